@@ -1,0 +1,1 @@
+"""Core numerics shared by every layer: angles, Gaussian densities, small linear algebra, random streams."""

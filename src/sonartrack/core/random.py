@@ -1,0 +1,19 @@
+"""Random streams: every trial draws from its own Generator, spawned from one SeedSequence.
+
+Trial i gets ``SeedSequence(seed, spawn_key=(i,))``, which is exactly the i-th child that
+``SeedSequence(seed).spawn(...)`` would return, without spawning the i - 1 before it. A trial's
+numbers therefore depend on (seed, i) only: not on the number of workers, the chunking, or the
+order in which trials run.
+"""
+
+import numpy as np
+
+
+def trial_seed_sequence(seed: int, trial_index: int) -> np.random.SeedSequence:
+    """The SeedSequence of trial ``trial_index`` under master ``seed``."""
+    return np.random.SeedSequence(int(seed), spawn_key=(int(trial_index),))
+
+
+def trial_rng(seed: int, trial_index: int) -> np.random.Generator:
+    """The Generator of trial ``trial_index`` under master ``seed`` (PCG64)."""
+    return np.random.Generator(np.random.PCG64(trial_seed_sequence(seed, trial_index)))

@@ -1,0 +1,107 @@
+"""Reproduce one study end to end: run (or resume) its trials, then summarise and store.
+
+Output, under ``<out>/<study>/``: ``trials.parquet`` (all trials), ``summary.json`` (summary and
+claims, as data), ``config.toml`` (the resolved configuration), one PNG per figure. Each file is
+written to a temporary name and renamed, so a folder never holds a half-written output.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from sonartrack.experiment import runner, store
+from sonartrack.io import toml as toml_io
+
+
+@dataclass(frozen=True, slots=True)
+class StudyResult:
+    study_id: str
+    out_dir: Path
+    runs: int
+    n_claims: int
+    n_holding: int
+    computed: int
+
+
+def resolve_config(study_mod, quick: bool = False, runs: int | None = None, overrides: dict | None = None):
+    """The study's config: defaults (or the quick preset), a TOML override dict, then ``runs``."""
+    base = study_mod.Config.quick() if quick else study_mod.Config()
+    data = base.model_dump(mode="json")
+    if overrides:
+        data = _deep_update(data, overrides)
+    if runs is not None:
+        data["runs"] = runs
+    return toml_io.validate(study_mod.Config, data, source=f"{study_mod.STUDY_ID} config")
+
+
+def _deep_update(base: dict, new: dict) -> dict:
+    out = dict(base)
+    for k, v in new.items():
+        out[k] = _deep_update(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, (np.bool_, bool)):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, (np.floating, float)):
+        v = float(x)
+        return v if np.isfinite(v) else None
+    return x
+
+
+def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path) -> tuple[dict, list[dict]]:
+    """Summarise stored trials, write summary.json, config.toml, figures and trials.parquet."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = Path(out) / study_mod.STUDY_ID
+    folder.mkdir(parents=True, exist_ok=True)
+    summary = _jsonable(study_mod.summarize(trials, config))
+    claims = _jsonable(study_mod.claims(summary, config))
+    figs = study_mod.figures(summary, config)
+    for name, fig in figs.items():
+        tmp = folder / f".{name}.{os.getpid()}.tmp.png"
+        fig.savefig(tmp, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        os.replace(tmp, folder / f"{name}.png")
+    store.write_trials_file(folder / "trials.parquet", trials)
+    _atomic_write_text(folder / "config.toml", toml_io.dumps(config.model_dump(mode="json")))
+    doc = {"study": study_mod.STUDY_ID, "title": study_mod.TITLE, "paper": study_mod.PAPER,
+           "runs": int(config.runs), "figures": list(figs), "summary": summary, "claims": claims}
+    _atomic_write_text(folder / "summary.json", json.dumps(doc, indent=1, allow_nan=False))
+    return summary, claims
+
+
+def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, scheduler: str | None = None,
+              progress=None) -> StudyResult:
+    """Run or resume a study's trials and write its outputs. ``progress(total, done, advance)`` hooks a bar."""
+    plan = runner.plan_run(study_mod, config, config.runs, seed, out)
+    if progress is not None:
+        progress.start(plan.study_id, plan.runs, plan.runs - plan.n_todo)
+    trials = runner.execute(plan, config, workers=workers, scheduler=scheduler,
+                            on_chunk=(progress.advance if progress is not None else None))
+    _, claims = finish(study_mod, config, trials, out)
+    held = sum(1 for c in claims if c.get("holds"))
+    return StudyResult(plan.study_id, Path(out) / plan.study_id, plan.runs, len(claims), held, plan.n_todo)

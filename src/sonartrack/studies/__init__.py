@@ -1,0 +1,55 @@
+"""Studies: one module per source paper, each reproducing that paper's experiment.
+
+Every study module exposes the same small surface (the *study contract*), so the runner, the
+report and the CLI treat them alike:
+
+``STUDY_ID``, ``TITLE``, ``PAPER``
+    identifier (as typed on the command line), a title, and the citation.
+``TRIAL_VERSION``
+    an integer bumped whenever ``run_trial`` changes its numbers; it is part of the cache key.
+``Config``
+    a frozen pydantic model whose defaults are the paper's values (and our documented choices),
+    with a ``runs`` field (full Monte Carlo size) and a classmethod ``quick()`` returning the CI
+    preset. It must round-trip through TOML (scalars, lists, nested tables).
+``run_trial(config, rng) -> dict[str, np.ndarray]``
+    one Monte Carlo trial; a pure function of its inputs; every array has a shape fixed by the
+    config (pad with NaN where a trial has fewer values).
+``summarize(trials, config) -> dict``
+    ``trials`` maps each key to the arrays of all trials stacked on axis 0; the result is
+    JSON-serialisable (lists, numbers, strings).
+``figures(summary, config) -> dict[str, matplotlib.figure.Figure]``
+    the key ``"scenario"`` (if present) is the scenario picture shown first in the report.
+``claims(summary, config) -> list[dict]``
+    each published result restated as a check on our numbers:
+    ``{"id", "text", "paper", "ours", "tolerance", "holds"}``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+from types import ModuleType
+
+from sonartrack.core.errors import InputError
+
+#: study id -> module path, in the order of the papers (P0..P4).
+STUDIES: dict[str, str] = {
+    "jpda-amplitude": "sonartrack.studies.jpda_amplitude",
+    "mftd": "sonartrack.studies.mftd",
+    "bftma-imm": "sonartrack.studies.bftma_imm",
+    "tma-propagation": "sonartrack.studies.tma_propagation",
+    "bistatic-imm-ipda": "sonartrack.studies.bistatic_imm_ipda",
+}
+
+
+def available() -> list[str]:
+    """Ids of the studies whose module is present in this installation."""
+    return [sid for sid, mod in STUDIES.items() if importlib.util.find_spec(mod) is not None]
+
+
+def load(study_id: str) -> ModuleType:
+    """Import a study module by id; unknown ids raise :class:`InputError` listing the choices."""
+    ids = available()
+    if study_id not in ids:
+        raise InputError(f"unknown study '{study_id}': choose one of {', '.join(ids)} (or 'all')")
+    return importlib.import_module(STUDIES[study_id])
