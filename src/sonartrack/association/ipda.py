@@ -1,0 +1,33 @@
+"""IPDA track existence: Markov-chain prediction and Bayesian update.
+
+Musicki, Evans, Stankovic 1994, "Integrated probabilistic data association", IEEE TAC 39(6),
+eqs. 11 and 29; Park, Song, Lee 2017, eqs. 12 and 21.
+
+    prediction:  P(E)k|k-1 = p11 P(E)k-1 + p21 (1 - P(E)k-1)
+    update:      delta_k = P_D P_G - P_D sum_i p_i / rho_i     (= 1 - Lambda, see association/pda.py)
+                 P(E)k = (1 - delta_k) P(E)k|k-1 / (1 - delta_k P(E)k|k-1)
+
+With no validated measurement, delta = P_D P_G and P(E)k = (1 - P_D P_G) P / (1 - P_D P_G P).
+For IMM-IPDA, 1 - delta = sum_r c_r Lambda_r (predicted mode probabilities c_r).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def existence_predict(p_exist, p11: float, p21: float = 0.0):
+    """Markov-chain prediction of the existence probability."""
+    p = np.asarray(p_exist, float)
+    return p11 * p + p21 * (1.0 - p)
+
+
+def existence_update(p_exist_pred, lam):
+    """Posterior existence from the prediction and ``Lambda = 1 - delta`` (scalar or array).
+
+    Written as ``Lambda P / (1 - P + Lambda P)``, which equals ``(1 - delta) P / (1 - delta P)``
+    and stays in [0, 1] for any Lambda >= 0.
+    """
+    p = np.asarray(p_exist_pred, float)
+    lam = np.asarray(lam, float)
+    return lam * p / (1.0 - p + lam * p)
