@@ -108,7 +108,7 @@ class Config(BaseModel):
 
     # ---- derived objects -------------------------------------------------------------------
     def ownship(self) -> ManeuveringTrack:
-        turn = (self.turn_start_s, self.n_scans * self.scan_period_s + 1.0, np.deg2rad(self.turn_rate_deg_s))
+        turn = (self.turn_start_s, self.turn_start_s + self.n_scans * self.scan_period_s, np.deg2rad(self.turn_rate_deg_s))
         return ManeuveringTrack(0.0, 0.0, self.ownship_speed_mps, np.deg2rad(self.ownship_heading_deg), (turn,))
 
     def sonar(self) -> BistaticSonar:
@@ -188,7 +188,7 @@ def _nanmean_quiet(a, axis=0):
 
 
 def _window_mean(a, lo, hi):
-    return float(np.nanmean(np.asarray(a, float)[lo:hi]))
+    return float(_nanmean_quiet(np.asarray(a, float)[lo:hi]))
 
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
@@ -222,8 +222,8 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
             "per_run_before": per_run_before.tolist(), "per_run_after": per_run_after.tolist(),
             "per_run_all": per_run_all.tolist(),
             "cft_mean": float(trials[f"{case}_cft"].mean()),
-            "rmse_before_m": float(np.nanmean(rms_over_runs(trials[f"{case}_err"])[:k0])),
-            "rmse_after_m": float(np.nanmean(rms_over_runs(trials[f"{case}_err"])[k0:])),
+            "rmse_before_m": float(_nanmean_quiet(rms_over_runs(trials[f"{case}_err"])[:k0])),
+            "rmse_after_m": float(_nanmean_quiet(rms_over_runs(trials[f"{case}_err"])[k0:])),
         }
     return s
 

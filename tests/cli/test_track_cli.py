@@ -1,0 +1,131 @@
+"""`sonartrack track --contacts`: a synthetic bistatic scenario, and every kind of bad file."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sonartrack.sim.bistatic_sonar import simulate_scan
+from sonartrack.studies.bistatic_imm_ipda import Config
+
+CLI = [sys.executable, "-m", "sonartrack.cli", "track"]
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    """Contacts of the P4 scenario (40 scans, no turn), plus raw bistatic columns and navigation."""
+    from sonartrack.models.bistatic import bistatic_inputs
+
+    folder = tmp_path_factory.mktemp("contacts")
+    c = Config(n_scans=40, turn_start_s=1e6)
+    ship, sonar, truth = c.ownship(), c.sonar(), c.target_states()
+    rng = np.random.default_rng(5)
+    rows, raw, nav = [], [], []
+    for k, t in enumerate(c.times_s()):
+        s = simulate_scan(rng, sonar, ship, float(t), truth[k, :2])
+        for z, R in zip(s.z, s.R):
+            rows.append(dict(time_s=t, x_m=z[0], y_m=z[1], var_x_m2=R[0, 0], var_y_m2=R[1, 1], cov_xy_m2=R[0, 1]))
+        rx, phi = ship.towed(t, c.rx_cable_m)
+        tx, _ = ship.towed(t, c.tx_cable_m)
+        tt, th = bistatic_inputs(s.z, tx, rx, phi, 1500.0)
+        for a, b in zip(tt, th):
+            raw.append(dict(time_s=t, travel_time_s=a, bearing_deg=np.rad2deg(b)))
+        nav.append(dict(time_s=t, tx_x_m=tx[0], tx_y_m=tx[1], rx_x_m=rx[0], rx_y_m=rx[1], array_heading_deg=np.rad2deg(phi)))
+    pd.DataFrame(rows).to_csv(folder / "contacts.csv", index=False)
+    pd.DataFrame(rows).to_parquet(folder / "contacts.parquet")
+    pd.DataFrame(raw).to_csv(folder / "raw.csv", index=False)
+    pd.DataFrame(nav).to_csv(folder / "nav.csv", index=False)
+    return folder, truth
+
+
+def run(*args):
+    return subprocess.run(CLI + [str(a) for a in args], capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("name", ["contacts.csv", "contacts.parquet"])
+def test_tracks_the_target(scenario, tmp_path, name):
+    folder, truth = scenario
+    res = run("--contacts", folder / name, "--out", tmp_path)
+    assert res.returncode == 0, res.stderr
+    tracks = pd.read_csv(tmp_path / "tracks.csv")
+    assert {"time_s", "track_id", "status", "existence", "x_m", "y_m"} <= set(tracks.columns)
+    assert tracks.existence.between(0, 1).all()
+    last = tracks[(tracks.time_s == tracks.time_s.max()) & (tracks.status == "confirmed")]
+    err = np.hypot(last.x_m - truth[-1, 0], last.y_m - truth[-1, 1])
+    assert (err < 600).any(), "no confirmed track near the target at the last scan"
+    assert (tmp_path / "tracks.png").stat().st_size > 1000
+
+
+def test_raw_bistatic_with_navigation(scenario, tmp_path):
+    folder, truth = scenario
+    res = run("--contacts", folder / "raw.csv", "--nav", folder / "nav.csv", "--out", tmp_path, "--confirmed-only")
+    assert res.returncode == 0, res.stderr
+    tracks = pd.read_csv(tmp_path / "tracks.csv")
+    assert (tracks.status == "confirmed").all()
+    last = tracks[tracks.time_s == tracks.time_s.max()]
+    assert (np.hypot(last.x_m - truth[-1, 0], last.y_m - truth[-1, 1]) < 600).any()
+
+
+def assert_error(res, out, *words):
+    assert res.returncode == 2, res.stdout + res.stderr
+    lines = [ln for ln in res.stderr.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:") and "Traceback" not in res.stderr, res.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+    assert not out.exists() or not any(out.iterdir()), "partial output written"
+
+
+def bad_file(scenario, tmp_path, edit):
+    folder, _ = scenario
+    df = pd.read_csv(folder / "contacts.csv")
+    df = edit(df)
+    p = tmp_path / "bad.csv"
+    df.to_csv(p, index=False)
+    return p
+
+
+def test_missing_column(scenario, tmp_path):
+    p = bad_file(scenario, tmp_path, lambda d: d.drop(columns=["y_m"]))
+    assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "y_m")
+
+
+def test_nan_values(scenario, tmp_path):
+    def edit(d):
+        d.loc[7, "x_m"] = np.nan
+        return d
+    assert_error(run("--contacts", bad_file(scenario, tmp_path, edit), "--out", tmp_path / "o"), tmp_path / "o", "x_m", "row 8")
+
+
+def test_unsorted_times(scenario, tmp_path):
+    p = bad_file(scenario, tmp_path, lambda d: d.iloc[::-1])
+    assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "sort")
+
+
+def test_wrong_unit(scenario, tmp_path):
+    p = bad_file(scenario, tmp_path, lambda d: d.assign(x_m=d.x_m / 1e3).rename(columns={"x_m": "x_km"}))
+    assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "x_km", "x_m")
+
+
+def test_raw_without_navigation(scenario, tmp_path):
+    folder, _ = scenario
+    assert_error(run("--contacts", folder / "raw.csv", "--out", tmp_path / "o"), tmp_path / "o", "--nav")
+
+
+def test_no_covariance_and_no_default(scenario, tmp_path):
+    p = bad_file(scenario, tmp_path, lambda d: d[["time_s", "x_m", "y_m"]])
+    assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "default_sigma_m")
+
+
+def test_malformed_and_empty_files(tmp_path):
+    p = tmp_path / "x.parquet"
+    p.write_text("not parquet")
+    assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "Parquet")
+    q = tmp_path / "e.csv"
+    q.write_text("time_s,x_m,y_m\n")
+    assert_error(run("--contacts", q, "--out", tmp_path / "o"), tmp_path / "o", "no rows")
+
+
+def test_needs_exactly_one_input(tmp_path):
+    assert_error(run("--out", tmp_path / "o"), tmp_path / "o", "--contacts")
