@@ -197,10 +197,10 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     k0 = config.turn_scan
     err_xy = trials["meas_error_xy"]
     err_m = np.hypot(err_xy[..., 0], err_xy[..., 1])
-    bias = np.nanmean(err_xy, axis=0)  # (n_scans, 2)
+    bias = _nanmean_quiet(err_xy)  # (n_scans, 2)
     s = {"runs": runs, "turn_scan": k0, "n_scans": config.n_scans,
          "meas_error_rms_m": rms_over_runs(err_m).tolist(),
-         "meas_error_mean_m": np.nanmean(err_m, axis=0).tolist(),
+         "meas_error_mean_m": _nanmean_quiet(err_m).tolist(),
          "meas_bias_m": np.hypot(bias[:, 0], bias[:, 1]).tolist(),
          "clutter_per_scan": float(np.mean(trials["n_measurements"]) - config.pd),
          "cases": {}}
