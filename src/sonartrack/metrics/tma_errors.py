@@ -1,0 +1,67 @@
+"""TMA error measures: position, velocity, course and speed errors against time, RMSE over Monte
+Carlo runs, and divergence.
+
+For a target solution x_hat = [x, y, vx, vy] (absolute or observer-relative, the same frame as the
+truth x) at times t_k::
+
+    position error   e_p(k) = |p_hat - p|                     (m; the same in either frame)
+    velocity error   e_v(k) = |v_hat - v|                     (m/s; the same in either frame once the
+                                                               observer's velocity is added back)
+    course error     e_c(k) = wrap(course_hat - course)       (rad, course = atan2(vx, vy))
+    speed error      e_s(k) = |v_hat| - |v|                   (m/s)
+    RMSE(k)          sqrt(mean over runs of e(k)^2)           (NaN entries -- a run that failed -- skipped)
+
+A run *diverges* at a checkpoint when its position error exceeds ``rel_threshold`` times the true
+range there, or when the filter failed numerically (NaN estimate): a solution off by more than a
+quarter of the range (the default) no longer places the target usefully, which is the practical
+meaning of divergence in passive TMA (the estimate has left the neighbourhood of the truth and the
+filter's covariance no longer says so).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+
+
+def tma_errors(est, truth) -> dict[str, np.ndarray]:
+    """Errors of estimates ``est (..., >= 4)`` against ``truth (..., >= 4)`` (state order [x, y, vx, vy]).
+
+    Both must be in the same frame and hold *absolute* velocities for the course and speed errors.
+    Returns arrays of shape ``(...)``: position_m, velocity_mps, course_rad, speed_mps.
+    """
+    e = np.asarray(est, dtype=float)
+    x = np.asarray(truth, dtype=float)
+    dp = e[..., :2] - x[..., :2]
+    dv = e[..., 2:4] - x[..., 2:4]
+    course_hat = np.arctan2(e[..., 2], e[..., 3])
+    course = np.arctan2(x[..., 2], x[..., 3])
+    return {
+        "position_m": np.hypot(dp[..., 0], dp[..., 1]),
+        "velocity_mps": np.hypot(dv[..., 0], dv[..., 1]),
+        "course_rad": np.asarray(wrap_angle(course_hat - course)),
+        "speed_mps": np.hypot(e[..., 2], e[..., 3]) - np.hypot(x[..., 2], x[..., 3]),
+    }
+
+
+def rmse_over_runs(errors, axis: int = 0) -> np.ndarray:
+    """sqrt(mean of squared errors) over runs (axis 0 by default), skipping NaN entries."""
+    e = np.asarray(errors, dtype=float)
+    with np.errstate(invalid="ignore"):
+        n = np.sum(np.isfinite(e), axis=axis)
+        s = np.nansum(e * e, axis=axis)
+        return np.where(n > 0, np.sqrt(s / np.maximum(n, 1)), np.nan)
+
+
+def time_averaged_rmse(errors, start: int = 0, stop: int | None = None) -> float:
+    """RMSE over runs *and* the time window [start, stop): sqrt(mean of e^2) (NaN entries skipped)."""
+    e = np.asarray(errors, dtype=float)[:, start:stop]
+    return float(np.sqrt(np.nanmean(e * e)))
+
+
+def diverged(position_error_m, true_range_m, rel_threshold: float = 0.25) -> np.ndarray:
+    """True where the position error exceeds ``rel_threshold`` x the true range, or is NaN."""
+    e = np.asarray(position_error_m, dtype=float)
+    r = np.asarray(true_range_m, dtype=float)
+    return ~(e <= rel_threshold * r)
