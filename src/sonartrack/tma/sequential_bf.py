@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
+from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.models.passive import SOUND_SPEED_MPS
 from sonartrack.models.relative_motion import observer_inputs
 
