@@ -62,5 +62,6 @@ def logsumexp(a, axis=-1):
     a = np.asarray(a, dtype=float)
     amax = np.max(a, axis=axis, keepdims=True)
     amax = np.where(np.isfinite(amax), amax, 0.0)
-    out = np.log(np.sum(np.exp(a - amax), axis=axis, keepdims=True)) + amax
+    with np.errstate(divide="ignore"):  # an all -inf row is log(0) = -inf, by design
+        out = np.log(np.sum(np.exp(a - amax), axis=axis, keepdims=True)) + amax
     return np.squeeze(out, axis=axis)
