@@ -1,0 +1,75 @@
+"""System ROC by Monte Carlo (Im & Kim 1996, paper P1, sec. V: "system ROC curves by simulation").
+
+A detector outputs a scalar statistic S per trial. From n0 target-absent trials the threshold for a
+wanted false-alarm probability Pfa is the empirical (1 - Pfa) quantile of S | H0, taken so that at
+most Pfa n0 of the H0 statistics exceed it; Pd is then the fraction of n1 target-present trials
+whose statistic exceeds that threshold, with a Clopper-Pearson (exact binomial) interval.
+
+The threshold itself is uncertain (it rests on ~Pfa n0 exceedances), so a ROC point is trustworthy
+only where Pfa n0 >= ~10: :func:`min_pfa` says how far down a set of H0 trials reaches.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.core.errors import require
+
+#: H0 exceedances needed at the lowest Pfa of a curve (threshold quantile error ~ 1/sqrt(10))
+MIN_EXCEEDANCES = 10
+
+
+@dataclass(frozen=True, slots=True)
+class RocCurve:
+    """Pd at the wanted Pfa values, with the achieved Pfa, thresholds and 95 % binomial intervals."""
+
+    pfa: np.ndarray
+    pd: np.ndarray
+    pd_low: np.ndarray
+    pd_high: np.ndarray
+    pfa_achieved: np.ndarray
+    threshold: np.ndarray
+    n_h0: int
+    n_h1: int
+
+
+def min_pfa(n_h0: int, exceedances: int = MIN_EXCEEDANCES) -> float:
+    """Lowest Pfa a set of ``n_h0`` target-absent trials supports: exceedances / n_h0."""
+    return exceedances / max(int(n_h0), 1)
+
+
+def thresholds(h0_stat, pfa) -> np.ndarray:
+    """Thresholds t with #{S_0 > t} <= Pfa n0: the order statistic S_(n0 - floor(Pfa n0)) of the H0 sample."""
+    s = np.sort(np.asarray(h0_stat, dtype=float))
+    require(s.size > 0 and np.all(np.isfinite(s)), "the target-absent statistics must be finite and non-empty")
+    pfa = np.atleast_1d(np.asarray(pfa, dtype=float))
+    require(bool(np.all((pfa > 0) & (pfa < 1))), "false-alarm probabilities must lie in (0, 1)")
+    n_exceed = np.floor(pfa * s.size).astype(int)
+    return s[np.clip(s.size - 1 - n_exceed, 0, s.size - 1)]
+
+
+def binomial_interval(successes, trials, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Clopper-Pearson interval of a binomial proportion (exact: never narrower than the truth)."""
+    from scipy.stats import beta
+
+    k = np.asarray(successes, dtype=float)
+    n = np.asarray(trials, dtype=float)
+    alpha = 1.0 - level
+    lo = np.where(k > 0, beta.ppf(alpha / 2, k, n - k + 1), 0.0)
+    hi = np.where(k < n, beta.ppf(1 - alpha / 2, k + 1, n - k), 1.0)
+    return lo, hi
+
+
+def roc_curve(h0_stat, h1_stat, pfa) -> RocCurve:
+    """System ROC from target-absent and target-present statistics at the wanted ``pfa`` values."""
+    h0 = np.asarray(h0_stat, dtype=float).ravel()
+    h1 = np.asarray(h1_stat, dtype=float).ravel()
+    h0, h1 = h0[np.isfinite(h0)], h1[np.isfinite(h1)]
+    require(h1.size > 0, "no finite target-present statistics")
+    t = thresholds(h0, pfa)
+    k1 = (h1[None, :] > t[:, None]).sum(axis=1)
+    achieved = (h0[None, :] > t[:, None]).mean(axis=1)
+    lo, hi = binomial_interval(k1, h1.size)
+    return RocCurve(np.atleast_1d(np.asarray(pfa, dtype=float)), k1 / h1.size, lo, hi, achieved, t, h0.size, h1.size)

@@ -1,0 +1,78 @@
+"""The mftd study follows the study contract and its summary agrees with its pieces."""
+
+import numpy as np
+import pytest
+
+from sonartrack import studies
+from sonartrack.core.random import trial_rng
+from sonartrack.io import toml as toml_io
+from sonartrack.models.swerling import clairvoyant_pd, single_frame_plane_pd
+from sonartrack.studies import mftd as study
+
+
+@pytest.fixture(scope="module")
+def small():
+    cfg = study.Config(runs=40, n_range=8, n_doppler=32, n_family=[1, 10], sigma_a_family_mps2=[0.5, 1.0],
+                       snr_family_db=[5.0, 8.0], large_n=20, h1_fraction=0.6)
+    outs = [study.run_trial(cfg, trial_rng(1996, i)) for i in range(40)]
+    return cfg, {k: np.stack([o[k] for o in outs]) for k in outs[0]}
+
+
+def test_contract_surface():
+    mod = studies.load("mftd")
+    assert mod.STUDY_ID == "mftd" and mod.TITLE and mod.PAPER and mod.TRIAL_VERSION >= 1
+    cfg = mod.Config()
+    assert (cfg.period_s, cfg.pulse_s, cfg.carrier_hz, cfg.sound_speed_mps) == (2.0, 0.125, 30e3, 1500.0)
+    assert (cfg.n_frames, cfg.n_tracks, cfg.snr_db, cfg.sigma_a_mps2) == (6, 10, 5.0, 1.0)
+    assert cfg.runs * 1e-3 >= 10 and mod.Config.quick().runs < cfg.runs  # full size reaches Pfa 1e-3
+
+
+def test_config_round_trips_through_toml(tmp_path):
+    cfg = study.Config.quick()
+    path = tmp_path / "c.toml"
+    path.write_text(toml_io.dumps(cfg.model_dump(mode="json")))
+    assert toml_io.validate(study.Config, toml_io.load(path)) == cfg
+
+
+def test_variants_cover_every_family_once():
+    cfg = study.Config()
+    v = cfg.variants()
+    assert len(set(v.values())) == len(v)
+    for fam in ("snr", "sigma", "sigma_large_n", "n", "density"):
+        for _, name in cfg.family(fam):
+            assert name in v
+
+
+def test_trial_is_deterministic_and_scalar(small):
+    cfg, trials = small
+    a = study.run_trial(cfg, trial_rng(1996, 3))
+    for k, val in a.items():
+        assert np.shape(val) == ()
+        np.testing.assert_array_equal(val, trials[k][3])
+    # a target makes the statistic larger on the same noise, at every variant
+    for name in cfg.variants():
+        ok = np.isfinite(trials[f"h1_{name}"])
+        assert ok.sum() >= 10 and np.mean(trials[f"h1_{name}"][ok] > trials[f"h0_{name}"][ok]) > 0.5
+
+
+def test_summary_claims_and_figures(small):
+    cfg, trials = small
+    s = study.summarize(trials, cfg)
+    assert s["pfa"] == [p for p in study.PFA_GRID if p >= 10 / 40 - 1e-15]
+    ref = s["references"]["5"]
+    np.testing.assert_allclose(ref["clairvoyant"], clairvoyant_pd(np.array(s["pfa"]), 10 ** 0.5, 6))
+    np.testing.assert_allclose(ref["single_frame"], single_frame_plane_pd(np.array(s["pfa"]), 10 ** 0.5, 256))
+    for c in s["curves"].values():
+        assert np.all(np.diff(c["pd"]) >= 0)  # a ROC never decreases with Pfa
+        assert np.all(np.array(c["pd_low"]) <= c["pd"]) and np.all(np.array(c["pd"]) <= c["pd_high"])
+    out = study.claims(s, cfg)
+    assert {c["id"] for c in out} >= {"pd_rises_with_snr", "pd_falls_with_sigma_a", "pd_rises_with_n_and_saturates",
+                                      "between_bounds", "k1_closed_form"}
+    for c in out:
+        assert set(c) == {"id", "text", "paper", "ours", "tolerance", "holds"} and isinstance(c["holds"], bool)
+    figs = study.figures(s, cfg)
+    assert list(figs)[0] == "scenario" and {"roc_families", "roc_checks"} <= set(figs)
+    import matplotlib.pyplot as plt
+
+    for f in figs.values():
+        plt.close(f)
