@@ -23,13 +23,21 @@ MIN_EXCEEDANCES = 10
 
 @dataclass(frozen=True, slots=True)
 class RocCurve:
-    """Pd at the wanted Pfa values, with the achieved Pfa, thresholds and 95 % binomial intervals."""
+    """Pd at the wanted Pfa values, with the achieved Pfa, thresholds and 95 % binomial intervals.
+
+    ``pd_low``/``pd_high`` bound Pd at the threshold used (binomial in the H1 trials);
+    ``pfa_low``/``pfa_high`` bound the *true* false-alarm probability of that threshold (binomial in
+    the H0 exceedances): a ROC point is a box, and a closed-form curve agrees with it if it passes
+    through the box.
+    """
 
     pfa: np.ndarray
     pd: np.ndarray
     pd_low: np.ndarray
     pd_high: np.ndarray
     pfa_achieved: np.ndarray
+    pfa_low: np.ndarray
+    pfa_high: np.ndarray
     threshold: np.ndarray
     n_h0: int
     n_h1: int
@@ -70,6 +78,8 @@ def roc_curve(h0_stat, h1_stat, pfa) -> RocCurve:
     require(h1.size > 0, "no finite target-present statistics")
     t = thresholds(h0, pfa)
     k1 = (h1[None, :] > t[:, None]).sum(axis=1)
-    achieved = (h0[None, :] > t[:, None]).mean(axis=1)
+    k0 = (h0[None, :] > t[:, None]).sum(axis=1)
     lo, hi = binomial_interval(k1, h1.size)
-    return RocCurve(np.atleast_1d(np.asarray(pfa, dtype=float)), k1 / h1.size, lo, hi, achieved, t, h0.size, h1.size)
+    f_lo, f_hi = binomial_interval(k0, h0.size)
+    return RocCurve(np.atleast_1d(np.asarray(pfa, dtype=float)), k1 / h1.size, lo, hi, k0 / h0.size, f_lo, f_hi, t,
+                    h0.size, h1.size)

@@ -204,7 +204,8 @@ def _pfa_grid(n_h0: int) -> np.ndarray:
 def _curve(trials, name, pfa) -> dict:
     c = roc_curve(trials[f"h0_{name}"], trials[f"h1_{name}"], pfa)
     return {"pfa": c.pfa.tolist(), "pd": c.pd.tolist(), "pd_low": c.pd_low.tolist(), "pd_high": c.pd_high.tolist(),
-            "pfa_achieved": c.pfa_achieved.tolist(), "threshold": c.threshold.tolist(), "n_h0": c.n_h0, "n_h1": c.n_h1}
+            "pfa_achieved": c.pfa_achieved.tolist(), "pfa_low": c.pfa_low.tolist(), "pfa_high": c.pfa_high.tolist(),
+            "threshold": c.threshold.tolist(), "n_h0": c.n_h0, "n_h1": c.n_h1}
 
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
@@ -220,6 +221,11 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
         refs[f"{s:g}"] = {"single_frame": single_frame_plane_pd(pfa, rho, grid.n_cells).tolist(),
                           "known_cell": single_cell_pd(pfa, rho).tolist(),
                           "clairvoyant": clairvoyant_pd(pfa, rho, config.n_frames).tolist()}
+    # the bounds at the ends of each point's false-alarm interval (a Monte Carlo threshold is uncertain)
+    for c in curves.values():
+        rho = float(db_to_ratio(c["snr_db"]))
+        c["single_frame_at_pfa_low"] = single_frame_plane_pd(np.array(c["pfa_low"]), rho, grid.n_cells).tolist()
+        c["clairvoyant_at_pfa_high"] = clairvoyant_pd(np.array(c["pfa_high"]), rho, config.n_frames).tolist()
     rho = float(db_to_ratio(config.snr_db))
     k1 = roc_curve(trials["k1_h0"], trials["k1_h1"], pfa)
     rank = np.asarray(trials["first_rank"])
@@ -231,7 +237,9 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
         "curves": curves,
         "references": refs,
         "k1": {"pd": k1.pd.tolist(), "pd_low": k1.pd_low.tolist(), "pd_high": k1.pd_high.tolist(),
-               "closed_form": single_cell_pd(pfa, rho).tolist()},
+               "closed_form": single_cell_pd(pfa, rho).tolist(),
+               "closed_form_low": single_cell_pd(k1.pfa_low, rho).tolist(),
+               "closed_form_high": single_cell_pd(k1.pfa_high, rho).tolist()},
         "first_cell_kept": {str(nk): float(np.mean(rank < nk)) for nk in config.n_family},
     }
 
@@ -290,29 +298,32 @@ def claims(summary: dict, config: Config) -> list[dict]:
     out.append({"id": "pd_rises_with_n_and_saturates", "text": f"Pd rises with N and saturates (N {config.n_family}) "
                 f"at Pfa={pfa:g}",
                 "paper": "Fig. 6: more tracks, higher Pd, with diminishing returns",
-                "ours": f"Pd {fmt(pds)}; saturated (within 1.96 SE of N={config.n_family[-1]}) from N={sat}",
+                "ours": f"Pd {fmt(pds)}; saturated (within 1.96 SE of N={config.n_family[-1]}) from N={sat}"
+                        + ("" if sat < config.n_family[-1] else "; the true first cell survives the first pruning in "
+                           + "/".join(f"{summary['first_cell_kept'][str(k)]:.0%}" for k in config.n_family)
+                           + " of trials at these N: on this plane the first frame still loses targets at the largest N"),
                 "tolerance": "largest N above N=1 by > 1.96 SE, no significant drop, saturation before the largest N",
                 "holds": bool(rises and sat < config.n_family[-1])})
     worst_low, worst_high, ok = 1.0, 1.0, True
     for name, c in summary["curves"].items():
-        ref = summary["references"][f"{c['snr_db']:g}"]
         for i in range(len(c["pfa"])):
-            lo_gap = c["pd_high"][i] - ref["single_frame"][i]
-            hi_gap = ref["clairvoyant"][i] - c["pd_low"][i]
+            lo_gap = c["pd_high"][i] - c["single_frame_at_pfa_low"][i]
+            hi_gap = c["clairvoyant_at_pfa_high"][i] - c["pd_low"][i]
             worst_low, worst_high = min(worst_low, lo_gap), min(worst_high, hi_gap)
             ok &= lo_gap >= 0 and hi_gap >= 0
     out.append({"id": "between_bounds", "text": "every MFTD ROC point lies between the single-frame detector over the "
                 "plane and the clairvoyant known-track bound",
                 "paper": "(our check; Gamma(K) bound of DIGEST P1)",
                 "ours": f"smallest margin to the single-frame curve {worst_low:+.3f}, to the clairvoyant bound {worst_high:+.3f}",
-                "tolerance": "95 % Clopper-Pearson interval of Pd", "holds": bool(ok)})
+                "tolerance": "95 % Clopper-Pearson intervals of Pd and of the threshold's true Pfa", "holds": bool(ok)})
     k1 = summary["k1"]
-    inside = [lo <= cf <= hi for lo, cf, hi in zip(k1["pd_low"], k1["closed_form"], k1["pd_high"])]
+    inside = [lo <= cf_hi and cf_lo <= hi
+              for lo, hi, cf_lo, cf_hi in zip(k1["pd_low"], k1["pd_high"], k1["closed_form_low"], k1["closed_form_high"])]
     dev = max(abs(a - b) for a, b in zip(k1["pd"], k1["closed_form"]))
     out.append({"id": "k1_closed_form", "text": "at K = 1 the Monte Carlo ROC matches Pd = Pfa^(1/(1+rho)) (one cell)",
                 "paper": "Swerling-1 single-cell ROC", "ours": f"largest |Pd - closed form| {dev:.3f}; "
                 f"{sum(inside)}/{len(inside)} points inside the 95 % interval",
-                "tolerance": "closed form inside the 95 % interval at all but one point in ten",
+                "tolerance": "closed form through the 95 % box (Pd interval x the threshold's Pfa interval) at all but one point in ten",
                 "holds": bool(sum(inside) >= len(inside) - max(1, len(inside) // 10))})
     return out
 
