@@ -18,15 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-
-def best_of(fn, n, repeat=5):
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / n)
-    return best
+sys.path.insert(0, str(Path(__file__).parent))
+from _timing import best_of  # noqa: E402
 
 
 def main() -> None:

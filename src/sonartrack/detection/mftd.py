@@ -263,6 +263,18 @@ def _window(what: np.ndarray, prior: KalmanPrior, k: int, grid: RangeDopplerGrid
     return cells.reshape(n, -1), ok.reshape(n, -1)
 
 
+def _pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final):
+    """Validated frames, N and the number of best tracks to return (shared by both pruned detectors)."""
+    y = np.asarray(frames, dtype=float) if checked else validate_frames(frames)
+    if not checked:
+        _check(y, grid, prior)
+        require(int(n_tracks) >= 1, f"N (tracks kept) must be at least 1, got {n_tracks}")
+        require(0.0 < tol < 1.0, f"restriction tolerance must be in (0, 1), got {tol}")
+        require(final in FINAL_SUMS, f"final must be one of {FINAL_SUMS}, got '{final}'")
+    N = int(n_tracks)
+    return y, N, N if n_best is None else int(n_best)
+
+
 def pruned_detect(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float, n_tracks: int,
                   restrict: bool = True, tol: float = RESTRICT_TOL, n_best: int | None = None,
                   checked: bool = False, final: str = "branches") -> MftdResult:
@@ -274,15 +286,8 @@ def pruned_detect(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float
     all N x M branches of the last frame (our default, module doc); "kept" sums over the N tracks
     kept after the last pruning, eq. 20 to the letter.
     """
-    y = np.asarray(frames, dtype=float) if checked else validate_frames(frames)
-    if not checked:
-        _check(y, grid, prior)
-        require(int(n_tracks) >= 1, f"N (tracks kept) must be at least 1, got {n_tracks}")
-        require(0.0 < tol < 1.0, f"restriction tolerance must be in (0, 1), got {tol}")
-        require(final in FINAL_SUMS, f"final must be one of {FINAL_SUMS}, got '{final}'")
+    y, N, n_best = _pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final)
     K, M = y.shape[0], grid.n_cells
-    N = int(n_tracks)
-    n_best = N if n_best is None else int(n_best)
     yf = y.reshape(K, M)
     centres = grid.centres()
     g = snr / (1.0 + snr)
@@ -341,15 +346,8 @@ def pruned_detect_fast(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: 
     result (the restricted window is chosen per track, so it leaves out at most what the reference does)."""
     from sonartrack.detection.mftd_kernel import pruned_kernel
 
-    y = np.asarray(frames, dtype=float) if checked else validate_frames(frames)
-    if not checked:
-        _check(y, grid, prior)
-        require(int(n_tracks) >= 1, f"N (tracks kept) must be at least 1, got {n_tracks}")
-        require(0.0 < tol < 1.0, f"restriction tolerance must be in (0, 1), got {tol}")
-        require(final in FINAL_SUMS, f"final must be one of {FINAL_SUMS}, got '{final}'")
+    y, N, n_best = _pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final)
     K, M = y.shape[0], grid.n_cells
-    N = int(n_tracks)
-    n_best = N if n_best is None else int(n_best)
     S_cov = np.zeros_like(prior.S_inv)
     for k in range(K):
         if np.any(prior.S_inv[k]):
