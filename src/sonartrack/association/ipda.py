@@ -26,8 +26,12 @@ def existence_update(p_exist_pred, lam):
     """Posterior existence from the prediction and ``Lambda = 1 - delta`` (scalar or array).
 
     Written as ``Lambda P / (1 - P + Lambda P)``, which equals ``(1 - delta) P / (1 - delta P)``
-    and stays in [0, 1] for any Lambda >= 0.
+    and stays in [0, 1] for any Lambda >= 0. The one undefined case, P = 1 with Lambda = 0 (a certain
+    target that the scan says cannot be there: P_D P_G = 1 and nothing in the gate), is 0/0; we keep
+    P = 1, the prior's certainty.
     """
     p = np.asarray(p_exist_pred, float)
     lam = np.asarray(lam, float)
-    return lam * p / (1.0 - p + lam * p)
+    den = 1.0 - p + lam * p
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0.0, lam * p / np.where(den > 0.0, den, 1.0), p)
