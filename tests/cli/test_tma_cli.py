@@ -134,7 +134,7 @@ def test_batch_method_is_called_with_the_shared_interface(files, tmp_path, capsy
     calls = {}
 
     def solve_batch(record, ownship, method, *, sigma_bearing_rad, sigma_snr_db=1.0, env=None, sl_db=None,
-                    freq_hz=200.0, depth_m=None):
+                    freq_hz=200.0, depth_m=None, **extra):
         calls.update(method=method, sigma=sigma_bearing_rad, env=env, sl=sl_db, n=len(record.time_s),
                      nav=len(ownship.time_s), freq_hz=freq_hz)
         X = np.tile(truth[0], (len(record.time_s), 1))

@@ -67,6 +67,10 @@ def tma_config_model():
         sigma_snr_db: float = Field(1.0, gt=0)
         freq_hz: float = Field(200.0, gt=0)
         depth_m: Optional[float] = None
+        nl_db: float = 73.0
+        di_db: float = 12.5
+        r_min_m: float = Field(500.0, gt=0)
+        r_max_m: float = Field(60_000.0, gt=0)
         # picture
         ellipses: int = Field(8, ge=0)
 
@@ -85,7 +89,7 @@ def tma_cmd(
     method: Annotated[Optional[str], typer.Option(help="ekf | mgekf | imm-ekf | imm-mgekf | ml | em-map (default imm-mgekf).")] = None,
     sigma_bearing_deg: Annotated[Optional[float], typer.Option(help="Bearing noise std (deg; default 1.0).")] = None,
     sigma_freq_hz: Annotated[Optional[float], typer.Option(help="Frequency noise std (Hz; default 0.1).")] = None,
-    env: Annotated[Optional[str], typer.Option(help="Environment name for the propagation model (ml, em-map).")] = None,
+    env: Annotated[Optional[str], typer.Option(help="em-map propagation model: a shipped environment (east-summer, ..., see sonartrack tl --list) or a profile file (.toml or .csv).")] = None,
     sl: Annotated[Optional[float], typer.Option("--sl", help="Source level in dB (ml, em-map).")] = None,
     config: Annotated[Optional[Path], typer.Option(help="TOML file with settings (keys: the TmaConfig fields in sonartrack/cli/tma.py).")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("tma-results"),
@@ -139,8 +143,15 @@ def run_tma(bearings_path, ownship_path, cfg, out: Path) -> str:
             from sonartrack.tma.batch import solve_batch
         except ImportError:
             raise InputError(f"method '{cfg.method}' is not available in this installation") from None
-        solution = solve_batch(record, own, cfg.method, sigma_bearing_rad=sigma_b, sigma_snr_db=cfg.sigma_snr_db,
-                               env=cfg.env, sl_db=cfg.sl_db, freq_hz=cfg.freq_hz, depth_m=cfg.depth_m)
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            solution = solve_batch(record, own, cfg.method, sigma_bearing_rad=sigma_b, sigma_snr_db=cfg.sigma_snr_db,
+                                   env=cfg.env, sl_db=cfg.sl_db, freq_hz=cfg.freq_hz, depth_m=cfg.depth_m,
+                                   r_min_m=cfg.r_min_m, r_max_m=cfg.r_max_m, nl_db=cfg.nl_db, di_db=cfg.di_db)
+        for w in caught:
+            typer.echo(f"warning: {w.message}", err=True)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = write_solution_csv(out / CSV_NAME, solution, own)

@@ -98,6 +98,10 @@ def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, sche
               progress=None) -> StudyResult:
     """Run or resume a study's trials and write its outputs. ``progress(total, done, advance)`` hooks a bar."""
     plan = runner.plan_run(study_mod, config, config.runs, seed, out)
+    if plan.n_todo and hasattr(study_mod, "prepare"):
+        # shared, expensive inputs (e.g. transmission-loss fields) computed once here and cached on
+        # disk, so that the workers load them instead of each computing them
+        study_mod.prepare(config)
     if progress is not None:
         progress.start(plan.study_id, plan.runs, plan.runs - plan.n_todo)
     trials = runner.execute(plan, config, workers=workers, scheduler=scheduler,

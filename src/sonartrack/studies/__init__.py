@@ -19,6 +19,8 @@ report and the CLI treat them alike:
     JSON-serialisable (lists, numbers, strings).
 ``figures(summary, config) -> dict[str, matplotlib.figure.Figure]``
     the key ``"scenario"`` (if present) is the scenario picture shown first in the report.
+``prepare(config) -> None`` (optional)
+    computes shared inputs once in the main process before trials run (e.g. cached TL fields).
 ``claims(summary, config) -> list[dict]``
     each published result restated as a check on our numbers:
     ``{"id", "text", "paper", "ours", "tolerance", "holds"}``.

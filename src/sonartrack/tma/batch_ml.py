@@ -1,0 +1,160 @@
+"""Batch bearings-only TMA: maximum likelihood by Gauss-Newton with Levenberg-Marquardt safeguards,
+its covariance, the Cramer-Rao bound, and the observability check (paper P3, eqs. 1-18).
+
+Target at constant velocity with state X0 = [x0, y0, vx, vy] at the reference time t0 (the first
+bearing's); at time t_n (tau_n = t_n - t0) and ownship position o_n = (ox_n, oy_n):
+
+    dx_n = x0 + vx tau_n - ox_n,   dy_n = y0 + vy tau_n - oy_n,   r_n^2 = dx_n^2 + dy_n^2
+    h_n(X0) = atan2(dx_n, dy_n)                                            (eq. 6)
+    H_n = dh_n/dX0 = [dy_n, -dx_n, tau_n dy_n, -tau_n dx_n] / r_n^2         (eq. 16)
+
+ML minimises C(X0) = sum_n wrap(z_n - h_n)^2 / sigma_n^2 (eq. 15). Gauss-Newton (eqs. 17-18) with the
+Levenberg-Marquardt damping of Marquardt (1963): solve (J^T J + lambda diag(J^T J)) delta = J^T e with
+J = H / sigma, e = wrap(z - h) / sigma; accept if C falls (lambda / 10), else retry (lambda * 10).
+Covariance: the inverse Fisher information (J^T J)^-1 at the solution; the CRB is the same matrix
+at the true state (Nardone, Lindgren & Gong 1984). Starting point: the pseudo-linear estimate
+(Lindgren & Gong 1978): each bearing line gives the linear equation
+    [cos z, -sin z, tau cos z, -tau sin z] X0 = ox cos z - oy sin z.
+
+Observability: with the ownship at constant velocity every target track scaled about the ownship's
+line fits the bearings exactly, so range is unobservable (Nardone & Aidala 1981); we check the
+ownship's deviation from its best constant-velocity fit over the record.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import InputError, require
+
+#: ownship must leave its best straight constant-velocity line by this much (m) for range to be observable
+MIN_MANEUVER_M = 50.0
+
+
+@dataclass(frozen=True, slots=True)
+class BatchEstimate:
+    """A batch TMA solution: X0 at ``t0_s`` and its covariance, with how the solver ended."""
+
+    x0: np.ndarray
+    covariance: np.ndarray
+    t0_s: float
+    iterations: int
+    converged: bool
+    objective: float
+    method: str
+
+    def state_at(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """States (n, 4) and covariances (n, 4, 4) at times ``t_s`` (constant-velocity propagation)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=float)) - self.t0_s
+        F = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+        F[:, 0, 2] = F[:, 1, 3] = t
+        return F @ self.x0, F @ self.covariance @ np.swapaxes(F, 1, 2)
+
+
+def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Predicted bearings h (n,), Jacobian H (n, 4) (eq. 16) and ranges (n,) of the CV track x0."""
+    x0 = np.asarray(x0, dtype=float)
+    tau = np.asarray(tau_s, dtype=float)
+    dx = x0[0] + x0[2] * tau - own_xy[:, 0]
+    dy = x0[1] + x0[3] * tau - own_xy[:, 1]
+    r2 = dx * dx + dy * dy
+    H = np.stack([dy, -dx, tau * dy, -tau * dx], axis=-1) / r2[:, None]
+    return np.arctan2(dx, dy), H, np.sqrt(r2)
+
+
+def fisher_information(x0, tau_s, own_xy, sigma_rad) -> np.ndarray:
+    """J = sum_n H_n^T H_n / sigma_n^2: the bearings' Fisher information about X0."""
+    _, H, _ = bearing_model(x0, tau_s, own_xy)
+    w = 1.0 / np.broadcast_to(np.asarray(sigma_rad, dtype=float), (len(H),)) ** 2
+    return (H * w[:, None]).T @ H
+
+
+def crb(x0_true, tau_s, own_xy, sigma_rad) -> np.ndarray:
+    """Cramer-Rao bound on X0 for this geometry: the inverse Fisher information at the true state."""
+    return np.linalg.inv(fisher_information(x0_true, tau_s, own_xy, sigma_rad))
+
+
+def ownship_deviation_m(tau_s, own_xy) -> float:
+    """Largest distance (m) of the ownship from its least-squares constant-velocity line."""
+    tau = np.asarray(tau_s, dtype=float)
+    A = np.column_stack([np.ones_like(tau), tau])
+    coef, *_ = np.linalg.lstsq(A, own_xy, rcond=None)
+    return float(np.max(np.linalg.norm(own_xy - A @ coef, axis=1)))
+
+
+def check_observability(tau_s, own_xy, min_maneuver_m: float = MIN_MANEUVER_M) -> str | None:
+    """A one-line message if the ownship has not maneuvered enough for bearings-only range, else None."""
+    dev = ownship_deviation_m(tau_s, own_xy)
+    if dev < min_maneuver_m:
+        return (f"ownship has not maneuvered (it stays within {dev:.0f} m of a straight constant-velocity line): range is "
+                "unobservable from bearings alone; use a record with a course or speed change, or em-map with SNR")
+    return None
+
+
+def pseudo_linear_estimate(z_rad, tau_s, own_xy) -> np.ndarray:
+    """Pseudo-linear X0 (Lindgren & Gong 1978): least squares over the bearing-line equations."""
+    c, s = np.cos(z_rad), np.sin(z_rad)
+    A = np.column_stack([c, -s, tau_s * c, -tau_s * s])
+    b = own_xy[:, 0] * c - own_xy[:, 1] * s
+    x, *_ = np.linalg.lstsq(A, b, rcond=None)
+    return x
+
+
+def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: int = 100, tol: float = 1e-10,
+                     check: bool = True) -> BatchEstimate:
+    """ML X0 from bearings by Gauss-Newton / Levenberg-Marquardt (module doc).
+
+    ``own_xy`` (n, 2): ownship positions at the bearing times. ``check`` raises
+    :class:`InputError` when the ownship has not maneuvered (range unobservable).
+    """
+    z = np.asarray(z_rad, dtype=float)
+    t = np.asarray(time_s, dtype=float)
+    own = np.asarray(own_xy, dtype=float)
+    require(z.ndim == 1 and len(z) == len(t) == len(own), "bearings, times and ownship positions must have the same length")
+    require(len(z) >= 5, f"batch TMA needs at least 5 bearings, got {len(z)}")
+    require(bool(np.all(np.diff(t) > 0)), "bearing times must increase strictly: sort the file and drop duplicates")
+    tau = t - t[0]
+    if check:
+        msg = check_observability(tau, own)
+        if msg:
+            raise InputError(msg)
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), z.shape)
+    x = pseudo_linear_estimate(z, tau, own) if x_init is None else np.asarray(x_init, dtype=float).copy()
+
+    def residual(x):
+        h, H, _ = bearing_model(x, tau, own)
+        return wrap_angle(z - h) / sig, H / sig[:, None]
+
+    e, J = residual(x)
+    cost = float(e @ e)
+    lam, it, converged = 1e-3, 0, False
+    for it in range(1, max_iter + 1):
+        g = J.T @ e
+        JTJ = J.T @ J
+        improved = False
+        for _ in range(30):
+            A = JTJ + lam * np.diag(np.diag(JTJ))
+            try:
+                step = np.linalg.solve(A, g)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            e_new, J_new = residual(x + step)
+            c_new = float(e_new @ e_new)
+            if np.isfinite(c_new) and c_new <= cost:
+                x, e, J = x + step, e_new, J_new
+                rel = (cost - c_new) / max(cost, 1e-300)
+                cost, lam, improved = c_new, max(lam / 10.0, 1e-12), True
+                break
+            lam *= 10.0
+        if not improved or rel < tol:
+            converged = improved or rel < tol
+            break
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        cov = np.full((4, 4), np.inf)
+    return BatchEstimate(x, cov, float(t[0]), it, bool(converged), cost, "ml")

@@ -1,0 +1,295 @@
+"""EM/MAP target motion analysis with bearings, measured SNR and a propagation model
+(paper P3, eqs. 19-29, after Streit & Walsh 2002; E and M steps derived here from the model).
+
+Model, per frame n (time t_n, tau_n = t_n - t0, ownship o_n, bearing theta_n, SNR xi_n):
+the target position P_n = F'_n X0 with F'_n = [[1, 0, tau_n, 0], [0, 1, 0, tau_n]], and a latent
+range r on [r_min, r_max]:
+
+    p(xi_n | r)      = N(xi_n; xi_bar(r), sigma_SNR^2),  xi_bar(r) = SL - TL(r) + DI - NL   (eq. 30)
+    p(P_n | r)       = N(P_n; mu_n(r), r^2 Sigma_n),     mu_n(r) = o_n + r u_n,  u_n = [sin th, cos th]
+    Sigma_n          = U_n diag(sigma_n^2, kappa^2) U_n^T, U_n = [[cos th, sin th], [-sin th, cos th]]
+
+(cross-range spread r sigma_n from the bearing error, along-range spread r kappa: kappa is our
+choice, see :data:`KAPPA`). With r uniform in area (measure r dr) the incomplete-data objective is
+
+    L(X0) = sum_n log integral psi_n(r) r dr,   psi_n(r) = p(xi_n | r) N(F'_n X0; mu_n(r), r^2 Sigma_n)
+
+E-step (eq. 24-25): p_n(r) = psi_n(r; X0_old) / integral psi_n(rho) rho d rho.
+M-step: maximise sum_n E[log N(F'_n X0; mu_n(r), r^2 Sigma_n)] over X0. The r^2 in the covariance
+and the r dr measure turn the expectations into integrals of p_n(r) dr / r (eqs. 26-28):
+
+    A_n = F'_n^T Sigma_n^-1 F'_n  integral p_n(r) dr / r
+    b_n = F'_n^T Sigma_n^-1       integral p_n(r) mu_n(r) dr / r
+    X0_new = (sum_n A_n)^-1 sum_n b_n                                                       (eq. 29)
+
+The integrals run on a logarithmic range grid (r dr = r^2 dlog r), which makes EM on a discrete
+latent range with prior mass proportional to r_j^2: each iteration cannot decrease L (Dempster, Laird
+& Rubin 1977), which the tests check. No derivative of the bearing function is needed.
+
+Initialisation (robust to the multimodal SNR of convergence zones): a grid search over tracks
+through a point on the first bearing line and one on the last (ranges on a log grid), scored by the
+direct bearing + SNR log-likelihood; EM starts from the best few in distinct range basins and from
+the bearings-only ML estimate when there is one, and the highest final L wins.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import require
+from sonartrack.tma.batch_ml import BatchEstimate
+
+#: relative along-range spread of the position model. The latent r *is* the target's range, so the
+#: exact model is kappa -> 0; a positive kappa smooths p(xi | r) over a window of relative width
+#: kappa and biases the noise-free solution by O(kappa^2) with a smooth TL curve (more where TL has
+#: interference ripple). 1 % keeps that bias far below the errors from noise, and EM (accelerated)
+#: still converges in tens of iterations.
+KAPPA = 0.01
+#: log-range grid step as a fraction of kappa (the grid must resolve the along-range kernel)
+GRID_STEP_OF_KAPPA = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class EmProblem:
+    """The data and model of one EM/MAP solve, precomputed on the range grid."""
+
+    tau_s: np.ndarray
+    own_xy: np.ndarray
+    theta_rad: np.ndarray
+    r_grid: np.ndarray
+    log_snr_lik: np.ndarray  # (n, n_r): log p(xi_n | r_j); 0 where the SNR is missing
+    sigma_rad: np.ndarray
+    kappa: float
+
+
+def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, snr_of_range: Callable,
+                 r_min_m: float, r_max_m: float, kappa: float = KAPPA, n_range: int | None = None) -> EmProblem:
+    """Precompute the range grid and log p(xi_n | r) (``snr_of_range(r) -> dB`` is xi_bar).
+
+    The grid has ``n_range`` points (default: a step of kappa / 2 in log range)."""
+    z = np.asarray(z_rad, dtype=float)
+    t = np.asarray(time_s, dtype=float)
+    own = np.asarray(own_xy, dtype=float)
+    require(len(z) == len(t) == len(own) and len(z) >= 3, "em-map needs at least 3 frames of bearing, time and ownship")
+    require(bool(np.all(np.diff(t) > 0)), "frame times must increase strictly: sort the file and drop duplicates")
+    require(0 < r_min_m < r_max_m, f"range interval must satisfy 0 < r_min < r_max, got {r_min_m:g}..{r_max_m:g} m")
+    require(sigma_snr_db > 0, "sigma_SNR must be positive")
+    require(kappa > 0, "kappa must be positive")
+    if n_range is None:
+        n_range = int(np.ceil(np.log(r_max_m / r_min_m) / (GRID_STEP_OF_KAPPA * kappa))) + 1
+    r = np.geomspace(r_min_m, r_max_m, n_range)
+    xi_bar = np.asarray(snr_of_range(r), dtype=float)
+    require(xi_bar.shape == r.shape and bool(np.all(np.isfinite(xi_bar))), "the SNR model must give finite values on the range grid")
+    if snr_db is None:
+        ll = np.zeros((len(z), len(r)))
+    else:
+        xi = np.asarray(snr_db, dtype=float)
+        ll = -0.5 * ((xi[:, None] - xi_bar[None, :]) / sigma_snr_db) ** 2 - np.log(np.sqrt(2 * np.pi) * sigma_snr_db)
+        ll[~np.isfinite(xi)] = 0.0
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), z.shape).copy()
+    return EmProblem(t - t[0], own, z, r, ll, sig, float(kappa))
+
+
+#: half-width of the range window of the E-step, in units of kappa (module doc: the along-range
+#: kernel exp(-(a - r)^2 / (2 r^2 kappa^2)) is below e^-70 outside it)
+WINDOW_KAPPAS = 12.0
+
+
+def _log_psi(prob: EmProblem, x0, full: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """log psi_n(r_j) + log r_j^2 (the measure on the log grid) and the r_j it is evaluated at.
+
+    Only a window of the grid around the peak of each frame's position factor is evaluated (the
+    rest weighs < e^-70 relative); ``full=True`` evaluates the whole grid (the reference)."""
+    P = np.column_stack([x0[0] + x0[2] * prob.tau_s, x0[1] + x0[3] * prob.tau_s])
+    d = P - prob.own_xy  # P_n - o_n; mu_n(r) - o_n = r u_n
+    s, c = np.sin(prob.theta_rad), np.cos(prob.theta_rad)
+    cross = d[:, 0] * c - d[:, 1] * s  # component across the bearing line (mu has none)
+    along = d[:, 0] * s + d[:, 1] * c
+    n, nr = prob.log_snr_lik.shape
+    if not full and np.any(along <= prob.r_grid[0]):
+        full = True  # a track behind or at the ownship (far-off iterate): the mass is not near one range
+    if full:
+        J = np.broadcast_to(np.arange(nr), (n, nr))
+    else:
+        # the position factor peaks at r* = a + (c kappa / sigma)^2 / a (minimise
+        # (c^2 / sigma^2 + (a - r)^2 / kappa^2) / r^2 over r) and is narrower than kappa in log r
+        centre = along + (cross * prob.kappa / prob.sigma_rad) ** 2 / along
+        step = np.log(prob.r_grid[1] / prob.r_grid[0])
+        w = min(int(np.ceil(WINDOW_KAPPAS * prob.kappa / step)), (nr - 1) // 2)
+        j = np.searchsorted(prob.r_grid, np.maximum(centre, prob.r_grid[0]))
+        start = np.clip(j - w, 0, nr - (2 * w + 1))
+        J = start[:, None] + np.arange(2 * w + 1)[None, :]
+    r = prob.r_grid[J]
+    m = (cross[:, None] ** 2 / prob.sigma_rad[:, None] ** 2 + (along[:, None] - r) ** 2 / prob.kappa**2) / r**2
+    log_norm = -np.log(2 * np.pi * prob.sigma_rad[:, None] * prob.kappa)  # the 1/r^2 cancels the r^2 measure
+    return np.take_along_axis(prob.log_snr_lik, J, axis=1) + log_norm - 0.5 * m, r
+
+
+def objective(prob: EmProblem, x0, full: bool = False) -> float:
+    """L(X0) = sum_n log sum_j psi_n(r_j) r_j^2 (dlog r dropped: a constant)."""
+    lp, _ = _log_psi(prob, np.asarray(x0, dtype=float), full)
+    mx = lp.max(axis=1, keepdims=True)
+    return float(np.sum(mx[:, 0] + np.log(np.exp(lp - mx).sum(axis=1))))
+
+
+def em_step(prob: EmProblem, x0) -> tuple[np.ndarray, float]:
+    """One E and M step from ``x0``: (X0_new, L(x0))."""
+    lp, r = _log_psi(prob, x0)
+    mx = lp.max(axis=1, keepdims=True)
+    w = np.exp(lp - mx)
+    tot = w.sum(axis=1)
+    L = float(np.sum(mx[:, 0] + np.log(tot)))
+    q = w / tot[:, None]  # posterior mass of r_j
+    e_inv_r2 = np.sum(q / r**2, axis=1)  # E[1/r^2] = integral p_n dr / r
+    e_inv_r = np.sum(q / r, axis=1)  # mu_n(r) / r^2 = o_n / r^2 + u_n / r
+    s, c = np.sin(prob.theta_rad), np.cos(prob.theta_rad)
+    # Sigma_n^-1 = U diag(1/sigma^2, 1/kappa^2) U^T with U's columns across [c, -s] and along [s, c]
+    a, b = 1.0 / prob.sigma_rad**2, 1.0 / prob.kappa**2
+    Si = np.empty((len(s), 2, 2))
+    Si[:, 0, 0] = a * c * c + b * s * s
+    Si[:, 1, 1] = a * s * s + b * c * c
+    Si[:, 0, 1] = Si[:, 1, 0] = -a * c * s + b * s * c
+    m_mean = prob.own_xy * e_inv_r2[:, None] + np.column_stack([s, c]) * e_inv_r[:, None]  # E[mu / r^2]
+    Fp = np.zeros((len(s), 2, 4))
+    Fp[:, 0, 0] = Fp[:, 1, 1] = 1.0
+    Fp[:, 0, 2] = Fp[:, 1, 3] = prob.tau_s
+    FtS = np.swapaxes(Fp, 1, 2) @ Si  # (n, 4, 2)
+    A = np.einsum("nij,njk,n->ik", FtS, Fp, e_inv_r2)
+    bb = np.einsum("nij,nj->i", FtS, m_mean)
+    return np.linalg.solve(A, bb), L
+
+
+def direct_log_likelihood(prob: EmProblem, x0s, snr_of_range_on_grid=None) -> np.ndarray:
+    """log p(bearings, SNRs | X0) for many X0 (m, 4): the initial grid search's score."""
+    x0s = np.atleast_2d(x0s)
+    dx = x0s[:, None, 0] + x0s[:, None, 2] * prob.tau_s - prob.own_xy[:, 0]
+    dy = x0s[:, None, 1] + x0s[:, None, 3] * prob.tau_s - prob.own_xy[:, 1]
+    rng = np.hypot(dx, dy)
+    e_b = wrap_angle(prob.theta_rad - np.arctan2(dx, dy)) / prob.sigma_rad
+    lr = np.log(prob.r_grid)
+    j = np.clip(np.searchsorted(lr, np.log(np.maximum(rng, 1e-9))), 0, len(lr) - 1)
+    ll_snr = np.take_along_axis(np.broadcast_to(prob.log_snr_lik, (len(x0s), *prob.log_snr_lik.shape)),
+                                j[..., None], axis=2)[..., 0]
+    out = -0.5 * np.sum(e_b**2, axis=1) + ll_snr.sum(axis=1)
+    outside = (rng < prob.r_grid[0]) | (rng > prob.r_grid[-1])
+    return np.where(outside.any(axis=1), -np.inf, out)
+
+
+def grid_initialisation(prob: EmProblem, n: int = 64, n_starts: int = 4) -> np.ndarray:
+    """Starting X0s: tracks through (first bearing, range r_a) and (last bearing, range r_b) over an
+    n x n log grid, scored by the direct bearing + SNR log-likelihood; the best ``n_starts`` whose
+    initial ranges differ by more than 20 % (distinct basins: direct path, convergence zones), best first."""
+    r = np.geomspace(prob.r_grid[0] * 1.01, prob.r_grid[-1] * 0.99, n)
+    u0 = np.array([np.sin(prob.theta_rad[0]), np.cos(prob.theta_rad[0])])
+    u1 = np.array([np.sin(prob.theta_rad[-1]), np.cos(prob.theta_rad[-1])])
+    ra, rb = np.meshgrid(r, r, indexing="ij")
+    p0 = prob.own_xy[0] + ra.ravel()[:, None] * u0
+    p1 = prob.own_xy[-1] + rb.ravel()[:, None] * u1
+    v = (p1 - p0) / prob.tau_s[-1]
+    cands = np.column_stack([p0, v])
+    score = direct_log_likelihood(prob, cands)
+    order = np.argsort(-score, kind="stable")
+    chosen: list[int] = []
+    for i in order:
+        if not np.isfinite(score[i]):
+            break
+        if all(abs(np.log(ra.ravel()[i] / ra.ravel()[j])) > 0.2 for j in chosen):
+            chosen.append(int(i))
+            if len(chosen) == n_starts:
+                break
+    if not chosen:
+        chosen = [int(order[0])]
+    return cands[chosen]
+
+
+def em_map(prob: EmProblem, x_init, max_iter: int = 500, tol: float = 1e-10,
+           accelerate: bool = True) -> tuple[np.ndarray, int, list[float]]:
+    """Iterate EM from ``x_init``; (X0, iterations, L history (one value per accepted iterate)).
+
+    EM converges slowly here: the latent range is almost determined by X0 (a small kappa), so each
+    step moves X0 only a little along the range direction. ``accelerate`` uses SQUAREM (Varadhan &
+    Roland 2008, scheme S3): two EM steps r = M(x) - x, v = M(M(x)) - 2 M(x) + x, the extrapolation
+    x - 2 a r + a^2 v with a = -|r| / |v| (<= -1), then one EM step from there; the result is kept
+    only if L did not decrease, else a is halved towards -1 (plain EM), so L never decreases.
+    Stops when L changes by less than ``tol`` (relative) and the position by less than 1e-7 of the range.
+    """
+    x = np.asarray(x_init, dtype=float)
+    L_x = objective(prob, x)
+    history: list[float] = [L_x]
+    scale = np.array([1.0, 1.0, 100.0, 100.0])  # put m and m/s on comparable footing for the step length
+    it = 0
+    for it in range(1, max_iter + 1):
+        x1, _ = em_step(prob, x)
+        if accelerate:
+            x2, _ = em_step(prob, x1)
+            r, v = (x1 - x) * scale, (x2 - 2 * x1 + x) * scale
+            nv = float(np.linalg.norm(v))
+            a = -float(np.linalg.norm(r)) / nv if nv > 0 else -1.0
+            a = min(a, -1.0)
+            while True:
+                x_sq = x - (2 * a * r - a * a * v) / scale
+                x_new, _ = em_step(prob, x_sq)
+                L_new = objective(prob, x_new)
+                if np.isfinite(L_new) and L_new >= L_x:
+                    break
+                if a == -1.0:  # plain EM from x2 cannot decrease L
+                    x_new, L_new = x2, objective(prob, x2)
+                    break
+                a = min((a - 1.0) / 2.0, -1.0)
+        else:
+            x_new = x1
+            L_new = objective(prob, x_new)
+        step = float(np.hypot(*(x_new[:2] - x[:2])))
+        rng = float(np.hypot(*(x_new[:2] - prob.own_xy[0])))
+        done = abs(L_new - L_x) <= tol * max(abs(L_new), 1.0) and step <= 1e-7 * max(rng, 1.0)
+        x, L_x = x_new, L_new
+        history.append(L_x)
+        if done:
+            break
+    return x, it, history
+
+
+def observed_information(prob: EmProblem, x0, scale=None) -> np.ndarray:
+    """-Hessian of L at X0 by central differences (the covariance of the estimate is its inverse)."""
+    x0 = np.asarray(x0, dtype=float)
+    rng = float(np.hypot(*(x0[:2] - prob.own_xy[0])))
+    h = np.array([1e-3 * rng, 1e-3 * rng, 1e-3, 1e-3]) if scale is None else np.asarray(scale)
+    Hm = np.empty((4, 4))
+    f0 = objective(prob, x0)
+    for i in range(4):
+        for j in range(i, 4):
+            ei, ej = np.eye(4)[i] * h[i], np.eye(4)[j] * h[j]
+            if i == j:
+                v = (objective(prob, x0 + ei) - 2 * f0 + objective(prob, x0 - ei)) / h[i] ** 2
+            else:
+                v = (objective(prob, x0 + ei + ej) - objective(prob, x0 + ei - ej) - objective(prob, x0 - ei + ej)
+                     + objective(prob, x0 - ei - ej)) / (4 * h[i] * h[j])
+            Hm[i, j] = Hm[j, i] = -v
+    return Hm
+
+
+def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: int = 500,
+                 covariance: bool = True) -> BatchEstimate:
+    """EM/MAP X0 with the robust initialisation (module doc) and the observed-information covariance
+    (``covariance=False`` skips it: NaN)."""
+    starts = [*grid_initialisation(prob), *[np.asarray(s, dtype=float) for s in extra_starts if s is not None]]
+    best = None
+    for s in starts:
+        x, it, hist = em_map(prob, s, max_iter=max_iter)
+        if np.all(np.isfinite(x)) and (best is None or hist[-1] > best[2][-1]):
+            best = (x, it, hist)
+    x, it, hist = best
+    if not covariance:
+        return BatchEstimate(x, np.full((4, 4), np.nan), float(t0_s), it, it < max_iter, hist[-1], "em-map")
+    info = observed_information(prob, x)
+    try:
+        cov = np.linalg.inv(info)
+        if not np.all(np.linalg.eigvalsh(0.5 * (cov + cov.T)) > 0):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:
+        cov = np.full((4, 4), np.nan)
+    return BatchEstimate(x, cov, float(t0_s), it, it < max_iter, hist[-1], "em-map")

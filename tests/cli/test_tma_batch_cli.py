@@ -1,0 +1,90 @@
+"""`sonartrack tma --method ml|em-map` on files synthesised here (paper P3's scenario, South Sea summer)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sonartrack.cli import main
+from sonartrack.sim.platforms import ManeuveringTrack
+
+KN = 1852.0 / 3600.0
+
+
+def run(capsys, *args):
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    import os
+
+    d = tmp_path_factory.mktemp("batch")
+    os.environ["SONARTRACK_CACHE_DIR"] = str(d / "cache")
+    from sonartrack.tma.batch import snr_model
+
+    xi_bar, _, _ = snr_model("south-summer", 140.0, 200.0, 50.0, 63_000.0)
+    t = np.arange(100) * 8.0
+    rng = np.random.default_rng(7)
+    out = {}
+    for name, turns in (("turning", ((250.0, 280.0, np.deg2rad(-3.0)), (520.0, 550.0, np.deg2rad(3.0)))), ("straight", ())):
+        po, _, _ = ManeuveringTrack(0.0, 0.0, 6 * KN, np.deg2rad(90.0), turns).state(t)
+        b = np.deg2rad(160.0)
+        pt, _, _ = ManeuveringTrack(8000 * np.sin(b), 8000 * np.cos(b), 6 * KN, np.deg2rad(270.0)).state(t)
+        dd = pt - po
+        r = np.linalg.norm(dd, axis=1)
+        brg = np.rad2deg(np.arctan2(dd[:, 0], dd[:, 1]) + rng.normal(0, np.deg2rad(0.5), len(t))) % 360
+        pd.DataFrame({"time_s": t, "bearing_deg": brg, "snr_db": xi_bar(r) + rng.normal(0, 1.0, len(t))}).to_csv(
+            d / f"{name}_brg.csv", index=False)
+        pd.DataFrame({"time_s": t, "x_m": po[:, 0], "y_m": po[:, 1]}).to_csv(d / f"{name}_own.csv", index=False)
+        out[name] = r[-1]
+    yield d, out
+    del os.environ["SONARTRACK_CACHE_DIR"]
+
+
+@pytest.mark.parametrize("method", ["ml", "em-map"])
+def test_batch_methods_find_the_target(files, tmp_path, capsys, method):
+    d, r_end = files
+    extra = ["--env", "south-summer", "--sl", "140"] if method == "em-map" else []
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\n")
+    code, out, err = run(capsys, "tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv",
+                         "--method", method, *extra, "--config", cfg, "--out", tmp_path / "o")
+    assert code == 0, err
+    sol = pd.read_csv(tmp_path / "o" / "tma_solution.csv")
+    assert abs(sol["range_m"].iloc[-1] - r_end[ "turning"]) < (0.25 if method == "ml" else 0.1) * r_end["turning"]
+    assert f"tma {method}" in out
+
+
+def test_no_maneuver(files, tmp_path, capsys):
+    d, r_end = files
+    args = ["tma", "--bearings", d / "straight_brg.csv", "--ownship", d / "straight_own.csv", "--out", tmp_path / "o"]
+    code, _, err = run(capsys, *args, "--method", "ml")
+    assert code == 2 and "unobservable" in err and err.strip().count("\n") == 0
+    code, out, err = run(capsys, *args, "--method", "em-map", "--env", "south-summer", "--sl", "140",
+                         "--config", _cfg(tmp_path))
+    assert code == 0 and err.startswith("warning: ") and "unobservable" in err
+    sol = pd.read_csv(tmp_path / "o" / "tma_solution.csv")
+    assert abs(sol["range_m"].iloc[-1] - r_end["straight"]) < 0.15 * r_end["straight"]  # the SNR gives range
+
+
+def _cfg(tmp_path):
+    p = tmp_path / "c2.toml"
+    p.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\n")
+    return p
+
+
+def test_em_map_needs_a_model_and_snr(files, tmp_path, capsys):
+    d, _ = files
+    base = ["tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv", "--method", "em-map",
+            "--out", tmp_path / "o"]
+    code, _, err = run(capsys, *base)
+    assert code == 2 and "--env" in err
+    code, _, err = run(capsys, *base, "--env", "atlantis", "--sl", "140")
+    assert code == 2 and "unknown environment 'atlantis'" in err
+    nosnr = tmp_path / "b.csv"
+    pd.read_csv(d / "turning_brg.csv").drop(columns="snr_db").to_csv(nosnr, index=False)
+    code, _, err = run(capsys, "tma", "--bearings", nosnr, "--ownship", d / "turning_own.csv", "--method", "em-map",
+                       "--env", "south-summer", "--sl", "140", "--out", tmp_path / "o")
+    assert code == 2 and "snr_db" in err

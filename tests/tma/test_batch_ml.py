@@ -1,0 +1,74 @@
+"""Batch bearings-only ML (paper P3, eqs. 15-18): Jacobian, efficiency against the CRB, observability, bad input."""
+
+import numpy as np
+import pytest
+
+from sonartrack.core.errors import InputError
+from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.tma.batch_ml import bearing_model, check_observability, crb, fisher_information, ml_bearings_only
+
+KN = 1852.0 / 3600.0
+
+
+def scenario():
+    """Observer 5 kn with two 90-deg turns, target ~6 km at 4 kn; bearings every 60 s for 30 min."""
+    t = np.arange(0.0, 1800.0 + 1.0, 60.0)
+    obs = ManeuveringTrack(0.0, 0.0, 5 * KN, 0.0, ((600.0, 660.0, np.deg2rad(1.5)), (1200.0, 1260.0, np.deg2rad(-1.5))))
+    po, _, _ = obs.state(t)
+    c = np.deg2rad(250.0)
+    x0 = np.array([3000.0, 5200.0, 4 * KN * np.sin(c), 4 * KN * np.cos(c)])
+    return t, po, x0
+
+
+def test_jacobian_matches_finite_differences():
+    t, po, x0 = scenario()
+    _, H, _ = bearing_model(x0, t, po)
+    eps = np.array([1.0, 1.0, 1e-3, 1e-3])
+    for i in range(4):
+        dp = np.eye(4)[i] * eps[i]
+        num = (bearing_model(x0 + dp, t, po)[0] - bearing_model(x0 - dp, t, po)[0]) / (2 * eps[i])
+        np.testing.assert_allclose(H[:, i], num, rtol=1e-5, atol=1e-12)
+
+
+def test_ml_rmse_is_within_20_percent_of_the_crb():
+    t, po, x0 = scenario()
+    sigma = np.deg2rad(1.0)
+    h, _, _ = bearing_model(x0, t, po)
+    rng = np.random.default_rng(2019)
+    errs = np.array([ml_bearings_only(h + rng.normal(0, sigma, len(t)), t, po, sigma).x0 - x0 for _ in range(300)])
+    rmse = np.sqrt(np.mean(errs**2, axis=0))
+    bound = np.sqrt(np.diag(crb(x0, t, po, sigma)))
+    np.testing.assert_allclose(rmse, bound, rtol=0.2)
+    assert np.all(np.abs(errs.mean(axis=0)) < 0.3 * bound)  # nearly unbiased here
+
+
+def test_noise_free_bearings_give_the_truth_and_the_crb_is_the_inverse_fisher():
+    t, po, x0 = scenario()
+    h, _, _ = bearing_model(x0, t, po)
+    est = ml_bearings_only(h, t, po, np.deg2rad(1.0))
+    np.testing.assert_allclose(est.x0, x0, rtol=1e-6, atol=1e-6)
+    assert est.converged
+    np.testing.assert_allclose(est.covariance @ fisher_information(x0, t, po, np.deg2rad(1.0)), np.eye(4), atol=1e-6)
+    x, P = est.state_at(t[[0, -1]])
+    np.testing.assert_allclose(x[0], x0, rtol=1e-6)
+    assert P.shape == (2, 4, 4)
+
+
+def test_no_maneuver_is_unobservable():
+    t = np.arange(0.0, 1800.0, 60.0)
+    po = np.column_stack([np.zeros_like(t), 2.5 * t])
+    x0 = np.array([4000.0, 5000.0, -1.0, 0.5])
+    h, _, _ = bearing_model(x0, t, po)
+    assert "unobservable" in check_observability(t, po)
+    with pytest.raises(InputError, match="has not maneuvered.*unobservable") as e:
+        ml_bearings_only(h, t, po, 0.01)
+    assert "\n" not in str(e.value)
+
+
+def test_unsorted_times_are_refused():
+    t, po, x0 = scenario()
+    h, _, _ = bearing_model(x0, t, po)
+    t2 = t.copy()
+    t2[[3, 4]] = t2[[4, 3]]
+    with pytest.raises(InputError, match="increase strictly"):
+        ml_bearings_only(h, t2, po, 0.01)
