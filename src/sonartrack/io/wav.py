@@ -1,0 +1,48 @@
+"""Two-channel WAV recordings for the bearing estimator (``sonartrack bearings``).
+
+Accepted: 2-channel PCM 16/32-bit integer or 32/64-bit float WAV, read with scipy.io.wavfile; integer
+samples are scaled to [-1, 1). Refused with a one-line reason: mono or > 2 channels, 8-bit or 24-bit
+files (scipy reads 24-bit as padded int32 on some versions; convert with sox or ffmpeg), empty or
+unreadable files.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sonartrack.core.errors import InputError, require
+
+
+def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
+    """(signals (2, n) float64, sample rate Hz)."""
+    import warnings
+
+    from scipy.io import wavfile
+
+    p = Path(path)
+    require(p.is_file(), f"recording not found: {p}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fs, data = wavfile.read(p)
+    except (ValueError, EOFError, OSError) as exc:
+        raise InputError(f"cannot read {p.name} as WAV ({exc}): give a PCM or float WAV file") from None
+    if data.ndim == 1:
+        raise InputError(f"{p.name} is mono: the bearing estimator needs two channels (one per sensor or half-array)")
+    require(data.shape[1] == 2, f"{p.name} has {data.shape[1]} channels: extract the two sensors' channels into a "
+                                "2-channel file (e.g. sox in.wav out.wav remix 1 2)")
+    require(data.shape[0] > 0, f"{p.name} holds no samples")
+    kind = data.dtype
+    if kind == np.int16:
+        x = data.astype(float) / 32768.0
+    elif kind == np.int32:
+        x = data.astype(float) / 2147483648.0
+    elif kind in (np.float32, np.float64):
+        x = data.astype(float)
+    else:
+        raise InputError(f"{p.name} has {kind} samples ({'8-bit' if kind == np.uint8 else 'unsupported'} format): "
+                         "convert to 16-bit PCM or 32-bit float WAV")
+    require(bool(np.all(np.isfinite(x))), f"{p.name} contains NaN/inf samples")
+    return np.ascontiguousarray(x.T), float(fs)

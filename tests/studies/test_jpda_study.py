@@ -1,0 +1,63 @@
+"""The jpda-amplitude study follows the study contract and its geometry matches its definitions."""
+
+import numpy as np
+import pytest
+
+from sonartrack import studies
+from sonartrack.core.random import trial_rng
+from sonartrack.io import toml as toml_io
+from sonartrack.studies import jpda_amplitude as study
+
+
+@pytest.fixture(scope="module")
+def small():
+    cfg = study.Config(runs=3, crossing_angles_deg=[20.0, 90.0], min_distances_deg=[1.0, 6.0], e2e_duration_s=30)
+    outs = [study.run_trial(cfg, trial_rng(1994, i)) for i in range(3)]
+    return cfg, {k: np.stack([o[k] for o in outs]) for k in outs[0]}
+
+
+def test_contract_surface():
+    mod = studies.load("jpda-amplitude")
+    assert mod.STUDY_ID == "jpda-amplitude" and mod.TITLE and mod.PAPER and mod.TRIAL_VERSION >= 1
+    cfg = mod.Config()
+    assert cfg.runs == 100 and cfg.gate_deg == 10.0 and cfg.amplitude_threshold == 5000.0
+    assert mod.Config.quick().runs < cfg.runs
+
+
+def test_config_round_trips_through_toml(tmp_path):
+    cfg = study.Config.quick()
+    p = tmp_path / "c.toml"
+    p.write_text(toml_io.dumps(cfg.model_dump(mode="json")))
+    assert toml_io.validate(study.Config, toml_io.load(p)) == cfg
+
+
+def test_geometries_follow_their_definitions():
+    cfg = study.Config()
+    for kind, val, truth in cfg.geometries():
+        gap = np.abs(truth[:, 0] - truth[:, 1])
+        if kind == "psi":
+            slope = np.diff(truth[:, 0])[0] - np.diff(truth[:, 1])[0]
+            assert np.rad2deg(2 * np.arctan(slope / 2)) == pytest.approx(val)
+            assert gap.min() < 1.0
+        else:
+            assert gap.min() == pytest.approx(val, abs=1e-6)
+        assert gap[-1] > 2 * cfg.success_tolerance_deg  # success at the end is unambiguous
+
+
+def test_trials_summary_claims_figures(small):
+    cfg, trials = small
+    again = study.run_trial(cfg, trial_rng(1994, 2))
+    for k, v in again.items():
+        np.testing.assert_array_equal(v, trials[k][2])
+        assert set(np.unique(v)) <= {0.0, 1.0}
+    s = study.summarize(trials, cfg)
+    assert set(s["rates"]) == {f"{c}_{t}" for c in study.CASES for t in study.TRACKERS}
+    out = study.claims(s, cfg)
+    assert {c["id"] for c in out} >= {"jpda_a_about_90pct", "jpda_falls_with_psi", "jpda_falls_with_L",
+                                      "similar_strengths_close", "end_to_end_from_sound"}
+    figs = study.figures(s, cfg)
+    assert list(figs)[0] == "scenario" and "success_rates" in figs
+    import matplotlib.pyplot as plt
+
+    for f in figs.values():
+        plt.close(f)
