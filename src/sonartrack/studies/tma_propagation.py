@@ -327,7 +327,8 @@ def figures(summary: dict, config: Config) -> dict:
             ax.plot(e.sound_speed_mps, e.depth_m, label=env)
         ax.invert_yaxis()
         ax.set(xlabel="sound speed (m/s)", ylabel="depth (m)", title=f"{sea.title()} Sea profiles (TEOS-10)")
-        ax.legend(fontsize=7)
+        if ax.lines:
+            ax.legend(fontsize=7)
     fig.tight_layout()
     figs["sound_speed"] = fig
 
