@@ -88,3 +88,17 @@ def test_em_map_needs_a_model_and_snr(files, tmp_path, capsys):
     code, _, err = run(capsys, "tma", "--bearings", nosnr, "--ownship", d / "turning_own.csv", "--method", "em-map",
                        "--env", "south-summer", "--sl", "140", "--out", tmp_path / "o")
     assert code == 2 and "snr_db" in err
+
+
+def test_sequential_ekf_from_the_batch_estimate(files, tmp_path, capsys):
+    d, r_end = files
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\nbatch_window_s = 600.0\n")
+    code, out, err = run(capsys, "tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv",
+                         "--method", "em-map", "--env", "south-summer", "--sl", "140", "--config", cfg, "--out", tmp_path / "o")
+    assert code == 0, err
+    assert "then a sequential EKF" in out
+    sol = pd.read_csv(tmp_path / "o" / "tma_solution.csv")
+    assert abs(sol["range_m"].iloc[-1] - r_end["turning"]) < 0.1 * r_end["turning"]
+    # the filter starts from the batch covariance and does not blow up
+    assert sol["range_std_m"].iloc[-1] < 0.2 * r_end["turning"]

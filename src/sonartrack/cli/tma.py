@@ -71,6 +71,8 @@ def tma_config_model():
         di_db: float = 12.5
         r_min_m: float = Field(500.0, gt=0)
         r_max_m: float = Field(60_000.0, gt=0)
+        batch_window_s: Optional[float] = Field(None, gt=0)
+        ekf_q_m2_s3: float = Field(1e-4, ge=0)
         # picture
         ellipses: int = Field(8, ge=0)
 
@@ -147,11 +149,34 @@ def run_tma(bearings_path, ownship_path, cfg, out: Path) -> str:
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            solution = solve_batch(record, own, cfg.method, sigma_bearing_rad=sigma_b, sigma_snr_db=cfg.sigma_snr_db,
+            batch_record = record
+            if cfg.batch_window_s is not None:
+                from sonartrack.tma.records import BearingRecord
+
+                first = record.time_s <= float(record.time_s[0]) + cfg.batch_window_s
+                require(0 < first.sum() < len(first), f"batch_window_s = {cfg.batch_window_s:g} s must leave bearings for "
+                                                      "both the batch and the EKF")
+                batch_record = BearingRecord(record.time_s[first], record.bearing_rad[first], None,
+                                             None if record.snr_db is None else record.snr_db[first])
+            solution = solve_batch(batch_record, own, cfg.method, sigma_bearing_rad=sigma_b, sigma_snr_db=cfg.sigma_snr_db,
                                    env=cfg.env, sl_db=cfg.sl_db, freq_hz=cfg.freq_hz, depth_m=cfg.depth_m,
                                    r_min_m=cfg.r_min_m, r_max_m=cfg.r_max_m, nl_db=cfg.nl_db, di_db=cfg.di_db)
         for w in caught:
             typer.echo(f"warning: {w.message}", err=True)
+        if cfg.batch_window_s is not None:
+            # batch on the first window only, then a sequential EKF takes over for the rest (paper P3)
+            from sonartrack.tma.batch import ekf_from_batch
+            from sonartrack.tma.batch_ml import BatchEstimate
+
+            from sonartrack.tma.records import TmaSolution
+
+            start = BatchEstimate(solution.state[-1], solution.covariance[-1], float(solution.time_s[-1]), 0, True, 0.0,
+                                  solution.method)
+            ekf = ekf_from_batch(record, own, start, start_s=start.t0_s, sigma_bearing_rad=sigma_b, q_m2_s3=cfg.ekf_q_m2_s3)
+            solution = TmaSolution(np.concatenate([solution.time_s, ekf.time_s[1:]]),
+                                   np.concatenate([solution.state, ekf.state[1:]]),
+                                   np.concatenate([solution.covariance, ekf.covariance[1:]]), ekf.method)
+            extra = f", batch on the first {cfg.batch_window_s:g} s then a sequential EKF"
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = write_solution_csv(out / CSV_NAME, solution, own)

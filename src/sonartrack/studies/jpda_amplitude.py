@@ -241,7 +241,28 @@ def figures(summary: dict, config: Config) -> dict:
         ax.legend(fontsize=7)
     figs["success_rates"] = fig
     figs["synthetic_example"] = _synthetic_example(config)
+    figs["peak_model"] = _peak_histograms(config)
     return figs
+
+
+def _peak_histograms(config: Config):
+    """The paper's histograms of the peak model (count, position, amplitude; strong, weak, background),
+    from 2000 synthetic scans at threshold 0, with the fitted parameters in the title."""
+    from sonartrack.acoustics.peak_fit import fit_peak_model, peak_histograms_figure
+
+    rng = np.random.default_rng(3)
+    model = PeakModel(false_rate=config.false_rate, gate_deg=config.gate_deg,
+                      false_amplitude_rate=config.false_amplitude_rate, amplitude_threshold=0.0)
+    K = 2000
+    truth = np.column_stack([np.full(K, 50.0), np.full(K, 130.0)])
+    scans = [(s.bearing_deg, s.amplitude) for s in generate_scans(rng, model, truth, [STRONG, WEAK])]
+    fig = peak_histograms_figure(scans, truth, config.gate_deg)
+    fit = fit_peak_model(scans, truth, config.gate_deg, threshold=0.0)
+    fig.suptitle(f"Peak model (2000 synthetic scans, threshold 0); fitted: lambda V {fit.false_rate:.2f}, alpha "
+                 f"{fit.false_amplitude_rate:.2e}, sigma_p {np.round(fit.sigma_p_deg, 2).tolist()} deg, z_a "
+                 f"{np.round(fit.amplitude_mean, -1).tolist()}, sigma_a {np.round(fit.amplitude_sd, -1).tolist()}", fontsize=8)
+    fig.tight_layout()
+    return fig
 
 
 def _waterfall(e: dict, title: str):

@@ -84,3 +84,48 @@ def solve_batch(record: BearingRecord, ownship: OwnshipTrack, method: str, *, si
     if not np.all(np.isfinite(est.covariance)):
         raise InputError("em-map found no well-defined solution (flat likelihood): check the SL, environment and depth")
     return estimate_to_solution(est, t)
+
+
+def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstimate, *, start_s: float,
+                   sigma_bearing_rad: float, q_m2_s3: float = 1e-4) -> TmaSolution:
+    """A sequential bearings-only EKF that takes over from a batch estimate (paper P3, sec. 2: the batch
+    solution initialises the tracker that follows the target from then on).
+
+    The batch estimate must come from the bearings up to ``start_s``; the EKF starts there with the
+    batch state and covariance and filters only the later bearings (refiltering the batch's own data
+    would count it twice and make the covariance too small). Absolute state [x, y, vx, vy] (m, m/s),
+    constant velocity with white-acceleration noise of intensity ``q_m2_s3``:
+    F = [[I, T I], [0, I]], Q = q [[T^3/3 I, T^2/2 I], [T^2/2 I, T I]]; bearing h = atan2(x - ox, y - oy)
+    with the Jacobian of batch_ml.bearing_model; Joseph-form update. Returns the states at ``start_s``
+    and at every later bearing.
+    """
+    from sonartrack.core.angles import wrap_angle
+    from sonartrack.filters.kalman import joseph_update, kf_gain
+
+    t_all = np.asarray(record.time_s, dtype=float)
+    later = t_all > start_s
+    require(bool(later.any()), f"no bearings after {start_s:g} s for the EKF to filter")
+    t = np.concatenate([[start_s], t_all[later]])
+    z = np.asarray(record.bearing_rad, dtype=float)[later]
+    own = ownship.position_at(t)
+    x0, P0 = est.state_at(t[:1])
+    x, P = x0[0].copy(), P0[0].copy()
+    require(bool(np.all(np.isfinite(P))), "the batch estimate has no finite covariance to start the EKF from")
+    R = np.array([[sigma_bearing_rad**2]])
+    xs = np.empty((len(t), 4))
+    Ps = np.empty((len(t), 4, 4))
+    xs[0], Ps[0] = x, P
+    for k in range(1, len(t)):
+        T = t[k] - t[k - 1]
+        F = np.eye(4)
+        F[0, 2] = F[1, 3] = T
+        Q = q_m2_s3 * np.kron(np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]]), np.eye(2))
+        x, P = F @ x, F @ P @ F.T + Q
+        dx, dy = x[0] - own[k, 0], x[1] - own[k, 1]
+        r2 = dx * dx + dy * dy
+        H = np.array([[dy / r2, -dx / r2, 0.0, 0.0]])
+        nu = np.array([wrap_angle(z[k - 1] - np.arctan2(dx, dy))])
+        S = H @ P @ H.T + R
+        x, P = joseph_update(x, P, nu, kf_gain(P, H, np.linalg.inv(S)), H, R)
+        xs[k], Ps[k] = x, P
+    return TmaSolution(t, xs, Ps, f"{est.method}+ekf")
