@@ -71,3 +71,21 @@ def test_summary_claims_figures(small):
 
     for f in figs.values():
         plt.close(f)
+
+
+def test_claims_survive_a_json_round_trip_with_failed_ml(small):
+    """An environment where ML diverged in every run has NaN RMSEs, which JSON stores as null."""
+    import json
+
+    from sonartrack.experiment.pipeline import _jsonable
+
+    cfg, trials = small
+    t2 = dict(trials)
+    t2["yellow-winter_ml"] = np.full_like(trials["yellow-winter_ml"], np.nan)
+    s = json.loads(json.dumps(_jsonable(study.summarize(t2, cfg))))
+    out = {c["id"]: c for c in study.claims(s, cfg)}
+    assert "ML diverged in 3/3" in out["em_map_not_worse_than_ml"]["ours"]
+    import matplotlib.pyplot as plt
+
+    for f in study.figures(s, cfg).values():
+        plt.close(f)

@@ -267,17 +267,23 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     return {"runs": len(next(iter(trials.values()))), "deltas_db": deltas.tolist(), "environments": envs}
 
 
+def _arr(x) -> np.ndarray:
+    """A summary list as floats (JSON turns NaN, e.g. an RMSE over no successful run, into None)."""
+    return np.array([np.nan if v is None else v for v in x], dtype=float)
+
+
 def claims(summary: dict, config: Config) -> list[dict]:
     envs = summary["environments"]
     out = []
-    worst = {e: max(v["em_rmse_pct"]) for e, v in envs.items()}
+    worst = {e: float(np.max(_arr(v["em_rmse_pct"]))) for e, v in envs.items()}
     out.append({"id": "em_map_under_10pct", "text": "EM/MAP normalised RMSE (start/end, X/Y) below 10 % in every environment with the true SL",
                 "paper": "Table 1: 0.26-6.22 %",
                 "ours": "; ".join(f"{e} {w:.2f} %" for e, w in worst.items()),
                 "tolerance": "every component < 10 %", "holds": bool(all(w < RMSE_LIMIT_PCT for w in worst.values()))})
-    cmp = {e: (float(np.mean(v["em_rmse_pct"])), float(np.mean(v["ml_rmse_pct"])), v["ml_failed"]) for e, v in envs.items()}
+    cmp = {e: (float(np.mean(_arr(v["em_rmse_pct"]))), float(np.mean(_arr(v["ml_rmse_pct"]))), v["ml_failed"])
+           for e, v in envs.items()}
     # ML that failed (diverged) in some runs is worse there whatever its RMSE over the rest
-    ok = all(f > 0 or not np.isfinite(b) or a <= 1.1 * b for a, b, f in cmp.values())
+    ok = all(np.isfinite(a) and (f > 0 or not np.isfinite(b) or a <= 1.1 * b) for a, b, f in cmp.values())
     out.append({"id": "em_map_not_worse_than_ml", "text": "EM/MAP at least as accurate as bearings-only ML on the same data",
                 "paper": "the SNR and the propagation model improve on bearings-only TMA",
                 "ours": "; ".join(f"{e} {a:.2f} vs {b:.2f} %" + (f" (ML diverged in {f}/{summary['runs']} runs)" if f else "")
@@ -357,7 +363,8 @@ def figures(summary: dict, config: Config) -> dict:
 
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5))
     for ax, env in zip(axes.T.ravel(), config.environments):
-        em, ml = np.asarray(envs[env]["start_errors_em"]), np.asarray(envs[env]["start_errors_ml"])
+        em = np.array([_arr(r) for r in envs[env]["start_errors_em"]]).reshape(-1, 2)
+        ml = np.array([_arr(r) for r in envs[env]["start_errors_ml"]]).reshape(-1, 2)
         ax.plot(ml[:, 0], ml[:, 1], "x", ms=4, label="bearings-only ML")
         ax.plot(em[:, 0], em[:, 1], "o", ms=3, label="EM/MAP")
         ax.axhline(0, color="k", lw=0.5)
@@ -370,7 +377,7 @@ def figures(summary: dict, config: Config) -> dict:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     d = summary["deltas_db"]
     for env, v in envs.items():
-        ax.plot(d, v["sweep_rmse_pct"], "o-", ms=3, label=env)
+        ax.plot(d, _arr(v["sweep_rmse_pct"]), "o-", ms=3, label=env)
     ax.axhline(RMSE_LIMIT_PCT, color="k", ls="--", lw=0.8)
     ax.set(yscale="log", xlabel="assumed SL - true SL (dB)", ylabel="normalised range RMSE (%)",
            title="SL mismatch (paper Fig. 7)")
