@@ -114,13 +114,11 @@ def tl_field(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: fl
     ranges, depths, tl = _run_pyram(env, freq_hz, source_depth_m, rmax_m, dr, dz, ndz)
     tl = tl + thorp_absorption_db_per_km(freq_hz) * ranges[None, :] / 1e3
     if use_cache:
+        from sonartrack.io.atomic import atomic_path
+
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
-        try:
+        with atomic_path(path) as tmp:
             np.savez(tmp, ranges_m=ranges, depths_m=depths, tl_db=tl.astype(np.float32))
-            os.replace(tmp, path)
-        finally:
-            tmp.unlink(missing_ok=True)
         tl = tl.astype(np.float32).astype(float)  # identical to what the cache returns next time
     return TLField(ranges, depths, tl, float(freq_hz), float(source_depth_m), env.name)
 

@@ -105,19 +105,12 @@ def estimate_peaks(signals, fs_hz: float, spacing_m: float, sound_speed_mps: flo
 
 def write_peaks_csv(path, record: PeakRecord) -> Path:
     """time_s, bearing_deg, amplitude (atomic write)."""
-    import os
-
     import pandas as pd
 
-    p = Path(path)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    try:
-        pd.DataFrame({"time_s": record.time_s, "bearing_deg": record.bearing_deg, "amplitude": record.amplitude}).to_csv(
-            tmp, index=False, float_format="%.6g")
-        os.replace(tmp, p)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return p
+    from sonartrack.io.atomic import write_csv
+
+    return write_csv(pd.DataFrame({"time_s": record.time_s, "bearing_deg": record.bearing_deg,
+                                   "amplitude": record.amplitude}), path, float_format="%.6g")
 
 
 def read_peaks_csv(path) -> PeakRecord:

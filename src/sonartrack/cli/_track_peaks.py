@@ -9,7 +9,6 @@ bearing_deg, bearing_rate_deg_s, bearing_std_deg, strength, confirmed: a row per
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 
 from sonartrack.core.errors import InputError
@@ -65,13 +64,9 @@ def track_peaks_command(peaks: Path, *, tracker: str, config: Path | None, out: 
     table = pd.DataFrame(rows, columns=cols)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    csv = out / "bearing_tracks.csv"
-    tmp = csv.with_name(f".{csv.name}.{os.getpid()}.tmp")
-    try:
-        table.to_csv(tmp, index=False, float_format="%.6g")
-        os.replace(tmp, csv)
-    finally:
-        tmp.unlink(missing_ok=True)
+    from sonartrack.io.atomic import write_csv
+
+    csv = write_csv(table, out / "bearing_tracks.csv", float_format="%.6g")
     from sonartrack.cli.bearings import waterfall_png
 
     conf = table[table["confirmed"]]

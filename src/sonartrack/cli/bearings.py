@@ -51,8 +51,6 @@ def bearings_cmd(
 
 def waterfall_png(path: Path, rec, tracks=None, title: str = "") -> Path:
     """Bearing-time picture of the peaks (amplitude as colour), optionally with tracks [(t, bearing, label)]."""
-    import os
-
     import matplotlib
 
     matplotlib.use("Agg")
@@ -67,11 +65,6 @@ def waterfall_png(path: Path, rec, tracks=None, title: str = "") -> Path:
     fig.colorbar(sc, ax=ax, label="amplitude")
     ax.set(xlabel="cone angle (deg from the array axis)", ylabel="time (s)", xlim=(0, 180), title=title)
     ax.invert_yaxis()
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
-    try:
-        fig.savefig(tmp, dpi=100, bbox_inches="tight")
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return path
+    from sonartrack.io.atomic import save_figure
+
+    return save_figure(fig, path, dpi=100, bbox_inches="tight")

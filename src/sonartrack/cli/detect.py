@@ -17,7 +17,6 @@ frames with the best track drawn over them) and a one-line decision.
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -130,13 +129,9 @@ def run_detect(frames_path, cfg, out: Path) -> str:
     table = pd.DataFrame({"frame": np.arange(1, K + 1), "range_index": best[:, 0], "doppler_index": best[:, 1],
                           "range_m": centres[:, 0], "range_rate_mps": centres[:, 1],
                           "cell_value": y[np.arange(K), best[:, 0], best[:, 1]]})
-    csv_path = out / CSV_NAME
-    tmp = csv_path.with_name(f".{CSV_NAME}.{os.getpid()}.tmp")
-    try:
-        table.to_csv(tmp, index=False, float_format="%.10g")
-        os.replace(tmp, csv_path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    from sonartrack.io.atomic import write_csv
+
+    csv_path = write_csv(table, out / CSV_NAME, float_format="%.10g")
     png_path = _picture(out / PNG_NAME, y, grid, best, res.statistic, thr, present)
     verdict = "TARGET PRESENT" if present else "no target"
     return (f"detect: {verdict}: statistic {res.statistic:.3f} vs threshold {thr:.3f} ({how}); {K} frames of {nr} x {nd} "
@@ -164,11 +159,6 @@ def _picture(path: Path, y, grid, best, stat, thr, present) -> Path:
     fig.suptitle(f"{'target present' if present else 'no target'}: statistic {stat:.2f}, threshold {thr:.2f}; "
                  "red: best track", fontsize=9)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
-    try:
-        fig.savefig(tmp, dpi=100)
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return path
+    from sonartrack.io.atomic import save_figure
+
+    return save_figure(fig, path, dpi=100)

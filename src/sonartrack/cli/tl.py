@@ -9,7 +9,6 @@ tl_avg_db, snr_db). ``--list`` prints the shipped environments.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -71,14 +70,10 @@ def run_tl(env, freq, zs, zr, rmax_m, sl, nl, di, threshold, out: Path) -> str:
     out.mkdir(parents=True, exist_ok=True)
     import pandas as pd
 
-    csv = out / "tl.csv"
-    tmp = csv.with_name(f".tl.csv.{os.getpid()}.tmp")
-    try:
-        pd.DataFrame({"range_m": f.ranges_m, "tl_db": line, "tl_avg_db": avg, "snr_db": snr}).to_csv(tmp, index=False,
-                                                                                                   float_format="%.4f")
-        os.replace(tmp, csv)
-    finally:
-        tmp.unlink(missing_ok=True)
+    from sonartrack.io.atomic import write_csv
+
+    csv = write_csv(pd.DataFrame({"range_m": f.ranges_m, "tl_db": line, "tl_avg_db": avg, "snr_db": snr}),
+                    out / "tl.csv", float_format="%.4f")
     _pictures(out, env, f, zr, line, avg, snr, det, threshold)
     fmt = ", ".join(f"{a / 1e3:.1f}-{b / 1e3:.1f} km" for a, b in det[:6]) or "none"
     cz = f"; convergence zones at {', '.join(f'{a / 1e3:.1f}-{b / 1e3:.1f} km' for a, b in czs[:4])}" if czs else ""
@@ -87,15 +82,9 @@ def run_tl(env, freq, zs, zr, rmax_m, sl, nl, di, threshold, out: Path) -> str:
 
 
 def _save(fig, path: Path) -> None:
-    import matplotlib.pyplot as plt
+    from sonartrack.io.atomic import save_figure
 
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
-    try:
-        fig.savefig(tmp, dpi=100, bbox_inches="tight")
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
+    save_figure(fig, path, dpi=100, bbox_inches="tight")
 
 
 def _pictures(out, env, f, zr, line, avg, snr, det, threshold) -> None:

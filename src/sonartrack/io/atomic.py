@@ -1,0 +1,44 @@
+"""Atomic file writes: an output is either the complete new file or absent, never half written.
+
+Write to a hidden temporary sibling (same folder, so the rename is atomic on POSIX), then
+``os.replace`` it over the target; on any error the temporary is removed and the target untouched.
+"""
+
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+
+@contextmanager
+def atomic_path(path) -> Iterator[Path]:
+    """Yield a temporary path next to ``path`` (same suffix); renamed over ``path`` if the block succeeds."""
+    p = Path(path)
+    tmp = p.with_name(f".{p.stem}.{os.getpid()}.tmp{p.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, p)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def save_figure(fig, path, **savefig_kwargs) -> Path:
+    """``fig.savefig`` atomically, then close the figure."""
+    import matplotlib.pyplot as plt
+
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, **savefig_kwargs)
+    finally:
+        plt.close(fig)
+    return Path(path)
+
+
+def write_csv(frame, path, **to_csv_kwargs) -> Path:
+    """``DataFrame.to_csv`` atomically (no index by default)."""
+    to_csv_kwargs.setdefault("index", False)
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, **to_csv_kwargs)
+    return Path(path)
