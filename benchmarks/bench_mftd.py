@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from pathlib import Path
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 
@@ -27,8 +27,8 @@ from _timing import best_of  # noqa: E402
 def _roc_chunk(args):
     start, count, present = args
     from sonartrack.core.random import trial_rng
-    from sonartrack.studies.mftd import Config, _detector
     from sonartrack.sim.range_doppler import simulate_frames, simulate_target
+    from sonartrack.studies.mftd import Config, _detector
 
     cfg = Config()
     grid = cfg.grid()

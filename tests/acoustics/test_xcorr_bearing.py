@@ -5,8 +5,9 @@ import pytest
 
 from sonartrack.acoustics.peak_fit import fit_peak_model
 from sonartrack.acoustics.signals import Multipath, SourceSpec, simulate_two_channel
-from sonartrack.acoustics.xcorr_bearing import estimate_peaks, read_peaks_csv, write_peaks_csv
+from sonartrack.acoustics.xcorr_bearing import estimate_peaks
 from sonartrack.core.errors import InputError
+from sonartrack.io.peaks import read_peaks_csv, write_peaks_csv
 from sonartrack.sim.bearing_peaks import STRONG, WEAK, PeakModel, generate_scans
 
 FS, D, C = 8000.0, 30.0, 1500.0

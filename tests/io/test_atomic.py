@@ -9,10 +9,9 @@ from sonartrack.io.atomic import atomic_path, write_csv
 def test_failed_write_keeps_the_old_file(tmp_path):
     target = tmp_path / "out.csv"
     target.write_text("old\n")
-    with pytest.raises(RuntimeError):
-        with atomic_path(target) as tmp:
-            tmp.write_text("half")
-            raise RuntimeError("disk full")
+    with pytest.raises(RuntimeError), atomic_path(target) as tmp:
+        tmp.write_text("half")
+        raise RuntimeError("disk full")
     assert target.read_text() == "old\n"
     assert list(tmp_path.iterdir()) == [target]
 

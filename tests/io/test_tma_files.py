@@ -6,8 +6,7 @@ import pytest
 
 from sonartrack.core.errors import InputError
 from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
-from sonartrack.io.tma_files import (check_coverage, read_bearings, read_ownship, solution_columns,
-                                     write_solution_csv)
+from sonartrack.io.tma_files import check_coverage, read_bearings, read_ownship, solution_columns, write_solution_csv
 
 
 def write(tmp_path, name, cols, parquet=False):

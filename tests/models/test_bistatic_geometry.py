@@ -3,8 +3,13 @@
 import numpy as np
 import pytest
 
-from sonartrack.models.bistatic import (BistaticErrors, bistatic_covariance, bistatic_inputs, bistatic_jacobian,
-                                        bistatic_position)
+from sonartrack.models.bistatic import (
+    BistaticErrors,
+    bistatic_covariance,
+    bistatic_inputs,
+    bistatic_jacobian,
+    bistatic_position,
+)
 
 
 def random_geometry(rng):

@@ -6,10 +6,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sonartrack.core.angles import wrap_angle
-from sonartrack.models.passive import (bearing_modified_row, bf_jacobian, bf_measurement, bf_residual,
-                                       modified_matrix)
-from sonartrack.models.relative_motion import (input_from_acceleration, observer_inputs, relative_predict_mean,
-                                               relative_process_noise, relative_transition)
+from sonartrack.models.passive import bearing_modified_row, bf_jacobian, bf_measurement, bf_residual, modified_matrix
+from sonartrack.models.relative_motion import (
+    input_from_acceleration,
+    observer_inputs,
+    relative_predict_mean,
+    relative_process_noise,
+    relative_transition,
+)
 
 C = 1500.0
 

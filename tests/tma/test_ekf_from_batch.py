@@ -2,10 +2,10 @@
 
 import numpy as np
 
+from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.tma.batch import ekf_from_batch
 from sonartrack.tma.batch_ml import BatchEstimate, bearing_model, ml_bearings_only
 from sonartrack.tma.records import BearingRecord, OwnshipTrack
-from sonartrack.sim.platforms import ManeuveringTrack
 
 KN = 1852.0 / 3600.0
 

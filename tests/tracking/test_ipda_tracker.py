@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from sonartrack.association.pda import pda_update_batch
 from sonartrack.core.errors import InputError
 from sonartrack.core.linalg import is_spd
-from sonartrack.tracking.tracker import CONFIRMED, Tracker, TrackerConfig
+from sonartrack.tracking.tracker import Tracker, TrackerConfig
 
 
 def straight_target(n, T=10.0, sigma=20.0, seed=0, clutter=0, region=5000.0):

@@ -15,8 +15,8 @@ arrival is a further plane wave from another cone angle (``bearing_offset_deg`` 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Union
 
 import numpy as np
 
@@ -34,7 +34,7 @@ class Multipath:
 class SourceSpec:
     """A source: cone angle (deg, or a function of time s -> deg), SNR per channel (dB), multipath arrivals."""
 
-    bearing_deg: Union[float, Callable[[float], float]]
+    bearing_deg: float | Callable[[float], float]
     snr_db: float
     multipath: tuple = ()
 

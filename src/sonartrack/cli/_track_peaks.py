@@ -43,8 +43,8 @@ def track_peaks_command(peaks: Path, *, tracker: str, config: Path | None, out: 
     import numpy as np
     import pandas as pd
 
-    from sonartrack.acoustics.xcorr_bearing import read_peaks_csv
     from sonartrack.io import toml as toml_io
+    from sonartrack.io.peaks import read_peaks_csv
     from sonartrack.tracking.bearing_tracker import BearingTracker, BearingTrackerConfig
 
     if tracker not in ("jpda", "jpda-a"):
@@ -67,7 +67,7 @@ def track_peaks_command(peaks: Path, *, tracker: str, config: Path | None, out: 
     from sonartrack.io.atomic import write_csv
 
     csv = write_csv(table, out / "bearing_tracks.csv", float_format="%.6g")
-    from sonartrack.cli.bearings import waterfall_png
+    from sonartrack.report.figures.bearings import waterfall_png
 
     conf = table[table["confirmed"]]
     lines = [(g["time_s"].to_numpy(), g["bearing_deg"].to_numpy(), f"track {tid}") for tid, g in conf.groupby("track_id")]

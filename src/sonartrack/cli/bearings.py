@@ -8,7 +8,7 @@ the cone angle from the array axis in 0..180 deg, time at the window centre) and
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -24,15 +24,17 @@ def bearings_cmd(
     spacing: Annotated[float, typer.Option(help="Sensor (or half-array centre) spacing d (m).")],
     sound_speed: Annotated[float, typer.Option(help="Sound speed c (m/s).")] = 1500.0,
     window: Annotated[float, typer.Option(help="Observation window (s).")] = 1.0,
-    threshold: Annotated[Optional[float], typer.Option(help="Peak amplitude threshold (default 5000 of 30000 = "
+    threshold: Annotated[float | None, typer.Option(help="Peak amplitude threshold (default 5000 of 30000 = "
                                                             "normalised correlation 1/6).")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("bearings"),
 ) -> None:
     """Cross-correlation bearings: WAV -> peaks CSV and waterfall PNG."""
     import numpy as np
 
-    from sonartrack.acoustics.xcorr_bearing import estimate_peaks, write_peaks_csv
+    from sonartrack.acoustics.xcorr_bearing import estimate_peaks
+    from sonartrack.io.peaks import write_peaks_csv
     from sonartrack.io.wav import read_two_channel_wav
+    from sonartrack.report.figures.bearings import waterfall_png
 
     require(spacing > 0, f"--spacing must be positive (metres), got {spacing:g}")
     require(sound_speed > 0, f"--sound-speed must be positive (m/s), got {sound_speed:g}")
@@ -47,24 +49,3 @@ def bearings_cmd(
     typer.echo(f"bearings: {n_win} windows of {window:g} s at {fs:g} Hz, {len(rec.time_s)} peaks "
                f"({len(rec.time_s) / max(n_win, 1):.1f} a window, median amplitude "
                f"{np.median(rec.amplitude) if len(rec.amplitude) else 0:.0f}); wrote {csv} and {png}")
-
-
-def waterfall_png(path: Path, rec, tracks=None, title: str = "") -> Path:
-    """Bearing-time picture of the peaks (amplitude as colour), optionally with tracks [(t, bearing, label)]."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 7))
-    sc = ax.scatter(rec.bearing_deg, rec.time_s, c=rec.amplitude, s=5, cmap="viridis")
-    for t, b, label in tracks or ():
-        ax.plot(b, t, "-", lw=1.5, label=label)
-    if tracks:
-        ax.legend(fontsize=7)
-    fig.colorbar(sc, ax=ax, label="amplitude")
-    ax.set(xlabel="cone angle (deg from the array axis)", ylabel="time (s)", xlim=(0, 180), title=title)
-    ax.invert_yaxis()
-    from sonartrack.io.atomic import save_figure
-
-    return save_figure(fig, path, dpi=100, bbox_inches="tight")

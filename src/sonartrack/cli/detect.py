@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -45,10 +45,10 @@ def detect_config_model():
         carrier_hz: float = Field(30e3, gt=0)
         sound_speed_mps: float = Field(1500.0, gt=0)
         range_min_m: float = 0.0
-        range_rate_min_mps: Optional[float] = None
+        range_rate_min_mps: float | None = None
         prior_density: Literal["smoothed", "centre"] = "smoothed"
         normalisation: Literal["median", "none"] = "median"
-        threshold: Optional[float] = None
+        threshold: float | None = None
         pfa: float = Field(1e-2, gt=0, lt=1)
         calibration_trials: int = Field(2000, ge=10)
         seed: int = 0
@@ -62,9 +62,9 @@ def register(app: typer.Typer) -> None:
 
 def detect_cmd(
     frames: Annotated[Path, typer.Option(help="K x Nr x Nd square-law frames (.npy, or .npz with key 'frames').")],
-    config: Annotated[Optional[Path], typer.Option(help="TOML settings (keys: DetectConfig in sonartrack/cli/detect.py).")] = None,
-    threshold: Annotated[Optional[float], typer.Option(help="Decision threshold on the log statistic (default: calibrated).")] = None,
-    pfa: Annotated[Optional[float], typer.Option(help="False-alarm probability for the calibrated threshold (default 0.01).")] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML settings (keys: DetectConfig in sonartrack/cli/detect.py).")] = None,
+    threshold: Annotated[float | None, typer.Option(help="Decision threshold on the log statistic (default: calibrated).")] = None,
+    pfa: Annotated[float | None, typer.Option(help="False-alarm probability for the calibrated threshold (default 0.01).")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("detect-results"),
 ) -> None:
     """Multi-frame track-before-detect: frames -> decision, statistic, best track (CSV and PNG)."""
@@ -80,11 +80,10 @@ def calibrate_threshold(detector, shape, pfa: float, trials: int, seed: int) -> 
     """Threshold with P(S > t | noise only) = pfa from ``trials`` seeded noise stacks of ``shape``."""
     import numpy as np
 
+    from sonartrack.core.errors import require
     from sonartrack.core.random import trial_rng
     from sonartrack.metrics.roc import thresholds
     from sonartrack.models.swerling import sample_cells
-
-    from sonartrack.core.errors import require
 
     require(pfa * trials >= 5, f"pfa {pfa:g} needs at least {int(np.ceil(5 / pfa))} calibration trials "
                                f"(have {trials}): raise calibration_trials or give a threshold")
@@ -144,7 +143,6 @@ def _picture(path: Path, y, grid, best, stat, thr, present) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     K = y.shape[0]
     r0, r1, v0, v1 = grid.extent()

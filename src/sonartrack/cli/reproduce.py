@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -27,19 +27,20 @@ def studies_cmd() -> None:
 
 def reproduce_cmd(
     study: Annotated[str, typer.Argument(help="Study id (see `sonartrack studies`) or 'all'.")],
-    runs: Annotated[Optional[int], typer.Option(help="Monte Carlo runs (default: the paper's, or the quick preset's).")] = None,
+    runs: Annotated[int | None, typer.Option(help="Monte Carlo runs (default: the paper's, or the quick preset's).")] = None,
     quick: Annotated[bool, typer.Option("--quick", help="Small preset for a fast check (CI, demo).")] = False,
     workers: Annotated[int, typer.Option(help="Local worker processes.")] = 2,
-    scheduler: Annotated[Optional[str], typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("results"),
     seed: Annotated[int, typer.Option(help="Master seed: trial i uses child i of SeedSequence(seed).")] = 2017,
-    config: Annotated[Optional[Path], typer.Option(help="TOML file overriding config values (one study only).")] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML file overriding config values (one study only).")] = None,
 ) -> None:
     """Reproduce a paper's experiment: run (or resume) its Monte Carlo trials, check its claims, write the report."""
     from sonartrack import studies
+    from sonartrack.cli._progress import TrialProgress, console, make_progress
     from sonartrack.experiment import pipeline
     from sonartrack.io import toml as toml_io
-    from sonartrack.cli._progress import TrialProgress, console, make_progress
+    from sonartrack.report.figures import study_figures
 
     require(runs is None or runs >= 1, f"--runs must be at least 1 (got {runs})")
     require(workers >= 1, f"--workers must be at least 1 (got {workers})")
@@ -57,7 +58,7 @@ def reproduce_cmd(
         bar = TrialProgress(prog)
         for mod, cfg in zip(mods, configs):
             results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers,
-                                              scheduler=scheduler, progress=bar))
+                                              scheduler=scheduler, progress=bar, figures=study_figures))
     from sonartrack.report.html import write_report
 
     report = write_report(out)

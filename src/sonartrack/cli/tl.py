@@ -10,7 +10,7 @@ tl_avg_db, snr_db). ``--list`` prints the shipped environments.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -22,14 +22,14 @@ def register(app: typer.Typer) -> None:
 
 
 def tl_cmd(
-    env: Annotated[Optional[str], typer.Option(help="Shipped environment (see --list).")] = None,
-    profile: Annotated[Optional[Path], typer.Option(help="User profile: TOML, or CSV with depth_m and sound_speed_mps "
+    env: Annotated[str | None, typer.Option(help="Shipped environment (see --list).")] = None,
+    profile: Annotated[Path | None, typer.Option(help="User profile: TOML, or CSV with depth_m and sound_speed_mps "
                                                         "(or temperature_c and salinity_psu).")] = None,
     freq: Annotated[float, typer.Option(help="Frequency (Hz).")] = 200.0,
     zs: Annotated[float, typer.Option(help="Source (target) depth (m).")] = 50.0,
-    zr: Annotated[Optional[float], typer.Option(help="Receiver depth (m; default = zs).")] = None,
+    zr: Annotated[float | None, typer.Option(help="Receiver depth (m; default = zs).")] = None,
     rmax: Annotated[float, typer.Option(help="Maximum range (km).")] = 50.0,
-    water_depth: Annotated[Optional[float], typer.Option(help="Water depth (m) for a CSV profile (default: its last depth).")] = None,
+    water_depth: Annotated[float | None, typer.Option(help="Water depth (m) for a CSV profile (default: its last depth).")] = None,
     sl: Annotated[float, typer.Option("--sl", help="Source level (dB).")] = 140.0,
     nl: Annotated[float, typer.Option("--nl", help="Noise level (dB).")] = 73.0,
     di: Annotated[float, typer.Option("--di", help="Directivity index (dB).")] = 12.5,
@@ -54,7 +54,6 @@ def tl_cmd(
 
 
 def run_tl(env, freq, zs, zr, rmax_m, sl, nl, di, threshold, out: Path) -> str:
-    import numpy as np
 
     from sonartrack.acoustics.sonar_equation import convergence_zones, detection_ranges, passive_snr_db
     from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field

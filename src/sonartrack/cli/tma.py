@@ -21,7 +21,7 @@ from __future__ import annotations
 import functools
 import os
 from pathlib import Path
-from typing import Annotated, Literal, Optional
+from typing import Annotated, Literal
 
 import typer
 
@@ -56,22 +56,22 @@ def tma_config_model():
         initial_range_m: float = Field(10_000.0, gt=0)
         sigma_range_m: float = Field(5_000.0, gt=0)
         sigma_target_velocity_mps: float = Field(5.0, gt=0)
-        sigma_f0_hz: Optional[float] = Field(None, gt=0)
+        sigma_f0_hz: float | None = Field(None, gt=0)
         sound_speed_mps: float = Field(1500.0, gt=0)
         # input checks
         max_nav_gap_s: float = Field(120.0, gt=0)
         check_radians: bool = True
         # batch methods
-        env: Optional[str] = None
-        sl_db: Optional[float] = None
+        env: str | None = None
+        sl_db: float | None = None
         sigma_snr_db: float = Field(1.0, gt=0)
         freq_hz: float = Field(200.0, gt=0)
-        depth_m: Optional[float] = None
+        depth_m: float | None = None
         nl_db: float = 73.0
         di_db: float = 12.5
         r_min_m: float = Field(500.0, gt=0)
         r_max_m: float = Field(60_000.0, gt=0)
-        batch_window_s: Optional[float] = Field(None, gt=0)
+        batch_window_s: float | None = Field(None, gt=0)
         ekf_q_m2_s3: float = Field(1e-4, ge=0)
         # picture
         ellipses: int = Field(8, ge=0)
@@ -86,14 +86,14 @@ def register(app: typer.Typer) -> None:
 def tma_cmd(
     bearings: Annotated[Path, typer.Option(help="Bearings file (CSV/Parquet): time_s, bearing_deg[, frequency_hz, snr_db].")],
     ownship: Annotated[Path, typer.Option(help="Ownship navigation file (CSV/Parquet): time_s, x_m, y_m.")],
-    frequency: Annotated[Optional[bool], typer.Option("--frequency/--no-frequency",
+    frequency: Annotated[bool | None, typer.Option("--frequency/--no-frequency",
                                                       help="Use frequency_hz too (sequential methods).")] = None,
-    method: Annotated[Optional[str], typer.Option(help="ekf | mgekf | imm-ekf | imm-mgekf | ml | em-map (default imm-mgekf).")] = None,
-    sigma_bearing_deg: Annotated[Optional[float], typer.Option(help="Bearing noise std (deg; default 1.0).")] = None,
-    sigma_freq_hz: Annotated[Optional[float], typer.Option(help="Frequency noise std (Hz; default 0.1).")] = None,
-    env: Annotated[Optional[str], typer.Option(help="em-map propagation model: a shipped environment (east-summer, ..., see sonartrack tl --list) or a profile file (.toml or .csv).")] = None,
-    sl: Annotated[Optional[float], typer.Option("--sl", help="Source level in dB (ml, em-map).")] = None,
-    config: Annotated[Optional[Path], typer.Option(help="TOML file with settings (keys: the TmaConfig fields in sonartrack/cli/tma.py).")] = None,
+    method: Annotated[str | None, typer.Option(help="ekf | mgekf | imm-ekf | imm-mgekf | ml | em-map (default imm-mgekf).")] = None,
+    sigma_bearing_deg: Annotated[float | None, typer.Option(help="Bearing noise std (deg; default 1.0).")] = None,
+    sigma_freq_hz: Annotated[float | None, typer.Option(help="Frequency noise std (Hz; default 0.1).")] = None,
+    env: Annotated[str | None, typer.Option(help="em-map propagation model: a shipped environment (east-summer, ..., see sonartrack tl --list) or a profile file (.toml or .csv).")] = None,
+    sl: Annotated[float | None, typer.Option("--sl", help="Source level in dB (ml, em-map).")] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML file with settings (keys: the TmaConfig fields in sonartrack/cli/tma.py).")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("tma-results"),
 ) -> None:
     """Target motion analysis: bearings (+ frequency) and ownship navigation -> target solution CSV and picture."""
@@ -167,7 +167,6 @@ def run_tma(bearings_path, ownship_path, cfg, out: Path) -> str:
             # batch on the first window only, then a sequential EKF takes over for the rest (paper P3)
             from sonartrack.tma.batch import ekf_from_batch
             from sonartrack.tma.batch_ml import BatchEstimate
-
             from sonartrack.tma.records import TmaSolution
 
             start = BatchEstimate(solution.state[-1], solution.covariance[-1], float(solution.time_s[-1]), 0, True, 0.0,

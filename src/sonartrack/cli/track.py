@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -22,11 +22,11 @@ def register(app: typer.Typer) -> None:
 
 
 def track_cmd(
-    contacts: Annotated[Optional[Path], typer.Option(help="Contacts CSV/Parquet: time_s, x_m, y_m [+ var_x_m2, var_y_m2, cov_xy_m2] or raw bistatic time_s, travel_time_s, bearing_deg.")] = None,
-    nav: Annotated[Optional[Path], typer.Option(help="Navigation CSV/Parquet for raw bistatic contacts: time_s, tx_x_m, tx_y_m, rx_x_m, rx_y_m, array_heading_deg.")] = None,
-    peaks: Annotated[Optional[Path], typer.Option(help="Bearing peaks CSV (time_s, bearing_deg, amplitude) for JPDA tracking.")] = None,
+    contacts: Annotated[Path | None, typer.Option(help="Contacts CSV/Parquet: time_s, x_m, y_m [+ var_x_m2, var_y_m2, cov_xy_m2] or raw bistatic time_s, travel_time_s, bearing_deg.")] = None,
+    nav: Annotated[Path | None, typer.Option(help="Navigation CSV/Parquet for raw bistatic contacts: time_s, tx_x_m, tx_y_m, rx_x_m, rx_y_m, array_heading_deg.")] = None,
+    peaks: Annotated[Path | None, typer.Option(help="Bearing peaks CSV (time_s, bearing_deg, amplitude) for JPDA tracking.")] = None,
     tracker: Annotated[str, typer.Option(help="For --peaks: jpda or jpda-a.")] = "jpda-a",
-    config: Annotated[Optional[Path], typer.Option(help="TOML file with tracker settings.")] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML file with tracker settings.")] = None,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("tracks"),
     confirmed_only: Annotated[bool, typer.Option("--confirmed-only", help="Write confirmed tracks only.")] = False,
 ) -> None:

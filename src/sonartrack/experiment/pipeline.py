@@ -8,14 +8,20 @@ written to a temporary name and renamed, so a folder never holds a half-written 
 from __future__ import annotations
 
 import json
-import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from sonartrack.experiment import runner, store
+from sonartrack.experiment.claims import as_dicts
 from sonartrack.io import toml as toml_io
+from sonartrack.io.atomic import save_figure, write_text
+
+#: ``figures(study_id, summary, config) -> {name: matplotlib Figure}``: the face (cli/, report/) passes
+#: its figure maker in, so that this layer never imports the plotting layer above it.
+FigureMaker = Callable[[str, dict, object], dict]
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,12 +52,6 @@ def _deep_update(base: dict, new: dict) -> dict:
     return out
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def _jsonable(x):
     if isinstance(x, dict):
         return {str(k): _jsonable(v) for k, v in x.items()}
@@ -69,34 +69,33 @@ def _jsonable(x):
     return x
 
 
-def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path) -> tuple[dict, list[dict]]:
+def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path,
+           figures: FigureMaker | None = None) -> tuple[dict, list[dict]]:
     """Summarise stored trials, write summary.json, config.toml, figures and trials.parquet."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     folder = Path(out) / study_mod.STUDY_ID
     folder.mkdir(parents=True, exist_ok=True)
     summary = _jsonable(study_mod.summarize(trials, config))
-    claims = _jsonable(study_mod.claims(summary, config))
-    figs = study_mod.figures(summary, config)
-    for name, fig in figs.items():
-        tmp = folder / f".{name}.{os.getpid()}.tmp.png"
-        fig.savefig(tmp, dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        os.replace(tmp, folder / f"{name}.png")
+    claims = _jsonable(as_dicts(study_mod.claims(summary, config)))
+    names = []
+    if figures is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        for name, fig in figures(study_mod.STUDY_ID, summary, config).items():
+            save_figure(fig, folder / f"{name}.png", dpi=110, bbox_inches="tight")
+            names.append(name)
     store.write_trials_file(folder / "trials.parquet", trials)
-    _atomic_write_text(folder / "config.toml", toml_io.dumps(config.model_dump(mode="json")))
+    write_text(folder / "config.toml", toml_io.dumps(config.model_dump(mode="json")))
     doc = {"study": study_mod.STUDY_ID, "title": study_mod.TITLE, "paper": study_mod.PAPER,
-           "runs": int(config.runs), "figures": list(figs), "summary": summary, "claims": claims}
-    _atomic_write_text(folder / "summary.json", json.dumps(doc, indent=1, allow_nan=False))
+           "runs": int(config.runs), "figures": names, "summary": summary, "claims": claims}
+    write_text(folder / "summary.json", json.dumps(doc, indent=1, allow_nan=False))
     return summary, claims
 
 
 def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, scheduler: str | None = None,
-              progress=None) -> StudyResult:
-    """Run or resume a study's trials and write its outputs. ``progress(total, done, advance)`` hooks a bar."""
+              progress=None, figures: FigureMaker | None = None) -> StudyResult:
+    """Run or resume a study's trials and write its outputs. ``progress(total, done, advance)`` hooks a bar;
+    ``figures`` (e.g. :func:`sonartrack.report.figures.study_figures`) draws the PNGs."""
     plan = runner.plan_run(study_mod, config, config.runs, seed, out)
     if plan.n_todo and hasattr(study_mod, "prepare"):
         # shared, expensive inputs (e.g. transmission-loss fields) computed once here and cached on
@@ -106,6 +105,6 @@ def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, sche
         progress.start(plan.study_id, plan.runs, plan.runs - plan.n_todo)
     trials = runner.execute(plan, config, workers=workers, scheduler=scheduler,
                             on_chunk=(progress.advance if progress is not None else None))
-    _, claims = finish(study_mod, config, trials, out)
+    _, claims = finish(study_mod, config, trials, out, figures=figures)
     held = sum(1 for c in claims if c.get("holds"))
     return StudyResult(plan.study_id, Path(out) / plan.study_id, plan.runs, len(claims), held, plan.n_todo)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonartrack.core.gaussian import inv_and_logdet, LOG_2PI
+from sonartrack.core.gaussian import LOG_2PI, inv_and_logdet
 from sonartrack.filters.imm import imm_combine, imm_mix, imm_mixing, imm_mode_update
 from sonartrack.filters.kalman import joseph_update, kf_innovation
 

@@ -14,7 +14,6 @@ Contacts file (CSV or Parquet), one row per contact, rows with the same ``time_s
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 

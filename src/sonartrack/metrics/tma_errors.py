@@ -45,15 +45,6 @@ def tma_errors(est, truth) -> dict[str, np.ndarray]:
     }
 
 
-def rmse_over_runs(errors, axis: int = 0) -> np.ndarray:
-    """sqrt(mean of squared errors) over runs (axis 0 by default), skipping NaN entries."""
-    e = np.asarray(errors, dtype=float)
-    with np.errstate(invalid="ignore"):
-        n = np.sum(np.isfinite(e), axis=axis)
-        s = np.nansum(e * e, axis=axis)
-        return np.where(n > 0, np.sqrt(s / np.maximum(n, 1)), np.nan)
-
-
 def time_averaged_rmse(errors, start: int = 0, stop: int | None = None) -> float:
     """RMSE over runs *and* the time window [start, stop): sqrt(mean of e^2) (NaN entries skipped)."""
     e = np.asarray(errors, dtype=float)[:, start:stop]

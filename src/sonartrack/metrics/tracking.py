@@ -41,11 +41,3 @@ def scan_ctt_measures(x_true, x_hat, P_init, confirmed, existence, threshold: fl
     err = float(np.hypot(*(np.asarray(x_hat)[best, :2] - np.asarray(x_true)[:2])))
     return True, n_false, err, int(best)
 
-
-def rms_over_runs(errors, axis: int = 0):
-    """Root mean square over runs, ignoring NaN (runs without a value at that scan)."""
-    e = np.asarray(errors, float)
-    with np.errstate(invalid="ignore"):
-        n = np.sum(np.isfinite(e), axis=axis)
-        s = np.nansum(e**2, axis=axis)
-        return np.where(n > 0, np.sqrt(s / np.maximum(n, 1)), np.nan)

@@ -93,7 +93,7 @@ class RangeDopplerGrid:
 
     @classmethod
     def cw(cls, n_range: int, n_doppler: int, pulse_s: float, carrier_hz: float, sound_speed_mps: float,
-           range_min_m: float = 0.0, range_rate_min_mps: float | None = None) -> "RangeDopplerGrid":
+           range_min_m: float = 0.0, range_rate_min_mps: float | None = None) -> RangeDopplerGrid:
         """The plane of a CW pulse; by default the Doppler axis is centred on zero range-rate."""
         dr, _, dv = cw_cell_sizes(pulse_s, carrier_hz, sound_speed_mps)
         v0 = -0.5 * n_doppler * dv if range_rate_min_mps is None else float(range_rate_min_mps)

@@ -11,7 +11,7 @@ import base64
 import html
 import json
 import os
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 from sonartrack import __version__
@@ -71,7 +71,7 @@ def write_report(out: Path) -> Path:
     folders = [out / s for s in order if (out / s / "summary.json").exists()]
     toc = "".join(f'<li><a href="#{f.name}">{f.name}</a></li>' for f in folders)
     body = "\n".join(_section(f) for f in folders) or "<p>No study has been run yet.</p>"
-    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     page = (f"<!doctype html><html><head><meta charset='utf-8'><title>sonartrack report</title><style>{_CSS}</style></head>"
             f"<body><h1>sonartrack — reproduced studies</h1><p class='muted'>sonartrack {__version__}, {stamp}</p>"
             f"<ul>{toc}</ul>{body}</body></html>")

@@ -20,7 +20,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.filters.imm_ekf import run_imm_bf, transition_matrix
-from sonartrack.metrics.tma_errors import diverged, rmse_over_runs, time_averaged_rmse, tma_errors
+from sonartrack.metrics.statistics import rmse_over_runs
+from sonartrack.metrics.tma_errors import diverged, time_averaged_rmse, tma_errors
 from sonartrack.models.passive import bf_measurement
 from sonartrack.models.relative_motion import observer_inputs
 from sonartrack.sim.platforms import ManeuveringTrack
@@ -98,7 +99,7 @@ class Config(BaseModel):
     divergence_rel_threshold: float = Field(0.25, gt=0)
 
     @classmethod
-    def quick(cls) -> "Config":
+    def quick(cls) -> Config:
         """CI preset: the full scenario and every filter, 20 runs."""
         return cls(runs=20)
 

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from sonartrack.metrics.tracking import CTT_CHI2_4DOF_99, rms_over_runs, scan_ctt_measures
+from sonartrack.metrics.statistics import rmse_over_runs
+from sonartrack.metrics.tracking import CTT_CHI2_4DOF_99, scan_ctt_measures
 from sonartrack.models.bistatic import BistaticErrors
 from sonartrack.models.clutter import Region
 from sonartrack.sim.bistatic_sonar import BistaticSonar, simulate_scan
@@ -102,7 +103,7 @@ class Config(BaseModel):
     ctt_threshold: float = CTT_CHI2_4DOF_99
 
     @classmethod
-    def quick(cls) -> "Config":
+    def quick(cls) -> Config:
         """CI preset: the full scenario and every tracker, 20 runs."""
         return cls(runs=20)
 
@@ -199,7 +200,7 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     err_m = np.hypot(err_xy[..., 0], err_xy[..., 1])
     bias = _nanmean_quiet(err_xy)  # (n_scans, 2)
     s = {"runs": runs, "turn_scan": k0, "n_scans": config.n_scans,
-         "meas_error_rms_m": rms_over_runs(err_m).tolist(),
+         "meas_error_rms_m": rmse_over_runs(err_m).tolist(),
          "meas_error_mean_m": _nanmean_quiet(err_m).tolist(),
          "meas_bias_m": np.hypot(bias[:, 0], bias[:, 1]).tolist(),
          "clutter_per_scan": float(np.mean(trials["n_measurements"]) - config.pd),
@@ -215,15 +216,15 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
             "label": LABELS[case], "q": list(q),
             "ctt_rate": ctt.mean(axis=0).tolist(),
             "cft_per_scan": trials[f"{case}_cft"].mean(axis=0).tolist(),
-            "range_rmse_m": rms_over_runs(trials[f"{case}_err"]).tolist(),
+            "range_rmse_m": rmse_over_runs(trials[f"{case}_err"]).tolist(),
             "mode_prob": np.asarray(mu_mean).tolist(),
             "ctt_before": float(per_run_before.mean()), "ctt_after": float(per_run_after.mean()),
             "ctt_all": float(per_run_all.mean()),
             "per_run_before": per_run_before.tolist(), "per_run_after": per_run_after.tolist(),
             "per_run_all": per_run_all.tolist(),
             "cft_mean": float(trials[f"{case}_cft"].mean()),
-            "rmse_before_m": float(_nanmean_quiet(rms_over_runs(trials[f"{case}_err"])[:k0])),
-            "rmse_after_m": float(_nanmean_quiet(rms_over_runs(trials[f"{case}_err"])[k0:])),
+            "rmse_before_m": float(_nanmean_quiet(rmse_over_runs(trials[f"{case}_err"])[:k0])),
+            "rmse_after_m": float(_nanmean_quiet(rmse_over_runs(trials[f"{case}_err"])[k0:])),
         }
     return s
 

@@ -75,7 +75,7 @@ class Config(BaseModel):
     e2e_spacing_m: float = 20.0
 
     @classmethod
-    def quick(cls) -> "Config":
+    def quick(cls) -> Config:
         return cls(runs=20)
 
     def model(self) -> PeakModel:

@@ -101,7 +101,7 @@ class Config(BaseModel):
     h1_fraction: float = Field(0.4, gt=0, le=1, description="share of trials that also run the target-present stacks")
 
     @classmethod
-    def quick(cls) -> "Config":
+    def quick(cls) -> Config:
         return cls(runs=1000, h1_fraction=1.0)
 
     def grid(self) -> RangeDopplerGrid:

@@ -97,7 +97,7 @@ class Config(BaseModel):
     sweep_fraction: float = Field(0.3, gt=0, le=1)
 
     @classmethod
-    def quick(cls) -> "Config":
+    def quick(cls) -> Config:
         return cls(runs=6, sweep_fraction=1.0)
 
     def times_s(self) -> np.ndarray:

@@ -34,8 +34,8 @@ the bearings-only ML estimate when there is one, and the highest final L wins.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.models.passive import SOUND_SPEED_MPS
 from sonartrack.models.relative_motion import observer_inputs
+from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
 
 METHODS = ("ekf", "mgekf", "imm-ekf", "imm-mgekf")
 

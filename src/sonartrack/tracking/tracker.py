@@ -117,14 +117,14 @@ class _Tracks:
     born_s: np.ndarray
 
     @classmethod
-    def empty(cls, r: int) -> "_Tracks":
+    def empty(cls, r: int) -> _Tracks:
         return cls(np.zeros((0, r, 4)), np.zeros((0, r, 4, 4)), np.zeros((0, r)), np.zeros(0), np.zeros(0, np.int8),
                    np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros(0))
 
-    def select(self, keep: np.ndarray) -> "_Tracks":
+    def select(self, keep: np.ndarray) -> _Tracks:
         return _Tracks(*(getattr(self, f)[keep] for f in _FIELDS))
 
-    def append(self, other: "_Tracks") -> "_Tracks":
+    def append(self, other: _Tracks) -> _Tracks:
         return _Tracks(*(np.concatenate([getattr(self, f), getattr(other, f)]) for f in _FIELDS))
 
 

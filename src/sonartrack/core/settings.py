@@ -1,0 +1,93 @@
+"""Settings: each group declared once, with type, default, unit and a one-line doc beside each field.
+
+Every group of settings in sonartrack (a tracker, a detector, a study's scenario) is a subclass of
+:class:`Settings`, and each field is declared with :func:`setting`::
+
+    class TrackerSettings(Settings):
+        pd: float = setting(0.8, "probability of detection of a target", unit="1", gt=0, le=1)
+
+The same declaration serves every face: studies nest it in their config, TOML files nest it as a
+table (``[tracker]``), command-line options take their help text from it (``cli/_settings.py``), and
+``--print-config`` prints the resolved values with their units and docs (:func:`to_commented_toml`).
+Settings are frozen pydantic models with unknown keys refused, so a misspelt TOML key is an error, not
+a silently ignored value.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class Settings(BaseModel):
+    """Base of every settings group: frozen, unknown keys refused, NaN refused."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+
+def setting(default: Any = ..., doc: str = "", *, unit: str = "", default_factory=None, **constraints) -> Any:
+    """A settings field: ``default``, a one-line ``doc``, its ``unit`` ("1" for dimensionless), and
+    pydantic constraints (``gt``, ``ge``, ``le``, ``lt``, ``min_length``, ...)."""
+    extra = {"unit": unit}
+    if default_factory is not None:
+        return Field(default_factory=default_factory, description=doc, json_schema_extra=extra, **constraints)
+    return Field(default, description=doc, json_schema_extra=extra, **constraints)
+
+
+def field_unit(model_cls: type[BaseModel], name: str) -> str:
+    """The unit declared for field ``name`` of a settings class ('' if none)."""
+    extra = model_cls.model_fields[name].json_schema_extra or {}
+    return str(extra.get("unit", "")) if isinstance(extra, dict) else ""
+
+
+def field_help(model_cls: type[BaseModel], name: str) -> str:
+    """'doc [unit]' of field ``name``: the text a command-line option shows."""
+    f = model_cls.model_fields[name]
+    unit = field_unit(model_cls, name)
+    doc = f.description or name
+    return f"{doc} [{unit}]" if unit and unit != "1" else doc
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def to_commented_toml(settings: BaseModel, _prefix: str = "") -> str:
+    """The resolved settings as TOML, each key followed by ``# doc [unit]`` (nested groups as tables).
+
+    The output is valid TOML and reads back to the same settings."""
+    cls = type(settings)
+    lines: list[str] = []
+    tables: list[tuple[str, BaseModel]] = []
+    for name in cls.model_fields:
+        value = getattr(settings, name)
+        if isinstance(value, BaseModel):
+            tables.append((name, value))
+            continue
+        if value is None:
+            lines.append(f"# {name} = (not set)  # {field_help(cls, name)}")
+            continue
+        dumped = settings.model_dump(mode="json", include={name})[name]
+        lines.append(f"{name} = {_toml_value(dumped)}  # {field_help(cls, name)}")
+    for name, sub in tables:
+        full = f"{_prefix}{name}"
+        lines.append("")
+        lines.append(f"[{full}]")
+        lines.append(to_commented_toml(sub, _prefix=full + ".").rstrip("\n"))
+    return "\n".join(lines).strip("\n") + "\n"
