@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    ?= results
 
-.PHONY: demo test bench install install-test clean
+.PHONY: demo test lint bench install install-test clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -26,8 +26,11 @@ demo: install
 	$(BIN)/sonartrack reproduce all --quick --out $(OUT)
 	@echo "Report: $(abspath $(OUT))/report.html"
 
-test: install-test
+test: install-test lint
 	$(BIN)/python -m pytest -q -n 2
+
+lint: install-test
+	$(BIN)/ruff check src tests benchmarks
 
 bench: install-test
 	$(BIN)/python benchmarks/run_all.py

@@ -24,11 +24,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _timing import best_of  # noqa: E402
 
 
-def main() -> None:
-    tmp = tempfile.mkdtemp()
-    os.environ["SONARTRACK_CACHE_DIR"] = tmp
+def bench_tl() -> None:
+    """RAM TL cold (pyram import apart) and through the disk cache."""
     from sonartrack.acoustics.environment import load_environment
-    from sonartrack.acoustics.transmission_loss import tl_field
+    from sonartrack.io.environment import cached_tl_field
 
     t0 = time.perf_counter()
     import pyram.PyRAM  # noqa: F401 - compile once, outside the timing
@@ -36,18 +35,16 @@ def main() -> None:
     t_import = time.perf_counter() - t0
     env = load_environment("east-summer")
     t0 = time.perf_counter()
-    tl_field(env, 200.0, 200.0, rmax_m=80_000.0)
+    cached_tl_field(env, 200.0, 200.0, rmax_m=80_000.0)
     t_cold = time.perf_counter() - t0
-    t_cache = best_of(lambda: tl_field(env, 200.0, 200.0, rmax_m=80_000.0), 5)
+    t_cache = best_of(lambda: cached_tl_field(env, 200.0, 200.0, rmax_m=80_000.0), 5)
     print(f"TL East Sea summer, 200 m, 200 Hz, to 80 km: cold {t_cold:.2f} s (target <= 2.5 s; pyram import "
           f"{t_import:.1f} s apart), from cache {t_cache * 1e3:.1f} ms (target < 50 ms)")
 
-    from scipy.optimize import least_squares
 
-    from sonartrack.core.angles import wrap_angle
+def _scenario():
+    """Bearings and SNRs of one tma-propagation run, South Sea summer: (config, t, po, z, xi, ranges, snr, sb)."""
     from sonartrack.studies.tma_propagation import Config, placement, snr_curve
-    from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only
-    from sonartrack.tma.em_map import make_problem, solve_em_map
 
     cfg = Config()
     e = "south-summer"
@@ -61,9 +58,22 @@ def main() -> None:
     sb = np.deg2rad(0.5)
     z = np.arctan2(d[:, 0], d[:, 1]) + rng.normal(0, sb, len(t))
     xi = np.interp(np.linalg.norm(d, axis=1), ranges, snr) + rng.normal(0, 1.0, len(t))
+    return cfg, t, po, z, xi, ranges, snr, sb
+
+
+def bench_solvers() -> None:
+    """One EM/MAP solve; bearings-only ML against scipy's least_squares on the same problem."""
+    from scipy.optimize import least_squares
+
+    from sonartrack.core.angles import wrap_angle
+    from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only
+    from sonartrack.tma.em_map import make_problem, solve_em_map
+
+    cfg, t, po, z, xi, ranges, snr, sb = _scenario()
 
     def em():
-        prob = make_problem(z, xi, t, po, sb, 1.0, lambda r: np.interp(r, ranges, snr), cfg.r_min_m, cfg.r_max_m)
+        prob = make_problem(z, xi, t, po, sb, 1.0, lambda r: np.interp(r, ranges, snr), cfg.em_map.r_min_m,
+                            cfg.em_map.r_max_m)
         return solve_em_map(prob)
 
     t_em = best_of(em, 3, repeat=3)
@@ -82,6 +92,11 @@ def main() -> None:
     print(f"bearings-only ML (Gauss-Newton/LM), 100 bearings: ours {t_ours * 1e3:.2f} ms, peer {t_peer * 1e3:.2f} ms "
           f"(scipy least_squares 'lm', same start), ratio {t_peer / t_ours:.1f} x; max |X0 diff| {diff:.1e}")
 
+
+def bench_study() -> None:
+    """The full study's time, extrapolated from a 4-run reproduce in which every run sweeps."""
+    from sonartrack.studies.tma_propagation import Config
+
     with tempfile.TemporaryDirectory() as out:
         cfgfile = Path(out) / "c.toml"
         cfgfile.write_text("sweep_fraction = 1.0\n")
@@ -92,6 +107,13 @@ def main() -> None:
     full = t4 / 4 * (100 * Config().sweep_fraction) + t4 / 4 * 100 * (1 - Config().sweep_fraction) * 2 / 17
     print(f"tma-propagation study, full (100 runs, 30 % sweeping 15 SL values): ~{full:.0f} s extrapolated from 4 "
           f"sweeping runs in {t4:.1f} s, 2 workers (target <= 300 s)")
+
+
+def main() -> None:
+    os.environ["SONARTRACK_CACHE_DIR"] = tempfile.mkdtemp()
+    bench_tl()
+    bench_solvers()
+    bench_study()
 
 
 if __name__ == "__main__":

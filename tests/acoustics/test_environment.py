@@ -3,10 +3,11 @@
 import numpy as np
 import pytest
 
-from sonartrack.acoustics.environment import list_environments, load_environment, read_profile
+from sonartrack.acoustics.environment import DEFAULT_BOTTOM, list_environments, load_environment
 from sonartrack.acoustics.sonar_equation import convergence_zones, detection_ranges, passive_snr_db
 from sonartrack.acoustics.sound_speed import sound_speed_from_ts
 from sonartrack.core.errors import InputError
+from sonartrack.io.environment import environment_from_name_or_file, read_profile
 
 
 def mackenzie(T, S, D):
@@ -33,7 +34,8 @@ def test_six_shipped_environments():
         assert e.sources
     # summer surface water is warmer, hence faster, than winter's
     for sea in ("east", "yellow", "south"):
-        assert load_environment(f"{sea}-summer").sound_speed_mps[0] > load_environment(f"{sea}-winter").sound_speed_mps[0]
+        summer, winter = load_environment(f"{sea}-summer"), load_environment(f"{sea}-winter")
+        assert summer.sound_speed_mps[0] > winter.sound_speed_mps[0]
 
 
 def test_user_profiles_csv_and_toml(tmp_path):
@@ -66,6 +68,17 @@ def test_profile_not_reaching_the_bottom(tmp_path):
     p.write_text("depth_m,sound_speed_mps\n0,1500\n50,1490\n")
     with pytest.raises(InputError, match="stops at 50 m but the water is 120 m deep"):
         read_profile(p, water_depth_m=120.0)
+
+
+def test_name_or_file(tmp_path):
+    assert environment_from_name_or_file("yellow-winter").name == "yellow-winter"
+    p = tmp_path / "mine.toml"
+    p.write_text('depth_m = [0.0, 40.0]\nsound_speed_mps = [1500.0, 1495.0]\nbottom_sound_speed_mps = 1700.0\n')
+    e = environment_from_name_or_file(p)
+    assert e.name == "mine.toml" and e.water_depth_m == 40.0 and e.bottom_sound_speed_mps == 1700.0
+    assert e.bottom_density_gcc == DEFAULT_BOTTOM[1]  # seabed keys not given take the default
+    with pytest.raises(InputError, match="profile file not found"):
+        environment_from_name_or_file(tmp_path / "missing.csv")
 
 
 def test_unknown_environment_lists_the_choices():

@@ -7,6 +7,7 @@ from scipy.optimize import brentq
 from sonartrack.acoustics.environment import Environment
 from sonartrack.acoustics.transmission_loss import smooth_tl, thorp_absorption_db_per_km, tl_field, transmission_loss
 from sonartrack.core.errors import InputError
+from sonartrack.io.environment import TLDiskCache, cached_tl_field
 
 D, CW, CB, RHOB, F = 100.0, 1500.0, 1700.0, 1.8, 100.0
 
@@ -41,7 +42,7 @@ def pekeris_tl(r, zs, zr):
 
 
 def test_ram_agrees_with_the_pekeris_mode_sum_after_1km_averaging(tmp_path):
-    f = tl_field(pekeris(), F, 50.0, rmax_m=21_000.0, cache=tmp_path)
+    f = tl_field(pekeris(), F, 50.0, rmax_m=21_000.0, store=TLDiskCache(tmp_path))
     ram = smooth_tl(f.ranges_m, f.at_depth(50.0), 1000.0)
     exact = smooth_tl(f.ranges_m, pekeris_tl(f.ranges_m, 50.0, 50.0), 1000.0)
     sel = (f.ranges_m > 3000) & (f.ranges_m < 20000)
@@ -53,24 +54,42 @@ def test_ram_agrees_with_the_pekeris_mode_sum_after_1km_averaging(tmp_path):
 def test_wrapper_does_not_mutate_inputs_and_cache_is_identical(tmp_path):
     env = pekeris()
     before = (env.depth_m.copy(), env.sound_speed_mps.copy())
-    a = tl_field(env, F, 30.0, rmax_m=3000.0, cache=tmp_path)
+    a = tl_field(env, F, 30.0, rmax_m=3000.0, store=TLDiskCache(tmp_path))
     np.testing.assert_array_equal(env.depth_m, before[0])
     np.testing.assert_array_equal(env.sound_speed_mps, before[1])
     files = list(tmp_path.glob("*.npz"))
     assert len(files) == 1
-    b = tl_field(env, F, 30.0, rmax_m=3000.0, cache=tmp_path)
+    b = tl_field(env, F, 30.0, rmax_m=3000.0, store=TLDiskCache(tmp_path))
     np.testing.assert_array_equal(a.tl_db, b.tl_db)
     np.testing.assert_array_equal(a.ranges_m, b.ranges_m)
     # any changed input is another field
-    tl_field(env, F, 31.0, rmax_m=3000.0, cache=tmp_path)
+    tl_field(env, F, 31.0, rmax_m=3000.0, store=TLDiskCache(tmp_path))
     assert len(list(tmp_path.glob("*.npz"))) == 2
-    line = transmission_loss(env, F, 30.0, 40.0, [0.5, 100.0, 2000.0], rmax_m=3000.0, cache=tmp_path)
+    # without a store the field is computed again, and is the same to the last bit (always single precision)
+    c = tl_field(env, F, 30.0, rmax_m=3000.0)
+    np.testing.assert_array_equal(a.tl_db, c.tl_db)
+    line = transmission_loss(env, F, 30.0, 40.0, [0.5, 100.0, 2000.0], rmax_m=3000.0, store=TLDiskCache(tmp_path))
     assert line[0] == pytest.approx(20 * np.log10(1.0))  # below the first step: spherical spreading
     assert 30 < line[1] < line[2]
 
 
+def test_damaged_cache_file_is_recomputed_and_replaced(tmp_path, monkeypatch):
+    env = pekeris()
+    a = cached_tl_field(env, F, 30.0, rmax_m=3000.0, cache=tmp_path)
+    (path,) = tmp_path.glob("*.npz")
+    path.write_bytes(b"not an npz file")
+    b = cached_tl_field(env, F, 30.0, rmax_m=3000.0, cache=tmp_path)
+    np.testing.assert_array_equal(a.tl_db, b.tl_db)
+    assert TLDiskCache(tmp_path).load(path.stem) is not None  # replaced by a readable file
+    assert not list(tmp_path.glob(".*"))  # no temporary file left behind
+    # and the default folder follows $SONARTRACK_CACHE_DIR
+    monkeypatch.setenv("SONARTRACK_CACHE_DIR", str(tmp_path / "elsewhere"))
+    cached_tl_field(env, F, 30.0, rmax_m=3000.0)
+    assert len(list((tmp_path / "elsewhere" / "tl").glob("*.npz"))) == 1
+
+
 def test_bad_depths(tmp_path):
     with pytest.raises(InputError, match="inside the water column"):
-        tl_field(pekeris(), F, 150.0, rmax_m=3000.0, cache=tmp_path)
+        tl_field(pekeris(), F, 150.0, rmax_m=3000.0, store=TLDiskCache(tmp_path))
     with pytest.raises(InputError, match="outside the water column"):
-        tl_field(pekeris(), F, 30.0, rmax_m=3000.0, cache=tmp_path).at_depth(500.0)
+        tl_field(pekeris(), F, 30.0, rmax_m=3000.0, store=TLDiskCache(tmp_path)).at_depth(500.0)

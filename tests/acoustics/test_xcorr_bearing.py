@@ -5,7 +5,14 @@ import pytest
 
 from sonartrack.acoustics.peak_fit import fit_peak_model
 from sonartrack.acoustics.signals import Multipath, SourceSpec, simulate_two_channel
-from sonartrack.acoustics.xcorr_bearing import estimate_peaks
+from sonartrack.acoustics.xcorr_bearing import (
+    BearingSettings,
+    bearings_from_recording,
+    cone_angle_deg,
+    estimate_peaks,
+    peaks_summary,
+    window_count,
+)
 from sonartrack.core.errors import InputError
 from sonartrack.io.peaks import read_peaks_csv, write_peaks_csv
 from sonartrack.sim.bearing_peaks import STRONG, WEAK, PeakModel, generate_scans
@@ -49,7 +56,8 @@ def test_peak_generator_moments():
     b = np.array([s.bearing_deg[s.origin == 0][0] for s in true])
     a = np.array([s.amplitude[s.origin == 0][0] for s in true])
     assert b.std() == pytest.approx(STRONG.sigma_p_deg, rel=0.05) and abs(b.mean() - 90) < 0.1
-    assert a.mean() == pytest.approx(STRONG.amplitude_mean, rel=0.01) and a.std() == pytest.approx(STRONG.amplitude_sd, rel=0.05)
+    assert a.mean() == pytest.approx(STRONG.amplitude_mean, rel=0.01)
+    assert a.std() == pytest.approx(STRONG.amplitude_sd, rel=0.05)
     fa = np.concatenate([s.amplitude[s.origin < 0] for s in scans])
     assert fa.mean() == pytest.approx(1 / model.false_amplitude_rate, rel=0.03)
 
@@ -89,3 +97,24 @@ def test_peaks_csv_round_trip_and_bad_files(tmp_path):
         read_peaks_csv(rad)
     with pytest.raises(InputError, match="spacing must be positive"):
         estimate_peaks(np.zeros((2, 8000)), FS, 0.0)
+
+
+def test_cone_angle_and_window_count_by_hand():
+    # tau = d cos(theta) / c: 0 -> broadside 90 deg, d/c -> endfire 0 deg, -d/(2c) -> 120 deg
+    np.testing.assert_allclose(cone_angle_deg([0.0, D / C, -D / (2 * C), 2 * D / C], D, C), [90.0, 0.0, 120.0, 0.0])
+    assert window_count(8000 * 3 + 7999, 8000.0, 1.0) == 3  # a partial last window is dropped
+    assert window_count(8000, 8000.0, 0.5) == 2
+
+
+def test_settings_face_gives_the_same_peaks_and_refuses_bad_values():
+    x = simulate_two_channel(np.random.default_rng(6), duration_s=3.0, fs_hz=FS, spacing_m=D,
+                             sources=[SourceSpec(75.0, 5.0)])
+    s = BearingSettings(spacing_m=D, threshold=4000.0, max_peaks=3)
+    a, b = bearings_from_recording(x, FS, s), estimate_peaks(x, FS, D, C, 1.0, 4000.0, 3)
+    np.testing.assert_array_equal(a.bearing_deg, b.bearing_deg)
+    assert np.max(np.unique(a.time_s, return_counts=True)[1]) <= 3
+    assert peaks_summary(a, x.shape[1], FS, 1.0).startswith("3 windows of 1 s at 8000 Hz")
+    with pytest.raises(ValueError, match="greater than 0"):
+        BearingSettings(spacing_m=-1.0)
+    with pytest.raises(InputError, match="shorter than one 5 s window"):
+        estimate_peaks(x, FS, D, window_s=5.0)

@@ -60,7 +60,8 @@ def _imported_layers(tree: ast.AST, module_path: Path):
                     yield node.lineno, parts[1]
         elif isinstance(node, ast.ImportFrom):
             if node.level:  # relative import: resolve against this module's package
-                base = list(pkg_parts[:-node.level]) if module_path.name != "__init__.py" else list(pkg_parts[:len(pkg_parts) - node.level])
+                # from a module the package is its parent; from an __init__.py the package itself
+                base = list(pkg_parts[:len(pkg_parts) - node.level])
                 parts = base + (node.module.split(".") if node.module else [])
             else:
                 parts = (node.module or "").split(".")

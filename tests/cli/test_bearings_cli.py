@@ -35,7 +35,8 @@ def test_bearings_then_tracks(wav, tmp_path, capsys):
     late = peaks[peaks["time_s"] == 30.5]["bearing_deg"].to_numpy()
     assert np.min(np.abs(late - 90.5)) < 1.0 and np.min(np.abs(late - 114.75)) < 1.5
     for tracker in ("jpda-a", "jpda"):
-        code, out, err = run(capsys, "track", "--peaks", tmp_path / "peaks.csv", "--tracker", tracker, "--out", tmp_path / tracker)
+        code, out, err = run(capsys, "track", "--peaks", tmp_path / "peaks.csv", "--tracker", tracker,
+                             "--out", tmp_path / tracker)
         assert code == 0, err
         tr = pd.read_csv(tmp_path / tracker / "bearing_tracks.csv")
         end = tr[(tr["time_s"] == tr["time_s"].max()) & tr["confirmed"]]["bearing_deg"].to_numpy()
@@ -46,8 +47,10 @@ def test_bearings_then_tracks(wav, tmp_path, capsys):
 @pytest.mark.parametrize("name, args, needle", [
     ("mono.wav", ["--spacing", "20"], "mono"),
     ("u8.wav", ["--spacing", "20"], "uint8"),
-    ("rec.wav", ["--spacing", "0"], "--spacing must be positive"),
-    ("rec.wav", ["--spacing", "-3"], "--spacing must be positive"),
+    ("rec.wav", ["--spacing", "0"], "'spacing_m': Input should be greater than 0"),
+    ("rec.wav", ["--spacing", "-3"], "'spacing_m': Input should be greater than 0"),
+    ("rec.wav", [], "'spacing_m': Field required"),
+    ("rec.wav", ["--spacing", "20", "--window", "60"], "shorter than one 60 s window"),
     ("missing.wav", ["--spacing", "20"], "not found"),
 ])
 def test_bad_recordings(wav, tmp_path, capsys, name, args, needle):
@@ -65,3 +68,17 @@ def test_bad_peaks_files(tmp_path, capsys):
     ok.write_text("time_s,bearing_deg,amplitude\n0.5,60,12000\n")
     code, _, err = run(capsys, "track", "--peaks", ok, "--tracker", "kalman", "--out", tmp_path / "o")
     assert code == 2 and "jpda or jpda-a" in err
+
+
+def test_print_config_and_config_file(wav, tmp_path, capsys):
+    code, out, err = run(capsys, "bearings", "--print-config", "--spacing", "20", "--threshold", "4000")
+    assert code == 0, err
+    assert "spacing_m = 20.0  # sensor (or half-array centre) spacing d (m)" in out and "threshold = 4000.0" in out
+    cfg = tmp_path / "b.toml"
+    cfg.write_text(out)
+    code, out, err = run(capsys, "bearings", "--wav", wav / "rec.wav", "--config", cfg, "--max-peaks", "1",
+                         "--out", tmp_path / "o")
+    assert code == 0, err
+    peaks = pd.read_csv(tmp_path / "o" / "peaks.csv")
+    assert peaks.groupby("time_s").size().max() == 1  # the option overrode the file's max_peaks = 20
+    assert out.startswith("bearings: 40 windows of 1 s at 8000 Hz")

@@ -30,13 +30,14 @@ def frames(tmp_path_factory):
 def test_strong_target_is_detected_and_its_track_found(frames, tmp_path, capsys):
     d, track = frames
     cfg = tmp_path / "det.toml"
-    cfg.write_text("sigma_a_mps2 = 0.3\ncalibration_trials = 300\npfa = 0.05\n")
+    cfg.write_text("[detector]\nsigma_a_mps2 = 0.3\n[decision]\ncalibration_trials = 300\npfa = 0.05\n")
     code, out, err = run(capsys, "detect", "--frames", d / "strong.npy", "--config", cfg, "--out", tmp_path / "o")
     assert code == 0, err
     assert "TARGET PRESENT" in out and out.count("\n") == 1
     table = pd.read_csv(tmp_path / "o" / "detection.csv")
     assert len(table) == 6
-    hits = (table["range_index"].to_numpy() == track.cells[:, 0]) & (table["doppler_index"].to_numpy() == track.cells[:, 1])
+    cells = table[["range_index", "doppler_index"]].to_numpy()
+    hits = (cells == track.cells).all(axis=1)
     assert hits.sum() >= 5  # 20 dB echoes: the best track is the target's
     assert (tmp_path / "o" / "detection.png").stat().st_size > 0
 
@@ -71,6 +72,25 @@ def test_bad_options(frames, tmp_path, capsys):
     code, _, err = run(capsys, "detect", "--frames", d / "noise.npz", "--pfa", "1e-5", "--out", tmp_path / "o")
     assert code == 2 and "calibration trials" in err
     cfg = tmp_path / "c.toml"
-    cfg.write_text("n_trakcs = 3\n")
+    cfg.write_text("[detector]\nn_trakcs = 3\n")
     code, _, err = run(capsys, "detect", "--frames", d / "noise.npz", "--config", cfg, "--out", tmp_path / "o")
     assert code == 2 and "n_trakcs" in err
+    code, _, err = run(capsys, "detect", "--out", tmp_path / "o")
+    assert code == 2 and "--frames" in err
+
+
+def test_print_config_reads_back_and_shows_options(tmp_path, capsys):
+    """--print-config shows defaults <- TOML <- options, and the printed TOML reads back to the same settings."""
+    from sonartrack.detection.detect import DetectSettings
+    from sonartrack.io import toml as toml_io
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("normalisation = 'none'\n[plane]\npulse_s = 0.25\n[detector]\nn_tracks = 4\n")
+    code, out, err = run(capsys, "detect", "--config", cfg, "--n-tracks", "7", "--pfa", "0.05", "--print-config")
+    assert code == 0, err
+    printed = tmp_path / "printed.toml"
+    printed.write_text(out)
+    s = toml_io.validate(DetectSettings, toml_io.load(printed))
+    assert (s.normalisation, s.plane.pulse_s, s.detector.n_tracks, s.decision.pfa) == ("none", 0.25, 7, 0.05)
+    assert s.detector.snr_db == DetectSettings().detector.snr_db and s.decision.threshold is None
+    assert "(s)" in out and "(dB)" in out  # units beside the values

@@ -5,9 +5,8 @@ import pandas as pd
 import pytest
 
 from sonartrack.cli import main
+from sonartrack.core.units import KNOT_MPS as KN
 from sonartrack.sim.platforms import ManeuveringTrack
-
-KN = 1852.0 / 3600.0
 
 
 def run(capsys, *args):
@@ -22,13 +21,15 @@ def files(tmp_path_factory):
 
     d = tmp_path_factory.mktemp("batch")
     os.environ["SONARTRACK_CACHE_DIR"] = str(d / "cache")
+    from sonartrack.io.environment import TLDiskCache
     from sonartrack.tma.batch import snr_model
 
-    xi_bar, _, _ = snr_model("south-summer", 140.0, 200.0, 50.0, 63_000.0)
+    xi_bar, _, _ = snr_model("south-summer", 140.0, 200.0, 50.0, 63_000.0, tl_store=TLDiskCache())
     t = np.arange(100) * 8.0
     rng = np.random.default_rng(7)
     out = {}
-    for name, turns in (("turning", ((250.0, 280.0, np.deg2rad(-3.0)), (520.0, 550.0, np.deg2rad(3.0)))), ("straight", ())):
+    zigzag = ((250.0, 280.0, np.deg2rad(-3.0)), (520.0, 550.0, np.deg2rad(3.0)))
+    for name, turns in (("turning", zigzag), ("straight", ())):
         po, _, _ = ManeuveringTrack(0.0, 0.0, 6 * KN, np.deg2rad(90.0), turns).state(t)
         b = np.deg2rad(160.0)
         pt, _, _ = ManeuveringTrack(8000 * np.sin(b), 8000 * np.cos(b), 6 * KN, np.deg2rad(270.0)).state(t)
@@ -48,12 +49,12 @@ def test_batch_methods_find_the_target(files, tmp_path, capsys, method):
     d, r_end = files
     extra = ["--env", "south-summer", "--sl", "140"] if method == "em-map" else []
     cfg = tmp_path / "c.toml"
-    cfg.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\n")
+    cfg.write_text("sigma_bearing_deg = 0.5\n[batch]\ndepth_m = 50.0\n")
     code, out, err = run(capsys, "tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv",
                          "--method", method, *extra, "--config", cfg, "--out", tmp_path / "o")
     assert code == 0, err
     sol = pd.read_csv(tmp_path / "o" / "tma_solution.csv")
-    assert abs(sol["range_m"].iloc[-1] - r_end[ "turning"]) < (0.25 if method == "ml" else 0.1) * r_end["turning"]
+    assert abs(sol["range_m"].iloc[-1] - r_end["turning"]) < (0.25 if method == "ml" else 0.1) * r_end["turning"]
     assert f"tma {method}" in out
 
 
@@ -71,7 +72,7 @@ def test_no_maneuver(files, tmp_path, capsys):
 
 def _cfg(tmp_path):
     p = tmp_path / "c2.toml"
-    p.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\n")
+    p.write_text("sigma_bearing_deg = 0.5\n[batch]\ndepth_m = 50.0\n")
     return p
 
 
@@ -93,9 +94,10 @@ def test_em_map_needs_a_model_and_snr(files, tmp_path, capsys):
 def test_sequential_ekf_from_the_batch_estimate(files, tmp_path, capsys):
     d, r_end = files
     cfg = tmp_path / "c.toml"
-    cfg.write_text("sigma_bearing_deg = 0.5\ndepth_m = 50.0\nbatch_window_s = 600.0\n")
+    cfg.write_text("sigma_bearing_deg = 0.5\n[batch]\ndepth_m = 50.0\nwindow_s = 600.0\n")
     code, out, err = run(capsys, "tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv",
-                         "--method", "em-map", "--env", "south-summer", "--sl", "140", "--config", cfg, "--out", tmp_path / "o")
+                         "--method", "em-map", "--env", "south-summer", "--sl", "140", "--config", cfg,
+                         "--out", tmp_path / "o")
     assert code == 0, err
     assert "then a sequential EKF" in out
     sol = pd.read_csv(tmp_path / "o" / "tma_solution.csv")

@@ -1,18 +1,16 @@
 """`sonartrack tma` on files synthesised here: outputs, accuracy, options, and bad input."""
 
-import sys
-import types
+import tomllib
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from sonartrack.cli import main
-from sonartrack.io.records import TmaSolution
+from sonartrack.core.units import KNOT_MPS as KN
 from sonartrack.models.passive import bf_measurement
 from sonartrack.sim.platforms import ManeuveringTrack
-
-KN = 1852.0 / 3600.0
+from sonartrack.tma.records import TmaSolution
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +61,7 @@ def test_tma_tracks_the_target_and_writes_outputs(files, tmp_path, capsys, metho
 def test_bearings_only_with_config_file(files, tmp_path, capsys):
     d, truth = files
     cfg = tmp_path / "tma.toml"
-    cfg.write_text('method = "mgekf"\nq_single = 1e-8\ninitial_range_m = 8000.0\n')
+    cfg.write_text('method = "mgekf"\n[sequential]\nq_single = 1e-8\ninitial_range_m = 8000.0\n')
     code, stdout, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
                             "--config", cfg, "--out", tmp_path / "o")
     assert code == 0, err
@@ -73,7 +71,7 @@ def test_bearings_only_with_config_file(files, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("args,needle", [
-    (["--method", "kalman"], "unknown --method"),
+    (["--method", "kalman"], "'method'"),
     (["--method", "ekf", "--env", "east-sea"], "--env and --sl"),
     (["--method", "ml", "--frequency"], "--frequency applies"),
     (["--sigma-bearing-deg", "-1"], "sigma_bearing_deg"),
@@ -89,10 +87,14 @@ def test_bad_options(files, tmp_path, capsys, args, needle):
 def test_unknown_config_key(files, tmp_path, capsys):
     d, _ = files
     cfg = tmp_path / "tma.toml"
-    cfg.write_text("q_singel = 1e-3\n")
+    cfg.write_text("[sequential]\nq_singel = 1e-3\n")
     code, _, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
                        "--config", cfg, "--out", tmp_path / "o")
     assert code == 2 and "q_singel" in err
+    cfg.write_text("q_single = 1e-3\n")  # a key of the [sequential] table at the top level
+    code, _, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
+                       "--config", cfg, "--out", tmp_path / "o")
+    assert code == 2 and "q_single" in err
 
 
 def test_bad_files(files, tmp_path, capsys):
@@ -121,32 +123,54 @@ def test_bad_files(files, tmp_path, capsys):
     assert not (tmp_path / "o2").exists()
 
 
-def test_batch_method_missing_gives_clear_error(files, tmp_path, capsys, monkeypatch):
-    d, _ = files
-    monkeypatch.setitem(sys.modules, "sonartrack.tma.batch", None)  # import fails
-    code, _, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
-                       "--method", "em-map", "--out", tmp_path / "o")
-    assert code == 2 and "method 'em-map' is not available in this installation" in err
+def test_print_config_shows_defaults_then_config_then_options(tmp_path, capsys):
+    cfg = tmp_path / "tma.toml"
+    cfg.write_text('method = "ml"\nsigma_bearing_deg = 0.5\n[batch]\nsl_db = 140.0\ndepth_m = 50.0\n')
+    code, out, err = run(capsys, "tma", "--config", cfg, "--sigma-bearing-deg", "2", "--env", "east-summer",
+                         "--print-config")
+    assert code == 0, err
+    data = tomllib.loads(out)  # valid TOML, which --config reads back
+    assert data["method"] == "ml" and data["sigma_bearing_deg"] == 2.0  # the option beats the file
+    assert data["batch"] == {**data["batch"], "env": "east-summer", "sl_db": 140.0, "depth_m": 50.0}
+    assert data["imm"]["q_values"] == [1e-5, 1e-3, 1e-1]  # untouched defaults
+    line = next(row for row in out.splitlines() if row.startswith("sigma_bearing_deg"))
+    assert "# bearing noise standard deviation" in line and "deg" in line.split("#")[1]  # doc and unit
+    again = tmp_path / "again.toml"
+    again.write_text(out)
+    code, out2, _ = run(capsys, "tma", "--config", again, "--print-config")
+    assert code == 0 and out2 == out
 
 
-def test_batch_method_is_called_with_the_shared_interface(files, tmp_path, capsys, monkeypatch):
+def test_missing_inputs(tmp_path, capsys):
+    code, _, err = run(capsys, "tma", "--out", tmp_path / "o")
+    assert code == 2 and "--bearings FILE --ownship FILE" in err
+
+
+def test_the_command_calls_the_library_with_the_resolved_settings(files, tmp_path, capsys, monkeypatch):
+    """The face only wires: options and config become TmaSettings, solve_tma gets the files' records, and
+    what it returns is written and summarised."""
+    import sonartrack.tma.solve as solve_mod
+
     d, truth = files
     calls = {}
 
-    def solve_batch(record, ownship, method, *, sigma_bearing_rad, sigma_snr_db=1.0, env=None, sl_db=None,
-                    freq_hz=200.0, depth_m=None, **extra):
-        calls.update(method=method, sigma=sigma_bearing_rad, env=env, sl=sl_db, n=len(record.time_s),
-                     nav=len(ownship.time_s), freq_hz=freq_hz)
+    def fake_solve_tma(record, ownship, settings, **kw):
+        calls.update(settings=settings, n=len(record.time_s), nav=len(ownship.time_s), env=kw["environment"])
         X = np.tile(truth[0], (len(record.time_s), 1))
-        return TmaSolution(record.time_s, X, np.tile(np.eye(4), (len(X), 1, 1)), method)
+        sol = TmaSolution(time_s=record.time_s, state=X, covariance=np.tile(np.eye(4), (len(X), 1, 1)), method="ml")
+        return solve_mod.TmaResult(solution=sol, record=record, ownship=ownship, settings=settings,
+                                   warnings=("a warning",))
 
-    fake = types.ModuleType("sonartrack.tma.batch")
-    fake.solve_batch = solve_batch
-    monkeypatch.setitem(sys.modules, "sonartrack.tma.batch", fake)
+    monkeypatch.setattr(solve_mod, "solve_tma", fake_solve_tma)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[batch]\nsl_db = 140.0\nfreq_hz = 300.0\n")
     code, stdout, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
-                            "--method", "ml", "--sigma-bearing-deg", "2", "--env", "east-sea", "--sl", "150",
-                            "--out", tmp_path / "o")
+                            "--method", "ml", "--sigma-bearing-deg", "2", "--sl", "150", "--env", "east-summer",
+                            "--config", cfg, "--out", tmp_path / "o")
     assert code == 0, err
-    assert calls == {"method": "ml", "sigma": pytest.approx(np.deg2rad(2.0)), "env": "east-sea", "sl": 150.0,
-                     "n": len(truth), "nav": 164, "freq_hz": 200.0}
-    assert "tma ml" in stdout and (tmp_path / "o" / "tactical_picture.png").exists()
+    s = calls["settings"]
+    assert (s.method, s.sigma_bearing_deg, s.batch.sl_db, s.batch.freq_hz) == ("ml", 2.0, 150.0, 300.0)
+    assert calls["n"] == len(truth) and calls["nav"] == 164 and calls["env"].name == "east-summer"
+    assert err == "warning: a warning\n" and stdout.startswith("tma ml: ") and stdout.count("\n") == 1
+    assert len(pd.read_csv(tmp_path / "o" / "tma_solution.csv")) == len(truth)
+    assert (tmp_path / "o" / "tactical_picture.png").exists()

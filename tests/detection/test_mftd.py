@@ -4,15 +4,10 @@ import numpy as np
 import pytest
 
 from sonartrack.core.errors import InputError
-from sonartrack.detection.mftd import (
-    MftdDetector,
-    exhaustive_detect,
-    kalman_prior,
-    pruned_detect,
-    pruned_detect_fast,
-    track_log_weights,
-    validate_frames,
-)
+from sonartrack.detection.frames import validate_frames
+from sonartrack.detection.mftd import MftdDetector, pruned_detect_fast
+from sonartrack.detection.mftd_reference import exhaustive_detect, pruned_detect, track_log_weights
+from sonartrack.detection.prior import kalman_prior
 from sonartrack.metrics.roc import roc_curve, thresholds
 from sonartrack.models.range_doppler import (
     RangeDopplerGrid,
@@ -87,7 +82,7 @@ def test_kalman_prior_hand_worked_two_frames():
     np.testing.assert_allclose(prior.B[1], B2, rtol=1e-12)
     tracks = np.array([[[1, 2], [1, 3]], [[2, 0], [3, 1]]])
     got = track_log_weights(np.zeros((2, 4, 5)), g, prior, 0.0, tracks)
-    for tr, lw in zip(tracks, got):
+    for tr, lw in zip(tracks, got, strict=True):
         v1 = np.array([(tr[0, 0] + 0.5) * 30.0, -1.25 + (tr[0, 1] + 0.5) * 0.5])
         v2 = np.array([(tr[1, 0] + 0.5) * 30.0, -1.25 + (tr[1, 1] + 0.5) * 0.5])
         d = v2 - Phi @ v1

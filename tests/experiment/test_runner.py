@@ -14,6 +14,7 @@ from sonartrack.core.errors import InputError
 from sonartrack.experiment import pipeline, runner, store
 
 STUDY = "bistatic-imm-ipda"
+STUDY_MODULE = studies.STUDIES[STUDY]  # the runner is given the module, never the registry
 
 
 def small_config(runs=6):
@@ -49,15 +50,15 @@ def test_same_trials_on_a_dask_localcluster(tmp_path):
 
 def test_different_seeds_give_different_trials(tmp_path):
     mod, cfg = small_config(2)
-    a = runner.run_chunk(STUDY, cfg.model_dump(mode="json"), 1, (0, 1))
-    b = runner.run_chunk(STUDY, cfg.model_dump(mode="json"), 2, (0, 1))
+    a = runner.run_chunk(STUDY_MODULE, cfg.model_dump(mode="json"), 1, (0, 1))
+    b = runner.run_chunk(STUDY_MODULE, cfg.model_dump(mode="json"), 2, (0, 1))
     assert not np.array_equal(a["meas_error_xy"], b["meas_error_xy"], equal_nan=True)
 
 
 def test_trial_i_does_not_depend_on_chunking(tmp_path):
     mod, cfg = small_config(4)
-    whole = runner.run_chunk(STUDY, cfg.model_dump(mode="json"), 3, (0, 1, 2, 3))
-    last = runner.run_chunk(STUDY, cfg.model_dump(mode="json"), 3, (3,))
+    whole = runner.run_chunk(STUDY_MODULE, cfg.model_dump(mode="json"), 3, (0, 1, 2, 3))
+    last = runner.run_chunk(STUDY_MODULE, cfg.model_dump(mode="json"), 3, (3,))
     for k in whole:
         np.testing.assert_array_equal(whole[k][3], last[k][0])
 
@@ -147,3 +148,28 @@ def test_zero_runs_is_an_input_error(tmp_path):
     mod, cfg = small_config(2)
     with pytest.raises(InputError, match="at least 1"):
         runner.plan_run(mod, cfg, 0, seed=1, out_dir=tmp_path)
+
+
+def test_runner_runs_any_study_module_it_is_given(tmp_path, monkeypatch):
+    """The runner never consults the studies registry: workers import the module it was given, by name."""
+    import types
+
+    from pydantic import BaseModel
+
+    from sonartrack.core.random import trial_rng
+
+    class Config(BaseModel):
+        runs: int = 3
+        scale: float = 2.0
+
+    def run_trial(config, rng):
+        return {"x": config.scale * rng.normal(size=2)}
+
+    mod = types.ModuleType("toy_study_for_the_runner")
+    mod.STUDY_ID, mod.Config, mod.run_trial = "toy", Config, run_trial
+    monkeypatch.setitem(sys.modules, mod.__name__, mod)
+    cfg = Config()
+    plan = runner.plan_run(mod, cfg, 3, seed=5, out_dir=tmp_path, chunk_size=2)
+    assert plan.study_module == "toy_study_for_the_runner" and plan.todo_chunks == ((0, 1), (2,))
+    trials = runner.execute(plan, cfg, workers=1)
+    np.testing.assert_array_equal(trials["x"], [2.0 * trial_rng(5, i).normal(size=2) for i in range(3)])

@@ -6,9 +6,9 @@ from filterpy.kalman import ExtendedKalmanFilter
 
 from sonartrack.core.linalg import is_spd
 from sonartrack.filters.ekf import ekf_predict, ekf_update, gaussian_loglik
-from sonartrack.filters.imm_ekf import imm_bf_step, imm_bf_step_reference, transition_matrix
 from sonartrack.models.passive import bf_jacobian, bf_measurement, bf_residual
 from sonartrack.models.relative_motion import relative_process_noise, relative_transition
+from sonartrack.tma.imm_mgekf import ImmBfModel, imm_bf_step, imm_bf_step_reference, transition_matrix
 
 SB, SF = np.deg2rad(1.0), 0.1
 
@@ -60,8 +60,8 @@ def test_ekf_step_equals_filterpy(with_freq):
         ref = imm_bf_step_reference(x[None], P[None], np.ones(1), z, u, dt, [q], Pi, R, modified=False, q_f0=q_f0)
         np.testing.assert_allclose(ref[3], fx, rtol=1e-10, atol=1e-9)
         np.testing.assert_allclose(ref[4], fP, rtol=1e-8, atol=1e-10 * np.abs(fP).max())
-        fast = imm_bf_step(x[None], P[None], np.ones(1), z, u, dt, np.array([q]), Pi, SB**2, SF**2,
-                           modified=False, q_f0=q_f0)
+        fast = imm_bf_step(x[None], P[None], np.ones(1), z, u, dt, ImmBfModel([q], Pi, SB, SF, q_f0=q_f0,
+                                                                             modified=False))
         np.testing.assert_allclose(fast[3], fx, rtol=1e-10, atol=1e-9)
         np.testing.assert_allclose(fast[4], fP, rtol=1e-8, atol=1e-10 * np.abs(fP).max())
 

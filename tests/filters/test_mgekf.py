@@ -6,11 +6,11 @@ from hypothesis import strategies as st
 
 from sonartrack.core.linalg import is_spd
 from sonartrack.filters.ekf import ekf_update
-from sonartrack.filters.imm_ekf import run_imm_bf
 from sonartrack.filters.mgekf import mgekf_update, mgekf_update_bf
 from sonartrack.models.passive import bearing_modified_row, bf_jacobian, bf_measurement, modified_matrix
 from sonartrack.models.relative_motion import observer_inputs
 from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.tma.imm_mgekf import ImmBfModel, run_imm_bf
 from sonartrack.tma.sequential_bf import initial_estimate
 
 SB, SF = np.deg2rad(1.0), 0.1
@@ -86,7 +86,7 @@ def test_mgekf_covariance_stays_spd_over_a_noisy_run():
     x0, P0 = initial_estimate(z[0, 0], z[0, 1], vo[0], range_m=7000.0, sigma_range_m=4000.0, sigma_bearing_rad=SB,
                               sigma_f0_hz=1.0)
     u = observer_inputs(t, po, vo)
-    _, P, _, failed = run_imm_bf(t, z[:, 0], z[:, 1], u, x0, P0, qs=[1e-4], sigma_bearing_rad=SB, sigma_freq_hz=SF,
-                                 modified=True, q_f0=1e-8, engine="reference")
+    _, P, _, failed = run_imm_bf(t, z[:, 0], z[:, 1], u, x0, P0, ImmBfModel([1e-4], None, SB, SF, q_f0=1e-8),
+                                 engine="reference")
     assert failed == -1
     assert all(is_spd(Pk) for Pk in P)

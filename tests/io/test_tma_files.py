@@ -1,12 +1,12 @@
-"""Bearings / ownship readers, coverage checks and the solution table."""
+"""Bearings / ownship readers and the solution table writer."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from sonartrack.core.errors import InputError
-from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
-from sonartrack.io.tma_files import check_coverage, read_bearings, read_ownship, solution_columns, write_solution_csv
+from sonartrack.io.records import OwnshipTrack, TmaSolution
+from sonartrack.io.tma_files import read_bearings, read_ownship, write_solution_csv
 
 
 def write(tmp_path, name, cols, parquet=False):
@@ -21,7 +21,8 @@ def test_bearings_round_trip(tmp_path, parquet):
     t = np.arange(10.0)
     b = np.array([350.0, 355, 0, 5, 10, 15, 20, 25, 30, -170])
     f = np.linspace(300, 301, 10)
-    path = write(tmp_path, "b", {"time_s": t, "bearing_deg": b, "frequency_hz": f, "snr_db": np.full(10, 12.0)}, parquet)
+    path = write(tmp_path, "b", {"time_s": t, "bearing_deg": b, "frequency_hz": f, "snr_db": np.full(10, 12.0)},
+                 parquet)
     rec = read_bearings(path)
     np.testing.assert_allclose(rec.time_s, t)
     np.testing.assert_allclose(rec.bearing_rad[:3], np.deg2rad([-10.0, -5.0, 0.0]))
@@ -33,7 +34,8 @@ def test_bearings_round_trip(tmp_path, parquet):
 
 def test_empty_frequency_cells_mean_no_frequency(tmp_path):
     path = tmp_path / "b.csv"
-    path.write_text("# a comment line\ntime_s,bearing_deg,frequency_hz\n0,10,300.1\n1,11,\n2,12,300.2\n3,13,\n4,14,300.0\n")
+    path.write_text("# a comment line\ntime_s,bearing_deg,frequency_hz\n0,10,300.1\n1,11,\n2,12,300.2\n3,13,\n"
+                    "4,14,300.0\n")
     rec = read_bearings(path)
     assert np.isnan(rec.frequency_hz[1]) and rec.frequency_hz[2] == 300.2
     path.write_text("time_s,bearing_deg,frequency_hz\n0,10,\n1,11,\n2,12,\n3,13,\n4,14,\n")
@@ -85,44 +87,11 @@ def test_ownship_reader_and_checks(tmp_path):
         read_ownship(write(tmp_path, "o4", {"time_s": [0.0], "x_m": [0.0], "y_m": [0.0]}))
 
 
-def test_coverage_errors():
-    own = OwnshipTrack(np.array([0.0, 10, 20, 300, 310]), np.zeros(5), np.zeros(5))
-    rec = BearingRecord(np.array([5.0, 15.0, 305.0]), np.zeros(3))
-    check_coverage(rec, own, max_gap_s=300)  # interpolation across the 280 s gap is allowed here
-    with pytest.raises(InputError, match="gap"):
-        check_coverage(BearingRecord(np.array([5.0, 150.0]), np.zeros(2)), own)
-    check_coverage(BearingRecord(np.array([20.0, 300.0]), np.zeros(2)), own)  # exactly on samples: fine
-    with pytest.raises(InputError, match="outside the ownship file's span"):
-        check_coverage(BearingRecord(np.array([5.0, 311.0]), np.zeros(2)), own)
-    with pytest.raises(InputError, match="outside"):
-        check_coverage(BearingRecord(np.array([-1.0, 5.0]), np.zeros(2)), own)
-
-
-def test_solution_columns_hand_case():
-    """Target 1 km due north of an ownship at the origin, moving east at 5 m/s."""
-    own = OwnshipTrack(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))
-    P = np.diag([400.0, 900.0, 0.04, 0.09])
-    sol = TmaSolution(np.array([0.0]), np.array([[0.0, 1000.0, 5.0, 0.0]]), P[None], "test")
-    c = solution_columns(sol, own)
-    assert c["range_m"][0] == pytest.approx(1000.0) and c["bearing_deg"][0] == pytest.approx(0.0)
-    assert c["course_deg"][0] == pytest.approx(90.0) and c["speed_kn"][0] == pytest.approx(5 * 3600 / 1852)
-    assert c["range_std_m"][0] == pytest.approx(30.0)  # along y: sqrt(900)
-    assert c["bearing_std_deg"][0] == pytest.approx(np.rad2deg(20.0 / 1000.0))  # across: sqrt(400) / r
-    assert c["speed_std_kn"][0] == pytest.approx(0.2 * 3600 / 1852)  # along vx
-    assert c["course_std_deg"][0] == pytest.approx(np.rad2deg(0.3 / 5.0))  # across: sqrt(0.09) / s
-    assert c["x_std_m"][0] == pytest.approx(20.0) and c["vy_std_mps"][0] == pytest.approx(0.3)
-
-
-def test_course_std_saturates_at_zero_speed():
-    own = OwnshipTrack(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))
-    sol = TmaSolution(np.array([0.0]), np.array([[0.0, 1000.0, 0.0, 0.0]]), np.eye(4)[None], "test")
-    assert solution_columns(sol, own)["course_std_deg"][0] == 180.0
-
-
 def test_write_solution_csv_is_atomic_and_complete(tmp_path):
-    own = OwnshipTrack(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))
-    sol = TmaSolution(np.array([0.0, 50.0]), np.array([[0.0, 1000.0, 5.0, 0.0], [250.0, 1000.0, 5.0, 0.0]]),
-                      np.stack([np.eye(4)] * 2), "test")
+    own = OwnshipTrack(time_s=np.array([0.0, 100.0]), x_m=np.zeros(2), y_m=np.zeros(2))
+    sol = TmaSolution(time_s=np.array([0.0, 50.0]),
+                      state=np.array([[0.0, 1000.0, 5.0, 0.0], [250.0, 1000.0, 5.0, 0.0]]),
+                      covariance=np.stack([np.eye(4)] * 2), method="test")
     path = write_solution_csv(tmp_path / "sub" / "sol.csv", sol, own)
     df = pd.read_csv(path)
     assert list(df.columns[:9]) == ["time_s", "x_m", "y_m", "vx_mps", "vy_mps", "course_deg", "speed_kn", "range_m",

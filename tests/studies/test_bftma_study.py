@@ -7,8 +7,11 @@ import pytest
 
 from sonartrack import studies
 from sonartrack.core.random import trial_rng
+from sonartrack.experiment.claims import Claim
 from sonartrack.io import toml as toml_io
+from sonartrack.report.figures import study_figures
 from sonartrack.studies import bftma_imm as study
+from sonartrack.tma.settings import ImmSettings
 
 FIGURES = {"scenario", "rmse_position", "rmse_velocity", "rmse_course_speed", "mode_probabilities", "divergence"}
 
@@ -25,6 +28,7 @@ def test_contract_surface():
     assert mod.STUDY_ID == "bftma-imm" and mod.TITLE and mod.PAPER and mod.TRIAL_VERSION >= 1
     cfg = mod.Config()
     assert cfg.runs >= 100 and mod.Config.quick().runs < cfg.runs
+    assert cfg.imm == ImmSettings()  # the IMM bank is the one of sonartrack tma, with the same defaults
     assert len(cfg.observer_turns) >= 1 and cfg.f0_hz == 300.0 and cfg.sigma_bearing_deg == 1.0
     assert 0.05 <= cfg.sigma_freq_hz <= 0.1
 
@@ -46,7 +50,7 @@ def test_trial_is_deterministic_with_fixed_shapes(quick_trials):
     for case, (_, _, qs) in cfg.cases().items():
         assert trials[f"{case}_pos"].shape == (4, n_rec)
         if len(qs) > 1:
-            assert trials[f"{case}_mu"].shape == (4, n_rec, len(cfg.q_values))
+            assert trials[f"{case}_mu"].shape == (4, n_rec, len(cfg.imm.q_values))
             np.testing.assert_allclose(np.nansum(trials[f"{case}_mu"], axis=-1), 1.0)
     b = study.run_trial(cfg, trial_rng(2017, 2))
     assert not np.array_equal(a["bf_mgekf_imm_pos"], b["bf_mgekf_imm_pos"])
@@ -75,18 +79,16 @@ def test_summary_claims_and_figures(quick_trials):
     # time-averaged RMSE is the root of the mean of the per-run mean squares
     assert case["rmse_pos_all_m"] == pytest.approx(np.sqrt(np.mean(case["per_run_mse_all"])))
     claims = study.claims(summary, cfg)
-    ids = {c["id"] for c in claims}
+    ids = {c.id for c in claims}
     assert {"imm-beats-single-all", "imm-beats-single-post", "frequency-helps", "mgekf-divergence-turn",
             "mgekf-divergence-end"} <= ids
     for c in claims:
-        assert set(c) >= {"id", "text", "paper", "ours", "tolerance", "holds"}
-        assert isinstance(c["holds"], bool)
-    import matplotlib
-
-    matplotlib.use("Agg")
+        assert isinstance(c, Claim) and c.text and c.paper and c.ours and c.tolerance
+        assert isinstance(c.holds, bool)
     import matplotlib.pyplot as plt
 
-    figs = study.figures(summary, cfg)
+    assert not hasattr(study, "figures")  # the pictures live in report/figures/bftma_imm.py
+    figs = study_figures("bftma-imm", summary, cfg)
     assert set(figs) >= FIGURES
     for f in figs.values():
         plt.close(f)
@@ -94,7 +96,6 @@ def test_summary_claims_and_figures(quick_trials):
 
 def test_reproduce_end_to_end(tmp_path):
     from sonartrack.experiment import pipeline
-    from sonartrack.report.figures import study_figures
 
     cfg = pipeline.resolve_config(study, quick=True, runs=3)
     res = pipeline.reproduce(study, cfg, seed=1, out=tmp_path, workers=1, figures=study_figures)

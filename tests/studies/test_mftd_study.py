@@ -22,8 +22,13 @@ def test_contract_surface():
     mod = studies.load("mftd")
     assert mod.STUDY_ID == "mftd" and mod.TITLE and mod.PAPER and mod.TRIAL_VERSION >= 1
     cfg = mod.Config()
-    assert (cfg.period_s, cfg.pulse_s, cfg.carrier_hz, cfg.sound_speed_mps) == (2.0, 0.125, 30e3, 1500.0)
-    assert (cfg.n_frames, cfg.n_tracks, cfg.snr_db, cfg.sigma_a_mps2) == (6, 10, 5.0, 1.0)
+    assert (cfg.detector.period_s, cfg.plane.pulse_s, cfg.plane.carrier_hz, cfg.plane.sound_speed_mps) == (
+        2.0, 0.125, 30e3, 1500.0)
+    assert (cfg.n_frames, cfg.detector.n_tracks, cfg.detector.snr_db, cfg.detector.sigma_a_mps2) == (6, 10, 5.0, 1.0)
+    # the study nests the same declarations as `sonartrack detect` (one declaration per group)
+    from sonartrack.detection.detect import DetectSettings
+
+    assert type(cfg.plane) is type(DetectSettings().plane) and type(cfg.detector) is type(DetectSettings().detector)
     assert cfg.runs * 1e-3 >= 10 and mod.Config.quick().runs < cfg.runs  # full size reaches Pfa 1e-3
 
 
@@ -65,14 +70,17 @@ def test_summary_claims_and_figures(small):
     for c in s["curves"].values():
         assert np.all(np.diff(c["pd"]) >= 0)  # a ROC never decreases with Pfa
         assert np.all(np.array(c["pd_low"]) <= c["pd"]) and np.all(np.array(c["pd"]) <= c["pd_high"])
-    out = study.claims(s, cfg)
+    out = [c.as_dict() for c in study.claims(s, cfg)]
     assert {c["id"] for c in out} >= {"pd_rises_with_snr", "pd_falls_with_sigma_a", "pd_rises_with_n_and_saturates",
                                       "between_bounds", "k1_closed_form"}
     for c in out:
         assert set(c) == {"id", "text", "paper", "ours", "tolerance", "holds"} and isinstance(c["holds"], bool)
-    figs = study.figures(s, cfg)
+    from sonartrack.report.figures import study_figures
+
+    figs = study_figures("mftd", s, cfg)
     assert list(figs)[0] == "scenario" and {"roc_families", "roc_checks"} <= set(figs)
     import matplotlib.pyplot as plt
 
     for f in figs.values():
+        assert f.axes
         plt.close(f)

@@ -77,8 +77,12 @@ def test_m_step_maximises_the_expected_complete_log_likelihood():
         return -0.5 * np.sum(q * m)
 
     eps = np.array([0.5, 0.5, 1e-3, 1e-3])
-    grad = np.array([(Q(x_new + np.eye(4)[i] * eps[i]) - Q(x_new - np.eye(4)[i] * eps[i])) / (2 * eps[i]) for i in range(4)])
-    grad_old = np.array([(Q(x_old + np.eye(4)[i] * eps[i]) - Q(x_old - np.eye(4)[i] * eps[i])) / (2 * eps[i]) for i in range(4)])
+
+    def gradient(x):
+        steps = np.eye(4) * eps
+        return np.array([(Q(x + steps[i]) - Q(x - steps[i])) / (2 * eps[i]) for i in range(4)])
+
+    grad, grad_old = gradient(x_new), gradient(x_old)
     assert np.all(np.abs(grad) < 1e-6 * np.abs(grad_old).max())
     assert Q(x_new) > Q(x_old)
 

@@ -2,13 +2,15 @@
 
 An :class:`Environment` is a range-independent water column (depths and sound speeds, from T/S via
 TEOS-10 where given) over a flat bottom and a homogeneous fluid seabed half-space. The shipped cases
-live in ``sonartrack/data/environments/<name>.toml`` (tables and sources in
-shared/data/korean_seas_environments.md); users give their own as a TOML file with the same keys
-or a CSV with columns ``depth_m`` and ``sound_speed_mps`` (or ``temperature_c`` and ``salinity_psu``).
+are tables of this package, ``sonartrack/data/environments/<name>.toml`` (sources in
+shared/data/korean_seas_environments.md), read here like any other constant table. A user's own
+profile file (TOML or CSV) is read by :mod:`sonartrack.io.environment`, which hands the columns to
+:func:`environment_from_mapping`: every check of the values lives here, every file format there.
 """
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,83 +69,74 @@ def load_environment(name: str) -> Environment:
     names = list_environments()
     if name not in names:
         raise InputError(f"unknown environment '{name}': choose one of {', '.join(names)}, or give --profile FILE")
-    return _from_mapping(_read_toml(_data_dir() / f"{name}.toml"), source=name)
+    # a table shipped with the package (not user input): the standard library reads it
+    data = tomllib.loads((_data_dir() / f"{name}.toml").read_text())
+    return environment_from_mapping(data, source=name)
 
 
-def read_profile(path: str | Path, water_depth_m: float | None = None) -> Environment:
-    """A user environment from TOML (the shipped files' keys) or CSV (depth_m + sound_speed_mps, or
-    depth_m + temperature_c + salinity_psu; water depth = the last depth unless given; seabed
-    :data:`DEFAULT_BOTTOM`)."""
-    p = Path(path)
-    require(p.is_file(), f"profile file not found: {p}")
-    if p.suffix.lower() == ".toml":
-        data = _read_toml(p)
-    else:
-        import pandas as pd
-
-        try:
-            df = pd.read_csv(p)
-        except Exception as exc:  # noqa: BLE001 - pandas raises many types for bad files
-            raise InputError(f"cannot read profile {p.name} as CSV: {exc}") from None
-        require(len(df) > 0, f"profile {p.name} has no rows")
-        cols = set(df.columns)
-        require("depth_m" in cols, f"profile {p.name} needs a depth_m column (has {', '.join(df.columns)})")
-        data = {"name": p.stem, "description": f"user profile {p.name}", "depth_m": df["depth_m"].to_list()}
-        if "sound_speed_mps" in cols:
-            data["sound_speed_mps"] = df["sound_speed_mps"].to_list()
-        elif {"temperature_c", "salinity_psu"} <= cols:
-            data["temperature_c"] = df["temperature_c"].to_list()
-            data["salinity_psu"] = df["salinity_psu"].to_list()
-        else:
-            raise InputError(f"profile {p.name} needs sound_speed_mps, or temperature_c and salinity_psu, next to depth_m")
-    if water_depth_m is not None:
-        data["water_depth_m"] = float(water_depth_m)
-    data.setdefault("water_depth_m", float(np.max(np.asarray(data["depth_m"], dtype=float))))
-    return _from_mapping(data, source=p.name)
-
-
-def _read_toml(path: Path) -> dict:
-    from sonartrack.io import toml as toml_io
-
-    return toml_io.load(path)
-
-
-def _from_mapping(d: dict, source: str) -> Environment:
-    from sonartrack.acoustics.sound_speed import sound_speed_from_ts
-
+def _checked_depths(d: dict, source: str) -> tuple[np.ndarray, float]:
+    """(profile depths, water depth) after the checks a user profile most often fails."""
     try:
         z = np.asarray(d["depth_m"], dtype=float)
     except (KeyError, TypeError, ValueError):
         raise InputError(f"profile {source}: depth_m must be a list of numbers") from None
     require(z.ndim == 1 and z.size >= 1, f"profile {source}: depth_m must be a non-empty list")
     require(bool(np.all(np.isfinite(z))), f"profile {source}: depth_m contains NaN")
-    require(bool(np.all(z >= 0)), f"profile {source}: negative depth {z.min():g} m: depths are metres below the surface, positive down")
-    require(bool(np.all(np.diff(z) > 0)), f"profile {source}: depths must increase strictly (sort the rows, drop duplicates)")
+    require(bool(np.all(z >= 0)), f"profile {source}: negative depth {z.min():g} m: depths are metres below the "
+                                  "surface, positive down")
+    require(bool(np.all(np.diff(z) > 0)), f"profile {source}: depths must increase strictly (sort the rows, drop "
+                                          "duplicates)")
     depth = float(d.get("water_depth_m", z[-1]))
     require(depth > 0, f"profile {source}: water depth must be positive, got {depth:g} m")
-    require(z[-1] >= depth - 1.0, f"profile {source}: the profile stops at {z[-1]:g} m but the water is {depth:g} m deep: "
-                                  f"extend it to the bottom (repeat the last value at {depth:g} m if it is well mixed)")
+    require(z[-1] >= depth - 1.0, f"profile {source}: the profile stops at {z[-1]:g} m but the water is {depth:g} m "
+                                  f"deep: extend it to the bottom (repeat the last value at {depth:g} m if it is "
+                                  "well mixed)")
     require(z[0] <= 1.0, f"profile {source}: the profile starts at {z[0]:g} m: add a row at the surface (0 m)")
-    lat = float(d.get("latitude_deg", DEFAULT_LATITUDE_DEG))
-    lon = float(d.get("longitude_deg", 0.0))
-    t = s = None
-    if "sound_speed_mps" in d:
-        c = np.asarray(d["sound_speed_mps"], dtype=float)
-        require(c.shape == z.shape, f"profile {source}: sound_speed_mps needs one value per depth")
-        require(bool(np.all(np.isfinite(c))), f"profile {source}: sound_speed_mps contains NaN")
-        if np.all(c < 2.0):
-            raise InputError(f"profile {source}: sound speeds {c.min():g}..{c.max():g} look like km/s: give m/s (about 1450-1550)")
-        require(bool(np.all((c > 1300) & (c < 1700))), f"profile {source}: sound speeds {c.min():g}..{c.max():g} m/s are "
-                                                        "outside 1300-1700 m/s: check the column")
-    else:
+    return z, depth
+
+
+def _checked_sound_speed(d: dict, z: np.ndarray, lat: float, lon: float, source: str):
+    """(c m/s, temperature or None, salinity or None): the given column, or TEOS-10 from T and S."""
+    from sonartrack.acoustics.sound_speed import sound_speed_from_ts
+
+    if "sound_speed_mps" not in d:
         require("temperature_c" in d and "salinity_psu" in d,
                 f"profile {source}: give sound_speed_mps, or temperature_c and salinity_psu")
         t = np.asarray(d["temperature_c"], dtype=float)
         s = np.asarray(d["salinity_psu"], dtype=float)
-        c = sound_speed_from_ts(z, t, s, lat, lon)
-    bottom = (float(d.get("bottom_sound_speed_mps", DEFAULT_BOTTOM[0])), float(d.get("bottom_density_gcc", DEFAULT_BOTTOM[1])),
-              float(d.get("bottom_attenuation_db_per_wavelength", DEFAULT_BOTTOM[2])))
+        return sound_speed_from_ts(z, t, s, lat, lon), t, s
+    c = np.asarray(d["sound_speed_mps"], dtype=float)
+    require(c.shape == z.shape, f"profile {source}: sound_speed_mps needs one value per depth")
+    require(bool(np.all(np.isfinite(c))), f"profile {source}: sound_speed_mps contains NaN")
+    if np.all(c < 2.0):
+        raise InputError(f"profile {source}: sound speeds {c.min():g}..{c.max():g} look like km/s: give m/s "
+                         "(about 1450-1550)")
+    require(bool(np.all((c > 1300) & (c < 1700))), f"profile {source}: sound speeds {c.min():g}..{c.max():g} m/s are "
+                                                    "outside 1300-1700 m/s: check the column")
+    return c, None, None
+
+
+def _checked_seabed(d: dict, source: str) -> tuple[float, float, float]:
+    """(sound speed m/s, density g/cm^3, attenuation dB/wavelength), :data:`DEFAULT_BOTTOM` where not given."""
+    keys = ("bottom_sound_speed_mps", "bottom_density_gcc", "bottom_attenuation_db_per_wavelength")
+    c, rho, attn = (float(d.get(k, default)) for k, default in zip(keys, DEFAULT_BOTTOM, strict=True))
+    bottom = (c, rho, attn)
     require(bottom[0] > 0 and bottom[1] > 0 and bottom[2] >= 0, f"profile {source}: seabed values must be positive")
+    return bottom
+
+
+def environment_from_mapping(d: dict, source: str) -> Environment:
+    """An :class:`Environment` from plain data (the shipped TOML keys; lists or arrays as values).
+
+    Keys: ``depth_m`` and either ``sound_speed_mps`` or ``temperature_c`` + ``salinity_psu``
+    (then c from TEOS-10 at ``latitude_deg``/``longitude_deg``); optional ``water_depth_m`` (default:
+    the last depth), seabed keys (default :data:`DEFAULT_BOTTOM`), ``name``, ``description``,
+    ``season``, ``sources``. ``source`` names the input in error messages (one line each)."""
+    z, depth = _checked_depths(d, source)
+    lat = float(d.get("latitude_deg", DEFAULT_LATITUDE_DEG))
+    lon = float(d.get("longitude_deg", 0.0))
+    c, t, s = _checked_sound_speed(d, z, lat, lon, source)
+    bottom = _checked_seabed(d, source)
     # keep the water column to the bottom exactly (RAM needs the profile to reach the deepest point)
     keep = z < depth
     z2 = np.append(z[keep], depth)
@@ -151,4 +144,5 @@ def _from_mapping(d: dict, source: str) -> Environment:
     return Environment(name=str(d.get("name", source)), description=str(d.get("description", "")), water_depth_m=depth,
                        depth_m=z2, sound_speed_mps=c2, bottom_sound_speed_mps=bottom[0], bottom_density_gcc=bottom[1],
                        bottom_attenuation_db_per_wavelength=bottom[2], latitude_deg=lat, longitude_deg=lon,
-                       season=str(d.get("season", "")), temperature_c=t, salinity_psu=s, sources=str(d.get("sources", "")))
+                       season=str(d.get("season", "")), temperature_c=t, salinity_psu=s,
+                       sources=str(d.get("sources", "")))

@@ -62,7 +62,8 @@ def simulate_two_channel(rng: np.random.Generator, *, duration_s: float, fs_hz: 
         for src in sources:
             power = 10.0 ** (src.snr_db / 10.0) * noise_std**2
             arrivals = [(0.0, 1.0, src.bearing_at(t_mid))]
-            arrivals += [(mp.extra_delay_s, mp.relative_amplitude, float(np.clip(src.bearing_at(t_mid) + mp.bearing_offset_deg, 0, 180)))
+            arrivals += [(mp.extra_delay_s, mp.relative_amplitude,
+                          float(np.clip(src.bearing_at(t_mid) + mp.bearing_offset_deg, 0, 180)))
                          for mp in src.multipath]
             # white in band; Parseval for irfft: var = 2 sum |X_k|^2 / nb^2, and E|X_k|^2 = 2 c^2 here
             spec = np.zeros(len(f), dtype=complex)

@@ -26,10 +26,11 @@ def detection_ranges(ranges_m, snr_db, threshold_db: float = 0.0) -> list[tuple[
         return []
     edges = np.diff(np.concatenate([[0], ok.astype(int), [0]]))
     starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0] - 1
-    return [(float(r[a]), float(r[b])) for a, b in zip(starts, ends)]
+    return [(float(r[a]), float(r[b])) for a, b in zip(starts, ends, strict=True)]
 
 
-def convergence_zones(ranges_m, snr_db, threshold_db: float = 0.0, min_gap_m: float = 2_000.0) -> list[tuple[float, float]]:
+def convergence_zones(ranges_m, snr_db, threshold_db: float = 0.0,
+                      min_gap_m: float = 2_000.0) -> list[tuple[float, float]]:
     """Detection intervals that begin after a shadow of at least ``min_gap_m`` beyond the direct path."""
     zones = detection_ranges(ranges_m, snr_db, threshold_db)
     if not zones:

@@ -22,11 +22,13 @@ def sound_speed_from_ts(depth_m, temperature_c, salinity_psu, latitude_deg: floa
     t = np.asarray(temperature_c, dtype=float)
     sp = np.asarray(salinity_psu, dtype=float)
     require(z.shape == t.shape == sp.shape, "depth, temperature and salinity columns must have the same length")
-    require(bool(np.all(np.isfinite(t)) and np.all(np.isfinite(sp))), "temperature/salinity contain NaN: fill or drop those rows")
-    require(bool(np.all((t > -3) & (t < 40))), f"temperatures {t.min():.3g}..{t.max():.3g} are not sea temperatures in deg C "
-                                               "(Fahrenheit or kelvin?)")
-    require(bool(np.all((sp >= 0) & (sp < 45))), f"salinities {sp.min():.3g}..{sp.max():.3g} are not practical salinities "
-                                                 "(PSU, about 30-35 in the open sea)")
+    require(bool(np.all(np.isfinite(t)) and np.all(np.isfinite(sp))),
+            "temperature/salinity contain NaN: fill or drop those rows")
+    require(bool(np.all((t > -3) & (t < 40))),
+            f"temperatures {t.min():.3g}..{t.max():.3g} are not sea temperatures in deg C (Fahrenheit or kelvin?)")
+    require(bool(np.all((sp >= 0) & (sp < 45))),
+            f"salinities {sp.min():.3g}..{sp.max():.3g} are not practical salinities "
+            "(PSU, about 30-35 in the open sea)")
     p = gsw.p_from_z(-z, latitude_deg)
     sa = gsw.SA_from_SP(sp, p, longitude_deg, latitude_deg)
     ct = gsw.CT_from_t(sa, t, p)

@@ -1,4 +1,4 @@
-"""Transmission loss TL(range, depth) from the RAM parabolic-equation model (``pyram``), with a disk cache.
+"""Transmission loss TL(range, depth) from the RAM parabolic-equation model (``pyram``).
 
 Collins' RAM (split-step Pade PE, as in pyram, Collins 1993) gives the field of a point source at depth
 zs over a range-independent environment (:mod:`sonartrack.acoustics.environment`): flat bottom, fluid
@@ -11,10 +11,16 @@ is added as alpha r / 1000 (0.008 dB/km at 200 Hz: small against spreading, kept
 Grid (our defaults, from a convergence check against the Pekeris mode sum in the tests): range step
 dr = 6 wavelengths, depth step dz = wavelength / 20, the field kept every 10th depth point (wavelength
 / 2: 3.75 m at 200 Hz) and every range step. pyram's own defaults (8 wavelengths, wavelength / 10)
-are 2 dB off the exact Pekeris field at 20 km after 1 km averaging; ours 0.2 dB (dz matters most). Fields are cached as ``.npz`` in ``$SONARTRACK_CACHE_DIR/tl`` (default
-``.sonartrack-cache/tl``), written atomically and keyed by a hash of every input (environment
-values, frequency, source depth, grid, pyram version), so Monte Carlo workers and reruns never
-recompute one. pyram is imported only on a cache miss (it compiles with numba).
+are 2 dB off the exact Pekeris field at 20 km after 1 km averaging; ours 0.2 dB (dz matters most).
+TL is kept in single precision (float32, 1e-5 dB steps at 100 dB), whether or not it came from a
+store, so that a result never depends on whether a cache was warm.
+
+Fields are expensive (seconds to minutes), so :func:`tl_field` takes an optional ``store`` (any
+object with ``load(key)`` and ``save(key, ranges_m, depths_m, tl_db)``, :class:`FieldStore`): it
+looks the field up by :func:`field_key`, a hash of every input (environment values, frequency,
+source depth, grid, pyram version), and saves what it computes. The disk store that Monte Carlo
+workers and reruns share is :class:`sonartrack.io.environment.TLDiskCache`; this module does no file
+I/O. pyram is imported only when a field is computed (it compiles with numba).
 
 By reciprocity TL(source at zs -> receiver at zr, r) = TL(zr -> zs, r): for passive sonar the target
 is the source at its depth and the array the receiver.
@@ -24,9 +30,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import dataclass
-from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -38,6 +43,8 @@ TL_VERSION = 2
 RANGE_STEP_WAVELENGTHS = 6.0
 DEPTH_STEP_WAVELENGTHS = 0.05
 DEPTH_DECIMATION = 10
+#: nominal sound speed (m/s) that turns the frequency into the wavelength of the grid steps
+GRID_SOUND_SPEED_MPS = 1500.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,10 +61,21 @@ class TLField:
     def at_depth(self, depth_m: float) -> np.ndarray:
         """TL along range at one receiver depth (linear in depth between grid rows)."""
         z = self.depths_m
-        require(0 <= depth_m <= z[-1] + 1e-9, f"receiver depth {depth_m:g} m is outside the water column (0..{z[-1]:g} m)")
+        require(0 <= depth_m <= z[-1] + 1e-9,
+                f"receiver depth {depth_m:g} m is outside the water column (0..{z[-1]:g} m)")
         i = int(np.clip(np.searchsorted(z, depth_m) - 1, 0, len(z) - 2))
         w = float(np.clip((depth_m - z[i]) / (z[i + 1] - z[i]), 0.0, 1.0))
         return (1 - w) * self.tl_db[i] + w * self.tl_db[i + 1]
+
+
+class FieldStore(Protocol):
+    """Where computed TL fields are kept between calls (e.g. :class:`sonartrack.io.environment.TLDiskCache`)."""
+
+    def load(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(ranges_m, depths_m, tl_db) stored under ``key``, or None (absent or unreadable)."""
+
+    def save(self, key: str, ranges_m: np.ndarray, depths_m: np.ndarray, tl_db: np.ndarray) -> None:
+        """Keep a field under ``key``."""
 
 
 def thorp_absorption_db_per_km(freq_hz) -> np.ndarray:
@@ -65,13 +83,6 @@ def thorp_absorption_db_per_km(freq_hz) -> np.ndarray:
     f = np.asarray(freq_hz, dtype=float) / 1e3
     f2 = f * f
     return 0.11 * f2 / (1 + f2) + 44 * f2 / (4100 + f2) + 2.75e-4 * f2 + 0.003
-
-
-def cache_dir(path: str | Path | None = None) -> Path:
-    """Folder of cached TL fields: ``path``, else $SONARTRACK_CACHE_DIR/tl, else .sonartrack-cache/tl."""
-    if path is not None:
-        return Path(path)
-    return Path(os.environ.get("SONARTRACK_CACHE_DIR", ".sonartrack-cache")) / "tl"
 
 
 def _pyram_version() -> str:
@@ -85,70 +96,75 @@ def _pyram_version() -> str:
 
 def field_key(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float, dr_m: float, dz_m: float,
               ndz: int) -> str:
+    """A short hash of everything that changes a field (the store key)."""
     spec = {"env": env.key(), "freq_hz": float(freq_hz), "zs": float(source_depth_m), "rmax_m": float(rmax_m),
             "dr_m": float(dr_m), "dz_m": float(dz_m), "ndz": int(ndz), "pyram": _pyram_version(), "v": TL_VERSION}
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
-def tl_field(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float = 50_000.0, dr_m: float | None = None,
-             dz_m: float | None = None, ndz: int = DEPTH_DECIMATION, cache: str | Path | None = None,
-             use_cache: bool = True) -> TLField:
-    """TL field of a source at ``source_depth_m`` out to ``rmax_m`` (module doc); cached on disk."""
+def grid_steps_m(freq_hz: float, dr_m: float | None = None, dz_m: float | None = None) -> tuple[float, float]:
+    """(range step, depth step) in metres: the given ones, else 6 and 1/20 wavelengths (module doc)."""
+    wavelength = GRID_SOUND_SPEED_MPS / freq_hz
+    dr = float(dr_m) if dr_m is not None else RANGE_STEP_WAVELENGTHS * wavelength
+    dz = float(dz_m) if dz_m is not None else DEPTH_STEP_WAVELENGTHS * wavelength
+    return dr, dz
+
+
+def tl_field(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float = 50_000.0,
+             dr_m: float | None = None, dz_m: float | None = None, ndz: int = DEPTH_DECIMATION,
+             store: FieldStore | None = None) -> TLField:
+    """TL field of a source at ``source_depth_m`` out to ``rmax_m`` (module doc), from ``store`` if it has it."""
     require(freq_hz > 0, f"frequency must be positive, got {freq_hz:g} Hz")
     require(0 < source_depth_m < env.water_depth_m,
             f"source depth {source_depth_m:g} m must lie inside the water column (0..{env.water_depth_m:g} m)")
     require(rmax_m > 0, f"maximum range must be positive, got {rmax_m:g} m")
-    wavelength = 1500.0 / freq_hz
-    dr = float(dr_m) if dr_m is not None else RANGE_STEP_WAVELENGTHS * wavelength
-    dz = float(dz_m) if dz_m is not None else DEPTH_STEP_WAVELENGTHS * wavelength
+    dr, dz = grid_steps_m(freq_hz, dr_m, dz_m)
     require(dr > 0 and dz > 0 and rmax_m > 2 * dr, "range and depth steps must be positive and smaller than the range")
     key = field_key(env, freq_hz, source_depth_m, rmax_m, dr, dz, ndz)
-    path = cache_dir(cache) / f"{key}.npz"
-    if use_cache and path.is_file():
-        try:
-            with np.load(path) as f:
-                return TLField(f["ranges_m"], f["depths_m"], f["tl_db"].astype(float), float(freq_hz),
-                               float(source_depth_m), env.name)
-        except (OSError, ValueError, KeyError):
-            pass  # a damaged cache file is recomputed and replaced
-    ranges, depths, tl = _run_pyram(env, freq_hz, source_depth_m, rmax_m, dr, dz, ndz)
-    tl = tl + thorp_absorption_db_per_km(freq_hz) * ranges[None, :] / 1e3
-    if use_cache:
-        from sonartrack.io.atomic import atomic_path
+    found = store.load(key) if store is not None else None
+    if found is not None:
+        ranges, depths, tl32 = found
+    else:
+        ranges, depths, tl = _run_pyram(env, freq_hz, source_depth_m, rmax_m, dr, dz, ndz)
+        tl32 = (tl + thorp_absorption_db_per_km(freq_hz) * ranges[None, :] / 1e3).astype(np.float32)
+        if store is not None:
+            store.save(key, ranges, depths, tl32)
+    return TLField(ranges, depths, np.asarray(tl32).astype(float), float(freq_hz), float(source_depth_m), env.name)
 
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp:
-            np.savez(tmp, ranges_m=ranges, depths_m=depths, tl_db=tl.astype(np.float32))
-        tl = tl.astype(np.float32).astype(float)  # identical to what the cache returns next time
-    return TLField(ranges, depths, tl, float(freq_hz), float(source_depth_m), env.name)
+
+def _pyram_inputs(env: Environment, freq_hz: float, rmax_m: float) -> dict:
+    """pyram's environment arguments, each a fresh copy (pyram modifies some inputs in place)."""
+    depth = float(env.water_depth_m)
+    wavelength = GRID_SOUND_SPEED_MPS / freq_hz
+    return {
+        "z_ss": np.array(env.depth_m, dtype=float, copy=True), "rp_ss": np.array([0.0]),
+        "cw": np.array(env.sound_speed_mps, dtype=float, copy=True)[:, None],
+        # seabed layer below the deepest water point; pyram adds its absorbing layer under it
+        "z_sb": np.array([0.0, 40.0 * wavelength]), "rp_sb": np.array([0.0]),
+        "cb": np.full((2, 1), float(env.bottom_sound_speed_mps)),
+        "rhob": np.full((2, 1), float(env.bottom_density_gcc)),
+        "attn": np.full((2, 1), float(env.bottom_attenuation_db_per_wavelength)),
+        "rbzb": np.array([[0.0, depth], [float(rmax_m), depth]]),
+    }
 
 
 def _run_pyram(env: Environment, freq_hz, zs, rmax, dr, dz, ndz):
-    """Call pyram on copies of every array (it modifies some inputs in place)."""
+    """(ranges m, depths m, TL dB without absorption) from pyram, source and receiver depth both ``zs``."""
     from pyram.PyRAM import PyRAM
 
-    D = float(env.water_depth_m)
-    wavelength = 1500.0 / freq_hz
-    z_ss = np.array(env.depth_m, dtype=float, copy=True)
-    cw = np.array(env.sound_speed_mps, dtype=float, copy=True)[:, None]
-    z_sb = np.array([0.0, 40.0 * wavelength])  # below the deepest water point; pyram adds its absorbing layer under it
-    cb = np.full((2, 1), float(env.bottom_sound_speed_mps))
-    rhob = np.full((2, 1), float(env.bottom_density_gcc))
-    attn = np.full((2, 1), float(env.bottom_attenuation_db_per_wavelength))
-    rbzb = np.array([[0.0, D], [float(rmax), D]])
-    model = PyRAM(float(freq_hz), float(zs), float(zs), z_ss, np.array([0.0]), cw, z_sb, np.array([0.0]), cb, rhob, attn,
-                  rbzb, rmax=float(rmax), dr=float(dr), dz=float(dz), ndz=int(ndz), zmplt=D)
+    a = _pyram_inputs(env, freq_hz, rmax)
+    model = PyRAM(float(freq_hz), float(zs), float(zs), a["z_ss"], a["rp_ss"], a["cw"], a["z_sb"], a["rp_sb"], a["cb"],
+                  a["rhob"], a["attn"], a["rbzb"], rmax=float(rmax), dr=float(dr), dz=float(dz), ndz=int(ndz),
+                  zmplt=float(env.water_depth_m))
     res = model.run()
-    depths = np.asarray(res["Depths"], dtype=float)
-    ranges = np.asarray(res["Ranges"], dtype=float)
-    tl = np.asarray(res["TL Grid"], dtype=float)
-    del wavelength
-    return ranges, depths, tl
+    return (np.asarray(res["Ranges"], dtype=float), np.asarray(res["Depths"], dtype=float),
+            np.asarray(res["TL Grid"], dtype=float))
 
 
 def transmission_loss(env: Environment, freq_hz: float, source_depth_m: float, receiver_depth_m: float, ranges_m,
-                      *, rmax_m: float | None = None, average_m: float = 0.0, cache: str | Path | None = None) -> np.ndarray:
-    """TL (dB) at ``ranges_m`` between the two depths (interpolated from the cached field).
+                      *, rmax_m: float | None = None, average_m: float = 0.0,
+                      store: FieldStore | None = None) -> np.ndarray:
+    """TL (dB) at ``ranges_m`` between the two depths (interpolated from the field).
 
     ``average_m`` > 0 averages the intensity over a window of that length in range first (the usual
     way to compare PE results and to remove the interference detail a passive sonar integrates over).
@@ -157,7 +173,7 @@ def transmission_loss(env: Environment, freq_hz: float, source_depth_m: float, r
     r = np.asarray(ranges_m, dtype=float)
     require(bool(np.all(np.isfinite(r)) and np.all(r >= 0)), "ranges must be finite and non-negative")
     rmax = float(rmax_m) if rmax_m is not None else max(float(np.max(r, initial=0.0)) * 1.05, 2_000.0)
-    f = tl_field(env, freq_hz, source_depth_m, rmax_m=rmax, cache=cache)
+    f = tl_field(env, freq_hz, source_depth_m, rmax_m=rmax, store=store)
     line = f.at_depth(receiver_depth_m)
     if average_m > 0:
         line = smooth_tl(f.ranges_m, line, average_m)

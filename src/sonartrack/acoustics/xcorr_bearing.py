@@ -23,9 +23,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, setting
 
 AMPLITUDE_SCALE = 30_000.0
 DEFAULT_THRESHOLD = 5_000.0
+
+
+class BearingSettings(Settings):
+    """Settings of the cross-correlation bearing estimator (``sonartrack bearings``; paper P0's values)."""
+
+    spacing_m: float = setting(..., "sensor (or half-array centre) spacing d", unit="m", gt=0)
+    sound_speed_mps: float = setting(1500.0, "sound speed c at the array", unit="m/s", gt=0)
+    window_s: float = setting(1.0, "observation window of one correlation", unit="s", gt=0)
+    threshold: float = setting(DEFAULT_THRESHOLD, "peak amplitude threshold (amplitudes 0..30000 = normalised "
+                               "correlation 0..1; 5000 = 1/6)", unit="1", ge=0)
+    max_peaks: int = setting(20, "largest number of peaks kept per window (the highest)", unit="1", ge=1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,32 +83,68 @@ def pick_peaks(cc: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray
     return idx + delta, y1 - 0.25 * (y0 - y2) * delta
 
 
-def estimate_peaks(signals, fs_hz: float, spacing_m: float, sound_speed_mps: float = 1500.0, window_s: float = 1.0,
-                   threshold: float | None = None, max_peaks: int = 20) -> PeakRecord:
-    """Peaks of every window of a (2, n) recording (module doc); ``threshold`` in amplitude units."""
-    x = np.asarray(signals, dtype=float)
+def cone_angle_deg(lag_s, spacing_m: float, sound_speed_mps: float) -> np.ndarray:
+    """theta = arccos(c tau / d) in degrees (0..180 from the array axis; c tau / d clipped to [-1, 1])."""
+    return np.rad2deg(np.arccos(np.clip(sound_speed_mps * np.asarray(lag_s, dtype=float) / spacing_m, -1.0, 1.0)))
+
+
+def window_count(n_samples: int, fs_hz: float, window_s: float) -> int:
+    """Number of whole observation windows of ``window_s`` in ``n_samples`` samples (a partial last one is dropped)."""
+    return int(n_samples // int(round(window_s * fs_hz)))
+
+
+def window_peaks(r1: np.ndarray, r2: np.ndarray, max_lag: int, threshold: float,
+                 max_peaks: int) -> tuple[np.ndarray, np.ndarray]:
+    """(fractional lag index in 0..2 max_lag, normalised height) of the strongest ``max_peaks`` peaks of one window."""
+    cc = correlate_window(r1 - r1.mean(), r2 - r2.mean(), max_lag)
+    pos, h = pick_peaks(cc, threshold)
+    if len(pos) > max_peaks:
+        keep = np.argsort(-h)[:max_peaks]
+        pos, h = pos[keep], h[keep]
+    return pos, h
+
+
+def _check_recording(x: np.ndarray, fs_hz: float, spacing_m: float, sound_speed_mps: float, window_s: float) -> None:
     require(x.ndim == 2 and x.shape[0] == 2, f"need two channels as a (2, n) array, got shape {x.shape}")
     require(spacing_m > 0, f"sensor spacing must be positive, got {spacing_m:g} m")
     require(sound_speed_mps > 0 and fs_hz > 0 and window_s > 0, "sound speed, sample rate and window must be positive")
     require(bool(np.all(np.isfinite(x))), "the recording contains NaN/inf samples")
+    require(x.shape[1] >= window_s * fs_hz, f"the recording is {x.shape[1] / fs_hz:.2f} s long, shorter than one "
+                                            f"{window_s:g} s window")
+
+
+def estimate_peaks(signals, fs_hz: float, spacing_m: float, sound_speed_mps: float = 1500.0, window_s: float = 1.0,
+                   threshold: float | None = None, max_peaks: int = 20) -> PeakRecord:
+    """Peaks of every window of a (2, n) recording (module doc); ``threshold`` in amplitude units."""
+    x = np.asarray(signals, dtype=float)
+    _check_recording(x, fs_hz, spacing_m, sound_speed_mps, window_s)
     thr = (DEFAULT_THRESHOLD if threshold is None else float(threshold)) / AMPLITUDE_SCALE
     nw = int(round(window_s * fs_hz))
     require(nw >= 16, f"window of {window_s:g} s holds only {nw} samples at {fs_hz:g} Hz")
     max_lag = int(np.ceil(spacing_m / sound_speed_mps * fs_hz)) + 1
     require(max_lag < nw // 2, "the array is too long for the window: lengthen --window")
     ts, bs, amps = [], [], []
-    for k in range(x.shape[1] // nw):
+    for k in range(window_count(x.shape[1], fs_hz, window_s)):
         seg = x[:, k * nw:(k + 1) * nw]
-        cc = correlate_window(seg[0] - seg[0].mean(), seg[1] - seg[1].mean(), max_lag)
-        pos, h = pick_peaks(cc, thr)
-        if len(pos) > max_peaks:
-            keep = np.argsort(-h)[:max_peaks]
-            pos, h = pos[keep], h[keep]
-        tau = (pos - max_lag) / fs_hz
-        theta = np.rad2deg(np.arccos(np.clip(sound_speed_mps * tau / spacing_m, -1.0, 1.0)))
+        pos, h = window_peaks(seg[0], seg[1], max_lag, thr, max_peaks)
         ts.append(np.full(len(pos), (k + 0.5) * window_s))
-        bs.append(theta)
+        bs.append(cone_angle_deg((pos - max_lag) / fs_hz, spacing_m, sound_speed_mps))
         amps.append(h * AMPLITUDE_SCALE)
     if not ts:
         return PeakRecord(np.zeros(0), np.zeros(0), np.zeros(0))
     return PeakRecord(np.concatenate(ts), np.concatenate(bs), np.concatenate(amps))
+
+
+def bearings_from_recording(signals, fs_hz: float, settings: BearingSettings) -> PeakRecord:
+    """:func:`estimate_peaks` with the declared settings of ``sonartrack bearings``."""
+    s = settings
+    return estimate_peaks(signals, fs_hz, s.spacing_m, s.sound_speed_mps, s.window_s, s.threshold, s.max_peaks)
+
+
+def peaks_summary(record: PeakRecord, n_samples: int, fs_hz: float, window_s: float) -> str:
+    """One line: windows, peaks, peaks a window and their median amplitude."""
+    n_win = window_count(n_samples, fs_hz, window_s)
+    n = len(record.time_s)
+    median = float(np.median(record.amplitude)) if n else 0.0
+    return (f"{n_win} windows of {window_s:g} s at {fs_hz:g} Hz, {n} peaks ({n / max(n_win, 1):.1f} a window, "
+            f"median amplitude {median:.0f})")

@@ -5,8 +5,8 @@ modules are discovered here, so adding a command means adding a file. Heavy impo
 the command functions so that ``sonartrack --help`` is quick.
 
 User mistakes raise :class:`sonartrack.InputError`; :func:`main` prints its one-line message
-(``error: ...``) and exits with status 2, with no traceback. Any other exception is a bug and is
-shown in full.
+(``error: ...``) and exits with status 2, with no traceback; usage errors print the usage and exit
+with status 2 too. Any other exception is a bug and is shown in full.
 """
 
 from __future__ import annotations
@@ -40,27 +40,39 @@ def _register_commands() -> None:
 _register_commands()
 
 
+#: what an interrupted run prints (exit status 130, as for SIGINT)
+INTERRUPTED = "interrupted: finished trials are saved; rerun the same command to resume"
+
+
+def _exit_status(code) -> int:
+    """``SystemExit.code`` as a process status: None is 0, an int itself, anything else (a message) 1."""
+    if code is None:
+        return 0
+    return code if isinstance(code, int) else 1
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: run the app, turning :class:`InputError` into a one-line message and exit 2."""
+    """Entry point: run the app and return its exit status, with no traceback for a user's mistake.
+
+    typer runs in its standalone mode, which handles its own (bundled click) usage errors whatever
+    click it ships: usage text and status 2 for a missing argument, an unknown option or command, and
+    no arguments at all; help and ``--print-config`` end with status 0. A user mistake inside a
+    command is an :class:`InputError`: its one-line message (``error: ...``), status 2. Ctrl-C is
+    status 130 with a note on resuming. Any other exception is a bug and is shown in full.
+    """
     try:
-        app(args=argv, prog_name="sonartrack", standalone_mode=False)
+        app(args=argv, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
         typer.echo(f"error: {exc}", err=True)
         return 2
     except KeyboardInterrupt:
-        typer.echo("interrupted: finished trials are saved; rerun the same command to resume", err=True)
+        typer.echo(INTERRUPTED, err=True)
         return 130
-    except SystemExit as exc:  # typer's own exits (--help, usage errors)
-        return int(exc.code or 0)
-    except Exception as exc:  # click usage errors arrive as ClickException in non-standalone mode
-        import click
-
-        if isinstance(exc, click.exceptions.ClickException):
-            exc.show()
-            return exc.exit_code
-        if isinstance(exc, click.exceptions.Abort):
-            return 1
-        raise
+    except SystemExit as exc:
+        status = _exit_status(exc.code)
+        if status == 130:
+            typer.echo(INTERRUPTED, err=True)
+        return status
     return 0
 
 

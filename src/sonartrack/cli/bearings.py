@@ -2,7 +2,8 @@
 
 Writes atomically into ``--out``: ``peaks.csv`` (time_s, bearing_deg, amplitude: one row per peak,
 the cone angle from the array axis in 0..180 deg, time at the window centre) and ``waterfall.png``
-(bearing against time, amplitude as colour), and prints a one-line summary.
+(bearing against time, amplitude as colour), and prints a one-line summary. The estimator's settings
+are :class:`sonartrack.acoustics.xcorr_bearing.BearingSettings` (``--config``, ``--print-config``).
 """
 
 from __future__ import annotations
@@ -12,40 +13,45 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.core.errors import require
+from sonartrack.acoustics.xcorr_bearing import BearingSettings
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
 
 
 def register(app: typer.Typer) -> None:
     app.command("bearings")(bearings_cmd)
 
 
+def _help(name: str) -> str:
+    return option_help(BearingSettings, name)
+
+
 def bearings_cmd(
-    wav: Annotated[Path, typer.Option(help="Two-channel WAV (one channel per sensor or half-array).")],
-    spacing: Annotated[float, typer.Option(help="Sensor (or half-array centre) spacing d (m).")],
-    sound_speed: Annotated[float, typer.Option(help="Sound speed c (m/s).")] = 1500.0,
-    window: Annotated[float, typer.Option(help="Observation window (s).")] = 1.0,
-    threshold: Annotated[float | None, typer.Option(help="Peak amplitude threshold (default 5000 of 30000 = "
-                                                            "normalised correlation 1/6).")] = None,
+    wav: Annotated[Path | None, typer.Option(help="Two-channel WAV (one channel per sensor or half-array).")] = None,
+    spacing: Annotated[float | None, typer.Option(help=_help("spacing_m"))] = None,
+    sound_speed: Annotated[float | None, typer.Option(help=_help("sound_speed_mps"))] = None,
+    window: Annotated[float | None, typer.Option(help=_help("window_s"))] = None,
+    threshold: Annotated[float | None, typer.Option(help=_help("threshold"))] = None,
+    max_peaks: Annotated[int | None, typer.Option(help=_help("max_peaks"))] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML file of estimator settings (see --print-config).")] = None,
+    print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("bearings"),
 ) -> None:
     """Cross-correlation bearings: WAV -> peaks CSV and waterfall PNG."""
-    import numpy as np
-
-    from sonartrack.acoustics.xcorr_bearing import estimate_peaks
+    from sonartrack.acoustics.xcorr_bearing import bearings_from_recording, peaks_summary
+    from sonartrack.core.errors import require
     from sonartrack.io.peaks import write_peaks_csv
     from sonartrack.io.wav import read_two_channel_wav
     from sonartrack.report.figures.bearings import waterfall_png
 
-    require(spacing > 0, f"--spacing must be positive (metres), got {spacing:g}")
-    require(sound_speed > 0, f"--sound-speed must be positive (m/s), got {sound_speed:g}")
-    require(window > 0, f"--window must be positive (s), got {window:g}")
+    s = resolve(BearingSettings, config, spacing_m=spacing, sound_speed_mps=sound_speed, window_s=window,
+                threshold=threshold, max_peaks=max_peaks)
+    if print_config:
+        print_config_and_exit(s)
+    require(wav is not None, "give the recording: --wav FILE (a two-channel WAV)")
     x, fs = read_two_channel_wav(wav)
-    require(x.shape[1] >= window * fs, f"{wav.name} is {x.shape[1] / fs:.2f} s long, shorter than one {window:g} s window")
-    rec = estimate_peaks(x, fs, spacing, sound_speed, window, threshold)
+    rec = bearings_from_recording(x, fs, s)
     out.mkdir(parents=True, exist_ok=True)
     csv = write_peaks_csv(out / "peaks.csv", rec)
-    png = waterfall_png(out / "waterfall.png", rec, title=f"{wav.name}: d = {spacing:g} m, c = {sound_speed:g} m/s")
-    n_win = int(x.shape[1] // round(window * fs))
-    typer.echo(f"bearings: {n_win} windows of {window:g} s at {fs:g} Hz, {len(rec.time_s)} peaks "
-               f"({len(rec.time_s) / max(n_win, 1):.1f} a window, median amplitude "
-               f"{np.median(rec.amplitude) if len(rec.amplitude) else 0:.0f}); wrote {csv} and {png}")
+    title = f"{wav.name}: d = {s.spacing_m:g} m, c = {s.sound_speed_mps:g} m/s"
+    png = waterfall_png(out / "waterfall.png", rec, title=title)
+    typer.echo(f"bearings: {peaks_summary(rec, x.shape[1], fs, s.window_s)}; wrote {csv} and {png}")

@@ -22,12 +22,14 @@ def studies_cmd() -> None:
 
     for sid in studies.available():
         mod = studies.load(sid)
-        typer.echo(f"{sid:20s} {mod.TITLE}  [{mod.PAPER}]  full: {mod.Config().runs} runs, quick: {mod.Config.quick().runs}")
+        typer.echo(f"{sid:20s} {mod.TITLE}  [{mod.PAPER}]  full: {mod.Config().runs} runs, "
+                   f"quick: {mod.Config.quick().runs}")
 
 
 def reproduce_cmd(
     study: Annotated[str, typer.Argument(help="Study id (see `sonartrack studies`) or 'all'.")],
-    runs: Annotated[int | None, typer.Option(help="Monte Carlo runs (default: the paper's, or the quick preset's).")] = None,
+    runs: Annotated[int | None, typer.Option(help="Monte Carlo runs (default: the paper's, or the quick "
+                                                   "preset's).")] = None,
     quick: Annotated[bool, typer.Option("--quick", help="Small preset for a fast check (CI, demo).")] = False,
     workers: Annotated[int, typer.Option(help="Local worker processes.")] = 2,
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
@@ -56,7 +58,7 @@ def reproduce_cmd(
     results = []
     with make_progress() as prog:
         bar = TrialProgress(prog)
-        for mod, cfg in zip(mods, configs):
+        for mod, cfg in zip(mods, configs, strict=True):
             results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers,
                                               scheduler=scheduler, progress=bar, figures=study_figures))
     from sonartrack.report.html import write_report
@@ -67,4 +69,5 @@ def reproduce_cmd(
                       f"claims holding {r.n_holding}/{r.n_claims}")
     n_claims = sum(r.n_claims for r in results)
     n_hold = sum(r.n_holding for r in results)
-    typer.echo(f"done in {time.perf_counter() - t0:.1f} s: {len(results)} studies, {n_hold}/{n_claims} claims hold; report: {report}")
+    typer.echo(f"done in {time.perf_counter() - t0:.1f} s: {len(results)} studies, {n_hold}/{n_claims} claims hold; "
+               f"report: {report}")

@@ -43,11 +43,13 @@ def field_unit(model_cls: type[BaseModel], name: str) -> str:
 
 
 def field_help(model_cls: type[BaseModel], name: str) -> str:
-    """'doc [unit]' of field ``name``: the text a command-line option shows."""
+    """'doc (unit)' of field ``name``: the text a command-line option shows.
+
+    Round brackets, because typer's rich help would read '[dB]' as a markup tag and drop it."""
     f = model_cls.model_fields[name]
     unit = field_unit(model_cls, name)
     doc = f.description or name
-    return f"{doc} [{unit}]" if unit and unit != "1" else doc
+    return f"{doc} ({unit})" if unit and unit != "1" else doc
 
 
 def _toml_value(v) -> str:

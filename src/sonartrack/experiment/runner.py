@@ -5,10 +5,14 @@ bit-for-bit identical whatever the number of workers, the scheduler, or how ofte
 interrupted. Work is cut into chunks of consecutive trials; each finished chunk is written
 atomically by the parent process (experiment/store.py), so an interrupted run loses at most the
 chunks in flight and a rerun computes only the trials not yet on disk.
+
+The runner knows a study only as the module it is given (:func:`plan_run`); workers re-import it by
+its dotted name (``RunPlan.study_module``), so this layer never imports the studies above it.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -28,6 +32,7 @@ class RunPlan:
     """What a run will do: where its trials live and which ones still need computing."""
 
     study_id: str
+    study_module: str  #: dotted import path of the study module (what a worker imports)
     runs: int
     seed: int
     cache_dir: Path
@@ -38,11 +43,10 @@ class RunPlan:
         return sum(len(c) for c in self.todo_chunks)
 
 
-def run_chunk(study_id: str, config_json: dict, seed: int, indices: tuple[int, ...]) -> dict[str, np.ndarray]:
-    """Run trials ``indices`` of a study and stack their outputs (executed in a worker)."""
-    from sonartrack import studies
-
-    mod = studies.load(study_id)
+def run_chunk(study_module: str, config_json: dict, seed: int, indices: tuple[int, ...]) -> dict[str, np.ndarray]:
+    """Run trials ``indices`` of the study module ``study_module`` (dotted path) and stack their outputs
+    (executed in a worker)."""
+    mod = importlib.import_module(study_module)
     config = mod.Config.model_validate(config_json)
     outs = [mod.run_trial(config, trial_rng(seed, i)) for i in indices]
     return {k: np.stack([np.asarray(o[k]) for o in outs]) for k in outs[0]}
@@ -70,7 +74,7 @@ def plan_run(study_mod, config, runs: int, seed: int, out_dir: Path, chunk_size:
     done = store.done_indices(cache_dir)
     todo = [i for i in range(runs) if i not in done]
     size = chunk_size or getattr(study_mod, "CHUNK_SIZE", DEFAULT_CHUNK)
-    return RunPlan(study_mod.STUDY_ID, runs, int(seed), cache_dir, tuple(_chunks(todo, size)))
+    return RunPlan(study_mod.STUDY_ID, study_mod.__name__, runs, int(seed), cache_dir, tuple(_chunks(todo, size)))
 
 
 def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = None,
@@ -96,7 +100,7 @@ def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None)
         yield from _iter_dask(plan, cfg, scheduler)
     elif workers == 1 or len(plan.todo_chunks) == 1:
         for idx in plan.todo_chunks:
-            yield idx, run_chunk(plan.study_id, cfg, plan.seed, idx)
+            yield idx, run_chunk(plan.study_module, cfg, plan.seed, idx)
     else:
         yield from _iter_processes(plan, cfg, workers)
 
@@ -108,7 +112,7 @@ def _iter_processes(plan: RunPlan, cfg: dict, workers: int):
     # "spawn" would re-import everything per worker; "forkserver" is safe with threads in the parent.
     ctx = mp.get_context("forkserver" if os.name == "posix" else "spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = {pool.submit(run_chunk, plan.study_id, cfg, plan.seed, idx): idx for idx in plan.todo_chunks}
+        futures = {pool.submit(run_chunk, plan.study_module, cfg, plan.seed, idx): idx for idx in plan.todo_chunks}
         try:
             for fut in as_completed(futures):
                 yield futures[fut], fut.result()
@@ -128,7 +132,7 @@ def _iter_dask(plan: RunPlan, cfg: dict, scheduler: str):
     except (OSError, TimeoutError) as exc:
         raise InputError(f"cannot reach the Dask scheduler at {scheduler}: start it or fix --scheduler") from exc
     try:
-        futures = {client.submit(run_chunk, plan.study_id, cfg, plan.seed, idx, pure=False): idx
+        futures = {client.submit(run_chunk, plan.study_module, cfg, plan.seed, idx, pure=False): idx
                    for idx in plan.todo_chunks}
         for fut in as_completed(list(futures)):
             yield futures[fut], fut.result()

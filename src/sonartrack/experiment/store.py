@@ -5,9 +5,10 @@ Layout under a study's output folder::
     <out>/<study>/cache/<key>/trials-<first>-<stop>.parquet    one chunk: trials first..stop-1
     <out>/<study>/trials.parquet                                all trials of the last run
 
-A chunk is written to a temporary file in the same folder and renamed into place, so a file that
-exists is complete. One row per trial; each array-valued key is one list<float64/int64> column
-holding the flattened array, and its per-trial shape and dtype sit in the schema metadata.
+Every file is written through :func:`sonartrack.io.atomic.atomic_path` (a temporary sibling renamed
+into place), so a chunk file that exists is complete. One row per trial; each array-valued key is one
+list<float64/int64> column holding the flattened array, and its per-trial shape and dtype sit in the
+schema metadata.
 The key hashes the study id, its ``TRIAL_VERSION``, the config without ``runs``, and the master
 seed: asking for more runs reuses every trial already on disk.
 """
@@ -16,11 +17,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import re
 from pathlib import Path
 
 import numpy as np
+
+from sonartrack.io.atomic import atomic_path
 
 _CHUNK_RE = re.compile(r"^trials-(\d+)-(\d+)\.parquet$")
 
@@ -62,9 +64,8 @@ def write_chunk(folder: Path, indices, trials: dict[str, np.ndarray]) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     first, stop = int(indices[0]), int(indices[-1]) + 1
     final = folder / f"trials-{first:06d}-{stop:06d}.parquet"
-    tmp = folder / f".{final.name}.{os.getpid()}.tmp"
-    pq.write_table(_table_from_trials(indices, trials), tmp)
-    os.replace(tmp, final)
+    with atomic_path(final) as tmp:
+        pq.write_table(_table_from_trials(indices, trials), tmp)
     return final
 
 
@@ -120,7 +121,6 @@ def write_trials_file(path: Path, trials: dict[str, np.ndarray]) -> None:
     import pyarrow.parquet as pq
 
     n = len(next(iter(trials.values())))
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     path.parent.mkdir(parents=True, exist_ok=True)
-    pq.write_table(_table_from_trials(np.arange(n), trials), tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        pq.write_table(_table_from_trials(np.arange(n), trials), tmp)

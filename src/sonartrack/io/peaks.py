@@ -36,7 +36,8 @@ def read_peaks_csv(path) -> PeakRecord:
     except Exception as exc:  # noqa: BLE001 - pandas raises many types for bad files
         raise InputError(f"cannot read peaks file {p.name}: {exc}") from None
     missing = [c for c in ("time_s", "bearing_deg", "amplitude") if c not in df.columns]
-    require(not missing, f"peaks file {p.name} lacks column(s) {', '.join(missing)} (has {', '.join(map(str, df.columns))})")
+    require(not missing, f"peaks file {p.name} lacks column(s) {', '.join(missing)} "
+                         f"(has {', '.join(map(str, df.columns))})")
     require(len(df) > 0, f"peaks file {p.name} has no rows")
     try:
         cols = {c: df[c].to_numpy(dtype=float) for c in ("time_s", "bearing_deg", "amplitude")}
@@ -47,5 +48,6 @@ def read_peaks_csv(path) -> PeakRecord:
     b = cols["bearing_deg"]
     require(bool(np.all((b >= 0) & (b <= 180))), f"peaks file {p.name}: bearing_deg must be cone angles in 0..180 deg "
                                                  f"(found {b.min():.3g}..{b.max():.3g}; radians or compass bearings?)")
-    require(bool(np.all(np.diff(cols["time_s"]) >= 0)), f"peaks file {p.name}: time_s must not decrease (sort the rows)")
+    require(bool(np.all(np.diff(cols["time_s"]) >= 0)),
+            f"peaks file {p.name}: time_s must not decrease (sort the rows)")
     return PeakRecord(cols["time_s"], b, cols["amplitude"])

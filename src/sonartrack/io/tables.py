@@ -31,13 +31,11 @@ def read_table(path: str | Path, what: str):
     p = Path(path)
     if not p.is_file():
         raise InputError(f"{what} file not found: {p}")
+    parquet = p.suffix.lower() in (".parquet", ".pq")
     try:
-        if p.suffix.lower() in (".parquet", ".pq"):
-            df = pd.read_parquet(p)
-        else:
-            df = pd.read_csv(p, comment="#")
+        df = pd.read_parquet(p) if parquet else pd.read_csv(p, comment="#")
     except Exception as exc:  # pandas raises many types for malformed files
-        raise InputError(f"{what} file {p} could not be read as {'Parquet' if p.suffix.lower() in ('.parquet', '.pq') else 'CSV'}: "
+        raise InputError(f"{what} file {p} could not be read as {'Parquet' if parquet else 'CSV'}: "
                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
     df.columns = [str(c).strip() for c in df.columns]
     if len(df) == 0:

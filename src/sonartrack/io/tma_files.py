@@ -11,9 +11,8 @@ Bearings file (CSV or Parquet; ``#`` comment lines allowed in CSV), one row per 
 
 Ownship file (CSV or Parquet): ``time_s`` (s, strictly increasing), ``x_m``, ``y_m`` (m, x east, y
 north, in the same local frame as the solution). Positions are interpolated linearly to the
-measurement times, velocities from central differences of the samples. Measurement times outside
-the ownship file's span are an error (no extrapolation), and so is a measurement inside a gap of more
-than ``max_gap_s`` (default 120 s) between two ownship samples.
+measurement times, velocities from central differences of the samples; that the file covers the
+measurements is checked by the solver (tma/records.py ``check_coverage``).
 
 Checks with one-line errors: missing or non-numeric values, unsorted or repeated times, columns in
 the wrong unit (``bearing_rad``, ``x_km``, ``time_ms`` ...), bearings beyond +-360 deg, bearings that
@@ -21,30 +20,28 @@ all lie within +-2 pi (radians written in a degrees column; switch off with ``ch
 for a target genuinely within 6 deg of north), non-positive frequencies, an ownship moving faster
 than 40 m/s (about 78 kn: kilometres or minutes written as metres or seconds).
 
-Solution table (CSV), one row per measurement time: ``time_s, x_m, y_m, vx_mps, vy_mps,
-course_deg, speed_kn, range_m, bearing_deg`` and the standard deviation of each (``*_std``
-columns, with the same unit), from the solution's covariance by first-order propagation (the course
-std is capped at 180 deg, where the speed is too uncertain for a course); range and bearing are from
-the ownship to the target.
+Solution table (CSV), one row per solution time: the columns of tma/solution_table.py (``time_s, x_m,
+y_m, vx_mps, vy_mps, course_deg, speed_kn, range_m, bearing_deg`` and their ``*_std`` standard
+deviations), written atomically.
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError
+from sonartrack.io.atomic import write_csv
 from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.io.tables import check_columns, check_sorted, numeric_column, read_table
+from sonartrack.tma.solution_table import solution_columns
 
 BEARING_COLUMNS = ["time_s", "bearing_deg"]
 OWNSHIP_COLUMNS = ["time_s", "x_m", "y_m"]
-MAX_NAV_GAP_S = 120.0
+#: an ownship faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
 MAX_OWNSHIP_SPEED_MPS = 40.0
-KNOT_MPS = 1852.0 / 3600.0
 
 
 def _optional_column(df, col: str, what: str, path) -> np.ndarray:
@@ -75,7 +72,8 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
                          "give bearings in degrees clockwise from north")
     if check_radians and len(b_deg) >= 5 and np.all(np.abs(b_deg) <= 2.0 * np.pi):
         raise InputError(f"{what} file {path}: every bearing_deg lies within ±6.29, so these look like radians: "
-                         "multiply by 180/pi (or set check_radians = false if the target really stays within 6 deg of north)")
+                         "multiply by 180/pi (or set check_radians = false under [inputs] if the target really stays "
+                         "within 6 deg of north)")
     freq = snr = None
     if "frequency_hz" in df.columns:
         freq = _optional_column(df, "frequency_hz", what, path)
@@ -86,7 +84,7 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
             freq = None
     if "snr_db" in df.columns:
         snr = numeric_column(df, "snr_db", what, path)
-    return BearingRecord(t, np.asarray(wrap_angle(np.deg2rad(b_deg))), freq, snr)
+    return BearingRecord(time_s=t, bearing_rad=np.asarray(wrap_angle(np.deg2rad(b_deg))), frequency_hz=freq, snr_db=snr)
 
 
 def read_ownship(path) -> OwnshipTrack:
@@ -103,80 +101,15 @@ def read_ownship(path) -> OwnshipTrack:
     speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
     if np.any(speed > MAX_OWNSHIP_SPEED_MPS):
         row = int(np.argmax(speed > MAX_OWNSHIP_SPEED_MPS)) + 1
-        raise InputError(f"{what} file {path}: the ownship moves at {speed[row - 1]:.0f} m/s before data row {row + 1}: "
-                         "positions must be metres and times seconds")
-    return OwnshipTrack(t, x, y)
-
-
-def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:
-    """Every measurement time must lie within the ownship span, in no gap longer than ``max_gap_s``."""
-    t = np.asarray(record.time_s, float)
-    nt = np.asarray(ownship.time_s, float)
-    outside = (t < nt[0]) | (t > nt[-1])
-    if outside.any():
-        raise InputError(f"{int(outside.sum())} measurement time(s) (first {t[np.argmax(outside)]:g} s) lie outside the "
-                         f"ownship file's span {nt[0]:g}..{nt[-1]:g} s: extend the ownship file or trim the bearings "
-                         "(positions are not extrapolated)")
-    k = np.clip(np.searchsorted(nt, t, side="right"), 1, len(nt) - 1)
-    gap = nt[k] - nt[k - 1]
-    on_sample = np.isin(t, nt)
-    bad = (gap > max_gap_s) & ~on_sample
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise InputError(f"no ownship position near t = {t[i]:g} s: the ownship file has a {gap[i]:g} s gap "
-                         f"({nt[k[i] - 1]:g}..{nt[k[i]]:g} s) and sonartrack interpolates across at most "
-                         f"{max_gap_s:g} s: add ownship samples or drop those measurements")
-
-
-def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, np.ndarray]:
-    """The solution table's columns (module docstring), standard deviations by first-order propagation:
-
-        course = atan2(vx, vy):  J = [vy, -vx] / s^2 on (vx, vy);   speed s = |v|:  J = [vx, vy] / s
-        bearing = atan2(dx, dy): J = [dy, -dx] / r^2 on (x, y);     range r = |d|:  J = [dx, dy] / r
-    with d = target - ownship position.
-    """
-    t = np.asarray(solution.time_s, float)
-    X = np.asarray(solution.state, float)
-    P = np.asarray(solution.covariance, float)
-    own = ownship.position_at(t)
-    dx, dy = X[:, 0] - own[:, 0], X[:, 1] - own[:, 1]
-    vx, vy = X[:, 2], X[:, 3]
-    r = np.hypot(dx, dy)
-    s = np.hypot(vx, vy)
-
-    def quad(J, block):
-        return np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", J, P[:, block, block], J), 0.0))
-
-    pos, vel = slice(0, 2), slice(2, 4)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        s_safe = np.where(s > 0, s, np.nan)
-        r_safe = np.where(r > 0, r, np.nan)
-        course_std = quad(np.stack([vy, -vx], -1) / s_safe[:, None] ** 2, vel)
-        speed_std = quad(np.stack([vx, vy], -1) / s_safe[:, None], vel)
-        brg_std = quad(np.stack([dy, -dx], -1) / r_safe[:, None] ** 2, pos)
-        rng_std = quad(np.stack([dx, dy], -1) / r_safe[:, None], pos)
-    course = np.rad2deg(np.arctan2(vx, vy)) % 360.0
-    bearing = np.rad2deg(np.arctan2(dx, dy)) % 360.0
-    sd = np.sqrt(np.maximum(np.einsum("nii->ni", P), 0.0))
-    return {"time_s": t, "x_m": X[:, 0], "y_m": X[:, 1], "vx_mps": vx, "vy_mps": vy, "course_deg": course,
-            "speed_kn": s / KNOT_MPS, "range_m": r, "bearing_deg": bearing,
-            "x_std_m": sd[:, 0], "y_std_m": sd[:, 1], "vx_std_mps": sd[:, 2], "vy_std_mps": sd[:, 3],
-            # a course is undefined at zero speed: its std saturates at 180 deg
-            "course_std_deg": np.minimum(np.rad2deg(np.nan_to_num(course_std, nan=np.pi)), 180.0), "speed_std_kn": speed_std / KNOT_MPS,
-            "range_std_m": rng_std, "bearing_std_deg": np.rad2deg(brg_std)}
+        raise InputError(f"{what} file {path}: the ownship moves at {speed[row - 1]:.0f} m/s before data row "
+                         f"{row + 1}: positions must be metres and times seconds")
+    return OwnshipTrack(time_s=t, x_m=x, y_m=y)
 
 
 def write_solution_csv(path, solution: TmaSolution, ownship: OwnshipTrack) -> Path:
-    """Write the solution table atomically (temporary name in the same folder, then rename)."""
+    """Write the solution table (tma/solution_table.py) atomically (io/atomic.py)."""
     import pandas as pd
 
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp")
-    try:
-        pd.DataFrame(solution_columns(solution, ownship)).to_csv(tmp, index=False, float_format="%.10g")
-        os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return p
+    return write_csv(pd.DataFrame(solution_columns(solution, ownship)), p, float_format="%.10g")

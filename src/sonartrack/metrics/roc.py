@@ -83,3 +83,16 @@ def roc_curve(h0_stat, h1_stat, pfa) -> RocCurve:
     f_lo, f_hi = binomial_interval(k0, h0.size)
     return RocCurve(np.atleast_1d(np.asarray(pfa, dtype=float)), k1 / h1.size, lo, hi, k0 / h0.size, f_lo, f_hi, t,
                     h0.size, h1.size)
+
+
+def rise_is_significant(p_before: float, p_after: float, n: int, z: float = 1.96) -> bool:
+    """Whether a detection probability rose from ``p_before`` to ``p_after`` by more than ``z`` standard
+    errors of the difference of two independent binomial proportions of ``n`` trials each:
+
+        p_after - p_before > z sqrt(p_before (1 - p_before) / n + p_after (1 - p_after) / n),
+
+    each variance floored at 1e-12 / n so that a step between two proportions of 0 (or 1) is not
+    significant by a zero SE. (Curves sharing random numbers are positively correlated, so this SE is
+    conservative for them.)"""
+    se = np.sqrt(max(p_before * (1 - p_before), 1e-12) / n + max(p_after * (1 - p_after), 1e-12) / n)
+    return bool(p_after - p_before > z * se)

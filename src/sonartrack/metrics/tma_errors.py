@@ -9,7 +9,8 @@ truth x) at times t_k::
                                                                observer's velocity is added back)
     course error     e_c(k) = wrap(course_hat - course)       (rad, course = atan2(vx, vy))
     speed error      e_s(k) = |v_hat| - |v|                   (m/s)
-    RMSE(k)          sqrt(mean over runs of e(k)^2)           (NaN entries -- a run that failed -- skipped)
+    RMSE(k)          sqrt(mean over runs of e(k)^2)           (NaN entries -- a run that failed -- skipped;
+                                                               metrics/statistics.py rmse_over_runs)
 
 A run *diverges* at a checkpoint when its position error exceeds ``rel_threshold`` times the true
 range there, or when the filter failed numerically (NaN estimate): a solution off by more than a
@@ -19,6 +20,8 @@ filter's covariance no longer says so).
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -46,9 +49,12 @@ def tma_errors(est, truth) -> dict[str, np.ndarray]:
 
 
 def time_averaged_rmse(errors, start: int = 0, stop: int | None = None) -> float:
-    """RMSE over runs *and* the time window [start, stop): sqrt(mean of e^2) (NaN entries skipped)."""
+    """RMSE over runs (axis 0) *and* the time window [start, stop) (axis 1): sqrt(mean of e^2). NaN entries
+    are skipped, and a window with no value gives NaN (the NaN rule of metrics/statistics.py)."""
     e = np.asarray(errors, dtype=float)[:, start:stop]
-    return float(np.sqrt(np.nanmean(e * e)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # "mean of empty slice": NaN is the answer
+        return float(np.sqrt(np.nanmean(e * e)))
 
 
 def diverged(position_error_m, true_range_m, rel_threshold: float = 0.25) -> np.ndarray:

@@ -22,6 +22,10 @@ input u_k (the relative acceleration the sensor's own motion adds, from its acce
 
 Cells are numbered row-major, m = i * n_doppler + j, with i the range index and j the Doppler
 index; cell (i, j) covers [r_min + i dr, r_min + (i+1) dr) x [v_min + j dv, v_min + (j+1) dv).
+
+The simulator (``sim/range_doppler.py``) and the detector (``detection/``) share everything here:
+the plane (:class:`RangeDopplerGrid`, declared as settings by :class:`CwPlaneSettings`), the motion
+model and the known own-sensor inputs (:func:`own_accel_array`).
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, setting
 
 #: resolution factors of a CW pulse (Nielsen 1991, via the paper, sec. V)
 RANGE_CELL_FACTOR = 0.58
@@ -74,6 +79,19 @@ def ar_process_noise(period_s: float, sigma_a_mps2: float) -> np.ndarray:
     """Q = [[T^4/4, T^3/2], [T^3/2, T^2]] sigma_a^2 (eq. 24)."""
     g = ar_input_gain(period_s)
     return np.outer(g, g) * float(sigma_a_mps2) ** 2
+
+
+def own_accel_array(own_accel_mps2, n_frames: int) -> np.ndarray:
+    """The K - 1 known inputs u_k (eq. 23) as an array: None -> zeros, a scalar -> constant, a list -> itself."""
+    if own_accel_mps2 is None:
+        return np.zeros(max(n_frames - 1, 0))
+    u = np.atleast_1d(np.asarray(own_accel_mps2, dtype=float))
+    if u.size == 1:
+        return np.full(max(n_frames - 1, 0), float(u[0]))
+    require(u.ndim == 1 and u.size == n_frames - 1,
+            f"own-sensor acceleration needs K - 1 = {n_frames - 1} values (one per frame transition), got {u.size}")
+    require(bool(np.all(np.isfinite(u))), "own-sensor acceleration values must be finite")
+    return u
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,3 +153,21 @@ class RangeDopplerGrid:
         j = np.floor((w[..., 1] - self.range_rate_min_mps) / self.range_rate_cell_mps).astype(np.int64)
         inside = (i >= 0) & (i < self.n_range) & (j >= 0) & (j < self.n_doppler)
         return np.clip(i, 0, self.n_range - 1), np.clip(j, 0, self.n_doppler - 1), inside
+
+
+class CwPlaneSettings(Settings):
+    """Cell geometry of a CW pulse's range-Doppler plane (paper P1, sec. V); the plane's size comes
+    from the frames (``detect``) or the scenario (the mftd study)."""
+
+    pulse_s: float = setting(0.125, "CW pulse length tau (sets both cell sizes)", unit="s", gt=0)
+    carrier_hz: float = setting(30e3, "carrier frequency f_c (Doppler cell to range-rate)", unit="Hz", gt=0)
+    sound_speed_mps: float = setting(1500.0, "sound speed c", unit="m/s", gt=0)
+    range_min_m: float = setting(0.0, "lower range edge of the first range cell", unit="m")
+    range_rate_min_mps: float | None = setting(
+        None, "lower range-rate edge of the first Doppler cell (not set: the Doppler axis is centred on 0)",
+        unit="m/s")
+
+    def grid(self, n_range: int, n_doppler: int) -> RangeDopplerGrid:
+        """The n_range x n_doppler plane of these cells (:meth:`RangeDopplerGrid.cw`)."""
+        return RangeDopplerGrid.cw(n_range, n_doppler, self.pulse_s, self.carrier_hz, self.sound_speed_mps,
+                                   self.range_min_m, self.range_rate_min_mps)

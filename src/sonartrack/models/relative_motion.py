@@ -1,6 +1,6 @@
 """Relative constant-velocity motion with the observer's own motion as a known input.
 
-State order (used by models/passive.py, filters/{ekf,mgekf,imm_ekf}.py, tma/sequential_bf.py):
+State order (used by models/passive.py, filters/{ekf,mgekf}.py, tma/imm_mgekf.py, tma/sequential_bf.py):
 X = [x, y, vx, vy, f0] -- target minus observer position (m) and velocity (m/s), x east, y north,
 and the emitted frequency f0 (Hz).
 

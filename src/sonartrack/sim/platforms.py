@@ -64,7 +64,7 @@ class ManeuveringTrack:
         seg = self._segments()
         # position at each breakpoint
         p = [np.array([self.x0_m, self.y0_m])]
-        for (ta, ha, wa), (tb, _, _) in zip(seg[:-1], seg[1:]):
+        for (ta, ha, wa), (tb, _, _) in zip(seg[:-1], seg[1:], strict=True):
             p.append(p[-1] + self._advance(tb - ta, ha, wa))
         starts = np.array([s[0] for s in seg])
         k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(seg) - 1)

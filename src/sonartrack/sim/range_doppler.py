@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import require
-from sonartrack.models.range_doppler import RangeDopplerGrid, ar_input_gain, ar_transition
+from sonartrack.models.range_doppler import RangeDopplerGrid, ar_input_gain, ar_transition, own_accel_array
 from sonartrack.models.swerling import sample_cells
 
 #: candidate tracks drawn per batch while looking for one that stays in the plane
@@ -32,19 +32,6 @@ class TargetTrack:
 
     states: np.ndarray
     cells: np.ndarray
-
-
-def own_accel_array(own_accel_mps2, n_frames: int) -> np.ndarray:
-    """The K - 1 known inputs u_k as an array: None -> zeros, a scalar -> constant, a list -> itself."""
-    if own_accel_mps2 is None:
-        return np.zeros(max(n_frames - 1, 0))
-    u = np.atleast_1d(np.asarray(own_accel_mps2, dtype=float))
-    if u.size == 1:
-        return np.full(max(n_frames - 1, 0), float(u[0]))
-    require(u.ndim == 1 and u.size == n_frames - 1,
-            f"own-sensor acceleration needs K - 1 = {n_frames - 1} values (one per frame transition), got {u.size}")
-    require(bool(np.all(np.isfinite(u))), "own-sensor acceleration values must be finite")
-    return u
 
 
 def simulate_target(rng: np.random.Generator, grid: RangeDopplerGrid, period_s: float, sigma_a_mps2: float,

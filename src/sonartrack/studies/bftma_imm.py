@@ -11,21 +11,26 @@ trial simulates the scenario once (bearings and frequencies with noise) and runs
 
 Per trial and filter it records, on a grid every ``record_every_s``, the position, velocity, course
 and speed errors, the IMM mode probabilities, and whether the filter failed numerically.
+
+config -> run_trial -> summarize -> claims; the pictures are ``report/figures/bftma_imm.py``.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
 
 from sonartrack.core.angles import wrap_angle
-from sonartrack.filters.imm_ekf import run_imm_bf, transition_matrix
-from sonartrack.metrics.statistics import rmse_over_runs
+from sonartrack.core.settings import Settings, setting
+from sonartrack.core.units import KNOT_MPS
+from sonartrack.experiment.claims import Claim
+from sonartrack.metrics.statistics import paired_difference, rmse_over_runs
 from sonartrack.metrics.tma_errors import diverged, time_averaged_rmse, tma_errors
 from sonartrack.models.passive import bf_measurement
 from sonartrack.models.relative_motion import observer_inputs
 from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.tma.imm_mgekf import ImmBfModel, run_imm_bf, transition_matrix
 from sonartrack.tma.sequential_bf import initial_estimate
+from sonartrack.tma.settings import ImmSettings
 
 STUDY_ID = "bftma-imm"
 TITLE = "Bearing + frequency TMA of a maneuvering target with IMM-MGEKF"
@@ -33,12 +38,11 @@ PAPER = "Yoo & Song, passive-sonar TMA with the IMM (paper 002, P2)"
 TRIAL_VERSION = 1
 CHUNK_SIZE = 20
 
-KNOT_MPS = 1852.0 / 3600.0
 MEASUREMENTS = {"bf": "bearings + frequency", "b": "bearings only"}
 FILTERS = {"mgekf": "MGEKF", "ekf": "EKF"}
 
 
-class Config(BaseModel):
+class Config(Settings):
     """Scenario and filter parameters. The paper's text gives only the model, so every value below is
     a *choice* (DIGEST P2: "choose and document the scenario; keep it close to the standard
     passive-TMA literature"), with the reason.
@@ -69,34 +73,37 @@ class Config(BaseModel):
       and at the end of the run (metrics/tma_errors.py).
     """
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    runs: int = Field(100, ge=1)
-    duration_s: float = Field(2400.0, gt=0)
-    sample_period_s: float = Field(2.0, gt=0)
-    record_every_s: float = Field(20.0, gt=0)
-    observer_speed_kn: float = Field(5.0, gt=0)
-    observer_course_deg: float = 45.0
-    observer_turns: list[tuple[float, float, float]] = [(600.0, 640.0, -2.25), (1500.0, 1540.0, 2.25)]
-    target_x0_m: float = -3000.0
-    target_y0_m: float = 9500.0
-    target_speed_kn: float = Field(10.0, gt=0)
-    target_course_deg: float = 100.0
-    target_turn_start_s: float = 1200.0
-    target_turn_duration_s: float = Field(60.0, gt=0)
-    target_turn_rate_deg_s: float = -1.5
-    f0_hz: float = Field(300.0, gt=0)
-    sound_speed_mps: float = Field(1500.0, gt=0)
-    sigma_bearing_deg: float = Field(1.0, gt=0)
-    sigma_freq_hz: float = Field(0.1, gt=0)
-    q_values: list[float] = [1e-5, 1e-3, 1e-1]
-    q_f0: float = Field(1e-8, ge=0)
-    transition_diagonal: float = Field(0.99, gt=0, le=1)
-    init_sigma_range_m: float = Field(3000.0, gt=0)
-    init_range_clip_sigma: float = Field(2.0, gt=0)
-    init_sigma_velocity_mps: float = Field(3.0, gt=0)
-    init_sigma_f0_hz: float = Field(1.0, gt=0)
-    divergence_rel_threshold: float = Field(0.25, gt=0)
+    runs: int = setting(100, "Monte Carlo runs", unit="1", ge=1)
+    duration_s: float = setting(2400.0, "length of the scenario", unit="s", gt=0)
+    sample_period_s: float = setting(2.0, "time between measurements T", unit="s", gt=0)
+    record_every_s: float = setting(20.0, "time between recorded errors", unit="s", gt=0)
+    observer_speed_kn: float = setting(5.0, "observer speed", unit="kn", gt=0)
+    observer_course_deg: float = setting(45.0, "observer's initial course (clockwise from north)", unit="deg")
+    observer_turns: list[tuple[float, float, float]] = setting(
+        default_factory=lambda: [(600.0, 640.0, -2.25), (1500.0, 1540.0, 2.25)],
+        doc="observer turns: (start s, end s, rate deg/s; negative to port)")
+    target_x0_m: float = setting(-3000.0, "target's initial x (east of the observer's start)", unit="m")
+    target_y0_m: float = setting(9500.0, "target's initial y (north of the observer's start)", unit="m")
+    target_speed_kn: float = setting(10.0, "target speed", unit="kn", gt=0)
+    target_course_deg: float = setting(100.0, "target's initial course (clockwise from north)", unit="deg")
+    target_turn_start_s: float = setting(1200.0, "start of the target's turn", unit="s")
+    target_turn_duration_s: float = setting(60.0, "duration of the target's turn", unit="s", gt=0)
+    target_turn_rate_deg_s: float = setting(-1.5, "target's turn rate (negative to port)", unit="deg/s")
+    f0_hz: float = setting(300.0, "emitted frequency f0", unit="Hz", gt=0)
+    sound_speed_mps: float = setting(1500.0, "speed of sound (truth and filters)", unit="m/s", gt=0)
+    sigma_bearing_deg: float = setting(1.0, "bearing noise standard deviation (truth and filters)", unit="deg",
+                                       gt=0)
+    sigma_freq_hz: float = setting(0.1, "frequency noise standard deviation (truth and filters)", unit="Hz", gt=0)
+    imm: ImmSettings = setting(default_factory=ImmSettings,
+                               doc="the IMM modes (shared with sonartrack tma); single filters run each q alone")
+    init_sigma_range_m: float = setting(3000.0, "standard deviation of the initial range guess", unit="m", gt=0)
+    init_range_clip_sigma: float = setting(2.0, "initial range guess truncated at this many standard deviations",
+                                           unit="1", gt=0)
+    init_sigma_velocity_mps: float = setting(3.0, "standard deviation of the initial velocity guess, per axis",
+                                             unit="m/s", gt=0)
+    init_sigma_f0_hz: float = setting(1.0, "standard deviation of the initial f0", unit="Hz", gt=0)
+    divergence_rel_threshold: float = setting(0.25, "divergence: position error above this share of the range",
+                                              unit="1", gt=0)
 
     @classmethod
     def quick(cls) -> Config:
@@ -113,8 +120,8 @@ class Config(BaseModel):
 
     def observer(self) -> ManeuveringTrack:
         turns = tuple((a, b, float(np.deg2rad(w))) for a, b, w in self.observer_turns)
-        return ManeuveringTrack(0.0, 0.0, self.observer_speed_kn * KNOT_MPS, float(np.deg2rad(self.observer_course_deg)),
-                                turns)
+        return ManeuveringTrack(0.0, 0.0, self.observer_speed_kn * KNOT_MPS,
+                                float(np.deg2rad(self.observer_course_deg)), turns)
 
     def target(self) -> ManeuveringTrack:
         a = self.target_turn_start_s
@@ -127,9 +134,9 @@ class Config(BaseModel):
         out = {}
         for meas in MEASUREMENTS:
             for filt in FILTERS:
-                for i, q in enumerate(self.q_values):
+                for i, q in enumerate(self.imm.q_values):
                     out[f"{meas}_{filt}_q{i}"] = (meas, filt, (q,))
-                out[f"{meas}_{filt}_imm"] = (meas, filt, tuple(self.q_values))
+                out[f"{meas}_{filt}_imm"] = (meas, filt, tuple(self.imm.q_values))
         return out
 
     @property
@@ -157,32 +164,40 @@ def simulate(config: Config, rng: np.random.Generator):
     return t, po, vo, pt, vt, zb, zf
 
 
-def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """One Monte Carlo run: simulate once, run every filter on the same measurements."""
-    t, po, vo, pt, vt, zb, zf = simulate(config, rng)
+def _initial_estimates(config: Config, rng: np.random.Generator, zb, zf, po, vo, pt, vt) -> dict:
+    """The range-prior initial estimate of each measurement set, drawn once around the truth (Config doc)."""
     sb = float(np.deg2rad(config.sigma_bearing_deg))
     r_true0 = float(np.hypot(*(pt[0] - po[0])))
     e = float(np.clip(rng.standard_normal(), -config.init_range_clip_sigma, config.init_range_clip_sigma))
     r0 = r_true0 + config.init_sigma_range_m * e
     v0 = vt[0] + config.init_sigma_velocity_mps * rng.standard_normal(2)
-    init = {}
-    for meas in MEASUREMENTS:
-        init[meas] = initial_estimate(float(zb[0]), float(zf[0]) if meas == "bf" else None, vo[0], range_m=r0,
-                                      sigma_range_m=config.init_sigma_range_m, sigma_bearing_rad=sb,
-                                      target_velocity_mps=v0, sigma_target_velocity_mps=config.init_sigma_velocity_mps,
-                                      sigma_f0_hz=config.init_sigma_f0_hz, c=config.sound_speed_mps)
+    return {meas: initial_estimate(float(zb[0]), float(zf[0]) if meas == "bf" else None, vo[0], range_m=r0,
+                                   sigma_range_m=config.init_sigma_range_m, sigma_bearing_rad=sb,
+                                   target_velocity_mps=v0, sigma_target_velocity_mps=config.init_sigma_velocity_mps,
+                                   sigma_f0_hz=config.init_sigma_f0_hz, c=config.sound_speed_mps)
+            for meas in MEASUREMENTS}
+
+
+def case_model(config: Config, filt: str, qs) -> ImmBfModel:
+    """The filter of one case: one mode per q (a single EKF/MGEKF with one q)."""
+    return ImmBfModel(qs=np.asarray(qs, float), Pi=transition_matrix(len(qs), config.imm.transition_diagonal),
+                      sigma_bearing_rad=float(np.deg2rad(config.sigma_bearing_deg)), sigma_freq_hz=config.sigma_freq_hz,
+                      q_f0=config.imm.q_f0, sound_speed_mps=config.sound_speed_mps, modified=filt == "mgekf")
+
+
+def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """One Monte Carlo run: simulate once, run every filter on the same measurements."""
+    t, po, vo, pt, vt, zb, zf = simulate(config, rng)
+    init = _initial_estimates(config, rng, zb, zf, po, vo, pt, vt)
     u = observer_inputs(t, po, vo)
     rec = config.record_index()
     truth = np.concatenate([pt, vt], axis=-1)[rec]
     own = np.concatenate([po, vo], axis=-1)[rec]
-    n_q = len(config.q_values)
+    n_q = len(config.imm.q_values)
     out: dict[str, np.ndarray] = {}
     for case, (meas, filt, qs) in config.cases().items():
         x0, P0 = init[meas]
-        Pi = transition_matrix(len(qs), config.transition_diagonal)
-        x, _, mu, failed = run_imm_bf(t, zb, zf if meas == "bf" else None, u, x0, P0, qs=qs, Pi=Pi,
-                                      sigma_bearing_rad=sb, sigma_freq_hz=config.sigma_freq_hz,
-                                      modified=(filt == "mgekf"), q_f0=config.q_f0, c=config.sound_speed_mps)
+        x, _, mu, failed = run_imm_bf(t, zb, zf if meas == "bf" else None, u, x0, P0, case_model(config, filt, qs))
         err = tma_errors(x[rec, :4] + own, truth)
         out[f"{case}_pos"] = err["position_m"]
         out[f"{case}_vel"] = err["velocity_mps"]
@@ -197,13 +212,40 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 
 
 # ---------------------------------------------------------------------------------------------
-# summary, claims, figures
+# summary and claims
 # ---------------------------------------------------------------------------------------------
-def _true_range(config: Config) -> np.ndarray:
+def true_range(config: Config) -> np.ndarray:
+    """True range (m) on the record grid."""
     t = config.times_s()[config.record_index()]
     po, _, _ = config.observer().state(t)
     pt, _, _ = config.target().state(t)
     return np.hypot(*(pt - po).T)
+
+
+def _case_summary(trials: dict[str, np.ndarray], config: Config, case: str, k0: int, rng_true) -> dict:
+    """One filter's RMSE curves, time-averaged RMSEs, per-run MSEs, divergence counts, mode probabilities."""
+    meas, filt, qs = config.cases()[case]
+    pos = np.asarray(trials[f"{case}_pos"], float)
+    with np.errstate(invalid="ignore"):
+        per_run_all = np.nanmean(pos**2, axis=1)
+        per_run_post = np.nanmean(pos[:, k0:] ** 2, axis=1)
+    c = {"label": _label(case, config), "measurements": meas, "filter": filt, "q": list(qs),
+         "rmse_pos_m": rmse_over_runs(pos).tolist(),
+         "rmse_vel_mps": rmse_over_runs(trials[f"{case}_vel"]).tolist(),
+         "rmse_course_deg": rmse_over_runs(trials[f"{case}_course"]).tolist(),
+         "rmse_speed_kn": rmse_over_runs(trials[f"{case}_speed"]).tolist(),
+         "rmse_pos_all_m": time_averaged_rmse(pos), "rmse_pos_pre_m": time_averaged_rmse(pos, 0, k0),
+         "rmse_pos_post_m": time_averaged_rmse(pos, k0),
+         "median_pos_end_m": float(np.nanmedian(pos[:, -1])),
+         "per_run_mse_all": per_run_all.tolist(), "per_run_mse_post": per_run_post.tolist(),
+         "diverged_turn": int(diverged(pos[:, k0], rng_true[k0], config.divergence_rel_threshold).sum()),
+         "diverged_end": int(diverged(pos[:, -1], rng_true[-1], config.divergence_rel_threshold).sum()),
+         "failed": int(np.asarray(trials[f"{case}_failed"]).sum())}
+    if len(qs) > 1:
+        mu = np.asarray(trials[f"{case}_mu"], float)[..., : len(qs)]
+        with np.errstate(invalid="ignore"):
+            c["mode_prob"] = np.nanmean(mu, axis=0).tolist()
+    return c
 
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
@@ -211,211 +253,101 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     paired comparisons, divergence counts at the turn and at the end, mean mode probabilities."""
     rec_t = config.times_s()[config.record_index()]
     k0 = config.turn_record
-    rng_true = _true_range(config)
+    rng_true = true_range(config)
     runs = int(np.asarray(trials[next(iter(trials))]).shape[0])
-    s = {"runs": runs, "time_s": rec_t.tolist(), "turn_index": k0, "turn_time_s": float(rec_t[k0]),
-         "true_range_m": rng_true.tolist(), "cases": {}}
-    for case, (meas, filt, qs) in config.cases().items():
-        pos = np.asarray(trials[f"{case}_pos"], float)
-        with np.errstate(invalid="ignore"):
-            per_run_all = np.nanmean(pos**2, axis=1)
-            per_run_post = np.nanmean(pos[:, k0:] ** 2, axis=1)
-        div_turn = diverged(pos[:, k0], rng_true[k0], config.divergence_rel_threshold)
-        div_end = diverged(pos[:, -1], rng_true[-1], config.divergence_rel_threshold)
-        c = {"label": _label(case, config), "measurements": meas, "filter": filt, "q": list(qs),
-             "rmse_pos_m": rmse_over_runs(pos).tolist(),
-             "rmse_vel_mps": rmse_over_runs(trials[f"{case}_vel"]).tolist(),
-             "rmse_course_deg": rmse_over_runs(trials[f"{case}_course"]).tolist(),
-             "rmse_speed_kn": rmse_over_runs(trials[f"{case}_speed"]).tolist(),
-             "rmse_pos_all_m": time_averaged_rmse(pos), "rmse_pos_pre_m": time_averaged_rmse(pos, 0, k0),
-             "rmse_pos_post_m": time_averaged_rmse(pos, k0),
-             "median_pos_end_m": float(np.nanmedian(pos[:, -1])),
-             "per_run_mse_all": per_run_all.tolist(), "per_run_mse_post": per_run_post.tolist(),
-             "diverged_turn": int(div_turn.sum()), "diverged_end": int(div_end.sum()),
-             "failed": int(np.asarray(trials[f"{case}_failed"]).sum())}
-        if len(qs) > 1:
-            mu = np.asarray(trials[f"{case}_mu"], float)[..., : len(qs)]
-            with np.errstate(invalid="ignore"):
-                c["mode_prob"] = np.nanmean(mu, axis=0).tolist()
-        s["cases"][case] = c
-    return s
+    return {"runs": runs, "time_s": rec_t.tolist(), "turn_index": k0, "turn_time_s": float(rec_t[k0]),
+            "true_range_m": rng_true.tolist(),
+            "cases": {case: _case_summary(trials, config, case, k0, rng_true) for case in config.cases()}}
 
 
-def _paired(summary, a: str, b: str, key: str):
-    """Mean and standard error of the per-run difference a - b of ``key`` (NaN runs dropped)."""
-    d = np.asarray(summary["cases"][a][key], float) - np.asarray(summary["cases"][b][key], float)
-    d = d[np.isfinite(d)]
-    if len(d) < 2:
-        return float("nan"), float("inf")
-    return float(d.mean()), float(d.std(ddof=1) / np.sqrt(len(d)))
+#: the tolerance of the "lower RMSE" claims
+TOL_LOWER = ("lower by more than 2 standard errors of the paired per-run difference of time-averaged squared "
+             "position error (common random numbers; 2 SE ~ 95 % one-sided-safe against Monte Carlo noise)")
 
 
-def claims(summary: dict, config: Config) -> list[dict]:
-    """The paper's results as checks on our numbers (tolerances in each claim's text)."""
-    cs = summary["cases"]
-    n_q = len(config.q_values)
-    out = []
-    tol_lower = ("lower by more than 2 standard errors of the paired per-run difference of time-averaged squared "
-                 "position error (common random numbers; 2 SE ~ 95 % one-sided-safe against Monte Carlo noise)")
-    imm = "bf_mgekf_imm"
+def _lower(cs: dict, a: str, b: str, key: str, rmse_key: str) -> tuple[bool, float, float]:
+    """Whether case a's time-averaged RMSE is lower than b's and their paired per-run MSE difference
+    (metrics/statistics.py NaN rule) is below -2 SE; with that mean and SE."""
+    m, se = paired_difference(cs[a][key], cs[b][key])
+    return bool(cs[a][rmse_key] < cs[b][rmse_key] and m < -2 * se), m, se
+
+
+def _imm_beats_single_claims(cs: dict, n_q: int) -> list[Claim]:
+    imm, out = "bf_mgekf_imm", []
     for window, key, rkey, what in (("all", "per_run_mse_all", "rmse_pos_all_m", "over the whole run"),
                                     ("post", "per_run_mse_post", "rmse_pos_post_m", "after the target's turn")):
-        singles = [f"bf_mgekf_q{i}" for i in range(n_q)]
         parts, ok = [], True
-        for s_ in singles:
-            m, se = _paired(summary, imm, s_, key)
-            good = bool(cs[imm][rkey] < cs[s_][rkey] and m < -2 * se)
+        for single in (f"bf_mgekf_q{i}" for i in range(n_q)):
+            good, m, se = _lower(cs, imm, single, key, rkey)
             ok &= good
-            parts.append(f"q={cs[s_]['q'][0]:g}: {cs[s_][rkey]:.0f} m (MSE diff {m:+.3g} ± {se:.2g} m^2)")
-        out.append({"id": f"imm-beats-single-{window}",
-                    "paper": "IMM-MGEKF tracks the maneuvering target better than a single MGEKF (abstract, sec. 4)",
-                    "text": f"bearings + frequency: position RMSE of IMM-MGEKF {what} is lower than that of every "
-                            "single-q MGEKF",
-                    "ours": f"IMM-MGEKF {cs[imm][rkey]:.0f} m vs " + "; ".join(parts),
-                    "tolerance": tol_lower, "holds": ok})
+            parts.append(f"q={cs[single]['q'][0]:g}: {cs[single][rkey]:.0f} m (MSE diff {m:+.3g} ± {se:.2g} m^2)")
+        out.append(Claim(
+            id=f"imm-beats-single-{window}",
+            paper="IMM-MGEKF tracks the maneuvering target better than a single MGEKF (abstract, sec. 4)",
+            text=f"bearings + frequency: position RMSE of IMM-MGEKF {what} is lower than that of every single-q MGEKF",
+            ours=f"IMM-MGEKF {cs[imm][rkey]:.0f} m vs " + "; ".join(parts), tolerance=TOL_LOWER, holds=ok))
+    return out
+
+
+def _frequency_helps_claim(cs: dict, n_q: int) -> Claim:
     parts, ok = [], True
     for filt in ("mgekf", "ekf"):
         a, b = f"bf_{filt}_imm", f"b_{filt}_imm"
-        m, se = _paired(summary, a, b, "per_run_mse_all")
-        good = bool(cs[a]["rmse_pos_all_m"] < cs[b]["rmse_pos_all_m"] and m < -2 * se)
+        good, m, se = _lower(cs, a, b, "per_run_mse_all", "rmse_pos_all_m")
         ok &= good
         parts.append(f"IMM-{FILTERS[filt]}: {cs[a]['rmse_pos_all_m']:.0f} m with frequency vs "
                      f"{cs[b]['rmse_pos_all_m']:.0f} m without (MSE diff {m:+.3g} ± {se:.2g} m^2)")
     singles_better = sum(cs[f"bf_{f}_q{i}"]["rmse_pos_all_m"] < cs[f"b_{f}_q{i}"]["rmse_pos_all_m"]
                          for f in FILTERS for i in range(n_q))
     parts.append(f"single-q filters: lower with frequency in {singles_better} of {2 * n_q}")
-    out.append({"id": "frequency-helps",
-                "paper": "adding the frequency measurement improves observability and stability (sec. 1, 3)",
-                "text": "position RMSE over the whole run is lower with bearings + frequency than with bearings only, "
-                        "for IMM-MGEKF and IMM-EKF",
-                "ours": "; ".join(parts), "tolerance": tol_lower, "holds": ok})
+    return Claim(id="frequency-helps",
+                 paper="adding the frequency measurement improves observability and stability (sec. 1, 3)",
+                 text="position RMSE over the whole run is lower with bearings + frequency than with bearings only, "
+                      "for IMM-MGEKF and IMM-EKF",
+                 ours="; ".join(parts), tolerance=TOL_LOWER, holds=ok)
+
+
+def _divergence_claims(summary: dict, config: Config) -> list[Claim]:
+    cs, n_q, out = summary["cases"], len(config.imm.q_values), []
+    pairs = [(f"{m}_mgekf_{x}", f"{m}_ekf_{x}") for m in MEASUREMENTS for x in [f"q{i}" for i in range(n_q)] + ["imm"]]
     for where, key, what in (("turn", "diverged_turn", "at the target's turn (constant-velocity segment)"),
                              ("end", "diverged_end", "at the end of the run (after the turn)")):
-        pairs = [(f"{m}_mgekf_{x}", f"{m}_ekf_{x}") for m in MEASUREMENTS for x in [f"q{i}" for i in range(n_q)] + ["imm"]]
         n_mg = sum(cs[a][key] for a, _ in pairs)
         n_ekf = sum(cs[b][key] for _, b in pairs)
         detail = ", ".join(f"{cs[a]['label'].replace('MGEKF', 'MG/EKF')}: {cs[a][key]}/{cs[b][key]}" for a, b in pairs)
         worse = [cs[a]["label"] for a, b in pairs if cs[a][key] > cs[b][key]]
         if worse:
             detail += "; MGEKF diverges more in: " + ", ".join(worse)
-        out.append({"id": f"mgekf-divergence-{where}",
-                    "paper": "the MGEKF is more stable than the EKF (Song & Speyer 1985; paper sec. 1)",
-                    "text": f"MGEKF runs diverge no more often than EKF runs {what}, summed over all "
-                            f"{len(pairs)} matched filter pairs (same q / IMM, same measurements)",
-                    "ours": f"MGEKF {n_mg} vs EKF {n_ekf} of {len(pairs) * summary['runs']} ({detail})",
-                    "tolerance": "none: counts on common random numbers (every pair sees the same runs); divergence = "
-                                 f"position error > {config.divergence_rel_threshold:.0%} of the range",
-                    "holds": bool(n_mg <= n_ekf)})
-    mu = np.asarray(cs[imm].get("mode_prob", []), float)
-    k0 = summary["turn_index"]
-    t = np.asarray(summary["time_s"])
-    dt = t[1] - t[0] if len(t) > 1 else 1.0
-    pre = slice(max(0, k0 - int(round(300 / dt))), k0)
-    during = slice(k0, min(len(t), k0 + int(round(120 / dt)) + 1))
-    if mu.ndim == 2 and mu.shape[0] == len(t):
-        a, b = float(np.mean(mu[pre, -1])), float(np.mean(mu[during, -1]))
-        out.append({"id": "mode-switch",
-                    "paper": "the IMM chooses the process noise automatically in real time (abstract)",
-                    "text": "IMM-MGEKF (bearings + frequency): mean probability of the largest-q mode is higher in the "
-                            "2 min from the start of the turn than in the 5 min before it",
-                    "ours": f"{a:.3f} before -> {b:.3f} during the turn",
-                    "tolerance": "strict increase of the run-averaged probability", "holds": bool(b > a)})
+        out.append(Claim(
+            id=f"mgekf-divergence-{where}",
+            paper="the MGEKF is more stable than the EKF (Song & Speyer 1985; paper sec. 1)",
+            text=f"MGEKF runs diverge no more often than EKF runs {what}, summed over all {len(pairs)} matched filter "
+                 "pairs (same q / IMM, same measurements)",
+            ours=f"MGEKF {n_mg} vs EKF {n_ekf} of {len(pairs) * summary['runs']} ({detail})",
+            tolerance="none: counts on common random numbers (every pair sees the same runs); divergence = position "
+                      f"error > {config.divergence_rel_threshold:.0%} of the range",
+            holds=n_mg <= n_ekf))
     return out
 
 
-def figures(summary: dict, config: Config) -> dict:
-    """Scenario, position/velocity/course-speed RMSE against time, mode probabilities, divergence."""
-    import matplotlib.pyplot as plt
-
-    t_min = np.asarray(summary["time_s"]) / 60.0
-    t_turn = summary["turn_time_s"] / 60.0
-    cs = summary["cases"]
-    n_q = len(config.q_values)
-    figs = {"scenario": _scenario_figure(config)}
-
-    def curves(key, ylabel, name, title, log=True):
-        fig, axes = plt.subplots(1, 2, figsize=(11.5, 4), sharey=True)
-        for ax, meas in zip(axes, MEASUREMENTS):
-            for i in range(n_q):
-                ax.plot(t_min, cs[f"{meas}_mgekf_q{i}"][key], lw=1, label=cs[f"{meas}_mgekf_q{i}"]["label"])
-            ax.plot(t_min, cs[f"{meas}_ekf_imm"][key], "k--", lw=1.2, label=cs[f"{meas}_ekf_imm"]["label"])
-            ax.plot(t_min, cs[f"{meas}_mgekf_imm"][key], "k-", lw=2, label=cs[f"{meas}_mgekf_imm"]["label"])
-            ax.axvline(t_turn, color="r", ls=":", lw=1)
-            if log:
-                ax.set_yscale("log")
-            ax.set(xlabel="time (min)", ylabel=ylabel, title=f"{title}: {MEASUREMENTS[meas]}")
-            ax.legend(fontsize=7)
-        fig.tight_layout()
-        figs[name] = fig
-
-    curves("rmse_pos_m", "position RMSE (m)", "rmse_position", "Position RMSE")
-    curves("rmse_vel_mps", "velocity RMSE (m/s)", "rmse_velocity", "Velocity RMSE")
-
-    fig, axes = plt.subplots(2, 2, figsize=(11.5, 7), sharex=True)
-    for col, meas in enumerate(MEASUREMENTS):
-        for row, (key, ylabel) in enumerate((("rmse_course_deg", "course RMSE (deg)"), ("rmse_speed_kn", "speed RMSE (kn)"))):
-            ax = axes[row, col]
-            for i in range(n_q):
-                ax.plot(t_min, cs[f"{meas}_mgekf_q{i}"][key], lw=1, label=cs[f"{meas}_mgekf_q{i}"]["label"])
-            ax.plot(t_min, cs[f"{meas}_ekf_imm"][key], "k--", lw=1.2, label=cs[f"{meas}_ekf_imm"]["label"])
-            ax.plot(t_min, cs[f"{meas}_mgekf_imm"][key], "k-", lw=2, label=cs[f"{meas}_mgekf_imm"]["label"])
-            ax.axvline(t_turn, color="r", ls=":", lw=1)
-            ax.set_yscale("log")
-            ax.set(ylabel=ylabel, title=MEASUREMENTS[meas])
-            if row == 1:
-                ax.set_xlabel("time (min)")
-    axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
-    figs["rmse_course_speed"] = fig
-
-    imms = [c for c in ("bf_mgekf_imm", "b_mgekf_imm", "bf_ekf_imm") if "mode_prob" in cs[c]]
-    fig, axes = plt.subplots(1, len(imms), figsize=(4.2 * len(imms), 3.6), sharey=True, squeeze=False)
-    for ax, c in zip(axes[0], imms):
-        mu = np.asarray(cs[c]["mode_prob"], float)
-        for j, q in enumerate(cs[c]["q"]):
-            ax.plot(t_min, mu[:, j], label=f"q = {q:g} m²/s³")
-        ax.axvline(t_turn, color="r", ls=":", lw=1)
-        ax.set(xlabel="time (min)", ylabel="mean mode probability", ylim=(0, 1), title=cs[c]["label"])
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    figs["mode_probabilities"] = fig
-
-    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4), sharey=True)
-    names = [f"q{i}" for i in range(n_q)] + ["imm"]
-    xs = np.arange(len(names))
-    for ax, meas in zip(axes, MEASUREMENTS):
-        for off, (filt, key, hatch) in enumerate((("ekf", "diverged_turn", ""), ("mgekf", "diverged_turn", ""),
-                                                   ("ekf", "diverged_end", "//"), ("mgekf", "diverged_end", "//"))):
-            vals = [cs[f"{meas}_{filt}_{n}"][key] for n in names]
-            ax.bar(xs + (off - 1.5) * 0.2, vals, 0.2, hatch=hatch, color="C0" if filt == "ekf" else "C1",
-                   edgecolor="k", lw=0.5, label=f"{FILTERS[filt]}, {'at turn' if key.endswith('turn') else 'at end'}")
-        ax.set_xticks(xs, [f"q={q:g}" for q in config.q_values] + ["IMM"])
-        ax.set(ylabel=f"diverged runs (of {summary['runs']})", title=f"Divergence: {MEASUREMENTS[meas]}")
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    figs["divergence"] = fig
-    return figs
+def _mode_switch_claim(summary: dict) -> list[Claim]:
+    mu = np.asarray(summary["cases"]["bf_mgekf_imm"].get("mode_prob", []), float)
+    k0 = summary["turn_index"]
+    t = np.asarray(summary["time_s"])
+    dt = t[1] - t[0] if len(t) > 1 else 1.0
+    if not (mu.ndim == 2 and mu.shape[0] == len(t)):
+        return []
+    before = float(np.mean(mu[max(0, k0 - int(round(300 / dt))):k0, -1]))
+    during = float(np.mean(mu[k0:min(len(t), k0 + int(round(120 / dt)) + 1), -1]))
+    return [Claim(id="mode-switch", paper="the IMM chooses the process noise automatically in real time (abstract)",
+                  text="IMM-MGEKF (bearings + frequency): mean probability of the largest-q mode is higher in the 2 "
+                       "min from the start of the turn than in the 5 min before it",
+                  ours=f"{before:.3f} before -> {during:.3f} during the turn",
+                  tolerance="strict increase of the run-averaged probability", holds=during > before)]
 
 
-def _scenario_figure(config: Config):
-    import matplotlib.pyplot as plt
-
-    t = config.times_s()
-    po, _, _ = config.observer().state(t)
-    pt, _, _ = config.target().state(t)
-    k0 = int(np.searchsorted(t, config.target_turn_start_s))
-    fig, ax = plt.subplots(figsize=(6.5, 6.5))
-    ax.plot(po[:, 0] / 1e3, po[:, 1] / 1e3, "b-", label=f"observer ({config.observer_speed_kn:g} kn)")
-    ax.plot(pt[:, 0] / 1e3, pt[:, 1] / 1e3, "r-", label=f"target ({config.target_speed_kn:g} kn)")
-    ax.plot(po[0, 0] / 1e3, po[0, 1] / 1e3, "bo")
-    ax.plot(pt[0, 0] / 1e3, pt[0, 1] / 1e3, "ro")
-    ax.plot(pt[k0, 0] / 1e3, pt[k0, 1] / 1e3, "r^", label=f"target turn ({config.target_turn_start_s:g} s)")
-    for a, _, _ in config.observer_turns:
-        k = int(np.searchsorted(t, a))
-        ax.plot(po[k, 0] / 1e3, po[k, 1] / 1e3, "bs", ms=5)
-    for k in range(0, len(t), max(1, len(t) // 12)):
-        ax.plot([po[k, 0] / 1e3, pt[k, 0] / 1e3], [po[k, 1] / 1e3, pt[k, 1] / 1e3], color="0.75", lw=0.6)
-    ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal",
-           title=f"Scenario: {config.duration_s / 60:g} min, T = {config.sample_period_s:g} s, f0 = {config.f0_hz:g} Hz")
-    ax.legend(fontsize=8, loc="upper left")
-    return fig
+def claims(summary: dict, config: Config) -> list[Claim]:
+    """The paper's results as checks on our numbers (tolerances in each claim)."""
+    cs, n_q = summary["cases"], len(config.imm.q_values)
+    return [*_imm_beats_single_claims(cs, n_q), _frequency_helps_claim(cs, n_q), *_divergence_claims(summary, config),
+            *_mode_switch_claim(summary)]

@@ -11,16 +11,23 @@ solves it with
 
 Errors are the start-point and end-point X and Y errors normalised by the true range at that time
 (%), the paper's Table 1 metric; the sweep records the normalised range error at both points.
+
+config -> run_trial -> summarize -> claims; the pictures are ``report/figures/tma_propagation.py``.
 """
 
 from __future__ import annotations
 
 import functools
+import warnings
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
 
+from sonartrack.core.settings import Settings, setting
+from sonartrack.core.units import KNOT_MPS
+from sonartrack.experiment.claims import Claim
+from sonartrack.metrics.statistics import rmse_over_runs
 from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.tma.settings import EmMapSettings
 
 STUDY_ID = "tma-propagation"
 TITLE = "TMA with SNR and a RAM propagation model in six Korean seas (EM/MAP vs bearings-only ML)"
@@ -28,7 +35,6 @@ PAPER = "Seo 2019, target motion analysis with an acoustic propagation model (pa
 TRIAL_VERSION = 3
 CHUNK_SIZE = 2
 
-KNOT_MPS = 1852.0 / 3600.0
 ENVIRONMENTS = ("east-summer", "east-winter", "yellow-summer", "yellow-winter", "south-summer", "south-winter")
 #: paper Table 1, RMSE (%) of [start X, start Y, end X, end Y] normalised errors
 PAPER_TABLE1 = {"east-summer": (1.88, 6.22, 0.61, 2.44), "east-winter": (0.39, 1.80, 1.09, 6.04),
@@ -41,7 +47,7 @@ PAPER_TABLE2 = {"east-summer": (-18.0, 3.5), "east-winter": (-18.0, 2.0), "yello
 RMSE_LIMIT_PCT = 10.0
 
 
-class Config(BaseModel):
+class Config(Settings):
     """The paper's scenario and our choices for what it leaves open.
 
     Paper values: 200 Hz, SL 140 dB, NL 73 dB, DI 12.5 dB, target depth = sensor depth; 100 frames 8 s
@@ -63,38 +69,45 @@ class Config(BaseModel):
       every frame of the true track; the chosen ranges are in the summary.
     * **Geometry**: observer 6 kn, course 090, turning to 030 at 240-260 s and to 120 at 520-550 s
       (3 deg/s); target 6 kn on course 270 from bearing 160 deg.
-    * **Range interval** of the EM/MAP latent range 0.5-50 km; kappa 1 % (tma/em_map.py).
+    * **EM/MAP** (the ``[em_map]`` group, shared with ``sonartrack tma``): latent range 0.5-50 km (the
+      command's default reaches 60 km); kappa 1 % (tma/em_map.py).
     * **SL sweep** -18..+18 dB, 1.5 dB steps near 0 and 3-6 dB further out (the paper's Yellow Sea
       tolerances are +-1 dB), run in a random 30 % of the full runs (every quick run);
       the tolerated interval is the contiguous range of delta around 0 where the normalised range RMSE
       (start and end points pooled) stays below 10 %.
     """
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    runs: int = Field(100, ge=1)
-    environments: list[str] = list(ENVIRONMENTS)
-    freq_hz: float = Field(200.0, gt=0)
-    sl_db: float = 140.0
-    nl_db: float = 73.0
-    di_db: float = 12.5
-    detection_threshold_db: float = 3.0
-    sensor_depth_m: dict[str, float] = {"east": 200.0, "yellow": 38.0, "south": 50.0}
-    nominal_range_m: dict[str, float] = {"east": 29_000.0, "yellow": 25_000.0, "south": 8_000.0}
-    n_frames: int = Field(100, ge=5)
-    frame_period_s: float = Field(8.0, gt=0)
-    sigma_bearing_deg: float = Field(0.5, gt=0)
-    sigma_snr_db: float = Field(1.0, gt=0)
-    own_speed_kn: float = 6.0
-    own_course_deg: float = 90.0
-    own_turns: list[list[float]] = [[240.0, 260.0, -3.0], [520.0, 550.0, 3.0]]
-    target_speed_kn: float = 6.0
-    target_course_deg: float = 270.0
-    target_bearing_deg: float = 160.0
-    r_min_m: float = Field(500.0, gt=0)
-    r_max_m: float = Field(50_000.0, gt=0)
-    sl_mismatch_db: list[float] = [-18.0, -12.0, -9.0, -6.0, -4.5, -3.0, -1.5, 0.0, 1.5, 3.0, 4.5, 6.0, 9.0, 12.0, 18.0]
-    sweep_fraction: float = Field(0.3, gt=0, le=1)
+    runs: int = setting(100, "Monte Carlo runs (each: every environment)", unit="1", ge=1)
+    environments: list[str] = setting(default_factory=lambda: list(ENVIRONMENTS), doc="shipped environments run")
+    freq_hz: float = setting(200.0, "frequency of the tonal", unit="Hz", gt=0)
+    sl_db: float = setting(140.0, "true source level", unit="dB")
+    nl_db: float = setting(73.0, "noise level", unit="dB")
+    di_db: float = setting(12.5, "directivity index", unit="dB")
+    detection_threshold_db: float = setting(3.0, "SNR the target must keep on every frame of its placed track",
+                                            unit="dB")
+    sensor_depth_m: dict[str, float] = setting(default_factory=lambda: {"east": 200.0, "yellow": 38.0, "south": 50.0},
+                                               doc="sensor (= target) depth per sea", unit="m")
+    nominal_range_m: dict[str, float] = setting(
+        default_factory=lambda: {"east": 29_000.0, "yellow": 25_000.0, "south": 8_000.0},
+        doc="nominal initial target range per sea (the placement searches around it)", unit="m")
+    n_frames: int = setting(100, "frames (bearing + SNR measurements)", unit="1", ge=5)
+    frame_period_s: float = setting(8.0, "time between frames", unit="s", gt=0)
+    sigma_bearing_deg: float = setting(0.5, "bearing noise standard deviation (truth and estimators)", unit="deg",
+                                       gt=0)
+    sigma_snr_db: float = setting(1.0, "SNR noise standard deviation (truth and EM/MAP)", unit="dB", gt=0)
+    own_speed_kn: float = setting(6.0, "observer speed", unit="kn")
+    own_course_deg: float = setting(90.0, "observer's initial course (clockwise from north)", unit="deg")
+    own_turns: list[list[float]] = setting(default_factory=lambda: [[240.0, 260.0, -3.0], [520.0, 550.0, 3.0]],
+                                           doc="observer turns: [start s, end s, rate deg/s; negative to port]")
+    target_speed_kn: float = setting(6.0, "target speed", unit="kn")
+    target_course_deg: float = setting(270.0, "target course (clockwise from north)", unit="deg")
+    target_bearing_deg: float = setting(160.0, "target's initial bearing from the observer", unit="deg")
+    em_map: EmMapSettings = setting(default_factory=lambda: EmMapSettings(r_max_m=50_000.0),
+                                    doc="the EM/MAP solver (shared with sonartrack tma)")
+    sl_mismatch_db: list[float] = setting(
+        default_factory=lambda: [-18.0, -12.0, -9.0, -6.0, -4.5, -3.0, -1.5, 0.0, 1.5, 3.0, 4.5, 6.0, 9.0, 12.0, 18.0],
+        doc="assumed minus true SL of the mismatch sweep", unit="dB")
+    sweep_fraction: float = setting(0.3, "share of runs that run the SL sweep", unit="1", gt=0, le=1)
 
     @classmethod
     def quick(cls) -> Config:
@@ -122,16 +135,18 @@ def _snr_curve(env_name: str, depth_m: float, freq_hz: float, rmax_m: float, sl_
     """(ranges, mean SNR) at the sensor depth, TL averaged over 1 km (cached on disk and in memory)."""
     from sonartrack.acoustics.environment import load_environment
     from sonartrack.acoustics.sonar_equation import passive_snr_db
-    from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field
+    from sonartrack.acoustics.transmission_loss import smooth_tl
+    from sonartrack.io.environment import cached_tl_field
     from sonartrack.tma.batch import TL_AVERAGE_M
 
-    f = tl_field(load_environment(env_name), freq_hz, depth_m, rmax_m=rmax_m)
+    f = cached_tl_field(load_environment(env_name), freq_hz, depth_m, rmax_m=rmax_m)
     line = smooth_tl(f.ranges_m, f.at_depth(depth_m), TL_AVERAGE_M)
     return f.ranges_m, passive_snr_db(sl_db, line, di_db, nl_db)
 
 
 def snr_curve(config: Config, env: str):
-    return _snr_curve(env, float(config.sensor_depth_m[config.sea(env)]), config.freq_hz, 1.05 * config.r_max_m,
+    """(ranges (m), true mean SNR (dB)) of ``env`` at its sensor depth."""
+    return _snr_curve(env, float(config.sensor_depth_m[config.sea(env)]), config.freq_hz, 1.05 * config.em_map.r_max_m,
                       config.sl_db, config.di_db, config.nl_db)
 
 
@@ -166,239 +181,187 @@ def placement(config: Config, env: str) -> tuple[float, float]:
     return _placement(config.model_dump_json(), env)
 
 
-def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """One draw of bearings and SNRs per environment; EM/MAP, ML and (sometimes) the SL sweep."""
+def _normalised_errors(x0, t, truth, norm) -> np.ndarray:
+    """Start and end X, Y errors of the CV track X0 in % of the true range there (paper Table 1)."""
+    end = x0[:2] + x0[2:] * (t[-1] - t[0])
+    return 100.0 * (np.concatenate([x0[:2], end]) - truth) / norm
+
+
+def _range_errors(x0, t, po, rng_true) -> np.ndarray:
+    """|estimated - true| range at the start and at the end, in % of the true range."""
+    end = x0[:2] + x0[2:] * (t[-1] - t[0])
+    est = np.array([np.linalg.norm(x0[:2] - po[0]), np.linalg.norm(end - po[-1])])
+    return 100.0 * np.abs(est - rng_true[[0, -1]]) / rng_true[[0, -1]]
+
+
+def _ml_x0(config: Config, z, t, po, sb):
+    """The bearings-only ML X0, or None when it failed (diverged towards infinite range)."""
     from sonartrack.tma.batch_ml import ml_bearings_only
+
+    try:
+        ml = ml_bearings_only(z, t, po, sb)
+    except np.linalg.LinAlgError:
+        return None
+    if ml.converged and np.hypot(*(ml.x0[:2] - po[0])) < 5.0 * config.em_map.r_max_m:
+        return ml.x0
+    return None
+
+
+def _environment_trial(config: Config, env: str, rng: np.random.Generator, t, po, sweep: bool) -> dict:
+    """One draw of bearings and SNRs in ``env``; EM/MAP, ML and (if ``sweep``) the SL sweep."""
     from sonartrack.tma.em_map import make_problem, solve_em_map
 
-    t = config.times_s()
-    po, _, _ = config.observer().state(t)
+    ranges, snr = snr_curve(config, env)
+    r0, _ = placement(config, env)
+    pt, _, _ = config.target(r0).state(t)
+    d = pt - po
+    rng_true = np.linalg.norm(d, axis=1)
     sb = np.deg2rad(config.sigma_bearing_deg)
-    sweep = bool(rng.random() < config.sweep_fraction)
-    out: dict[str, np.ndarray] = {}
-    for env in config.environments:
-        ranges, snr = snr_curve(config, env)
-        r0, _ = placement(config, env)
-        pt, vt, _ = config.target(r0).state(t)
-        d = pt - po
-        rng_true = np.linalg.norm(d, axis=1)
-        z = np.arctan2(d[:, 0], d[:, 1]) + rng.normal(0.0, sb, len(t))
-        xi = np.interp(rng_true, ranges, snr) + rng.normal(0.0, config.sigma_snr_db, len(t))
-        truth = np.array([pt[0, 0], pt[0, 1], pt[-1, 0], pt[-1, 1]])
-        norm = np.array([rng_true[0], rng_true[0], rng_true[-1], rng_true[-1]])
+    z = np.arctan2(d[:, 0], d[:, 1]) + rng.normal(0.0, sb, len(t))
+    xi = np.interp(rng_true, ranges, snr) + rng.normal(0.0, config.sigma_snr_db, len(t))
+    truth = np.array([pt[0, 0], pt[0, 1], pt[-1, 0], pt[-1, 1]])
+    norm = np.array([rng_true[0], rng_true[0], rng_true[-1], rng_true[-1]])
+    ml_x0 = _ml_x0(config, z, t, po, sb)
+    em = config.em_map
 
-        def errors(x0):
-            end = x0[:2] + x0[2:] * (t[-1] - t[0])
-            return 100.0 * (np.concatenate([x0[:2], end]) - truth) / norm
+    def em_x0(shift_db):  # assumed SL = true + delta shifts the predicted SNR by delta
+        prob = make_problem(z, xi, t, po, sb, config.sigma_snr_db, lambda r: np.interp(r, ranges, snr) + shift_db,
+                            em.r_min_m, em.r_max_m, kappa=em.kappa)
+        return solve_em_map(prob, t0_s=0.0, extra_starts=[ml_x0], max_iter=em.max_iter, covariance=False).x0
 
-        def range_errors(x0):
-            end = x0[:2] + x0[2:] * (t[-1] - t[0])
-            return 100.0 * np.abs(np.array([np.linalg.norm(x0[:2] - po[0]), np.linalg.norm(end - po[-1])])
-                                  - rng_true[[0, -1]]) / rng_true[[0, -1]]
-
-        ml_x0 = None
-        out[f"{env}_ml"] = np.full(4, np.nan)  # a failed ML solve (diverged towards infinite range)
-        try:
-            ml = ml_bearings_only(z, t, po, sb)
-            if ml.converged and np.hypot(*(ml.x0[:2] - po[0])) < 5.0 * config.r_max_m:
-                ml_x0 = ml.x0
-                out[f"{env}_ml"] = errors(ml.x0)
-        except np.linalg.LinAlgError:
-            pass
-
-        def em(shift_db):
-            prob = make_problem(z, xi, t, po, sb, config.sigma_snr_db,
-                                lambda r: np.interp(r, ranges, snr) + shift_db, config.r_min_m, config.r_max_m)
-            return solve_em_map(prob, t0_s=0.0, extra_starts=[ml_x0], covariance=False).x0
-
-        out[f"{env}_em"] = errors(em(0.0))
-        sw = np.full((len(config.sl_mismatch_db), 2), np.nan)
-        if sweep:
-            for i, delta in enumerate(config.sl_mismatch_db):
-                sw[i] = range_errors(em(delta))  # assumed SL = true + delta shifts the predicted SNR by delta
-        out[f"{env}_sweep"] = sw
+    sw = np.full((len(config.sl_mismatch_db), 2), np.nan)
+    out = {"ml": np.full(4, np.nan) if ml_x0 is None else _normalised_errors(ml_x0, t, truth, norm),
+           "em": _normalised_errors(em_x0(0.0), t, truth, norm), "sweep": sw}
+    if sweep:
+        for i, delta in enumerate(config.sl_mismatch_db):
+            sw[i] = _range_errors(em_x0(delta), t, po, rng_true)
     return out
 
 
-def _nanmean(a, axis=0):
-    a = np.asarray(a, dtype=float)
-    n = np.sum(np.isfinite(a), axis=axis)
-    return np.where(n > 0, np.nansum(a, axis=axis) / np.maximum(n, 1), np.nan)
+def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """One draw of bearings and SNRs per environment; EM/MAP, ML and (sometimes) the SL sweep."""
+    t = config.times_s()
+    po, _, _ = config.observer().state(t)
+    sweep = bool(rng.random() < config.sweep_fraction)
+    out: dict[str, np.ndarray] = {}
+    for env in config.environments:
+        for key, value in _environment_trial(config, env, rng, t, po, sweep).items():
+            out[f"{env}_{key}"] = value
+    return out
 
 
-def _rmse(a, axis=0):
-    return np.sqrt(_nanmean(np.asarray(a, dtype=float) ** 2, axis=axis))
+def _mean_over_runs(a) -> np.ndarray:
+    """Mean over runs (axis 0) of the finite entries, NaN where no run has one (metrics/statistics.py rule)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # "mean of empty slice": NaN is the answer
+        return np.nanmean(np.asarray(a, dtype=float), axis=0)
+
+
+def tolerated_interval(deltas, curve) -> tuple[float | None, float | None]:
+    """The contiguous range of SL mismatch around 0 where the normalised range RMSE stays below 10 %
+    ((None, None) when it is not below 10 % at 0 itself)."""
+    ok = np.asarray(curve) < RMSE_LIMIT_PCT
+    i0 = int(np.argmin(np.abs(deltas)))
+    if not ok[i0]:
+        return None, None
+    a = i0
+    while a > 0 and ok[a - 1]:
+        a -= 1
+    b = i0
+    while b < len(deltas) - 1 and ok[b + 1]:
+        b += 1
+    return float(deltas[a]), float(deltas[b])
+
+
+def _environment_summary(trials: dict[str, np.ndarray], config: Config, env: str, deltas) -> dict:
+    em, ml, sw = trials[f"{env}_em"], trials[f"{env}_ml"], trials[f"{env}_sweep"]
+    r0, s_min = placement(config, env)
+    n_sweep = int(np.sum(np.all(np.isfinite(sw.reshape(sw.shape[0], len(deltas) * 2)), axis=1)))
+    # start and end points pooled: one RMSE per mismatch over every run and both points
+    curve = (rmse_over_runs(sw.transpose(1, 0, 2).reshape(len(deltas), -1), axis=1) if n_sweep
+             else np.full(len(deltas), np.nan))
+    ranges, snr = snr_curve(config, env)
+    return {"initial_range_m": r0, "min_snr_on_track_db": s_min,
+            "sensor_depth_m": config.sensor_depth_m[config.sea(env)],
+            "em_mean_pct": _mean_over_runs(em).tolist(), "em_rmse_pct": rmse_over_runs(em).tolist(),
+            "ml_mean_pct": _mean_over_runs(ml).tolist(), "ml_rmse_pct": rmse_over_runs(ml).tolist(),
+            "ml_failed": int(np.sum(~np.all(np.isfinite(ml), axis=1))),
+            "paper_rmse_pct": list(PAPER_TABLE1.get(env, (np.nan,) * 4)),
+            "sweep_runs": n_sweep, "sweep_rmse_pct": curve.tolist(),
+            "tolerated_db": list(tolerated_interval(deltas, curve)),
+            "paper_tolerated_db": list(PAPER_TABLE2.get(env, (np.nan, np.nan))),
+            "start_errors_em": em[:, :2].tolist(), "start_errors_ml": ml[:, :2].tolist(),
+            "snr_ranges_km": (ranges[::4] / 1e3).tolist(), "snr_db": snr[::4].tolist()}
 
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     """Table 1 (mean and RMSE, EM/MAP and ML), Table 2 (tolerated SL mismatch), placements, curves."""
     deltas = np.asarray(config.sl_mismatch_db, dtype=float)
-    envs = {}
-    for env in config.environments:
-        em, ml, sw = trials[f"{env}_em"], trials[f"{env}_ml"], trials[f"{env}_sweep"]
-        r0, s_min = placement(config, env)
-        pooled = sw.reshape(sw.shape[0], len(deltas) * 2)
-        n_sweep = int(np.sum(np.all(np.isfinite(pooled), axis=1)))
-        curve = _rmse(sw.transpose(1, 0, 2).reshape(len(deltas), -1), axis=1) if n_sweep else np.full(len(deltas), np.nan)
-        ok = curve < RMSE_LIMIT_PCT
-        i0 = int(np.argmin(np.abs(deltas)))
-        lo = hi = None
-        if ok[i0]:
-            a = i0
-            while a > 0 and ok[a - 1]:
-                a -= 1
-            b = i0
-            while b < len(deltas) - 1 and ok[b + 1]:
-                b += 1
-            lo, hi = float(deltas[a]), float(deltas[b])
-        ranges, snr = snr_curve(config, env)
-        envs[env] = {
-            "initial_range_m": r0, "min_snr_on_track_db": s_min,
-            "sensor_depth_m": config.sensor_depth_m[config.sea(env)],
-            "em_mean_pct": np.nanmean(em, axis=0).tolist(), "em_rmse_pct": _rmse(em).tolist(),
-            "ml_mean_pct": _nanmean(ml).tolist(), "ml_rmse_pct": _rmse(ml).tolist(),
-            "ml_failed": int(np.sum(~np.all(np.isfinite(ml), axis=1))),
-            "paper_rmse_pct": list(PAPER_TABLE1.get(env, (np.nan,) * 4)),
-            "sweep_runs": n_sweep, "sweep_rmse_pct": curve.tolist(),
-            "tolerated_db": [lo, hi], "paper_tolerated_db": list(PAPER_TABLE2.get(env, (np.nan, np.nan))),
-            "start_errors_em": em[:, :2].tolist(), "start_errors_ml": ml[:, :2].tolist(),
-            "snr_ranges_km": (ranges[::4] / 1e3).tolist(), "snr_db": snr[::4].tolist(),
-        }
+    envs = {env: _environment_summary(trials, config, env, deltas) for env in config.environments}
     return {"runs": len(next(iter(trials.values()))), "deltas_db": deltas.tolist(), "environments": envs}
 
 
-def _arr(x) -> np.ndarray:
+def as_floats(x) -> np.ndarray:
     """A summary list as floats (JSON turns NaN, e.g. an RMSE over no successful run, into None)."""
     return np.array([np.nan if v is None else v for v in x], dtype=float)
 
 
-def claims(summary: dict, config: Config) -> list[dict]:
-    envs = summary["environments"]
-    out = []
-    worst = {e: float(np.max(_arr(v["em_rmse_pct"]))) for e, v in envs.items()}
-    out.append({"id": "em_map_under_10pct", "text": "EM/MAP normalised RMSE (start/end, X/Y) below 10 % in every environment with the true SL",
-                "paper": "Table 1: 0.26-6.22 %",
-                "ours": "; ".join(f"{e} {w:.2f} %" for e, w in worst.items()),
-                "tolerance": "every component < 10 %", "holds": bool(all(w < RMSE_LIMIT_PCT for w in worst.values()))})
-    cmp = {e: (float(np.mean(_arr(v["em_rmse_pct"]))), float(np.mean(_arr(v["ml_rmse_pct"]))), v["ml_failed"])
-           for e, v in envs.items()}
+def _accuracy_claims(summary: dict) -> list[Claim]:
+    envs, runs = summary["environments"], summary["runs"]
+    worst = {e: float(np.max(as_floats(v["em_rmse_pct"]))) for e, v in envs.items()}
+    cmp = {e: (float(np.mean(as_floats(v["em_rmse_pct"]))), float(np.mean(as_floats(v["ml_rmse_pct"]))),
+               v["ml_failed"]) for e, v in envs.items()}
     # ML that failed (diverged) in some runs is worse there whatever its RMSE over the rest
     ok = all(np.isfinite(a) and (f > 0 or not np.isfinite(b) or a <= 1.1 * b) for a, b, f in cmp.values())
-    out.append({"id": "em_map_not_worse_than_ml", "text": "EM/MAP at least as accurate as bearings-only ML on the same data",
-                "paper": "the SNR and the propagation model improve on bearings-only TMA",
-                "ours": "; ".join(f"{e} {a:.2f} vs {b:.2f} %" + (f" (ML diverged in {f}/{summary['runs']} runs)" if f else "")
-                                  for e, (a, b, f) in cmp.items()),
-                "tolerance": "mean RMSE of EM/MAP <= 1.1 x ML's in each environment (Monte Carlo error of an RMSE over "
-                             f"{summary['runs']} runs is ~{100 / np.sqrt(2 * summary['runs']):.0f} %)",
-                "holds": bool(ok)})
-    lows = {e: v["tolerated_db"][0] for e, v in envs.items()}
-    east = [lows[e] for e in lows if e.startswith("east")]
-    other = [lows[e] for e in lows if not e.startswith("east")]
-    if not east or not other or any(v is None for v in east + other):
-        holds = False  # a sea not run, or a case with no tolerated interval at all
-    else:
-        holds = max(east) < min(other)
-    fmt = lambda v: "none" if v[0] is None else f"{v[0]:+g}..{v[1]:+g} dB"  # noqa: E731
-    out.append({"id": "east_tolerates_low_sl", "text": "the tolerated SL-mismatch interval reaches further towards "
-                "under-assumed SL in the East Sea than in the Yellow and South Seas",
-                "paper": "Table 2: East -18..+3.5/+2; Yellow -0.5..+1, -1..+0.5; South -5..+4, -3..+2.5",
-                "ours": "; ".join(f"{e} {fmt(v['tolerated_db'])}" for e, v in envs.items()),
-                "tolerance": "the lower ends, on the sweep's grid (1.5 dB steps near 0)",
-                "holds": bool(holds)})
-    widths = {e: (None if v["tolerated_db"][0] is None else v["tolerated_db"][1] - v["tolerated_db"][0]) for e, v in envs.items()}
-    east_w = [widths[e] for e in widths if e.startswith("east")]
-    other_w = [widths[e] for e in widths if not e.startswith("east")]
-    holds_w = bool(east_w) and bool(other_w) and None not in east_w and \
-        min(east_w) > max([w for w in other_w if w is not None], default=-1.0)
-    out.append({"id": "east_tolerates_wider_mismatch", "text": "the East Sea (convergence zones) tolerates a wider SL "
-                "mismatch than the Yellow and South Seas (width of the tolerated interval)",
-                "paper": "Table 2: East 21.5 and 20 dB wide; Yellow 1.5 dB; South 9 and 5.5 dB",
-                "ours": "; ".join(f"{e} {'none' if w is None else f'{w:g} dB'}" for e, w in widths.items()),
-                "tolerance": "every East case wider than every other case", "holds": bool(holds_w)})
-    return out
+    return [
+        Claim(id="em_map_under_10pct", paper="Table 1: 0.26-6.22 %",
+              text="EM/MAP normalised RMSE (start/end, X/Y) below 10 % in every environment with the true SL",
+              ours="; ".join(f"{e} {w:.2f} %" for e, w in worst.items()), tolerance="every component < 10 %",
+              holds=all(w < RMSE_LIMIT_PCT for w in worst.values())),
+        Claim(id="em_map_not_worse_than_ml", paper="the SNR and the propagation model improve on bearings-only TMA",
+              text="EM/MAP at least as accurate as bearings-only ML on the same data",
+              ours="; ".join(f"{e} {a:.2f} vs {b:.2f} %" + (f" (ML diverged in {f}/{runs} runs)" if f else "")
+                             for e, (a, b, f) in cmp.items()),
+              tolerance="mean RMSE of EM/MAP <= 1.1 x ML's in each environment (Monte Carlo error of an RMSE over "
+                        f"{runs} runs is ~{100 / np.sqrt(2 * runs):.0f} %)",
+              holds=ok)]
 
 
-def figures(summary: dict, config: Config) -> dict:
-    import matplotlib.pyplot as plt
+def _east_vs_others(values: dict) -> tuple[list, list]:
+    """The values of the East Sea cases and of the other cases."""
+    return ([v for e, v in values.items() if e.startswith("east")],
+            [v for e, v in values.items() if not e.startswith("east")])
 
-    from sonartrack.acoustics.environment import load_environment
 
-    figs = {"scenario": _scenario_figure(summary, config)}
+def _interval_text(v) -> str:
+    return "none" if v[0] is None else f"{v[0]:+g}..{v[1]:+g} dB"
+
+
+def _mismatch_claims(summary: dict) -> list[Claim]:
     envs = summary["environments"]
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.5))
-    for ax, sea in zip(axes, ("east", "yellow", "south")):
-        for env in [e for e in config.environments if e.startswith(sea)]:
-            e = load_environment(env)
-            ax.plot(e.sound_speed_mps, e.depth_m, label=env)
-        ax.invert_yaxis()
-        ax.set(xlabel="sound speed (m/s)", ylabel="depth (m)", title=f"{sea.title()} Sea profiles (TEOS-10)")
-        if ax.lines:
-            ax.legend(fontsize=7)
-    fig.tight_layout()
-    figs["sound_speed"] = fig
-
-    fig, axes = plt.subplots(2, 3, figsize=(15, 7))
-    from sonartrack.acoustics.transmission_loss import tl_field
-
-    for ax, env in zip(axes.T.ravel(), config.environments):
-        depth = config.sensor_depth_m[config.sea(env)]
-        f = tl_field(load_environment(env), config.freq_hz, depth, rmax_m=1.05 * config.r_max_m)
-        im = ax.pcolormesh(f.ranges_m / 1e3, f.depths_m, f.tl_db, vmin=50, vmax=110, cmap="jet_r", shading="auto")
-        ax.invert_yaxis()
-        ax.set(title=f"TL {env}, source {depth:g} m", xlabel="range (km)", ylabel="depth (m)")
-        fig.colorbar(im, ax=ax, label="TL (dB)")
-    fig.tight_layout()
-    figs["tl_fields"] = fig
-
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    for env, v in envs.items():
-        line, = ax.plot(v["snr_ranges_km"], v["snr_db"], lw=1, label=env)
-        ax.axvline(v["initial_range_m"] / 1e3, color=line.get_color(), ls=":", lw=1)
-    ax.axhline(config.detection_threshold_db, color="k", lw=0.8)
-    ax.set(xlabel="range (km)", ylabel="SNR (dB)", title="SNR = SL - TL + DI - NL at the sensor depth "
-           "(dotted: the target's initial range)", ylim=(-40, 60))
-    ax.legend(fontsize=7)
-    figs["snr_vs_range"] = fig
-
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7.5))
-    for ax, env in zip(axes.T.ravel(), config.environments):
-        em = np.array([_arr(r) for r in envs[env]["start_errors_em"]]).reshape(-1, 2)
-        ml = np.array([_arr(r) for r in envs[env]["start_errors_ml"]]).reshape(-1, 2)
-        ax.plot(ml[:, 0], ml[:, 1], "x", ms=4, label="bearings-only ML")
-        ax.plot(em[:, 0], em[:, 1], "o", ms=3, label="EM/MAP")
-        ax.axhline(0, color="k", lw=0.5)
-        ax.axvline(0, color="k", lw=0.5)
-        ax.set(title=f"start-point errors {env}", xlabel="X error (% of range)", ylabel="Y error (% of range)")
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    figs["error_scatter"] = fig
-
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    d = summary["deltas_db"]
-    for env, v in envs.items():
-        ax.plot(d, _arr(v["sweep_rmse_pct"]), "o-", ms=3, label=env)
-    ax.axhline(RMSE_LIMIT_PCT, color="k", ls="--", lw=0.8)
-    ax.set(yscale="log", xlabel="assumed SL - true SL (dB)", ylabel="normalised range RMSE (%)",
-           title="SL mismatch (paper Fig. 7)")
-    ax.legend(fontsize=7)
-    figs["sl_mismatch"] = fig
-    return figs
+    east, other = _east_vs_others({e: v["tolerated_db"][0] for e, v in envs.items()})
+    # a sea not run, or a case with no tolerated interval at all, fails the claim
+    holds_low = bool(east) and bool(other) and None not in east + other and max(east) < min(other)
+    widths = {e: (None if v["tolerated_db"][0] is None else v["tolerated_db"][1] - v["tolerated_db"][0])
+              for e, v in envs.items()}
+    east_w, other_w = _east_vs_others(widths)
+    holds_w = (bool(east_w) and bool(other_w) and None not in east_w
+               and min(east_w) > max([w for w in other_w if w is not None], default=-1.0))
+    return [
+        Claim(id="east_tolerates_low_sl",
+              paper="Table 2: East -18..+3.5/+2; Yellow -0.5..+1, -1..+0.5; South -5..+4, -3..+2.5",
+              text="the tolerated SL-mismatch interval reaches further towards under-assumed SL in the East Sea than "
+                   "in the Yellow and South Seas",
+              ours="; ".join(f"{e} {_interval_text(v['tolerated_db'])}" for e, v in envs.items()),
+              tolerance="the lower ends, on the sweep's grid (1.5 dB steps near 0)", holds=holds_low),
+        Claim(id="east_tolerates_wider_mismatch",
+              paper="Table 2: East 21.5 and 20 dB wide; Yellow 1.5 dB; South 9 and 5.5 dB",
+              text="the East Sea (convergence zones) tolerates a wider SL mismatch than the Yellow and South Seas "
+                   "(width of the tolerated interval)",
+              ours="; ".join(f"{e} {'none' if w is None else f'{w:g} dB'}" for e, w in widths.items()),
+              tolerance="every East case wider than every other case", holds=holds_w)]
 
 
-def _scenario_figure(summary: dict, config: Config):
-    import matplotlib.pyplot as plt
-
-    t = config.times_s()
-    po, _, _ = config.observer().state(t)
-    fig, ax = plt.subplots(figsize=(7, 6))
-    ax.plot(po[:, 0] / 1e3, po[:, 1] / 1e3, "k-", lw=2, label="observer (two course changes)")
-    for env, v in summary["environments"].items():
-        if env.endswith("summer"):
-            pt, _, _ = config.target(v["initial_range_m"]).state(t)
-            ax.plot(pt[:, 0] / 1e3, pt[:, 1] / 1e3, "-", label=f"target, {config.sea(env)} Sea ({v['initial_range_m'] / 1e3:.1f} km)")
-            ax.plot(pt[0, 0] / 1e3, pt[0, 1] / 1e3, "o", color=ax.lines[-1].get_color())
-    ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal",
-           title=f"{config.n_frames} frames x {config.frame_period_s:g} s; target from bearing {config.target_bearing_deg:g} deg")
-    ax.legend(fontsize=7)
-    return fig
+def claims(summary: dict, config: Config) -> list[Claim]:
+    """The paper's Tables 1 and 2 as checks on our numbers (tolerances in each claim)."""
+    return [*_accuracy_claims(summary), *_mismatch_claims(summary)]

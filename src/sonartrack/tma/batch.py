@@ -1,8 +1,12 @@
-"""Batch TMA on a user's record: bearings-only ML, or EM/MAP with SNR and a propagation model (paper P3).
+"""Batch TMA on a user's record: bearings-only ML, or EM/MAP with SNR and a propagation model (paper P3);
+optionally the batch on a first window only, with a sequential EKF taking over for the rest.
 
-:func:`solve_batch` is what ``sonartrack tma --method ml|em-map`` calls. For ``em-map`` the mean SNR
-against range is xi_bar(r) = SL - TL(r) + DI - NL with TL from RAM (``acoustics/``) for the named
-environment (or a profile file), source and receiver at ``depth_m``, averaged over 1 km.
+For ``em-map`` the mean SNR against range is xi_bar(r) = SL - TL(r) + DI - NL, with TL from RAM
+(``acoustics/``) in the given environment, source and receiver at ``depth_m``, averaged over 1 km.
+The environment is an :class:`~sonartrack.acoustics.environment.Environment` (a shipped one by name,
+or one read from a profile file by ``sonartrack.io.environment``); TL fields come from ``tl_store`` (any
+:class:`~sonartrack.acoustics.transmission_loss.FieldStore`, e.g. the disk cache of io/environment.py)
+when one is given.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ import numpy as np
 from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import BatchEstimate, check_observability, ml_bearings_only
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
+from sonartrack.tma.settings import BatchSettings, EmMapSettings
 
 #: TL range average (m): a passive sonar integrates over the interference pattern
 TL_AVERAGE_M = 1_000.0
@@ -23,19 +28,18 @@ class UnobservableWarning(UserWarning):
     """Range is not observable from bearings alone (the ownship has not maneuvered)."""
 
 
-def snr_model(env_name: str, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m: float,
-              nl_db: float | None = None, di_db: float | None = None):
-    """xi_bar(r) for an environment name or profile path: (callable, environment, depth used)."""
-    from pathlib import Path
-
-    from sonartrack.acoustics.environment import load_environment, read_profile
+def snr_model(env, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m: float,
+              nl_db: float | None = None, di_db: float | None = None, tl_store=None):
+    """xi_bar(r) for an :class:`Environment` (or a shipped environment's name): (callable, environment, depth)."""
+    from sonartrack.acoustics.environment import load_environment
     from sonartrack.acoustics.sonar_equation import DI_DB, NL_DB, passive_snr_db
     from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field
 
-    env = read_profile(env_name) if Path(env_name).suffix.lower() in (".toml", ".csv") else load_environment(env_name)
+    env = load_environment(env) if isinstance(env, str) else env
     z = float(depth_m) if depth_m is not None else min(50.0, env.water_depth_m / 2.0)
-    require(0 < z < env.water_depth_m, f"depth {z:g} m is outside the water column of {env.name} (0..{env.water_depth_m:g} m)")
-    f = tl_field(env, freq_hz, z, rmax_m=r_max_m)
+    require(0 < z < env.water_depth_m,
+            f"depth {z:g} m is outside the water column of {env.name} (0..{env.water_depth_m:g} m)")
+    f = tl_field(env, freq_hz, z, rmax_m=r_max_m, store=tl_store)
     line = smooth_tl(f.ranges_m, f.at_depth(z), TL_AVERAGE_M)
     nl = NL_DB if nl_db is None else nl_db
     di = DI_DB if di_db is None else di_db
@@ -47,54 +51,99 @@ def snr_model(env_name: str, sl_db: float, freq_hz: float, depth_m: float | None
 
 
 def estimate_to_solution(est: BatchEstimate, time_s) -> TmaSolution:
+    """A batch estimate propagated to ``time_s`` (constant velocity) as a :class:`TmaSolution`."""
     x, P = est.state_at(time_s)
-    return TmaSolution(np.asarray(time_s, dtype=float), x, P, est.method)
+    return TmaSolution(time_s=np.asarray(time_s, dtype=float), state=x, covariance=P, method=est.method)
 
 
-def solve_batch(record: BearingRecord, ownship: OwnshipTrack, method: str, *, sigma_bearing_rad: float,
-                sigma_snr_db: float = 1.0, env: str | None = None, sl_db: float | None = None, freq_hz: float = 200.0,
-                depth_m: float | None = None, r_min_m: float = 500.0, r_max_m: float = 60_000.0,
-                nl_db: float | None = None, di_db: float | None = None) -> TmaSolution:
-    """Batch TMA of a whole record: ``method`` 'ml' (bearings only) or 'em-map' (bearings + SNR + TL)."""
-    require(method in ("ml", "em-map"), f"unknown batch method '{method}': choose ml or em-map")
-    t = np.asarray(record.time_s, dtype=float)
-    own = ownship.position_at(t)
-    if method == "ml":
-        est = ml_bearings_only(record.bearing_rad, t, own, sigma_bearing_rad)
-        return estimate_to_solution(est, t)
+def _ml_start(record: BearingRecord, t, own, sigma_bearing_rad: float):
+    """The bearings-only ML X0 as an extra EM/MAP start, or None (with an UnobservableWarning) when the
+    ownship has not maneuvered or ML fails."""
+    msg = check_observability(t - t[0], own)
+    if msg:
+        warnings.warn(msg.replace("use a record with a course or speed change, or em-map with SNR",
+                                  "em-map relies on the SNR for range"), UnobservableWarning, stacklevel=3)
+        return None
+    try:
+        return ml_bearings_only(record.bearing_rad, t, own, sigma_bearing_rad).x0
+    except (InputError, np.linalg.LinAlgError):
+        return None
+
+
+def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_bearing_rad: float, batch: BatchSettings,
+                    em_map: EmMapSettings, environment=None, tl_store=None) -> BatchEstimate:
+    """EM/MAP X0 of a record with SNRs (tma/em_map.py); ``environment`` overrides ``batch.env`` (a name)."""
     from sonartrack.tma.em_map import make_problem, solve_em_map
 
     if record.snr_db is None:
         raise InputError("em-map needs measured SNR: add an snr_db column to the bearings file")
-    if env is None or sl_db is None:
+    env = environment if environment is not None else batch.env
+    if env is None or batch.sl_db is None:
         raise InputError("em-map needs a propagation model: give --env NAME (or a profile file) and --sl DB")
-    msg = check_observability(t - t[0], own)
-    ml_start = None
-    if msg:
-        warnings.warn(msg.replace("use a record with a course or speed change, or em-map with SNR",
-                                  "em-map relies on the SNR for range"), UnobservableWarning, stacklevel=2)
-    else:
-        try:
-            ml_start = ml_bearings_only(record.bearing_rad, t, own, sigma_bearing_rad).x0
-        except (InputError, np.linalg.LinAlgError):
-            ml_start = None
-    xi_bar, _, _ = snr_model(env, sl_db, freq_hz, depth_m, r_max_m * 1.05, nl_db, di_db)
-    prob = make_problem(record.bearing_rad, record.snr_db, t, own, sigma_bearing_rad, sigma_snr_db, xi_bar, r_min_m, r_max_m)
-    est = solve_em_map(prob, t0_s=float(t[0]), extra_starts=[ml_start])
+    t = np.asarray(record.time_s, dtype=float)
+    own = ownship.position_at(t)
+    ml_start = _ml_start(record, t, own, sigma_bearing_rad)
+    xi_bar, _, _ = snr_model(env, batch.sl_db, batch.freq_hz, batch.depth_m, em_map.r_max_m * 1.05, batch.nl_db,
+                             batch.di_db, tl_store=tl_store)
+    prob = make_problem(record.bearing_rad, record.snr_db, t, own, sigma_bearing_rad, batch.sigma_snr_db, xi_bar,
+                        em_map.r_min_m, em_map.r_max_m, kappa=em_map.kappa)
+    est = solve_em_map(prob, t0_s=float(t[0]), extra_starts=[ml_start], max_iter=em_map.max_iter)
     if not np.all(np.isfinite(est.covariance)):
         raise InputError("em-map found no well-defined solution (flat likelihood): check the SL, environment and depth")
+    return est
+
+
+def solve_batch(record: BearingRecord, ownship: OwnshipTrack, method: str, *, sigma_bearing_rad: float,
+                batch: BatchSettings | None = None, em_map: EmMapSettings | None = None, environment=None,
+                tl_store=None) -> TmaSolution:
+    """Batch TMA of a whole record: ``method`` 'ml' (bearings only) or 'em-map' (bearings + SNR + TL);
+    the solution at every measurement time."""
+    require(method in ("ml", "em-map"), f"unknown batch method '{method}': choose ml or em-map")
+    t = np.asarray(record.time_s, dtype=float)
+    if method == "ml":
+        est = ml_bearings_only(record.bearing_rad, t, ownship.position_at(t), sigma_bearing_rad)
+    else:
+        est = em_map_estimate(record, ownship, sigma_bearing_rad=sigma_bearing_rad,
+                              batch=BatchSettings() if batch is None else batch,
+                              em_map=EmMapSettings() if em_map is None else em_map, environment=environment,
+                              tl_store=tl_store)
     return estimate_to_solution(est, t)
+
+
+def solve_batch_then_ekf(record: BearingRecord, ownship: OwnshipTrack, method: str, *, window_s: float,
+                         sigma_bearing_rad: float, batch: BatchSettings | None = None,
+                         em_map: EmMapSettings | None = None, environment=None, tl_store=None) -> TmaSolution:
+    """Batch TMA on the bearings of the first ``window_s`` seconds, then a sequential EKF from the batch's
+    last state and covariance over the rest (paper P3, sec. 2: the batch solution initialises the tracker);
+    one solution over the whole record (method '<batch>+ekf')."""
+    batch = BatchSettings() if batch is None else batch
+    head = record.until(float(record.time_s[0]) + window_s)
+    require(0 < len(head.time_s) < len(record.time_s),
+            f"batch window {window_s:g} s must leave bearings for both the batch and the EKF")
+    first = solve_batch(head, ownship, method, sigma_bearing_rad=sigma_bearing_rad, batch=batch, em_map=em_map,
+                        environment=environment, tl_store=tl_store)
+    start_s = float(first.time_s[-1])
+    later = ekf_from_state(record, ownship, first.state[-1], first.covariance[-1], start_s=start_s,
+                           sigma_bearing_rad=sigma_bearing_rad, q_m2_s3=batch.ekf_q_m2_s3,
+                           method=f"{first.method}+ekf")
+    return first.followed_by(later)
 
 
 def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstimate, *, start_s: float,
                    sigma_bearing_rad: float, q_m2_s3: float = 1e-4) -> TmaSolution:
-    """A sequential bearings-only EKF that takes over from a batch estimate (paper P3, sec. 2: the batch
-    solution initialises the tracker that follows the target from then on).
+    """:func:`ekf_from_state` started from a batch estimate propagated to ``start_s``."""
+    x0, P0 = est.state_at(np.array([start_s]))
+    return ekf_from_state(record, ownship, x0[0], P0[0], start_s=start_s, sigma_bearing_rad=sigma_bearing_rad,
+                          q_m2_s3=q_m2_s3, method=f"{est.method}+ekf")
 
-    The batch estimate must come from the bearings up to ``start_s``; the EKF starts there with the
-    batch state and covariance and filters only the later bearings (refiltering the batch's own data
-    would count it twice and make the covariance too small). Absolute state [x, y, vx, vy] (m, m/s),
-    constant velocity with white-acceleration noise of intensity ``q_m2_s3``:
+
+def ekf_from_state(record: BearingRecord, ownship: OwnshipTrack, state, covariance, *, start_s: float,
+                   sigma_bearing_rad: float, q_m2_s3: float = 1e-4, method: str = "ekf") -> TmaSolution:
+    """A sequential bearings-only EKF from ``state``, ``covariance`` at ``start_s`` (e.g. a batch estimate).
+
+    The start must come from the bearings up to ``start_s``; the EKF filters only the later bearings
+    (refiltering the batch's own data would count it twice and make the covariance too small). Absolute
+    state [x, y, vx, vy] (m, m/s), constant velocity with white-acceleration noise of intensity ``q_m2_s3``:
     F = [[I, T I], [0, I]], Q = q [[T^3/3 I, T^2/2 I], [T^2/2 I, T I]]; bearing h = atan2(x - ox, y - oy)
     with the Jacobian of batch_ml.bearing_model; Joseph-form update. Returns the states at ``start_s``
     and at every later bearing.
@@ -108,12 +157,10 @@ def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstim
     t = np.concatenate([[start_s], t_all[later]])
     z = np.asarray(record.bearing_rad, dtype=float)[later]
     own = ownship.position_at(t)
-    x0, P0 = est.state_at(t[:1])
-    x, P = x0[0].copy(), P0[0].copy()
+    x, P = np.array(state, dtype=float), np.array(covariance, dtype=float)
     require(bool(np.all(np.isfinite(P))), "the batch estimate has no finite covariance to start the EKF from")
     R = np.array([[sigma_bearing_rad**2]])
-    xs = np.empty((len(t), 4))
-    Ps = np.empty((len(t), 4, 4))
+    xs, Ps = np.empty((len(t), 4)), np.empty((len(t), 4, 4))
     xs[0], Ps[0] = x, P
     for k in range(1, len(t)):
         T = t[k] - t[k - 1]
@@ -128,4 +175,4 @@ def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstim
         S = H @ P @ H.T + R
         x, P = joseph_update(x, P, nu, kf_gain(P, H, np.linalg.inv(S)), H, R)
         xs[k], Ps[k] = x, P
-    return TmaSolution(t, xs, Ps, f"{est.method}+ekf")
+    return TmaSolution(time_s=t, state=xs, covariance=Ps, method=method)

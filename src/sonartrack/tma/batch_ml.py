@@ -89,8 +89,9 @@ def check_observability(tau_s, own_xy, min_maneuver_m: float = MIN_MANEUVER_M) -
     """A one-line message if the ownship has not maneuvered enough for bearings-only range, else None."""
     dev = ownship_deviation_m(tau_s, own_xy)
     if dev < min_maneuver_m:
-        return (f"ownship has not maneuvered (it stays within {dev:.0f} m of a straight constant-velocity line): range is "
-                "unobservable from bearings alone; use a record with a course or speed change, or em-map with SNR")
+        return (f"ownship has not maneuvered (it stays within {dev:.0f} m of a straight constant-velocity line): "
+                "range is unobservable from bearings alone; use a record with a course or speed change, or em-map "
+                "with SNR")
     return None
 
 
@@ -103,9 +104,29 @@ def pseudo_linear_estimate(z_rad, tau_s, own_xy) -> np.ndarray:
     return x
 
 
+def _damped_step(residual, x, e, J, cost: float, lam: float):
+    """One Levenberg-Marquardt iteration (module doc): solve (J^T J + lam diag(J^T J)) delta = J^T e, raising
+    lam tenfold until the cost does not rise (at most 30 tries). Returns ``(x, e, J, cost, lam, improved)``."""
+    g = J.T @ e
+    JTJ = J.T @ J
+    for _ in range(30):
+        try:
+            step = np.linalg.solve(JTJ + lam * np.diag(np.diag(JTJ)), g)
+        except np.linalg.LinAlgError:
+            lam *= 10.0
+            continue
+        e_new, J_new = residual(x + step)
+        c_new = float(e_new @ e_new)
+        if np.isfinite(c_new) and c_new <= cost:
+            return x + step, e_new, J_new, c_new, max(lam / 10.0, 1e-12), True
+        lam *= 10.0
+    return x, e, J, cost, lam, False
+
+
 def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: int = 100, tol: float = 1e-10,
                      check: bool = True) -> BatchEstimate:
-    """ML X0 from bearings by Gauss-Newton / Levenberg-Marquardt (module doc).
+    """ML X0 from bearings by Gauss-Newton / Levenberg-Marquardt (module doc); stops when no damped step
+    lowers the cost or the relative decrease falls below ``tol``.
 
     ``own_xy`` (n, 2): ownship positions at the bearing times. ``check`` raises
     :class:`InputError` when the ownship has not maneuvered (range unobservable).
@@ -113,7 +134,8 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
     z = np.asarray(z_rad, dtype=float)
     t = np.asarray(time_s, dtype=float)
     own = np.asarray(own_xy, dtype=float)
-    require(z.ndim == 1 and len(z) == len(t) == len(own), "bearings, times and ownship positions must have the same length")
+    require(z.ndim == 1 and len(z) == len(t) == len(own),
+            "bearings, times and ownship positions must have the same length")
     require(len(z) >= 5, f"batch TMA needs at least 5 bearings, got {len(z)}")
     require(bool(np.all(np.diff(t) > 0)), "bearing times must increase strictly: sort the file and drop duplicates")
     tau = t - t[0]
@@ -130,26 +152,12 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
 
     e, J = residual(x)
     cost = float(e @ e)
-    lam, it, converged = 1e-3, 0, False
-    for it in range(1, max_iter + 1):
-        g = J.T @ e
-        JTJ = J.T @ J
-        improved = False
-        for _ in range(30):
-            A = JTJ + lam * np.diag(np.diag(JTJ))
-            try:
-                step = np.linalg.solve(A, g)
-            except np.linalg.LinAlgError:
-                lam *= 10.0
-                continue
-            e_new, J_new = residual(x + step)
-            c_new = float(e_new @ e_new)
-            if np.isfinite(c_new) and c_new <= cost:
-                x, e, J = x + step, e_new, J_new
-                rel = (cost - c_new) / max(cost, 1e-300)
-                cost, lam, improved = c_new, max(lam / 10.0, 1e-12), True
-                break
-            lam *= 10.0
+    lam, it, converged, rel = 1e-3, 0, False, np.inf
+    while it < max_iter:
+        it += 1
+        x, e, J, c_new, lam, improved = _damped_step(residual, x, e, J, cost, lam)
+        if improved:
+            rel, cost = (cost - c_new) / max(cost, 1e-300), c_new
         if not improved or rel < tol:
             converged = improved or rel < tol
             break
@@ -157,4 +165,5 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
         cov = np.linalg.inv(J.T @ J)
     except np.linalg.LinAlgError:
         cov = np.full((4, 4), np.inf)
-    return BatchEstimate(x, cov, float(t[0]), it, bool(converged), cost, "ml")
+    return BatchEstimate(x0=x, covariance=cov, t0_s=float(t[0]), iterations=it, converged=bool(converged),
+                         objective=cost, method="ml")

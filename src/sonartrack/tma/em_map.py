@@ -83,7 +83,8 @@ def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, 
         n_range = int(np.ceil(np.log(r_max_m / r_min_m) / (GRID_STEP_OF_KAPPA * kappa))) + 1
     r = np.geomspace(r_min_m, r_max_m, n_range)
     xi_bar = np.asarray(snr_of_range(r), dtype=float)
-    require(xi_bar.shape == r.shape and bool(np.all(np.isfinite(xi_bar))), "the SNR model must give finite values on the range grid")
+    require(xi_bar.shape == r.shape and bool(np.all(np.isfinite(xi_bar))),
+            "the SNR model must give finite values on the range grid")
     if snr_db is None:
         ll = np.zeros((len(z), len(r)))
     else:
@@ -206,6 +207,25 @@ def grid_initialisation(prob: EmProblem, n: int = 64, n_starts: int = 4) -> np.n
     return cands[chosen]
 
 
+def _squarem_step(prob: EmProblem, x, L_x: float, scale) -> tuple[np.ndarray, float]:
+    """One SQUAREM iteration from ``x`` (see :func:`em_map`): (X0_new, L(X0_new)), with L(X0_new) >= L(x)."""
+    x1, _ = em_step(prob, x)
+    x2, _ = em_step(prob, x1)
+    r, v = (x1 - x) * scale, (x2 - 2 * x1 + x) * scale
+    nv = float(np.linalg.norm(v))
+    a = -float(np.linalg.norm(r)) / nv if nv > 0 else -1.0
+    a = min(a, -1.0)
+    while True:
+        x_sq = x - (2 * a * r - a * a * v) / scale
+        x_new, _ = em_step(prob, x_sq)
+        L_new = objective(prob, x_new)
+        if np.isfinite(L_new) and L_new >= L_x:
+            return x_new, L_new
+        if a == -1.0:  # plain EM from x2 cannot decrease L
+            return x2, objective(prob, x2)
+        a = min((a - 1.0) / 2.0, -1.0)
+
+
 def em_map(prob: EmProblem, x_init, max_iter: int = 500, tol: float = 1e-10,
            accelerate: bool = True) -> tuple[np.ndarray, int, list[float]]:
     """Iterate EM from ``x_init``; (X0, iterations, L history (one value per accepted iterate)).
@@ -222,26 +242,12 @@ def em_map(prob: EmProblem, x_init, max_iter: int = 500, tol: float = 1e-10,
     history: list[float] = [L_x]
     scale = np.array([1.0, 1.0, 100.0, 100.0])  # put m and m/s on comparable footing for the step length
     it = 0
-    for it in range(1, max_iter + 1):
-        x1, _ = em_step(prob, x)
+    while it < max_iter:
+        it += 1
         if accelerate:
-            x2, _ = em_step(prob, x1)
-            r, v = (x1 - x) * scale, (x2 - 2 * x1 + x) * scale
-            nv = float(np.linalg.norm(v))
-            a = -float(np.linalg.norm(r)) / nv if nv > 0 else -1.0
-            a = min(a, -1.0)
-            while True:
-                x_sq = x - (2 * a * r - a * a * v) / scale
-                x_new, _ = em_step(prob, x_sq)
-                L_new = objective(prob, x_new)
-                if np.isfinite(L_new) and L_new >= L_x:
-                    break
-                if a == -1.0:  # plain EM from x2 cannot decrease L
-                    x_new, L_new = x2, objective(prob, x2)
-                    break
-                a = min((a - 1.0) / 2.0, -1.0)
+            x_new, L_new = _squarem_step(prob, x, L_x, scale)
         else:
-            x_new = x1
+            x_new, _ = em_step(prob, x)
             L_new = objective(prob, x_new)
         step = float(np.hypot(*(x_new[:2] - x[:2])))
         rng = float(np.hypot(*(x_new[:2] - prob.own_xy[0])))
@@ -284,7 +290,8 @@ def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: 
             best = (x, it, hist)
     x, it, hist = best
     if not covariance:
-        return BatchEstimate(x, np.full((4, 4), np.nan), float(t0_s), it, it < max_iter, hist[-1], "em-map")
+        return BatchEstimate(x0=x, covariance=np.full((4, 4), np.nan), t0_s=float(t0_s), iterations=it,
+                             converged=it < max_iter, objective=hist[-1], method="em-map")
     info = observed_information(prob, x)
     try:
         cov = np.linalg.inv(info)
@@ -292,4 +299,5 @@ def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: 
             raise np.linalg.LinAlgError
     except np.linalg.LinAlgError:
         cov = np.full((4, 4), np.nan)
-    return BatchEstimate(x, cov, float(t0_s), it, it < max_iter, hist[-1], "em-map")
+    return BatchEstimate(x0=x, covariance=cov, t0_s=float(t0_s), iterations=it, converged=it < max_iter,
+                         objective=hist[-1], method="em-map")

@@ -1,10 +1,12 @@
-"""Plain containers for TMA data shared by the estimators, the readers (io/) and the CLI.
+"""Plain containers for TMA data shared by the estimators, the readers (io/) and the CLI, and the check
+that a navigation record covers a measurement record.
 
 They live in tma/ (not io/) because the estimators take and return them and io/ sits above tma/ in
 the layering; ``sonartrack.io.records`` re-exports them for readers.
 
 These are the API boundary between ``io/`` (which reads and validates files) and the algorithm
-layers (which take arrays). All quantities are SI: seconds, metres, radians, hertz, dB.
+layers (which take arrays). All quantities are SI: seconds, metres, radians, hertz, dB. Build them
+with keywords: ``BearingRecord(time_s=t, bearing_rad=b)``, ``OwnshipTrack(time_s=tn, x_m=x, y_m=y)``.
 """
 
 from __future__ import annotations
@@ -12,6 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from sonartrack.core.errors import InputError
+
+#: longest gap (s) between two ownship samples across which positions are interpolated
+MAX_NAV_GAP_S = 120.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -23,6 +30,16 @@ class BearingRecord:
     bearing_rad: np.ndarray
     frequency_hz: np.ndarray | None = None
     snr_db: np.ndarray | None = None
+
+    def until(self, end_s: float) -> BearingRecord:
+        """The measurements at times <= ``end_s``."""
+        keep = np.asarray(self.time_s) <= end_s
+
+        def cut(a):
+            return None if a is None else np.asarray(a)[keep]
+
+        return BearingRecord(time_s=cut(self.time_s), bearing_rad=cut(self.bearing_rad),
+                             frequency_hz=cut(self.frequency_hz), snr_db=cut(self.snr_db))
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,3 +64,31 @@ class TmaSolution:
     state: np.ndarray  # (n, 4)
     covariance: np.ndarray  # (n, 4, 4)
     method: str
+
+    def followed_by(self, later: TmaSolution) -> TmaSolution:
+        """This solution, then ``later`` from its second row on (its first row restates this one's last time),
+        under ``later``'s method name."""
+        return TmaSolution(time_s=np.concatenate([self.time_s, later.time_s[1:]]),
+                           state=np.concatenate([self.state, later.state[1:]]),
+                           covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method)
+
+
+def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:
+    """Every measurement time must lie within the ownship span, in no gap longer than ``max_gap_s``
+    (positions are interpolated linearly, never extrapolated). Raises :class:`InputError`."""
+    t = np.asarray(record.time_s, float)
+    nt = np.asarray(ownship.time_s, float)
+    outside = (t < nt[0]) | (t > nt[-1])
+    if outside.any():
+        raise InputError(f"{int(outside.sum())} measurement time(s) (first {t[np.argmax(outside)]:g} s) lie outside "
+                         f"the ownship file's span {nt[0]:g}..{nt[-1]:g} s: extend the ownship file or trim the "
+                         "bearings (positions are not extrapolated)")
+    k = np.clip(np.searchsorted(nt, t, side="right"), 1, len(nt) - 1)
+    gap = nt[k] - nt[k - 1]
+    on_sample = np.isin(t, nt)
+    bad = (gap > max_gap_s) & ~on_sample
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"no ownship position near t = {t[i]:g} s: the ownship file has a {gap[i]:g} s gap "
+                         f"({nt[k[i] - 1]:g}..{nt[k[i]]:g} s) and sonartrack interpolates across at most "
+                         f"{max_gap_s:g} s: add ownship samples or drop those measurements")

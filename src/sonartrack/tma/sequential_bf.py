@@ -14,8 +14,9 @@ Initial estimate at the first measurement time (the usual range-prior initialisa
     f0         first measured frequency,  variance sigma_f0^2 (default: the Doppler spread
                f (|v_o| + 2 sigma_v) / c the unknown radial velocity can cause)
 
-Methods: ``ekf`` / ``mgekf`` (one model, q = ``q_single``), ``imm-ekf`` / ``imm-mgekf`` (one mode per
-value in ``q_values``, Markov matrix with ``transition_diagonal`` on its diagonal).
+Methods: ``ekf`` / ``mgekf`` (one model, q = ``sequential.q_single``), ``imm-ekf`` / ``imm-mgekf`` (one mode
+per value in ``imm.q_values``, Markov matrix with ``imm.transition_diagonal`` on its diagonal); settings in
+tma/settings.py, filters in tma/imm_mgekf.py.
 """
 
 from __future__ import annotations
@@ -27,34 +28,9 @@ import numpy as np
 from sonartrack.core.errors import InputError, require
 from sonartrack.models.passive import SOUND_SPEED_MPS
 from sonartrack.models.relative_motion import observer_inputs
+from sonartrack.tma.imm_mgekf import ImmBfModel, run_imm_bf, transition_matrix
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
-
-METHODS = ("ekf", "mgekf", "imm-ekf", "imm-mgekf")
-
-
-@dataclass(frozen=True, slots=True)
-class SequentialOptions:
-    """Tuning of the sequential filters (the defaults are the bftma-imm study's choices)."""
-
-    q_values: tuple[float, ...] = (1e-5, 1e-3, 1e-1)
-    q_single: float = 1e-3
-    transition_diagonal: float = 0.99
-    q_f0: float = 1e-8
-    initial_range_m: float = 10_000.0
-    sigma_range_m: float = 5_000.0
-    target_velocity_mps: tuple[float, float] = (0.0, 0.0)
-    sigma_target_velocity_mps: float = 5.0
-    sigma_f0_hz: float | None = None
-    sound_speed_mps: float = SOUND_SPEED_MPS
-
-    def __post_init__(self):
-        require(len(self.q_values) >= 1 and all(q >= 0 for q in self.q_values),
-                "q_values must be one or more non-negative process-noise intensities (m^2/s^3)")
-        require(self.q_single >= 0, "q_single must be non-negative (m^2/s^3)")
-        require(0.0 < self.transition_diagonal <= 1.0, "transition_diagonal must lie in (0, 1]")
-        require(self.initial_range_m > 0 and self.sigma_range_m > 0, "initial_range_m and sigma_range_m must be positive")
-        require(self.sigma_target_velocity_mps > 0, "sigma_target_velocity_mps must be positive")
-        require(self.sound_speed_mps > 0, "sound_speed_mps must be positive")
+from sonartrack.tma.settings import SEQUENTIAL_METHODS, ImmSettings, SequentialSettings
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,15 +46,16 @@ class SequentialTrack:
     q_values: tuple[float, ...]
 
 
-def filter_setup(method: str, options: SequentialOptions):
-    """``(qs, Pi, modified)`` for a method name."""
-    from sonartrack.filters.imm_ekf import transition_matrix
-
-    if method not in METHODS:
-        raise InputError(f"unknown sequential method '{method}': choose one of {', '.join(METHODS)}")
-    modified = method.endswith("mgekf")
-    qs = tuple(options.q_values) if method.startswith("imm") else (options.q_single,)
-    return np.asarray(qs, float), transition_matrix(len(qs), options.transition_diagonal), modified
+def filter_model(method: str, *, sigma_bearing_rad: float, sigma_freq_hz: float, imm: ImmSettings,
+                 sequential: SequentialSettings) -> ImmBfModel:
+    """The filter a method name stands for: ``ekf`` / ``mgekf`` one model with q = ``q_single``,
+    ``imm-ekf`` / ``imm-mgekf`` one mode per ``imm.q_values``; ``*mgekf`` the MGEKF covariance update."""
+    if method not in SEQUENTIAL_METHODS:
+        raise InputError(f"unknown sequential method '{method}': choose one of {', '.join(SEQUENTIAL_METHODS)}")
+    qs = tuple(imm.q_values) if method.startswith("imm") else (sequential.q_single,)
+    return ImmBfModel(qs=np.asarray(qs, float), Pi=transition_matrix(len(qs), imm.transition_diagonal),
+                      sigma_bearing_rad=sigma_bearing_rad, sigma_freq_hz=sigma_freq_hz, q_f0=imm.q_f0,
+                      sound_speed_mps=sequential.sound_speed_mps, modified=method.endswith("mgekf"))
 
 
 def observer_kinematics(ownship: OwnshipTrack, times_s):
@@ -119,52 +96,44 @@ def initial_estimate(bearing0_rad: float, freq0_hz: float | None, obs_vel0, *, r
     return x0, P0
 
 
-def run_sequential(times_s, bearing_rad, frequency_hz, obs_pos, obs_vel, x0, P0, method: str, *,
-                   sigma_bearing_rad: float, sigma_freq_hz: float = 0.1,
-                   options: SequentialOptions = SequentialOptions(), engine: str = "numba") -> SequentialTrack:
-    """Filter arrays: times (n,), bearings (n,) rad, frequencies (n,) Hz or None, observer
-    positions/velocities (n, 2), initial estimate at times[0]."""
-    from sonartrack.filters.imm_ekf import run_imm_bf
-
-    qs, Pi, modified = filter_setup(method, options)
-    u = observer_inputs(times_s, obs_pos, obs_vel)
-    x, P, mu, failed = run_imm_bf(times_s, bearing_rad, frequency_hz, u, x0, P0, qs=qs, Pi=Pi,
-                                  sigma_bearing_rad=sigma_bearing_rad, sigma_freq_hz=sigma_freq_hz,
-                                  modified=modified, q_f0=options.q_f0, c=options.sound_speed_mps, engine=engine)
-    return SequentialTrack(np.asarray(times_s, float), x, P, mu, failed, method, tuple(float(q) for q in qs))
+def _measured_frequencies(record: BearingRecord, use_frequency: bool) -> np.ndarray | None:
+    """The record's frequencies (Hz, NaN where missing) if asked for, else None."""
+    if not use_frequency:
+        return None
+    if record.frequency_hz is None or not np.isfinite(record.frequency_hz).any():
+        raise InputError("--frequency needs a frequency_hz column in the bearings file")
+    return np.asarray(record.frequency_hz, float)
 
 
 def solve_sequential(record: BearingRecord, ownship: OwnshipTrack, method: str = "imm-mgekf", *,
                      sigma_bearing_rad: float, sigma_freq_hz: float = 0.1, use_frequency: bool = False,
-                     options: SequentialOptions = SequentialOptions()) -> tuple[TmaSolution, SequentialTrack]:
-    """A user's record -> the target solution over time (absolute [x, y, vx, vy] with covariance).
+                     imm: ImmSettings | None = None, sequential: SequentialSettings | None = None,
+                     ) -> tuple[TmaSolution, SequentialTrack]:
+    """A user's record -> the target solution over time (absolute [x, y, vx, vy] with covariance), and the
+    filter's own output (relative state with f0, mode probabilities).
 
-    The caller has checked that the ownship file covers the record (io/tma_files.py). Raises
+    The ownship track must cover the record (tma/records.py ``check_coverage``). Raises
     :class:`InputError` when frequencies are asked for but absent, or when the filter fails.
     """
-    require(sigma_bearing_rad > 0, "the bearing standard deviation must be positive")
+    imm = ImmSettings() if imm is None else imm
+    seq = SequentialSettings() if sequential is None else sequential
+    model = filter_model(method, sigma_bearing_rad=sigma_bearing_rad, sigma_freq_hz=sigma_freq_hz, imm=imm,
+                         sequential=seq)
     t = np.asarray(record.time_s, float)
     require(len(t) >= 3, f"the bearings file has {len(t)} measurement(s): TMA needs at least 3")
-    freq = None
-    if use_frequency:
-        if record.frequency_hz is None or not np.isfinite(record.frequency_hz).any():
-            raise InputError("--frequency needs a frequency_hz column in the bearings file")
-        require(sigma_freq_hz > 0, "the frequency standard deviation must be positive")
-        freq = np.asarray(record.frequency_hz, float)
+    freq = _measured_frequencies(record, use_frequency)
     pos, vel = observer_kinematics(ownship, t)
-    f_first = None
-    if freq is not None:
-        f_first = float(freq[np.argmax(np.isfinite(freq))])
-    x0, P0 = initial_estimate(float(record.bearing_rad[0]), f_first, vel[0], range_m=options.initial_range_m,
-                              sigma_range_m=options.sigma_range_m, sigma_bearing_rad=sigma_bearing_rad,
-                              target_velocity_mps=options.target_velocity_mps,
-                              sigma_target_velocity_mps=options.sigma_target_velocity_mps,
-                              sigma_f0_hz=options.sigma_f0_hz, c=options.sound_speed_mps)
-    track = run_sequential(t, np.asarray(record.bearing_rad, float), freq, pos, vel, x0, P0, method,
-                           sigma_bearing_rad=sigma_bearing_rad, sigma_freq_hz=sigma_freq_hz, options=options)
-    if track.failed_at >= 0:
-        raise InputError(f"the {method} filter failed numerically at t = {t[track.failed_at]:g} s (the estimate "
+    f_first = None if freq is None else float(freq[np.argmax(np.isfinite(freq))])
+    x0, P0 = initial_estimate(float(record.bearing_rad[0]), f_first, vel[0], range_m=seq.initial_range_m,
+                              sigma_range_m=seq.sigma_range_m, sigma_bearing_rad=sigma_bearing_rad,
+                              sigma_target_velocity_mps=seq.sigma_target_velocity_mps, sigma_f0_hz=seq.sigma_f0_hz,
+                              c=seq.sound_speed_mps)
+    x, P, mu, failed = run_imm_bf(t, np.asarray(record.bearing_rad, float), freq, observer_inputs(t, pos, vel), x0,
+                                  P0, model)
+    if failed >= 0:
+        raise InputError(f"the {method} filter failed numerically at t = {t[failed]:g} s (the estimate "
                          "passed through the ownship): check the bearings' units and noise, or change "
-                         "initial_range_m / sigma_range_m in --config")
-    state = track.rel_state[:, :4] + np.concatenate([pos, vel], axis=-1)
-    return TmaSolution(t, state, track.rel_cov[:, :4, :4].copy(), method), track
+                         "sequential.initial_range_m / sigma_range_m in --config")
+    track = SequentialTrack(t, x, P, mu, failed, method, tuple(float(q) for q in model.qs))
+    state = x[:, :4] + np.concatenate([pos, vel], axis=-1)
+    return TmaSolution(time_s=t, state=state, covariance=P[:, :4, :4].copy(), method=method), track

@@ -1,0 +1,70 @@
+"""TMA pictures for the command line: the tactical picture of a solved record."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sonartrack.io.atomic import save_figure
+
+#: chi-square(2) 95 % quantile: the 95 % position ellipse is sqrt(5.991) standard deviations wide
+CHI2_2DOF_95 = 5.991
+
+
+def _bearing_lines(ax, record, ownship, length_m: float, n_lines: int = 40) -> None:
+    """About ``n_lines`` measured bearing lines from the ownship, each ``length_m`` long (km axes)."""
+    op = ownship.position_at(record.time_s)
+    for k in range(0, len(record.time_s), max(1, len(record.time_s) // n_lines)):
+        b = record.bearing_rad[k]
+        ax.plot([op[k, 0] / 1e3, (op[k, 0] + length_m * np.sin(b)) / 1e3],
+                [op[k, 1] / 1e3, (op[k, 1] + length_m * np.cos(b)) / 1e3], color="0.8", lw=0.6, zorder=1)
+    ax.plot([], [], color="0.8", lw=0.6, label="measured bearings")
+
+
+def _ellipses(ax, solution, n_ellipses: int) -> None:
+    """95 % position ellipses at ``n_ellipses`` evenly spread solution times."""
+    from matplotlib.patches import Ellipse
+
+    X, P = np.asarray(solution.state, float), np.asarray(solution.covariance, float)
+    k95 = np.sqrt(CHI2_2DOF_95)
+    idx = np.unique(np.linspace(0, len(X) - 1, n_ellipses).round().astype(int)) if n_ellipses > 0 else []
+    for j, k in enumerate(idx):
+        w, V = np.linalg.eigh(P[k, :2, :2])
+        if not np.all(np.isfinite(w)):
+            continue
+        w = np.maximum(w, 0.0)
+        angle_deg = np.degrees(np.arctan2(V[1, 1], V[0, 1]))
+        ax.add_patch(Ellipse((X[k, 0] / 1e3, X[k, 1] / 1e3), 2 * k95 * np.sqrt(w[1]) / 1e3,
+                             2 * k95 * np.sqrt(w[0]) / 1e3, angle=angle_deg, fill=False, color="r", lw=0.8, alpha=0.7,
+                             zorder=2, label="95 % position ellipses" if j == 0 else None))
+
+
+def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str = "TMA"):
+    """Ownship track, measured bearing lines, estimated target track and its 95 % position ellipses (Figure)."""
+    import matplotlib.pyplot as plt
+
+    X = np.asarray(solution.state, float)
+    fig, ax = plt.subplots(figsize=(7, 7))
+    est_range = np.hypot(*(X[:, :2] - ownship.position_at(solution.time_s)).T)
+    length = 1.3 * float(np.nanmax(est_range)) if np.isfinite(est_range).any() else 10_000.0
+    _bearing_lines(ax, record, ownship, length)
+    ax.plot(np.asarray(ownship.x_m) / 1e3, np.asarray(ownship.y_m) / 1e3, "b-", lw=1.5, label="ownship", zorder=3)
+    ax.plot(ownship.x_m[0] / 1e3, ownship.y_m[0] / 1e3, "bo", zorder=3)
+    ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "r-", lw=1.5, label="target (estimated)", zorder=3)
+    ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "r^", ms=8, zorder=4)
+    _ellipses(ax, solution, n_ellipses)
+    ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title=title)
+    ax.legend(fontsize=8, loc="best")
+    return fig
+
+
+def write_tactical_picture(path, result) -> Path:
+    """The tactical picture of a :class:`~sonartrack.tma.solve.TmaResult`, saved atomically as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    s = result.settings
+    title = f"TMA ({s.method}{', bearings + frequency' if s.frequency else ''})"
+    fig = tactical_picture(result.record, result.ownship, result.solution, s.ellipses, title=title)
+    return save_figure(fig, path, dpi=110, bbox_inches="tight")

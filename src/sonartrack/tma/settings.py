@@ -1,0 +1,104 @@
+"""Settings of target motion analysis, each group declared once (core/settings.py).
+
+``sonartrack tma`` reads :class:`TmaSettings` (TOML: top-level keys plus the ``[imm]``, ``[sequential]``,
+``[batch]``, ``[em_map]`` and ``[inputs]`` tables; command-line options for the common ones). The studies
+nest the same groups: bftma-imm (paper P2) its IMM mode bank (:class:`ImmSettings`), tma-propagation
+(paper P3) its EM/MAP solver settings (:class:`EmMapSettings`).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import NonNegativeFloat
+
+from sonartrack.core.settings import Settings, setting
+from sonartrack.tma.em_map import KAPPA
+
+SEQUENTIAL_METHODS = ("ekf", "mgekf", "imm-ekf", "imm-mgekf")
+BATCH_METHODS = ("ml", "em-map")
+Method = Literal["ekf", "mgekf", "imm-ekf", "imm-mgekf", "ml", "em-map"]
+
+
+class ImmSettings(Settings):
+    """The IMM's bank of modes (paper P2): the modes differ only in the target's process-noise intensity."""
+
+    q_values: list[NonNegativeFloat] = setting(
+        [1e-5, 1e-3, 1e-1], "process-noise intensity (white target acceleration) of each IMM mode", unit="m^2/s^3",
+        min_length=1)
+    transition_diagonal: float = setting(
+        0.99, "probability that the target keeps its mode from one measurement to the next (Markov diagonal)",
+        unit="1", gt=0, le=1)
+    q_f0: float = setting(1e-8, "random-walk intensity of the emitted frequency f0 (keeps P positive definite)",
+                          unit="Hz^2/s", ge=0)
+
+
+class SequentialSettings(Settings):
+    """The sequential filters' single-model tuning and range-prior initialisation (tma/sequential_bf.py)."""
+
+    q_single: float = setting(1e-3, "process-noise intensity of the single-model ekf and mgekf", unit="m^2/s^3",
+                              ge=0)
+    initial_range_m: float = setting(10_000.0, "range guess along the first bearing", unit="m", gt=0)
+    sigma_range_m: float = setting(5_000.0, "standard deviation of the range guess", unit="m", gt=0)
+    sigma_target_velocity_mps: float = setting(5.0, "standard deviation of the zero-mean target velocity prior, "
+                                                    "per axis", unit="m/s", gt=0)
+    sigma_f0_hz: float | None = setting(None, "standard deviation of the initial f0 (default: the Doppler spread an "
+                                              "unknown radial velocity can cause)", unit="Hz", gt=0)
+    sound_speed_mps: float = setting(1500.0, "speed of sound of the Doppler (frequency) model", unit="m/s", gt=0)
+
+
+class BatchSettings(Settings):
+    """The batch methods' propagation model (em-map) and the sequential EKF that may follow a batch window."""
+
+    env: str | None = setting(None, "em-map propagation model: a shipped environment (see sonartrack tl --list) "
+                                    "or a profile file (.toml or .csv)")
+    sl_db: float | None = setting(None, "source level of the target (em-map)", unit="dB")
+    sigma_snr_db: float = setting(1.0, "standard deviation of the measured SNR", unit="dB", gt=0)
+    freq_hz: float = setting(200.0, "frequency of the tonal (for the transmission loss)", unit="Hz", gt=0)
+    depth_m: float | None = setting(None, "target and sensor depth (default: 50 m, or half the water depth)",
+                                    unit="m", gt=0)
+    nl_db: float = setting(73.0, "noise level", unit="dB")
+    di_db: float = setting(12.5, "directivity index of the array", unit="dB")
+    window_s: float | None = setting(None, "solve the batch on the first window_s seconds only, then filter the "
+                                           "rest with a sequential EKF (default: batch over the whole record)",
+                                     unit="s", gt=0)
+    ekf_q_m2_s3: float = setting(1e-4, "process-noise intensity of the EKF that follows the batch window",
+                                 unit="m^2/s^3", ge=0)
+
+
+class EmMapSettings(Settings):
+    """The EM/MAP solver (paper P3, tma/em_map.py): the latent range interval and the position model."""
+
+    r_min_m: float = setting(500.0, "smallest range of the latent range grid", unit="m", gt=0)
+    r_max_m: float = setting(60_000.0, "largest range of the latent range grid", unit="m", gt=0)
+    kappa: float = setting(KAPPA, "relative along-range spread of the position model (exact model: 0; why 1 %: "
+                                  "tma/em_map.py)", unit="1", gt=0)
+    max_iter: int = setting(500, "largest number of EM iterations from each starting point", unit="1", ge=1)
+
+
+class InputSettings(Settings):
+    """Checks of a user's bearings and ownship files."""
+
+    max_nav_gap_s: float = setting(120.0, "longest gap between ownship samples interpolated across", unit="s",
+                                   gt=0)
+    check_radians: bool = setting(True, "refuse a bearings file whose degrees all lie within +-6.3 (radians?)")
+
+
+class TmaSettings(Settings):
+    """Settings of ``sonartrack tma`` and :func:`sonartrack.tma.solve.solve_tma`."""
+
+    method: Method = setting("imm-mgekf", "TMA method: ekf | mgekf | imm-ekf | imm-mgekf (sequential) or ml | "
+                                          "em-map (batch)")
+    frequency: bool = setting(False, "use the measured frequency too (sequential methods)")
+    sigma_bearing_deg: float = setting(1.0, "bearing noise standard deviation", unit="deg", gt=0)
+    sigma_freq_hz: float = setting(0.1, "frequency noise standard deviation", unit="Hz", gt=0)
+    ellipses: int = setting(8, "number of 95 % position ellipses drawn on the tactical picture", unit="1", ge=0)
+    imm: ImmSettings = setting(..., "the IMM modes (imm-ekf, imm-mgekf)", default_factory=ImmSettings)
+    sequential: SequentialSettings = setting(..., "the sequential filters", default_factory=SequentialSettings)
+    batch: BatchSettings = setting(..., "the batch methods (ml, em-map)", default_factory=BatchSettings)
+    em_map: EmMapSettings = setting(..., "the EM/MAP solver", default_factory=EmMapSettings)
+    inputs: InputSettings = setting(..., "checks of the input files", default_factory=InputSettings)
+
+    @property
+    def is_sequential(self) -> bool:
+        return self.method in SEQUENTIAL_METHODS

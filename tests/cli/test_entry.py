@@ -1,0 +1,100 @@
+"""The ``sonartrack`` entry point: usage errors, user mistakes, interrupts and bugs end the way they should.
+
+typer ships its own copy of click, so the entry point must not depend on which click's exception
+classes arrive: these tests go through :func:`sonartrack.cli.main` exactly as the console script does.
+"""
+
+import subprocess
+import sys
+
+import pytest
+import typer
+
+import sonartrack.cli as cli
+from sonartrack.cli import main
+from sonartrack.core.errors import InputError
+
+
+def run(capsys, *args):
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("args, needle", [
+    ([], "Commands"),                                   # no arguments at all: the usage and the commands
+    (["reproduce"], "Missing argument 'study'"),        # a missing required argument
+    (["tl", "--bogus"], "No such option: --bogus"),     # an unknown option
+    (["no-such-command"], "No such command"),           # an unknown command
+    (["tl", "--freq", "abc"], "Invalid value for '--freq'"),  # a value of the wrong type
+])
+def test_usage_errors_print_usage_and_exit_2(capsys, monkeypatch, args, needle):
+    monkeypatch.setenv("COLUMNS", "200")  # rich wraps its error panel at the terminal width
+    code, out, err = run(capsys, *args)
+    assert code == 2
+    assert needle in out + err and "Usage: sonartrack" in out + err
+    assert "Traceback" not in out + err
+
+
+def test_an_option_without_its_value_is_a_usage_error(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "200")
+    code, out, err = run(capsys, "bearings", "--spacing")
+    assert code == 2 and "Option '--spacing' requires an argument" in err and "Traceback" not in err
+
+
+def test_help_and_print_config_exit_0(capsys):
+    assert run(capsys, "--help")[0] == 0
+    assert run(capsys, "tl", "--help")[0] == 0
+    assert run(capsys, "tl", "--print-config")[0] == 0
+
+
+@pytest.fixture
+def toy_app(monkeypatch):
+    """A stand-in app whose commands fail in each way the entry point must handle."""
+    app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)
+
+    @app.command("mistake")
+    def mistake():
+        raise InputError("the spacing is negative: give it in metres, positive")
+
+    @app.command("interrupt")
+    def interrupt():
+        raise KeyboardInterrupt
+
+    @app.command("bug")
+    def bug():
+        raise ZeroDivisionError("a bug")
+
+    @app.command("exit3")
+    def exit3():
+        raise typer.Exit(3)
+
+    monkeypatch.setattr(cli, "app", app)
+    return app
+
+
+def test_input_error_is_one_line_and_status_2(toy_app, capsys):
+    code, out, err = run(capsys, "mistake")
+    assert code == 2 and err == "error: the spacing is negative: give it in metres, positive\n" and out == ""
+
+
+def test_interrupt_is_status_130_with_the_resume_note(toy_app, capsys):
+    code, _, err = run(capsys, "interrupt")
+    assert code == 130 and "rerun the same command to resume" in err
+
+
+def test_a_bug_is_not_hidden(toy_app, capsys):
+    with pytest.raises(ZeroDivisionError):
+        main(["bug"])
+
+
+def test_exit_status_of_a_command_is_kept(toy_app, capsys):
+    assert run(capsys, "exit3")[0] == 3
+
+
+def test_console_script_no_arguments_exits_2_without_traceback():
+    res = subprocess.run([sys.executable, "-m", "sonartrack.cli"], capture_output=True, text=True)
+    assert res.returncode == 2 and "Usage" in res.stdout + res.stderr and "Traceback" not in res.stderr
+    res = subprocess.run([sys.executable, "-m", "sonartrack.cli", "bearings", "--spacing"], capture_output=True,
+                         text=True)
+    assert res.returncode == 2 and "Traceback" not in res.stderr

@@ -1,0 +1,91 @@
+"""solve_tma: the one entry point, called with arrays as a notebook would, against the solvers it wires."""
+
+import numpy as np
+import pytest
+
+from sonartrack.core.errors import InputError
+from sonartrack.core.units import KNOT_MPS
+from sonartrack.models.passive import bf_measurement
+from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.tma import BearingRecord, OwnshipTrack, TmaSettings, solve_tma
+from sonartrack.tma.batch import ekf_from_batch, solve_batch
+from sonartrack.tma.batch_ml import ml_bearings_only
+from sonartrack.tma.settings import BatchSettings
+
+
+@pytest.fixture(scope="module")
+def scene():
+    """Noisy bearings + frequencies of a 10 kn target 10 km away, from a zig-zagging 5 kn ownship."""
+    t = np.arange(0.0, 1600.0 + 1e-9, 8.0)
+    obs = ManeuveringTrack(0.0, 0.0, 5 * KNOT_MPS, np.deg2rad(45), ((500.0, 540.0, np.deg2rad(-2.25)),
+                                                                     (1100.0, 1140.0, np.deg2rad(2.25))))
+    tgt = ManeuveringTrack(-3000.0, 9500.0, 10 * KNOT_MPS, np.deg2rad(100))
+    po, vo, _ = obs.state(t)
+    pt, vt, _ = tgt.state(t)
+    z = bf_measurement(np.column_stack([pt - po, vt - vo, np.full(len(t), 300.0)]))
+    z = z + np.random.default_rng(3).normal(size=z.shape) * [np.deg2rad(0.5), 0.05]
+    record = BearingRecord(time_s=t, bearing_rad=z[:, 0], frequency_hz=z[:, 1])
+    return record, OwnshipTrack(time_s=t, x_m=po[:, 0], y_m=po[:, 1]), np.column_stack([pt, vt])
+
+
+def test_sequential_with_frequency_tracks_the_target(scene):
+    record, own, truth = scene
+    res = solve_tma(record, own, TmaSettings(method="imm-mgekf", frequency=True, sigma_bearing_deg=0.5,
+                                             sigma_freq_hz=0.05))
+    assert res.solution.state.shape == (len(record.time_s), 4) and res.solution.method == "imm-mgekf"
+    assert np.hypot(*(res.solution.state[-1, :2] - truth[-1, :2])) < 0.03 * 10_000
+    assert res.f0_hz == pytest.approx(300.0, abs=0.1) and res.f0_std_hz > 0
+    assert len(res.mode_probabilities) == 3 and sum(res.mode_probabilities) == pytest.approx(1.0)
+    line = res.summary()
+    assert line.startswith("tma imm-mgekf: ") and "f0 300." in line and "\n" not in line
+
+
+def test_batch_window_then_ekf_is_the_composition_of_its_parts(scene):
+    """solve_tma with batch.window_s = ML on the first window, then the EKF from its last state."""
+    record, own, _ = scene
+    s = TmaSettings(method="ml", sigma_bearing_deg=0.5, batch=BatchSettings(window_s=1200.0, ekf_q_m2_s3=1e-6))
+    res = solve_tma(record, own, s)
+    sb = np.deg2rad(0.5)
+    head = record.until(1200.0)
+    first = solve_batch(head, own, "ml", sigma_bearing_rad=sb)
+    est = ml_bearings_only(head.bearing_rad, head.time_s, own.position_at(head.time_s), sb)
+    later = ekf_from_batch(record, own, est, start_s=float(head.time_s[-1]), sigma_bearing_rad=sb, q_m2_s3=1e-6)
+    np.testing.assert_array_equal(res.solution.time_s, record.time_s)
+    np.testing.assert_allclose(res.solution.state[: len(head.time_s)], first.state, rtol=1e-12)
+    np.testing.assert_allclose(res.solution.state[len(head.time_s):], later.state[1:], rtol=1e-9)
+    assert res.solution.method == "ml+ekf" and "then a sequential EKF" in res.summary()
+
+
+def test_settings_of_the_other_family_are_refused(scene):
+    record, own, _ = scene
+    with pytest.raises(InputError, match="--env and --sl"):
+        solve_tma(record, own, TmaSettings(method="ekf", batch=BatchSettings(env="east-summer")))
+    with pytest.raises(InputError, match="--frequency applies"):
+        solve_tma(record, own, TmaSettings(method="ml", frequency=True))
+    with pytest.raises(InputError, match="must leave bearings for both"):
+        solve_tma(record, own, TmaSettings(method="ml", batch=BatchSettings(window_s=5000.0)))
+
+
+def test_the_ownship_must_cover_the_record(scene):
+    record, own, _ = scene
+    short = OwnshipTrack(time_s=own.time_s[:50], x_m=own.x_m[:50], y_m=own.y_m[:50])
+    with pytest.raises(InputError, match="outside the ownship file's span"):
+        solve_tma(record, short)
+
+
+def test_a_failing_filter_is_an_input_error(scene, monkeypatch):
+    """A numerical failure of the filter (reported by run_imm_bf as its step index) becomes a one-line
+    InputError naming the time and what to change."""
+    import sonartrack.tma.sequential_bf as seq
+
+    record, own, _ = scene
+    real = seq.run_imm_bf
+
+    def failing(*args, **kw):
+        x, P, mu, _ = real(*args, **kw)
+        return x, P, mu, 5
+
+    monkeypatch.setattr(seq, "run_imm_bf", failing)
+    with pytest.raises(InputError, match=r"failed numerically at t = 40 s .*initial_range_m") as e:
+        solve_tma(record, own, TmaSettings(method="ekf"))
+    assert "\n" not in str(e.value)
