@@ -114,7 +114,8 @@ def main() -> None:
     t_e2e = best_of(lambda: ours_from_states(*args), 200)
     t_ss = best_of(lambda: assoc.associate(tracks, dets, t1), 3, repeat=3)
     t_ours = best_of(lambda: jpda_weights(log_lik, log_miss), 200)
-    t_full = best_of(lambda: (assoc.generate_hypotheses(tracks, dets, t1), jpda_weights(log_lik, log_miss)), 3, repeat=3)
+    t_full = best_of(lambda: (assoc.generate_hypotheses(tracks, dets, t1), jpda_weights(log_lik, log_miss)), 3,
+                     repeat=3)
     print(f"JPDA 8 converging targets ({m} detections, gates hold {gated.min()}-{gated.max()}), predict + gate + "
           f"exact marginals: ours {t_e2e * 1e3:.3f} ms, Stone Soup JPDAwithEHM2 {t_ss * 1e3:.2f} ms, ratio "
           f"{t_ss / t_e2e:.0f} x (target >= 20 x); max |beta diff| {np.abs(ours_e2e - theirs).max():.1e}")

@@ -24,7 +24,8 @@ def test_no_measurement_in_gate_follows_the_closed_form():
     np.testing.assert_allclose(lam, 1 - pd * pg)
     for p in (0.05, 0.5, 0.97):
         expected = (1 - pd * pg) * p / (1 - pd * pg * p)
-        assert existence_update(p, lam[0]) == np.float64(expected) or abs(existence_update(p, lam[0]) - expected) < 1e-15
+        got = existence_update(p, lam[0])
+        assert got == np.float64(expected) or abs(got - expected) < 1e-15
 
 
 def test_a_measurement_at_the_prediction_raises_existence_when_likelihood_beats_clutter():

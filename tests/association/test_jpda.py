@@ -54,7 +54,8 @@ def test_equal_to_stone_soup_jpda_on_identical_inputs():
     t1 = t0 + datetime.timedelta(seconds=1)
     trans = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.5), ConstantVelocity(0.5)])
     meas = LinearGaussian(4, [0, 2], np.diag([25.0, 25.0]))
-    tracks = [Track([GaussianState(np.array([[x], [1.0], [y], [0.0]]), np.diag([100.0, 4.0, 100.0, 4.0]), timestamp=t0)])
+    P0 = np.diag([100.0, 4.0, 100.0, 4.0])
+    tracks = [Track([GaussianState(np.array([[x], [1.0], [y], [0.0]]), P0, timestamp=t0)])
               for x, y in ((0, 0), (15, 5), (30, -5), (200, 200))]
     dets = [Detection(rng.uniform(-20, 50, 2).reshape(-1, 1), timestamp=t1, measurement_model=meas) for _ in range(6)]
     hyp = PDAHypothesiser(KalmanPredictor(trans), KalmanUpdater(meas), clutter_spatial_density=1e-4, prob_detect=0.9,
@@ -101,3 +102,14 @@ def test_amplitude_pieces():
     r = amplitude_log_ratio([21000.0, 6000.0], [21000.0], [2500.0], 4e-4, 5000.0)
     assert r[0, 0] > 0 > r[0, 1]  # a strong amplitude favours the strong track, a weak one the clutter
     np.testing.assert_allclose(update_strength([15000.0, 15000.0], [20000.0, np.nan]), [16500.0, 15000.0])
+
+
+def test_a_cluster_wider_than_the_bit_masks_is_an_input_error():
+    from sonartrack.association.jpda import MAX_CLUSTER_MEASUREMENTS
+    from sonartrack.core.errors import InputError
+
+    ll = np.zeros((2, MAX_CLUSTER_MEASUREMENTS + 1))
+    with pytest.raises(InputError, match=f"gates {MAX_CLUSTER_MEASUREMENTS + 1} measurements"):
+        jpda_log_weights(ll, np.log([0.1, 0.1]))
+    ok = jpda_weights(ll[:, :MAX_CLUSTER_MEASUREMENTS], np.log([0.1, 0.1]))  # the widest that fits
+    np.testing.assert_allclose(ok.sum(axis=1), 1.0)

@@ -74,7 +74,7 @@ def test_pda_equals_stone_soup(seed):
     miss, weights, x_ss, P_ss = stone_soup_pda(x0, P0, q, dt, z, R, pd, pg, rho)
     x, P, beta0, beta = pda_update(x_pred, P_pred, z, R, pd=pd, pg=pg, gamma=gate_threshold(pg), clutter_density=rho)
     assert beta0 == pytest.approx(miss, rel=1e-9)
-    ours = {tuple(zz): b for zz, b in zip(z, beta) if b > 0}
+    ours = {tuple(zz): b for zz, b in zip(z, beta, strict=True) if b > 0}
     assert ours.keys() == weights.keys()  # the same measurements validated
     for k, b in ours.items():
         assert b == pytest.approx(weights[k], rel=1e-9)

@@ -25,14 +25,15 @@ def scenario(tmp_path_factory):
     rows, raw, nav = [], [], []
     for k, t in enumerate(c.times_s()):
         s = simulate_scan(rng, sonar, ship, float(t), truth[k, :2])
-        for z, R in zip(s.z, s.R):
+        for z, R in zip(s.z, s.R, strict=True):
             rows.append(dict(time_s=t, x_m=z[0], y_m=z[1], var_x_m2=R[0, 0], var_y_m2=R[1, 1], cov_xy_m2=R[0, 1]))
         rx, phi = ship.towed(t, c.rx_cable_m)
         tx, _ = ship.towed(t, c.tx_cable_m)
         tt, th = bistatic_inputs(s.z, tx, rx, phi, 1500.0)
-        for a, b in zip(tt, th):
+        for a, b in zip(tt, th, strict=True):
             raw.append(dict(time_s=t, travel_time_s=a, bearing_deg=np.rad2deg(b)))
-        nav.append(dict(time_s=t, tx_x_m=tx[0], tx_y_m=tx[1], rx_x_m=rx[0], rx_y_m=rx[1], array_heading_deg=np.rad2deg(phi)))
+        nav.append(dict(time_s=t, tx_x_m=tx[0], tx_y_m=tx[1], rx_x_m=rx[0], rx_y_m=rx[1],
+                        array_heading_deg=np.rad2deg(phi)))
     pd.DataFrame(rows).to_csv(folder / "contacts.csv", index=False)
     pd.DataFrame(rows).to_parquet(folder / "contacts.parquet")
     pd.DataFrame(raw).to_csv(folder / "raw.csv", index=False)
@@ -95,7 +96,8 @@ def test_nan_values(scenario, tmp_path):
     def edit(d):
         d.loc[7, "x_m"] = np.nan
         return d
-    assert_error(run("--contacts", bad_file(scenario, tmp_path, edit), "--out", tmp_path / "o"), tmp_path / "o", "x_m", "row 8")
+    assert_error(run("--contacts", bad_file(scenario, tmp_path, edit), "--out", tmp_path / "o"), tmp_path / "o",
+                 "x_m", "row 8")
 
 
 def test_unsorted_times(scenario, tmp_path):
@@ -129,3 +131,38 @@ def test_malformed_and_empty_files(tmp_path):
 
 def test_needs_exactly_one_input(tmp_path):
     assert_error(run("--out", tmp_path / "o"), tmp_path / "o", "--contacts")
+
+
+@pytest.mark.parametrize("kind", ["--contacts", "--peaks"])
+def test_print_config_reads_back_to_the_same_settings(tmp_path, kind):
+    """The printed TOML is the library's declarations with their defaults, and --config reads it back unchanged."""
+    from sonartrack.io import toml as toml_io
+    from sonartrack.io.track_config import ContactsTrackSettings, PeaksTrackSettings
+    from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
+
+    model, tracker = ((ContactsTrackSettings, PositionTrackerSettings) if kind == "--contacts"
+                      else (PeaksTrackSettings, BearingTrackerSettings))
+    res = run(kind, tmp_path / "unused.csv", "--print-config")
+    assert res.returncode == 0, res.stderr
+    (tmp_path / "c.toml").write_text(res.stdout)
+    printed = toml_io.validate(model, toml_io.load(tmp_path / "c.toml"))
+    assert printed == model() and printed.tracker == tracker()
+    assert "[tracker]" in res.stdout
+    # a changed value survives the round trip, and the file then drives --print-config again
+    edited = res.stdout.replace("gate_probability = 0.99", "gate_probability = 0.95").replace(
+        "gate_deg = 10.0", "gate_deg = 8.0")
+    (tmp_path / "d.toml").write_text(edited)
+    again = run(kind, tmp_path / "unused.csv", "--config", tmp_path / "d.toml", "--print-config")
+    assert again.returncode == 0 and again.stdout == edited
+
+
+def test_peaks_tracker_option_overrides_the_config(tmp_path):
+    res = run("--peaks", tmp_path / "unused.csv", "--tracker", "jpda", "--print-config")
+    assert res.returncode == 0 and 'associator = "jpda"' in res.stdout
+
+
+def test_flat_tracker_keys_are_pointed_to_the_tracker_table(scenario, tmp_path):
+    folder, _ = scenario
+    (tmp_path / "flat.toml").write_text("q = [0.001]\npd = 0.9\n")
+    res = run("--contacts", folder / "contacts.csv", "--config", tmp_path / "flat.toml", "--out", tmp_path / "o")
+    assert_error(res, tmp_path / "o", "[tracker]", "pd, q")

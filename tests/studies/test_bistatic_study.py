@@ -1,16 +1,45 @@
 """The P4 study's contract: config round trip, trial shapes, summary and claims on a small run."""
 
 import numpy as np
+import pytest
 
 from sonartrack.core.random import trial_rng
 from sonartrack.io import toml as toml_io
 from sonartrack.studies import bistatic_imm_ipda as p4
+from sonartrack.tracking.settings import PositionTrackerSettings
 
 
 def test_config_round_trips_through_toml():
     cfg = p4.Config()
     back = p4.Config.model_validate(__import__("tomllib").loads(toml_io.dumps(cfg.model_dump(mode="json"))))
     assert back == cfg
+
+
+def test_the_trackers_are_the_library_default_but_for_q():
+    """The study declares no tracker setting of its own: each case is the library's tracker with its modes."""
+    cfg = p4.Config()
+    for q in cfg.cases().values():
+        s = cfg.tracker_settings(q)
+        assert s.q == list(q)
+        assert s.model_dump(exclude={"q"}) == PositionTrackerSettings().model_dump(exclude={"q"})
+    assert cfg.tracker.pd == cfg.pd and cfg.tracker.clutter_density_per_m2 == cfg.clutter_density_per_m2
+    with pytest.raises(ValueError, match="three modes"):
+        p4.Config(tracker=PositionTrackerSettings(q=[1e-4, 0.05]))
+
+
+def test_figures_are_drawn_from_the_summary():
+    import matplotlib.pyplot as plt
+
+    from sonartrack.report.figures import study_figures
+
+    cfg = p4.Config(n_scans=12, turn_start_s=180.0, runs=2)
+    trials = [p4.run_trial(cfg, trial_rng(2, i)) for i in range(2)]
+    s = p4.summarize({k: np.stack([t[k] for t in trials]) for k in trials[0]}, cfg)
+    figs = study_figures(p4.STUDY_ID, s, cfg)
+    assert list(figs)[0] == "scenario" and {"ctt_rate", "mode_probabilities"} <= set(figs)
+    assert not hasattr(p4, "figures")
+    for f in figs.values():
+        plt.close(f)
 
 
 def test_scenario_matches_the_paper():
@@ -48,11 +77,11 @@ def test_summary_and_claims_are_computed_from_trials():
     s = p4.summarize(stacked, cfg)
     assert np.allclose(s["cases"]["imm2"]["ctt_rate"], stacked["imm2_ctt"].mean(axis=0))
     cl = p4.claims(s, cfg)
-    assert len({c["id"] for c in cl}) == len(cl) == 7
-    assert all(isinstance(c["holds"], bool) for c in cl)
+    assert len({c.id for c in cl}) == len(cl) == 7
+    assert all(isinstance(c.holds, bool) for c in cl)
     # a claim must be able to fail: make IMM-IPDA's CTT rate zero and the exp claims fail
     broken = {**stacked, "imm2_ctt": np.zeros_like(stacked["imm2_ctt"]),
               "ipda_small_ctt": np.ones_like(stacked["ipda_small_ctt"])}
     sb = p4.summarize(broken, cfg)
-    assert not next(c for c in p4.claims(sb, cfg) if c["id"] == "exp1-imm-best")["holds"]
-    assert next(c for c in p4.claims(sb, cfg) if c["id"] == "large-q-before")["holds"] is False
+    assert not next(c for c in p4.claims(sb, cfg) if c.id == "exp1-imm-best").holds
+    assert next(c for c in p4.claims(sb, cfg) if c.id == "large-q-before").holds is False

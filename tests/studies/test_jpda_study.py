@@ -7,6 +7,7 @@ from sonartrack import studies
 from sonartrack.core.random import trial_rng
 from sonartrack.io import toml as toml_io
 from sonartrack.studies import jpda_amplitude as study
+from sonartrack.tracking.settings import BearingTrackerSettings
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +21,7 @@ def test_contract_surface():
     mod = studies.load("jpda-amplitude")
     assert mod.STUDY_ID == "jpda-amplitude" and mod.TITLE and mod.PAPER and mod.TRIAL_VERSION >= 1
     cfg = mod.Config()
-    assert cfg.runs == 100 and cfg.gate_deg == 10.0 and cfg.amplitude_threshold == 5000.0
+    assert cfg.runs == 100 and cfg.tracker.gate_deg == 10.0 and cfg.tracker.amplitude_threshold == 5000.0
     assert mod.Config.quick().runs < cfg.runs
 
 
@@ -29,6 +30,14 @@ def test_config_round_trips_through_toml(tmp_path):
     p = tmp_path / "c.toml"
     p.write_text(toml_io.dumps(cfg.model_dump(mode="json")))
     assert toml_io.validate(study.Config, toml_io.load(p)) == cfg
+
+
+def test_trackers_assume_the_simulated_clutter():
+    cfg = study.Config()
+    assert cfg.tracker == BearingTrackerSettings()  # P0's values are the library defaults
+    assert cfg.tracker.clutter_density_per_deg == cfg.model().false_density_per_deg
+    with pytest.raises(ValueError, match="clutter_density_per_deg"):
+        study.Config(false_rate=3.0)
 
 
 def test_geometries_follow_their_definitions():
@@ -53,9 +62,12 @@ def test_trials_summary_claims_figures(small):
     s = study.summarize(trials, cfg)
     assert set(s["rates"]) == {f"{c}_{t}" for c in study.CASES for t in study.TRACKERS}
     out = study.claims(s, cfg)
-    assert {c["id"] for c in out} >= {"jpda_a_about_90pct", "jpda_falls_with_psi", "jpda_falls_with_L",
+    assert {c.id for c in out} >= {"jpda_a_about_90pct", "jpda_falls_with_psi", "jpda_falls_with_L",
                                       "similar_strengths_close", "end_to_end_from_sound"}
-    figs = study.figures(s, cfg)
+    from sonartrack.report.figures import study_figures
+
+    figs = study_figures(study.STUDY_ID, s, cfg)
+    assert not hasattr(study, "figures")
     assert list(figs)[0] == "scenario" and "success_rates" in figs
     import matplotlib.pyplot as plt
 

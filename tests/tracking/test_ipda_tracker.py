@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 from sonartrack.association.pda import pda_update_batch
 from sonartrack.core.errors import InputError
 from sonartrack.core.linalg import is_spd
-from sonartrack.tracking.tracker import Tracker, TrackerConfig
+from sonartrack.tracking.configurations import position_tracker
+from sonartrack.tracking.settings import PositionTrackerSettings as Settings
 
 
 def straight_target(n, T=10.0, sigma=20.0, seed=0, clutter=0, region=5000.0):
@@ -25,8 +26,8 @@ def straight_target(n, T=10.0, sigma=20.0, seed=0, clutter=0, region=5000.0):
 
 def test_a_clean_target_is_confirmed_and_followed():
     truth, scans = straight_target(25)
-    trk = Tracker(TrackerConfig(q=(0.1,), clutter_density_per_m2=1e-7))
-    for (t, z, R), x in zip(scans, truth):
+    trk = position_tracker(Settings(q=[0.1], clutter_density_per_m2=1e-7))
+    for t, z, R in scans:
         snap = trk.step(t, z, R)
     assert snap.confirmed.sum() == 1
     i = np.nonzero(snap.confirmed)[0][0]
@@ -36,7 +37,7 @@ def test_a_clean_target_is_confirmed_and_followed():
 
 def test_tracks_are_terminated_when_measurements_stop():
     truth, scans = straight_target(15)
-    trk = Tracker(TrackerConfig(q=(0.1,), clutter_density_per_m2=1e-7))
+    trk = position_tracker(Settings(q=[0.1], clutter_density_per_m2=1e-7))
     for t, z, R in scans:
         trk.step(t, z, R)
     assert len(trk.snapshot().track_id) == 1
@@ -47,8 +48,8 @@ def test_tracks_are_terminated_when_measurements_stop():
 
 def test_single_model_equals_imm_with_identical_modes():
     _, scans = straight_target(20, clutter=8, region=600.0, seed=3)
-    one = Tracker(TrackerConfig(q=(0.3,), clutter_density_per_m2=1e-5))
-    two = Tracker(TrackerConfig(q=(0.3, 0.3), transition_diagonal=0.9, clutter_density_per_m2=1e-5))
+    one = position_tracker(Settings(q=[0.3], clutter_density_per_m2=1e-5))
+    two = position_tracker(Settings(q=[0.3, 0.3], transition_diagonal=0.9, clutter_density_per_m2=1e-5))
     for t, z, R in scans:
         a, b = one.step(t, z, R), two.step(t, z, R)
         np.testing.assert_array_equal(a.track_id, b.track_id)
@@ -107,7 +108,7 @@ def test_equal_covariances_give_the_textbook_combined_innovation_form():
 @given(seed=st.integers(0, 10_000), q=st.sampled_from([(1e-4,), (1e-3, 0.05), (1e-4, 3e-3, 0.05)]))
 def test_covariances_stay_spd_and_existence_in_unit_interval(seed, q):
     _, scans = straight_target(12, T=30.0, sigma=150.0, clutter=30, region=3000.0, seed=seed)
-    trk = Tracker(TrackerConfig(q=q, clutter_density_per_m2=30 / 36e6))
+    trk = position_tracker(Settings(q=list(q), clutter_density_per_m2=30 / 36e6))
     for t, z, R in scans:
         snap = trk.step(t, z, R)
         assert np.all((snap.existence >= 0) & (snap.existence <= 1))
@@ -117,13 +118,17 @@ def test_covariances_stay_spd_and_existence_in_unit_interval(seed, q):
 
 
 def test_bad_scans_are_input_errors():
-    trk = Tracker()
+    trk = position_tracker()
     trk.step(0.0, np.zeros((1, 2)), np.eye(2))
     with pytest.raises(InputError, match="increase"):
         trk.step(0.0, np.zeros((1, 2)), np.eye(2))
     with pytest.raises(InputError, match="NaN"):
         trk.step(1.0, np.array([[np.nan, 0.0]]), np.eye(2))
-    with pytest.raises(InputError):
-        TrackerConfig(q=())
-    with pytest.raises(InputError):
-        TrackerConfig(pd=0.0)
+    with pytest.raises(InputError, match="R"):
+        trk.step(2.0, np.zeros((1, 2)))
+    with pytest.raises(ValueError, match="q"):
+        Settings(q=[])
+    with pytest.raises(ValueError, match="pd"):
+        Settings(pd=0.0)
+    with pytest.raises(ValueError, match="terminate_threshold < initial_existence"):
+        Settings(initial_existence=0.95)

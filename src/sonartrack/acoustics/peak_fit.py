@@ -13,6 +13,8 @@ confirmed tracks on real data), each track's gate is the window of ``gate_deg`` 
   track (background), rescaled from the threshold tau back to threshold 0 by exp(alpha tau);
 * alpha: maximum likelihood for the shifted exponential above the threshold, 1 / mean(z - tau), from
   the background peaks.
+
+The paper's histograms of these quantities are drawn by report/figures/jpda_amplitude.py.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ def fit_peak_model(scans, reference_deg, gate_deg: float = 10.0, threshold: floa
     half = gate_deg / 2
     lo, hi = sector_deg
     first = _first_pass_sigma(scans, ref, half)
-    for (b, a), r in zip(scans, ref):
+    for (b, a), r in zip(scans, ref, strict=True):
         b = np.asarray(b, dtype=float)
         a = np.asarray(a, dtype=float)
         near_any = np.zeros(len(b), dtype=bool)
@@ -85,7 +87,7 @@ def _first_pass_sigma(scans, ref, half, iterations: int = 4) -> np.ndarray:
         for _ in range(iterations):
             win = half if k is None else min(half, 3.0 * sig)
             d_all = []
-            for (b, _), r in zip(scans, ref):
+            for (b, _), r in zip(scans, ref, strict=True):
                 d = np.asarray(b, dtype=float) - r[i]
                 d = d[np.abs(d) <= win]
                 if len(d):
@@ -96,39 +98,3 @@ def _first_pass_sigma(scans, ref, half, iterations: int = 4) -> np.ndarray:
             k = 3.0
         out.append(sig)
     return np.array(out)
-
-
-def peak_histograms_figure(scans, reference_deg, gate_deg: float = 10.0, labels=("strong track", "weak track")):
-    """The paper's histograms: peaks per gate, positions about each track, amplitudes (tracks, background)."""
-    import matplotlib.pyplot as plt
-
-    ref = np.atleast_2d(np.asarray(reference_deg, dtype=float))
-    n = ref.shape[1]
-    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
-    counts = [[] for _ in range(n)]
-    pos = [[] for _ in range(n)]
-    amp = [[] for _ in range(n)]
-    bg = []
-    for (b, a), r in zip(scans, ref):
-        b, a = np.asarray(b), np.asarray(a)
-        near = np.zeros(len(b), dtype=bool)
-        for i in range(n):
-            inside = np.abs(b - r[i]) <= gate_deg / 2
-            near |= inside
-            counts[i].append(int(inside.sum()))
-            pos[i].extend((b[inside] - r[i]).tolist())
-            amp[i].extend(a[inside].tolist())
-        bg.extend(a[~near].tolist())
-    for i in range(n):
-        lab = labels[i] if i < len(labels) else f"track {i + 1}"
-        axes[0].hist(counts[i], bins=np.arange(0, max(max(counts[i], default=0), 1) + 2) - 0.5, alpha=0.5, label=lab)
-        axes[1].hist(pos[i], bins=40, alpha=0.5, label=lab)
-        axes[2].hist(amp[i], bins=40, alpha=0.5, label=lab)
-    axes[2].hist(bg, bins=40, alpha=0.5, label="background")
-    axes[0].set(xlabel="peaks in the gate", ylabel="scans", title="Peak count per gate")
-    axes[1].set(xlabel="peak - track bearing (deg)", title="Peak positions")
-    axes[2].set(xlabel="amplitude", title="Peak amplitudes")
-    for ax in axes:
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    return fig

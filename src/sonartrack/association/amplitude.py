@@ -28,7 +28,8 @@ def detection_probability_above(pd0, strength, sigma_a, threshold):
     """P_D after the amplitude threshold: P_D0 Phi((z_hat - tau) / sigma_a)."""
     from scipy.special import ndtr
 
-    return np.asarray(pd0, dtype=float) * ndtr((np.asarray(strength, dtype=float) - threshold) / np.asarray(sigma_a, dtype=float))
+    z = (np.asarray(strength, dtype=float) - threshold) / np.asarray(sigma_a, dtype=float)
+    return np.asarray(pd0, dtype=float) * ndtr(z)
 
 
 def amplitude_log_ratio(amplitudes, strength, sigma_a, alpha, threshold) -> np.ndarray:

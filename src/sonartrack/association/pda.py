@@ -1,24 +1,23 @@
 """Probabilistic data association (PDA) and its IPDA / IMM-IPDA generalisation, on arrays.
 
-One routine serves single-track PDA, IPDA and IMM-IPDA for a whole batch of tracks: tracks are axis
-``n``, IMM modes axis ``r`` (r = 1 for a single model), measurements axis ``m``. Measurements may
-have their own covariances R_m (bistatic points do), so each validated measurement has its own
-Kalman gain; the PDA update is then the Gaussian-mixture reduction of the per-measurement
+Tracks are axis ``n``, IMM modes axis ``r`` (r = 1 for a single model), measurements axis ``m``.
+Measurements may have their own covariances R_m (bistatic points do), so each validated measurement
+has its own Kalman gain; the PDA update is then the Gaussian-mixture reduction of the per-measurement
 updates, which equals the textbook combined-innovation form when all R_m are equal.
 
 Equations (parametric PDA, Bar-Shalom & Tse 1975; Bar-Shalom, Daum, Huang 2009, eqs. 36-41;
 IPDA: Musicki, Evans, Stankovic 1994, eqs. 22-30; IMM-IPDA: Musicki, Suvorova, Challa 2004;
-Park, Song, Lee 2017, eqs. 13-21). For track n, mode r, validated measurement m:
+Park, Song, Lee 2017, eqs. 13-21). For track n, mode r, validated measurement m (likelihoods in
+association/likelihood.py):
 
-    nu      = z_m - H x-_r,   S = H P-_r H^T + R_m,   p_rm = N(nu; 0, S)      (likelihood)
     Lambda_r = 1 - P_D P_G + P_D sum_m p_rm / rho_m                          (mode likelihood ratio)
     beta_r0 = (1 - P_D P_G) / Lambda_r,   beta_rm = P_D (p_rm / rho_m) / Lambda_r   (sum to 1)
     K_rm = P-_r H^T S^-1,   x_rm = x-_r + K_rm nu,   P_rm = P-_r - K_rm S K_rm^T
     x_r = sum_m beta_rm x_rm (m = 0: x-_r),  P_r = sum_m beta_rm (P_rm + (x_rm - x_r)(x_rm - x_r)^T)
 
-rho_m is the clutter density at measurement m. For IPDA, delta = 1 - sum_r c_r Lambda_r and the
+The weights are :func:`pda_weights`, the update :func:`pda_mixture_update` (which also serves JPDA:
+only its weights differ, association/jpda.py). For IPDA, delta = 1 - sum_r c_r Lambda_r and the
 existence update is P(E)+ = (1 - delta) P(E)- / (1 - delta P(E)-) (association/ipda.py).
-Plain PDA's weights are the same beta (its normalisation is the same expression).
 """
 
 from __future__ import annotations
@@ -27,8 +26,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sonartrack.core.gaussian import LOG_2PI, inv_and_logdet
+from sonartrack.association.likelihood import Likelihoods, position_likelihoods
 from sonartrack.core.linalg import symmetrize
+
+
+@dataclass(frozen=True, slots=True)
+class AssociationWeights:
+    """Association probabilities of n tracks x r modes over m measurements."""
+
+    beta0: np.ndarray  # (n, r) weight of "no measurement is the target's"
+    beta: np.ndarray  # (n, r, m) weight of measurement m (zero outside the gate)
+    log_lambda: np.ndarray | None  # (n, r) log Lambda_r (PDA; None where an associator has no such ratio)
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,7 +51,44 @@ class PdaResult:
     beta: np.ndarray  # (n, r, m) association weights (zero outside the gate)
 
 
-def pda_update_batch(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density):
+def pda_weights(lik: Likelihoods) -> AssociationWeights:
+    """PDA weights beta_r0, beta_rm and Lambda_r of every track and mode, each track on its own (module doc)."""
+    # p_rm / rho_m in log space, then linear: ratios near 1 are the interesting range
+    ratio = np.where(lik.gated[:, None, :], np.exp(np.minimum(lik.log_ratio, 700.0)), 0.0)
+    pd = lik.pd if np.isscalar(lik.pd) else lik.pd[:, None]  # one value, or (n, 1)
+    lam = lik.miss + pd * ratio.sum(axis=-1)  # (n, r)
+    beta = (pd if np.isscalar(pd) else pd[..., None]) * ratio / lam[..., None]
+    return AssociationWeights(lik.miss / lam, beta, np.log(lam))
+
+
+def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta):
+    """Gaussian-mixture reduction of the per-measurement Kalman updates with weights ``beta0``, ``beta``.
+
+    x = x- + sum_m beta_m K_m nu_m;  P = beta_0 P- + sum_m beta_m (P- - K_m H P- + dx_m dx_m^T) - dx dx^T
+    with dx_m = K_m nu_m and dx = sum_m beta_m dx_m (module doc; H = [I_k 0]), over the gated pairs."""
+    n, r, d = x_pred.shape
+    k = lik.nu.shape[-1]
+    if lik.gated.shape[1] == 0:
+        return x_pred.copy(), P_pred.copy()
+    P_upd = beta0[..., None, None] * P_pred
+    ti, mi = lik.pair_track, lik.pair_meas
+    if not len(ti):
+        return x_pred.copy(), symmetrize(P_upd)
+    Pg = P_pred[ti]  # (G, r, d, d)
+    PHt = Pg[..., :, :k]  # P H^T for H = [I 0]
+    K = PHt @ lik.S_inv  # (G, r, d, k)
+    dx = np.einsum("grij,grj->gri", K, lik.nu)  # (G, r, d)
+    b = beta[ti, :, mi]  # (G, r)
+    # P_rm + dx dx^T  with  P_rm = P - K S K^T = P - K H P  (optimal gain)
+    term = Pg - K @ np.swapaxes(PHt, -1, -2) + dx[..., :, None] * dx[..., None, :]
+    acc_x = np.zeros((n, r, d))
+    acc_P = np.zeros((n, r, d, d))
+    np.add.at(acc_x, ti, b[..., None] * dx)
+    np.add.at(acc_P, ti, b[..., None, None] * term)
+    return x_pred + acc_x, symmetrize(P_upd + acc_P - acc_x[..., :, None] * acc_x[..., None, :])
+
+
+def pda_update_batch(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density) -> PdaResult:
     """PDA/IPDA/IMM-IPDA measurement update of n tracks x r modes with m position measurements.
 
     ``x_pred (n, r, d)``, ``P_pred (n, r, d, d)`` with position in the first two state entries;
@@ -52,47 +97,10 @@ def pda_update_batch(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float
     """
     x_pred = np.asarray(x_pred, float)
     P_pred = np.asarray(P_pred, float)
-    n, r, d = x_pred.shape
-    z = np.asarray(z, float).reshape(-1, 2)
-    m = len(z)
-    R = np.broadcast_to(np.asarray(R, float), (m, 2, 2))
-    rho = np.broadcast_to(np.asarray(clutter_density, float), (m,))
-    miss = 1.0 - pd * pg
-    if m == 0 or n == 0:
-        lam = np.full((n, r), miss)
-        return PdaResult(x_pred.copy(), P_pred.copy(), np.log(lam), np.zeros((n, m), bool),
-                         np.ones((n, r)), np.zeros((n, r, m)))
-
-    S = P_pred[:, :, None, :2, :2] + R[None, None]  # (n, r, m, 2, 2)
-    S_inv, logdet = inv_and_logdet(S)
-    nu = z[None, None] - x_pred[:, :, None, :2]  # (n, r, m, 2)
-    d2 = np.einsum("...i,...ij,...j->...", nu, S_inv, nu)
-    gated = (d2 < gamma).any(axis=1)  # (n, m)
-    # p_rm / rho_m in log space, then linear: ratios near 1 are the interesting range
-    log_ratio = -0.5 * (2 * LOG_2PI + logdet + d2) - np.log(rho)
-    ratio = np.where(gated[:, None, :], np.exp(np.minimum(log_ratio, 700.0)), 0.0)
-    lam = miss + pd * ratio.sum(axis=-1)  # (n, r)
-    beta = pd * ratio / lam[..., None]
-    beta0 = miss / lam
-
-    x_upd = x_pred.copy()
-    P_upd = beta0[..., None, None] * P_pred
-    ti, mi = np.nonzero(gated)
-    if len(ti):
-        Pg = P_pred[ti]  # (G, r, d, d)
-        PHt = Pg[..., :, :2]  # P H^T for H = [I 0]
-        K = PHt @ S_inv[ti, :, mi]  # (G, r, d, 2)
-        dx = np.einsum("grij,grj->gri", K, nu[ti, :, mi])  # (G, r, d)
-        b = beta[ti, :, mi]  # (G, r)
-        # P_rm + dx dx^T  with  P_rm = P - K S K^T = P - K H P  (optimal gain)
-        term = Pg - K @ np.swapaxes(PHt, -1, -2) + dx[..., :, None] * dx[..., None, :]
-        acc_x = np.zeros((n, r, d))
-        acc_P = np.zeros((n, r, d, d))
-        np.add.at(acc_x, ti, b[..., None] * dx)
-        np.add.at(acc_P, ti, b[..., None, None] * term)
-        x_upd = x_pred + acc_x
-        P_upd = P_upd + acc_P - acc_x[..., :, None] * acc_x[..., None, :]
-    return PdaResult(x_upd, symmetrize(P_upd), np.log(lam), gated, beta0, beta)
+    lik = position_likelihoods(x_pred, P_pred, z, R, pd=pd, pg=pg, gamma=gamma, clutter_density=clutter_density)
+    w = pda_weights(lik)
+    x, P = pda_mixture_update(x_pred, P_pred, lik, w.beta0, w.beta)
+    return PdaResult(x, P, w.log_lambda, lik.gated, w.beta0, w.beta)
 
 
 def pda_update(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density):

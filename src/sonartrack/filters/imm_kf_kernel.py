@@ -1,9 +1,10 @@
 """Compiled single-track IMM-KF step (numba), the same cycle as filters/imm_kf.imm_kf_step.
 
 Mixing, per-mode KF predict and Joseph update, mode probabilities, combination (equations in
-filters/imm.py and filters/kalman.py), as one compiled function: one track's IMM step with a few
-modes costs microseconds instead of ~100 us of NumPy call overhead. Compiled lazily, cached on disk.
-The NumPy ``imm_kf_step`` is the reference it is tested against.
+filters/imm.py and filters/kalman.py), each a compiled step, called in turn by one compiled function:
+one track's IMM step with a few modes costs microseconds instead of ~100 us of NumPy call overhead.
+Compiled lazily (numba is imported on the first call), cached on disk. The NumPy ``imm_kf_step`` is
+the reference it is tested against.
 """
 
 from __future__ import annotations
@@ -17,9 +18,58 @@ def _build():
     from numba import njit
 
     @njit(cache=True)
+    def mix(x, P, mu, Pi, j, c_j):  # pragma: no cover - compiled
+        """x0_j = sum_i mu_{i|j} x_i, P0_j = sum_i mu_{i|j} (P_i + (x_i - x0_j)(x_i - x0_j)^T),
+        with mu_{i|j} = Pi_ij mu_i / c_j."""
+        r, n = x.shape
+        x0 = np.zeros(n)
+        for i in range(r):
+            x0 += (Pi[i, j] * mu[i] / c_j if c_j > 0 else 0.0) * x[i]
+        P0 = np.zeros((n, n))
+        for i in range(r):
+            d = x[i] - x0
+            P0 += (Pi[i, j] * mu[i] / c_j if c_j > 0 else 0.0) * (P[i] + np.outer(d, d))
+        return x0, P0
+
+    @njit(cache=True)
+    def predict_update(x0, P0, z, F, Q, H, R):  # pragma: no cover - compiled
+        """KF predict (F, Q) then Joseph-form update; returns x+, P+ and the log-likelihood log N(nu; 0, S)."""
+        xp = F @ x0
+        Pp = F @ P0 @ F.T + Q
+        Pp = 0.5 * (Pp + Pp.T)
+        nu = z - H @ xp
+        S = H @ Pp @ H.T + R
+        S = 0.5 * (S + S.T)
+        Sinv = np.linalg.inv(S)
+        K = Pp @ H.T @ Sinv
+        A = np.eye(len(x0)) - K @ H
+        Pu = A @ Pp @ A.T + K @ R @ K.T
+        _, logdet = np.linalg.slogdet(S)
+        return xp + K @ nu, 0.5 * (Pu + Pu.T), -0.5 * (len(z) * np.log(2.0 * np.pi) + logdet + nu @ Sinv @ nu)
+
+    @njit(cache=True)
+    def mode_probabilities(c, loglik):  # pragma: no cover - compiled
+        """mu_j = c_j Lambda_j / sum_l c_l Lambda_l, in log space."""
+        a = np.log(np.maximum(c, 1e-300)) + loglik
+        e = np.exp(a - a.max())
+        return e / e.sum()
+
+    @njit(cache=True)
+    def combine(mu, x, P):  # pragma: no cover - compiled
+        """x = sum_j mu_j x_j,  P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T)."""
+        r, n = x.shape
+        xc = np.zeros(n)
+        for j in range(r):
+            xc += mu[j] * x[j]
+        Pc = np.zeros((n, n))
+        for j in range(r):
+            d = x[j] - xc
+            Pc += mu[j] * (P[j] + np.outer(d, d))
+        return xc, 0.5 * (Pc + Pc.T)
+
+    @njit(cache=True)
     def kernel(x, P, mu, z, F, Q, H, R, Pi):  # pragma: no cover - compiled
         r, n = x.shape
-        m = z.shape[0]
         c = np.zeros(r)
         for j in range(r):
             for i in range(r):
@@ -27,46 +77,12 @@ def _build():
         x_out = np.empty((r, n))
         P_out = np.empty((r, n, n))
         loglik = np.empty(r)
-        I = np.eye(n)
         for j in range(r):
-            # mixing
-            x0 = np.zeros(n)
-            for i in range(r):
-                w = Pi[i, j] * mu[i] / c[j] if c[j] > 0 else 0.0
-                x0 += w * x[i]
-            P0 = np.zeros((n, n))
-            for i in range(r):
-                w = Pi[i, j] * mu[i] / c[j] if c[j] > 0 else 0.0
-                d = x[i] - x0
-                P0 += w * (P[i] + np.outer(d, d))
-            # predict
-            xp = F[j] @ x0
-            Pp = F[j] @ P0 @ F[j].T + Q[j]
-            Pp = 0.5 * (Pp + Pp.T)
-            # update (Joseph form)
-            nu = z - H @ xp
-            S = H @ Pp @ H.T + R
-            S = 0.5 * (S + S.T)
-            Sinv = np.linalg.inv(S)
-            K = Pp @ H.T @ Sinv
-            A = I - K @ H
-            Pu = A @ Pp @ A.T + K @ R @ K.T
-            x_out[j] = xp + K @ nu
-            P_out[j] = 0.5 * (Pu + Pu.T)
-            sign, logdet = np.linalg.slogdet(S)
-            loglik[j] = -0.5 * (m * np.log(2.0 * np.pi) + logdet + nu @ Sinv @ nu)
-        a = np.log(np.maximum(c, 1e-300)) + loglik
-        amax = a.max()
-        e = np.exp(a - amax)
-        mu_new = e / e.sum()
-        xc = np.zeros(n)
-        for j in range(r):
-            xc += mu_new[j] * x_out[j]
-        Pc = np.zeros((n, n))
-        for j in range(r):
-            d = x_out[j] - xc
-            Pc += mu_new[j] * (P_out[j] + np.outer(d, d))
-        return x_out, P_out, mu_new, xc, 0.5 * (Pc + Pc.T)
+            x0, P0 = mix(x, P, mu, Pi, j, c[j])
+            x_out[j], P_out[j], loglik[j] = predict_update(x0, P0, z, F[j], Q[j], H, R)
+        mu_new = mode_probabilities(c, loglik)
+        xc, Pc = combine(mu_new, x_out, P_out)
+        return x_out, P_out, mu_new, xc, Pc
 
     return kernel
 

@@ -26,18 +26,12 @@ NAV_COLUMNS = ["time_s", "tx_x_m", "tx_y_m", "rx_x_m", "rx_y_m", "array_heading_
 
 @dataclass(frozen=True, slots=True)
 class Contacts:
-    """Contacts as arrays: times (k,), points (k, 2), covariances (k, 2, 2), sorted by time."""
+    """Contacts as arrays: times (k,), points (k, 2), covariances (k, 2, 2), sorted by time (rows sharing a time
+    are one scan: tracking/run.py track_contacts)."""
 
     time_s: np.ndarray
     z: np.ndarray
     R: np.ndarray
-
-    def scans(self):
-        """Yield ``(time_s, z (m, 2), R (m, 2, 2))`` per distinct time."""
-        times, starts = np.unique(self.time_s, return_index=True)
-        bounds = list(starts) + [len(self.time_s)]
-        for i, t in enumerate(times):
-            yield float(t), self.z[bounds[i]:bounds[i + 1]], self.R[bounds[i]:bounds[i + 1]]
 
 
 def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, bistatic_errors=None,
@@ -93,7 +87,8 @@ def _raw_bistatic(df, t, path, nav_path, errors, c_default) -> Contacts:
         raise InputError(f"contacts file {path}: travel_time_s must be positive (seconds)")
     if np.any(np.abs(bearing_deg) > 360):
         raise InputError(f"contacts file {path}: bearing_deg has values beyond ±360: give degrees")
-    c = numeric_column(df, "sound_speed_mps", "contacts", path) if "sound_speed_mps" in df.columns else np.full(len(t), c_default)
+    c = (numeric_column(df, "sound_speed_mps", "contacts", path) if "sound_speed_mps" in df.columns
+         else np.full(len(t), c_default))
     if np.any((c < 1300) | (c > 1700)):
         raise InputError(f"contacts file {path}: sound_speed_mps outside 1300..1700 m/s: give metres per second")
     tx = np.stack([navv["tx_x_m"], navv["tx_y_m"]], -1)
@@ -102,7 +97,8 @@ def _raw_bistatic(df, t, path, nav_path, errors, c_default) -> Contacts:
     z, rr = bistatic_position(tt, theta, phi, c, tx, rx)
     keep = rr > 0
     if not keep.any():
-        raise InputError(f"contacts file {path}: no contact gives a valid bistatic position (c * t shorter than the baseline?)")
+        raise InputError(f"contacts file {path}: no contact gives a valid bistatic position "
+                         "(c * t shorter than the baseline?)")
     errors = errors or BistaticErrors()
     R = bistatic_covariance(tt, theta, phi, c, tx, rx, errors.variances())
     return Contacts(t[keep], z[keep], R[keep])

@@ -1,60 +1,89 @@
-"""The TOML configuration of ``sonartrack track --contacts`` (defaults: the P4 study's tracker).
+"""The settings of ``sonartrack track`` (its ``--config`` TOML): the tracker's, nested, plus the input's.
 
-Example::
+The tracker settings are the library's own declarations (tracking/settings.py), nested as a
+``[tracker]`` table; ``sonartrack track --print-config`` prints the resolved file. Example for
+``--contacts``::
 
-    q = [1e-4, 0.05]            # one value: single-model IPDA; several: IMM-IPDA (m^2/s^3)
-    pd = 0.8
-    clutter_density_per_m2 = 1e-6
     default_sigma_m = 200.0     # only for Cartesian contacts without covariance columns
 
     [bistatic]                  # only for raw bistatic contacts
     sigma_bearing_deg = 0.5
+
+    [tracker]
+    q = [1e-4, 0.05]            # one value: single-model IPDA; several: IMM-IPDA (m^2/s^3)
+    pd = 0.8
+
+and for ``--peaks``::
+
+    associator = "jpda_a"
+
+    [tracker]
+    q = 0.01
+    gate_deg = 10.0
 """
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import model_validator
+
+from sonartrack.core.settings import Settings, setting
+from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
 
 
-class BistaticInputErrors(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-    sigma_time_s: float = Field(0.01, ge=0)
-    sigma_bearing_deg: float = Field(0.5, gt=0)
-    sigma_heading_deg: float = Field(0.0, ge=0)
-    sigma_sound_speed_mps: float = Field(7.5, ge=0)
-    sigma_position_m: float = Field(30.0, ge=0)
-    sound_speed_mps: float = Field(1500.0, gt=0)
+def _tracker_keys_at_top(model_cls, tracker_cls, data):
+    """A tracker key given at the top level (the old flat layout) gets a message saying where it goes."""
+    if isinstance(data, dict):
+        stray = sorted(k for k in data if k in tracker_cls.model_fields and k not in model_cls.model_fields)
+        if stray:
+            raise ValueError(f"tracker settings belong in a [tracker] table: move {', '.join(stray)} under [tracker]")
+    return data
+
+
+class BistaticInputErrors(Settings):
+    """Input errors of raw bistatic contacts, for their covariance J Sigma J^T (models/bistatic.py; P4's values)."""
+
+    sigma_time_s: float = setting(0.01, "travel-time error", unit="s", ge=0)
+    sigma_bearing_deg: float = setting(0.5, "bearing error of the receiving array", unit="deg", gt=0)
+    sigma_heading_deg: float = setting(0.0, "array heading error", unit="deg", ge=0)
+    sigma_sound_speed_mps: float = setting(7.5, "error of the assumed mean sound speed", unit="m/s", ge=0)
+    sigma_position_m: float = setting(30.0, "Tx and Rx position error per axis", unit="m", ge=0)
+    sound_speed_mps: float = setting(1500.0, "mean sound speed where the contacts file has no sound_speed_mps",
+                                     unit="m/s", gt=0)
 
     def errors(self):
         from sonartrack.models.bistatic import BistaticErrors
 
         return BistaticErrors(self.sigma_time_s, float(np.deg2rad(self.sigma_bearing_deg)),
-                              float(np.deg2rad(self.sigma_heading_deg)), self.sigma_sound_speed_mps, self.sigma_position_m)
+                              float(np.deg2rad(self.sigma_heading_deg)), self.sigma_sound_speed_mps,
+                              self.sigma_position_m)
 
 
-class TrackCommandConfig(BaseModel):
-    """Tracker and input settings for tracking a user's contacts."""
+class ContactsTrackSettings(Settings):
+    """``sonartrack track --contacts``: the IPDA / IMM-IPDA tracker and the contacts' errors."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
-    q: list[float] = Field(default_factory=lambda: [1e-4, 0.05], min_length=1)
-    transition_diagonal: float = 0.99
-    pd: float = Field(0.8, gt=0, le=1)
-    gate_probability: float = Field(0.99, gt=0, lt=1)
-    clutter_density_per_m2: float = Field(1e-6, gt=0)
-    p_survive: float = Field(0.98, gt=0, le=1)
-    initial_existence: float = 0.05
-    confirm_threshold: float = 0.9
-    terminate_threshold: float = 0.01
-    init_velocity_std_mps: float = Field(5.0, gt=0)
-    default_sigma_m: float | None = Field(None, gt=0)
-    bistatic: BistaticInputErrors = Field(default_factory=BistaticInputErrors)
+    default_sigma_m: float | None = setting(None, "position error of Cartesian contacts without covariance columns",
+                                            unit="m", gt=0)
+    bistatic: BistaticInputErrors = setting(default_factory=BistaticInputErrors,
+                                            doc="input errors of raw bistatic contacts")
+    tracker: PositionTrackerSettings = setting(default_factory=PositionTrackerSettings, doc="the position tracker")
 
-    def tracker_config(self):
-        from sonartrack.tracking.tracker import TrackerConfig
+    @model_validator(mode="before")
+    @classmethod
+    def _flat_layout(cls, data):
+        return _tracker_keys_at_top(cls, PositionTrackerSettings, data)
 
-        return TrackerConfig(q=tuple(self.q), transition_diagonal=self.transition_diagonal, pd=self.pd,
-                             gate_probability=self.gate_probability, clutter_density_per_m2=self.clutter_density_per_m2,
-                             p_survive=self.p_survive, initial_existence=self.initial_existence,
-                             confirm_threshold=self.confirm_threshold, terminate_threshold=self.terminate_threshold,
-                             init_velocity_std_mps=self.init_velocity_std_mps)
+
+class PeaksTrackSettings(Settings):
+    """``sonartrack track --peaks``: the JPDA / JPDA_A bearing tracker with automatic initiation."""
+
+    associator: Literal["jpda", "jpda_a"] = setting("jpda_a", "jpda ignores peak amplitudes; jpda_a weighs them "
+                                                              "(with eq. 9 track strengths)", unit="")
+    tracker: BearingTrackerSettings = setting(default_factory=BearingTrackerSettings, doc="the bearing tracker")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _flat_layout(cls, data):
+        return _tracker_keys_at_top(cls, BearingTrackerSettings, data)

@@ -4,7 +4,8 @@ Park, Ryu & Lee 1994 (paper 000, P0), sec. IV and Fig. 8. One trial draws, for e
 both grids and both strength mixes, one realisation of cross-correlation peaks from the paper's
 stochastic model (sim/bearing_peaks.py) and runs JPDA and JPDA_A on the *same* peaks, both started on
 the true bearings. The end-to-end run from sound (simulated two-channel signals -> estimator -> peaks
--> trackers) is done once, with a fixed seed, in ``summarize``.
+-> trackers) is done once, with a fixed seed, in ``summarize``. config -> run_trial (simulate ->
+estimate) -> summarize -> claims; the figures are report/figures/jpda_amplitude.py.
 
 Definitions:
 
@@ -20,10 +21,13 @@ Definitions:
 from __future__ import annotations
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import model_validator
 
+from sonartrack.core.settings import Settings, setting
+from sonartrack.experiment.claims import Claim
 from sonartrack.sim.bearing_peaks import STRONG, WEAK, PeakModel, TrackPeaks, generate_scans
-from sonartrack.tracking.bearing_tracker import BearingTracker, BearingTrackerConfig
+from sonartrack.tracking.configurations import bearing_tracker, bearing_tracks
+from sonartrack.tracking.settings import BearingTrackerSettings
 
 STUDY_ID = "jpda-amplitude"
 TITLE = "Bearing tracking of crossing and approaching targets: JPDA vs amplitude-aided JPDA_A"
@@ -35,7 +39,7 @@ TRACKERS = ("jpda", "jpda_a")
 CASES = ("strong_weak", "similar")
 
 
-class Config(BaseModel):
+class Config(Settings):
     """The paper's tracker values and our choices for what it leaves open.
 
     Paper: T = 1 s; q = 0.1 deg; gate V = 10 deg; P(0) = [[s^2, s^2], [s^2, 2 s^2]], s = sigma_p; threshold
@@ -43,50 +47,56 @@ class Config(BaseModel):
     background lambda V = 2 per 10 deg, alpha = 4e-4); 100 runs per point.
 
     Deviation: the paper's "q = 0.1 deg" is read as a standard deviation, so Q = q^2 [[1/3, 1/2], [1/2, 1]]
-    with q^2 = 0.01 deg^2/s^3. Taken as the variance (0.1), the filter's bearing rate wanders by 0.3 deg/s
-    every second and a weak track (sigma_p 1.8 deg) is lost in clutter away from any encounter (we
-    measured 60-78 % success for JPDA_A even at psi = 90 deg, L = 6 deg with 40 runs).
+    with q^2 = 0.01 deg^2/s^3 (``tracker.q``, tracking/settings.py). Taken as the variance (0.1), the
+    filter's bearing rate wanders by 0.3 deg/s every second and a weak track (sigma_p 1.8 deg) is lost in
+    clutter away from any encounter (we measured 60-78 % success for JPDA_A even at psi = 90 deg, L = 6 deg
+    with 40 runs).
 
     Our choices: the grids psi = 10..90 deg and L = 0.5..6 deg (Study doc for the definitions); "similar
     strengths" = two strong tracks; the true peak is always present at threshold 0 (P_D = 1 before the
     threshold, so P_D = Phi((z_a - 5000) / sigma_a) after: 1.0 strong, 0.98 weak); JPDA_A uses the
     model strengths ("known", as in the paper's synthetic runs; the end-to-end run and the CLI use
-    eq. 9); the clutter density the trackers assume is the model's (0.2 per deg x exp(-2) above the
-    threshold).
+    eq. 9). The peaks are simulated with the tracker's gate, alpha and threshold, and the trackers assume
+    the simulated clutter density (``tracker.clutter_density_per_deg`` must equal
+    false_rate / gate_deg x exp(-alpha tau), checked).
     """
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    runs: int = Field(100, ge=1)
-    duration_s: int = Field(160, ge=20)
-    crossing_angles_deg: list[float] = [10.0, 20.0, 30.0, 45.0, 60.0, 90.0]
-    min_distances_deg: list[float] = [0.5, 1.0, 2.0, 3.0, 4.0, 6.0]
-    approach_rate_deg_s: float = 0.3
-    approach_turn_s: float = 20.0
-    success_tolerance_deg: float = 5.0
-    q: float = 0.01
-    gate_deg: float = 10.0
-    false_rate: float = 2.0
-    false_amplitude_rate: float = 4e-4
-    amplitude_threshold: float = 5000.0
+    runs: int = setting(100, "Monte Carlo runs", unit="1", ge=1)
+    duration_s: int = setting(160, "scans (1 s each) per encounter", unit="s", ge=20)
+    crossing_angles_deg: list[float] = setting(default_factory=lambda: [10.0, 20.0, 30.0, 45.0, 60.0, 90.0],
+                                               doc="crossing angles psi of the crossing grid", unit="deg")
+    min_distances_deg: list[float] = setting(default_factory=lambda: [0.5, 1.0, 2.0, 3.0, 4.0, 6.0],
+                                             doc="minimum distances L of the maneuvering-approach grid", unit="deg")
+    approach_rate_deg_s: float = setting(0.3, "approach rate rho of the maneuvering approach", unit="deg/s")
+    approach_turn_s: float = setting(20.0, "turn time constant tau of the maneuvering approach", unit="s")
+    success_tolerance_deg: float = setting(5.0, "success: each track within this of its own target at the end",
+                                           unit="deg")
+    false_rate: float = setting(2.0, "simulated false peaks per gate width (tracker.gate_deg) at threshold 0 "
+                                     "(P0's background lambda V)", unit="1", ge=0)
+    tracker: BearingTrackerSettings = setting(default_factory=BearingTrackerSettings,
+                                              doc="both trackers (P0's values are the library defaults)")
     # end-to-end from sound
-    e2e_duration_s: int = 120
-    e2e_fs_hz: float = 8000.0
-    e2e_spacing_m: float = 20.0
+    e2e_duration_s: int = setting(120, "length of the end-to-end recording", unit="s")
+    e2e_fs_hz: float = setting(8000.0, "sampling rate of the end-to-end recording", unit="Hz")
+    e2e_spacing_m: float = setting(20.0, "sensor spacing of the end-to-end recording", unit="m")
 
     @classmethod
     def quick(cls) -> Config:
         return cls(runs=20)
 
-    def model(self) -> PeakModel:
-        return PeakModel(false_rate=self.false_rate, gate_deg=self.gate_deg, false_amplitude_rate=self.false_amplitude_rate,
-                         amplitude_threshold=self.amplitude_threshold)
+    @model_validator(mode="after")
+    def _tracker_assumes_the_simulated_clutter(self):
+        want = self.model().false_density_per_deg
+        if not np.isclose(self.tracker.clutter_density_per_deg, want, rtol=1e-12, atol=0.0):
+            raise ValueError(f"set tracker.clutter_density_per_deg = {want!r} (false_rate / gate_deg x "
+                             "exp(-alpha tau)): the trackers assume the simulated clutter")
+        return self
 
-    def tracker_config(self, amplitude: bool, strength: str = "known") -> BearingTrackerConfig:
-        return BearingTrackerConfig(amplitude=amplitude, q=self.q, gate_deg=self.gate_deg,
-                                    clutter_density_per_deg=self.model().false_density_per_deg,
-                                    false_amplitude_rate=self.false_amplitude_rate,
-                                    amplitude_threshold=self.amplitude_threshold, strength=strength)
+    def model(self) -> PeakModel:
+        """The simulated peaks (sim/bearing_peaks.py) with the tracker's gate, alpha and threshold."""
+        t = self.tracker
+        return PeakModel(false_rate=self.false_rate, gate_deg=t.gate_deg, false_amplitude_rate=t.false_amplitude_rate,
+                         amplitude_threshold=t.amplitude_threshold)
 
     def times(self) -> np.ndarray:
         return np.arange(self.duration_s, dtype=float)
@@ -99,7 +109,8 @@ class Config(BaseModel):
             w = np.tan(np.deg2rad(psi) / 2)
             out.append(("psi", psi, np.column_stack([90 + w * t, 90 - w * t])))
         for L in self.min_distances_deg:
-            h = L / 2 + self.approach_rate_deg_s * self.approach_turn_s * (np.sqrt(1 + (t / self.approach_turn_s) ** 2) - 1)
+            tau = self.approach_turn_s
+            h = L / 2 + self.approach_rate_deg_s * tau * (np.sqrt(1 + (t / tau) ** 2) - 1)
             out.append(("L", L, np.column_stack([90 + h, 90 - h])))
         return out
 
@@ -108,15 +119,23 @@ def _targets(case: str) -> list[TrackPeaks]:
     return [STRONG, WEAK] if case == "strong_weak" else [STRONG, STRONG]
 
 
-def run_tracker(cfg: BearingTrackerConfig, scans, truth_deg, targets: list[TrackPeaks]) -> np.ndarray:
-    """Bearing estimates (K, n) of a tracker started on the true bearings and rates of ``truth_deg`` (K, n)."""
-    trk = BearingTracker(cfg, truth_deg[0], [t.sigma_p_deg for t in targets], [t.amplitude_mean for t in targets],
-                         [t.amplitude_sd for t in targets])
-    trk.tracks.x[:, 1] = truth_deg[1] - truth_deg[0]
-    est = np.empty((len(scans), len(targets)))
-    for k, s in enumerate(scans):
-        est[k] = trk.step(s.bearing_deg, s.amplitude).x[:, 0]
-    return est
+# ---- simulate -> estimate ----------------------------------------------------------------------
+def run_tracker(settings: BearingTrackerSettings, scans, truth_deg, targets: list[TrackPeaks], *,
+                amplitude_aided: bool, adaptive_strength: bool = False) -> np.ndarray:
+    """Bearing estimates (K, n) of a tracker started on the true bearings and rates of ``truth_deg`` (K, n).
+
+    The tracks start one scan (1 s) before the first, as the paper's filter: predict, then update."""
+    init = bearing_tracks(truth_deg[0], truth_deg[1] - truth_deg[0], [t.sigma_p_deg for t in targets],
+                          [t.amplitude_mean for t in targets], [t.amplitude_sd for t in targets],
+                          adaptive_strength=adaptive_strength, time_s=-1.0)
+    trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=adaptive_strength,
+                          initial=init, time_s=-1.0)
+    return np.array([trk.step(float(k), s.bearing_deg, amplitude=s.amplitude).x[:, 0] for k, s in enumerate(scans)])
+
+
+def succeeded(config: Config, est_deg, truth_deg) -> bool:
+    """Each track within ``success_tolerance_deg`` of its own target at the last scan."""
+    return bool(np.all(np.abs(np.asarray(est_deg)[-1] - np.asarray(truth_deg)[-1]) < config.success_tolerance_deg))
 
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -130,8 +149,8 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
         for g, (_, _, truth) in enumerate(geoms):
             scans = generate_scans(rng, model, truth, targets)
             for tr in TRACKERS:
-                est = run_tracker(config.tracker_config(tr == "jpda_a"), scans, truth, targets)
-                res[tr][g] = float(np.all(np.abs(est[-1] - truth[-1]) < config.success_tolerance_deg))
+                est = run_tracker(config.tracker, scans, truth, targets, amplitude_aided=tr == "jpda_a")
+                res[tr][g] = float(succeeded(config, est, truth))
         for tr in TRACKERS:
             out[f"{case}_{tr}"] = res[tr]
     return out
@@ -150,28 +169,58 @@ def end_to_end(config: Config, seed: int = 1994) -> dict:
     x = simulate_two_channel(rng, duration_s=T, fs_hz=config.e2e_fs_hz, spacing_m=config.e2e_spacing_m,
                              sources=[SourceSpec(b1, 3.0), SourceSpec(b2, -1.0, (Multipath(0.02, 0.6, 25.0),))],
                              band_hz=(100.0, 1500.0))
-    rec = estimate_peaks(x, config.e2e_fs_hz, config.e2e_spacing_m, threshold=config.amplitude_threshold)
+    rec = estimate_peaks(x, config.e2e_fs_hz, config.e2e_spacing_m, threshold=config.tracker.amplitude_threshold)
     scans = rec.by_scan()
     truth = np.array([[b1(t), b2(t)] for t, _, _ in scans])
     out = {"peaks_t": rec.time_s.tolist(), "peaks_b": rec.bearing_deg.tolist(), "peaks_a": rec.amplitude.tolist(),
            "truth": truth.tolist()}
-    targets = [TrackPeaks(15_000.0, 4_000.0, 1.0), TrackPeaks(15_000.0, 4_000.0, 1.0)]
     for tr in TRACKERS:
-        cfg = config.tracker_config(tr == "jpda_a", strength="adaptive")
-        trk = BearingTracker(cfg, truth[0], [1.0, 1.0], [t.amplitude_mean for t in targets],
-                             [t.amplitude_sd for t in targets])
-        est = np.array([trk.step(b, a).x[:, 0].copy() for _, b, a in scans])
+        init = bearing_tracks(truth[0], 0.0, 1.0, 15_000.0, 4_000.0, adaptive_strength=True, time_s=-1.0)
+        trk = bearing_tracker(config.tracker, amplitude_aided=tr == "jpda_a", adaptive_strength=True, initial=init,
+                              time_s=-1.0)
+        est = np.array([trk.step(float(k), b, amplitude=a).x[:, 0] for k, (_, b, a) in enumerate(scans)])
         out[f"est_{tr}"] = est.tolist()
-        out[f"success_{tr}"] = bool(np.all(np.abs(est[-1] - truth[-1]) < config.success_tolerance_deg))
+        out[f"success_{tr}"] = succeeded(config, est, truth)
     return out
 
 
+def synthetic_example(config: Config, seed: int = 7) -> dict:
+    """One crossing (the second psi) of strong and weak tracks, both trackers: peaks, truth and estimates."""
+    rng = np.random.default_rng(seed)
+    _, val, truth = config.geometries()[1]
+    scans = generate_scans(rng, config.model(), truth, [STRONG, WEAK])
+    e = {"psi_deg": val, "truth": truth.tolist(),
+         "peaks_t": np.concatenate([np.full(len(s.bearing_deg), k) for k, s in enumerate(scans)]).tolist(),
+         "peaks_b": np.concatenate([s.bearing_deg for s in scans]).tolist(),
+         "peaks_a": np.concatenate([s.amplitude for s in scans]).tolist()}
+    for tr in TRACKERS:
+        est = run_tracker(config.tracker, scans, truth, [STRONG, WEAK], amplitude_aided=tr == "jpda_a")
+        e[f"est_{tr}"] = est.tolist()
+        e[f"success_{tr}"] = succeeded(config, est, truth)
+    return e
+
+
+def peak_model_sample(config: Config, n_scans: int = 2000, seed: int = 3):
+    """Synthetic scans at threshold 0 of a strong (50 deg) and a weak (130 deg) track, for the paper's
+    histograms, and the model fitted back from them (acoustics/peak_fit.py): (scans, truth, fit)."""
+    from sonartrack.acoustics.peak_fit import fit_peak_model
+
+    rng = np.random.default_rng(seed)
+    t = config.tracker
+    model = PeakModel(false_rate=config.false_rate, gate_deg=t.gate_deg, false_amplitude_rate=t.false_amplitude_rate,
+                      amplitude_threshold=0.0)
+    truth = np.column_stack([np.full(n_scans, 50.0), np.full(n_scans, 130.0)])
+    scans = [(s.bearing_deg, s.amplitude) for s in generate_scans(rng, model, truth, [STRONG, WEAK])]
+    return scans, truth, fit_peak_model(scans, truth, t.gate_deg, threshold=0.0)
+
+
+# ---- summarize -----------------------------------------------------------------------------------
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
+    from sonartrack.metrics.roc import binomial_interval
+
     geoms = config.geometries()
     n = len(next(iter(trials.values())))
     out = {"runs": n, "kinds": [g[0] for g in geoms], "values": [g[1] for g in geoms], "rates": {}}
-    from sonartrack.metrics.roc import binomial_interval
-
     for key, v in trials.items():
         k = np.sum(v, axis=0)
         lo, hi = binomial_interval(k, n)
@@ -180,123 +229,50 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     return out
 
 
-def _split(summary, key, kind):
+def split_rates(summary, key, kind):
+    """(grid values, rate, low, high) of one case_tracker ``key`` over the grid ``kind`` ("psi" or "L")."""
     idx = [i for i, k in enumerate(summary["kinds"]) if k == kind]
     r = summary["rates"][key]
-    return ([summary["values"][i] for i in idx], np.array(r["rate"])[idx], np.array(r["low"])[idx], np.array(r["high"])[idx])
+    return ([summary["values"][i] for i in idx], np.array(r["rate"])[idx], np.array(r["low"])[idx],
+            np.array(r["high"])[idx])
 
 
-def claims(summary: dict, config: Config) -> list[dict]:
-    out = []
+# ---- claims --------------------------------------------------------------------------------------
+def _falls_claim(summary, kind: str, name: str) -> Claim:
+    n = summary["runs"]
+    v, a, _, _ = split_rates(summary, "strong_weak_jpda_a", kind)
+    v, j, _, _ = split_rates(summary, "strong_weak_jpda", kind)
+    small = slice(0, max(len(v) // 2, 1))
+    falls = j[small].mean() < j[-1] - 1.96 * np.sqrt(max(j[-1] * (1 - j[-1]), 1e-3) / n)
+    below = np.all(j[small] <= a[small])
+    return Claim(f"jpda_falls_with_{kind}", "Fig. 8",
+                 f"JPDA's success falls as the {name} shrinks and is below JPDA_A's there (strong/weak)",
+                 f"{name} {v}: JPDA {np.round(j, 2).tolist()}, JPDA_A {np.round(a, 2).tolist()}", falls and below,
+                 f"mean JPDA rate over the smaller half below its rate at the largest {name} by > 1.96 SE, "
+                 "and not above JPDA_A's at any of those points")
+
+
+def claims(summary: dict, config: Config) -> list[Claim]:
     n = summary["runs"]
     sw_a = np.array(summary["rates"]["strong_weak_jpda_a"]["rate"])
     sw_a_hi = np.array(summary["rates"]["strong_weak_jpda_a"]["high"])
-    out.append({"id": "jpda_a_about_90pct", "text": "with strong/weak tracks JPDA_A succeeds about 90 % at every psi and L",
-                "paper": "Fig. 8: about 90 %", "ours": f"min {sw_a.min():.2f}, mean {sw_a.mean():.2f} over {len(sw_a)} points",
-                "tolerance": "the 95 % binomial interval reaches 0.85 at every point (about 90 %: 85 % or better)",
-                "holds": bool(np.all(sw_a_hi >= 0.85))})
-    for kind, name in (("psi", "crossing angle"), ("L", "minimum distance")):
-        v, a, _, _ = _split(summary, "strong_weak_jpda_a", kind)
-        v, j, j_lo, j_hi = _split(summary, "strong_weak_jpda", kind)
-        small = slice(0, max(len(v) // 2, 1))
-        falls = j[small].mean() < j[-1] - 1.96 * np.sqrt(max(j[-1] * (1 - j[-1]), 1e-3) / n)
-        below = np.all(j[small] <= a[small])
-        out.append({"id": f"jpda_falls_with_{kind}", "text": f"JPDA's success falls as the {name} shrinks and is below "
-                    f"JPDA_A's there (strong/weak)",
-                    "paper": "Fig. 8", "ours": f"{name} {v}: JPDA {np.round(j, 2).tolist()}, JPDA_A {np.round(a, 2).tolist()}",
-                    "tolerance": f"mean JPDA rate over the smaller half below its rate at the largest {name} by > 1.96 SE, "
-                                 "and not above JPDA_A's at any of those points",
-                    "holds": bool(falls and below)})
+    out = [Claim("jpda_a_about_90pct", "Fig. 8: about 90 %",
+                 "with strong/weak tracks JPDA_A succeeds about 90 % at every psi and L",
+                 f"min {sw_a.min():.2f}, mean {sw_a.mean():.2f} over {len(sw_a)} points", np.all(sw_a_hi >= 0.85),
+                 "the 95 % binomial interval reaches 0.85 at every point (about 90 %: 85 % or better)")]
+    out += [_falls_claim(summary, kind, name) for kind, name in (("psi", "crossing angle"), ("L", "minimum distance"))]
     a = np.array(summary["rates"]["similar_jpda_a"]["rate"])
     j = np.array(summary["rates"]["similar_jpda"]["rate"])
-    d = a - j
     se = np.sqrt(np.maximum(a * (1 - a) + j * (1 - j), 1e-3) / n)
-    out.append({"id": "similar_strengths_close", "text": "with similar strengths JPDA and JPDA_A are close (JPDA_A not worse)",
-                "paper": "about equal or slightly better", "ours": f"JPDA_A - JPDA per point {np.round(d, 2).tolist()}",
-                "tolerance": "JPDA_A never worse than JPDA by more than 1.96 SE at any point",
-                "holds": bool(np.all(d >= -1.96 * se))})
+    out.append(Claim("similar_strengths_close", "about equal or slightly better",
+                     "with similar strengths JPDA and JPDA_A are close (JPDA_A not worse)",
+                     f"JPDA_A - JPDA per point {np.round(a - j, 2).tolist()}", np.all(a - j >= -1.96 * se),
+                     "JPDA_A never worse than JPDA by more than 1.96 SE at any point"))
     e = summary["e2e"]
-    out.append({"id": "end_to_end_from_sound", "text": "from simulated two-channel sound, JPDA_A keeps both crossing tracks",
-                "paper": "Figs. 9-11 (real data): JPDA_A keeps the tracks JPDA swaps or loses",
-                "ours": f"JPDA_A {'kept' if e['success_jpda_a'] else 'lost/swapped'} them, JPDA "
-                        f"{'kept' if e['success_jpda'] else 'lost/swapped'} them (one fixed-seed run)",
-                "tolerance": "both JPDA_A tracks within 5 deg of their own source at the end",
-                "holds": bool(e["success_jpda_a"])})
+    kept = {True: "kept", False: "lost/swapped"}
+    out.append(Claim("end_to_end_from_sound", "Figs. 9-11 (real data): JPDA_A keeps the tracks JPDA swaps or loses",
+                     "from simulated two-channel sound, JPDA_A keeps both crossing tracks",
+                     f"JPDA_A {kept[e['success_jpda_a']]} them, JPDA {kept[e['success_jpda']]} them "
+                     "(one fixed-seed run)",
+                     e["success_jpda_a"], "both JPDA_A tracks within 5 deg of their own source at the end"))
     return out
-
-
-def figures(summary: dict, config: Config) -> dict:
-    import matplotlib.pyplot as plt
-
-    figs = {"scenario": _waterfall(summary["e2e"], "End-to-end from sound: peaks and tracks (Figs. 2, 9-11 analogue)")}
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4))
-    for ax, kind, xlabel in ((axes[0], "psi", "crossing angle psi (deg)"), (axes[1], "L", "minimum distance L (deg)")):
-        for case, ls in (("strong_weak", "-"), ("similar", "--")):
-            for tr, mk in (("jpda", "o"), ("jpda_a", "s")):
-                v, r, lo, hi = _split(summary, f"{case}_{tr}", kind)
-                ax.errorbar(v, r, yerr=[r - lo, hi - r], ls=ls, marker=mk, ms=4, capsize=2,
-                            label=f"{'JPDA_A' if tr == 'jpda_a' else 'JPDA'}, {case.replace('_', '/')}")
-        ax.set(xlabel=xlabel, ylabel="success rate", ylim=(0, 1.05), title=f"Success vs {kind} (paper Fig. 8)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    figs["success_rates"] = fig
-    figs["synthetic_example"] = _synthetic_example(config)
-    figs["peak_model"] = _peak_histograms(config)
-    return figs
-
-
-def _peak_histograms(config: Config):
-    """The paper's histograms of the peak model (count, position, amplitude; strong, weak, background),
-    from 2000 synthetic scans at threshold 0, with the fitted parameters in the title."""
-    from sonartrack.acoustics.peak_fit import fit_peak_model, peak_histograms_figure
-
-    rng = np.random.default_rng(3)
-    model = PeakModel(false_rate=config.false_rate, gate_deg=config.gate_deg,
-                      false_amplitude_rate=config.false_amplitude_rate, amplitude_threshold=0.0)
-    K = 2000
-    truth = np.column_stack([np.full(K, 50.0), np.full(K, 130.0)])
-    scans = [(s.bearing_deg, s.amplitude) for s in generate_scans(rng, model, truth, [STRONG, WEAK])]
-    fig = peak_histograms_figure(scans, truth, config.gate_deg)
-    fit = fit_peak_model(scans, truth, config.gate_deg, threshold=0.0)
-    fig.suptitle(f"Peak model (2000 synthetic scans, threshold 0); fitted: lambda V {fit.false_rate:.2f}, alpha "
-                 f"{fit.false_amplitude_rate:.2e}, sigma_p {np.round(fit.sigma_p_deg, 2).tolist()} deg, z_a "
-                 f"{np.round(fit.amplitude_mean, -1).tolist()}, sigma_a {np.round(fit.amplitude_sd, -1).tolist()}", fontsize=8)
-    fig.tight_layout()
-    return fig
-
-
-def _waterfall(e: dict, title: str):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5), sharey=True)
-    truth = np.asarray(e["truth"])
-    t = np.arange(len(truth))
-    for ax, tr in zip(axes, TRACKERS):
-        sc = ax.scatter(e["peaks_b"], e["peaks_t"], c=e["peaks_a"], s=4, cmap="viridis", vmin=5000, vmax=30000)
-        ax.plot(truth[:, 0], t, "k:", lw=1)
-        ax.plot(truth[:, 1], t, "k:", lw=1)
-        est = np.asarray(e[f"est_{tr}"])
-        ax.plot(est[:, 0], t, "r-", lw=1.5, label="track 1")
-        ax.plot(est[:, 1], t, "m-", lw=1.5, label="track 2")
-        ax.set(xlabel="cone angle (deg)", title=f"{'JPDA_A' if tr == 'jpda_a' else 'JPDA'}: "
-               f"{'kept' if e[f'success_{tr}'] else 'swapped/lost'}", xlim=(0, 180))
-        ax.legend(fontsize=7)
-    axes[0].set_ylabel("time (s)")
-    axes[0].invert_yaxis()
-    fig.colorbar(sc, ax=axes, label="peak amplitude")
-    fig.suptitle(title)
-    return fig
-
-
-def _synthetic_example(config: Config):
-    rng = np.random.default_rng(7)
-    kind, val, truth = config.geometries()[1]
-    scans = generate_scans(rng, config.model(), truth, [STRONG, WEAK])
-    e = {"peaks_t": np.concatenate([np.full(len(s.bearing_deg), k) for k, s in enumerate(scans)]).tolist(),
-         "peaks_b": np.concatenate([s.bearing_deg for s in scans]).tolist(),
-         "peaks_a": np.concatenate([s.amplitude for s in scans]).tolist(), "truth": truth.tolist()}
-    for tr in TRACKERS:
-        est = run_tracker(config.tracker_config(tr == "jpda_a"), scans, truth, [STRONG, WEAK])
-        e[f"est_{tr}"] = est.tolist()
-        e[f"success_{tr}"] = bool(np.all(np.abs(est[-1] - truth[-1]) < config.success_tolerance_deg))
-    return _waterfall(e, f"Synthetic peaks, crossing at psi = {val:g} deg, strong/weak")

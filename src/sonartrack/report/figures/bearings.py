@@ -21,3 +21,12 @@ def waterfall_png(path: Path, rec, tracks=None, title: str = "") -> Path:
     ax.set(xlabel="cone angle (deg from the array axis)", ylabel="time (s)", xlim=(0, 180), title=title)
     ax.invert_yaxis()
     return save_figure(fig, path, dpi=100, bbox_inches="tight")
+
+
+def bearing_tracks_png(path: Path, rec, table, title: str = "") -> Path:
+    """The waterfall of the peaks with the confirmed bearing tracks of ``table`` (tracking/run.py's
+    track_peaks) drawn over them."""
+    conf = table[table["confirmed"].astype(bool)]
+    lines = [(g["time_s"].to_numpy(), g["bearing_deg"].to_numpy(), f"track {tid}")
+             for tid, g in conf.groupby("track_id")]
+    return waterfall_png(path, rec, lines, title=title)

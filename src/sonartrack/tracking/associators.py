@@ -1,0 +1,51 @@
+"""Associator parts: association weights of all tracks at once from their likelihoods (association/).
+
+* :class:`PDA` -- each track on its own (PDA; with an existence model, IPDA; with modes, IMM-IPDA):
+  beta_r0 = (1 - P_D P_G) / Lambda_r, beta_rm = P_D (p_rm / rho_m) / Lambda_r (association/pda.py).
+* :class:`JPDA` -- the exact joint marginals: a measurement is shared out among the tracks that gate
+  it, so that sum_t beta_tj <= 1 (association/jpda.py, paper P0). JPDA_A is JPDA on likelihoods that
+  include the amplitude ratio (tracking/measurements.py). Where the maths of this package stops:
+  JPDA needs one mode (IMM-JPDA needs mode-mixed event likelihoods) and no existence model (JIPDA's
+  existence update differs from IPDA's), and the tracker refuses those combinations.
+
+The update that follows is the same for both (Gaussian-mixture reduction, association/pda.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sonartrack.association.jpda import jpda_log_weights
+from sonartrack.association.likelihood import Likelihoods
+from sonartrack.association.pda import AssociationWeights, pda_weights
+
+
+class PDA:
+    """Probabilistic data association, every track and mode independently."""
+
+    single_mode_only = False
+    supports_existence = True
+
+    def weights(self, lik: Likelihoods) -> AssociationWeights:
+        return pda_weights(lik)
+
+    def __repr__(self) -> str:
+        return "PDA()"
+
+
+class JPDA:
+    """Exact joint probabilistic data association (one mode, no existence)."""
+
+    single_mode_only = True
+    supports_existence = False
+
+    def weights(self, lik: Likelihoods) -> AssociationWeights:
+        n, r, _ = lik.shape
+        log_pd = np.broadcast_to(np.log(lik.pd), (n,))
+        ll = np.where(lik.gated, log_pd[:, None] + lik.log_ratio[:, 0], -np.inf)
+        log_miss = np.log(np.clip(np.broadcast_to(lik.miss, (n, r))[:, 0], 1e-12, 1.0))
+        beta = np.exp(jpda_log_weights(ll, log_miss))
+        return AssociationWeights(beta[:, :1], beta[:, None, 1:], None)
+
+    def __repr__(self) -> str:
+        return "JPDA()"

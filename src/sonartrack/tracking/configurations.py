@@ -1,0 +1,81 @@
+"""The paper trackers as configurations of the same parts (tracking/multi_target.py).
+
+=====================  ===========================================  ==========================================
+part                   position tracker (P4, :func:`position_tracker`)  bearing tracker (P0, :func:`bearing_tracker`)
+=====================  ===========================================  ==========================================
+motion                 CV in x, y; one mode per q, IMM chain          CV in bearing (deg); one mode
+measurements           points with R_m, chi-square gate               peaks, window gate V, sigma_p per track
+associator             PDA (IPDA / IMM-IPDA with existence)           exact JPDA (JPDA_A: amplitude ratio)
+existence              IPDA Markov chain                               none
+initiator              one-point, velocity prior                      strongest peak per cluster (or given tracks)
+deleter                existence thresholds                            M-of-N, consecutive misses
+=====================  ===========================================  ==========================================
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sonartrack.association.amplitude import STRENGTH_INITIAL
+from sonartrack.tracking.associators import JPDA, PDA
+from sonartrack.tracking.deleters import ExistenceDeleter, MOfNDeleter
+from sonartrack.tracking.existence import IpdaExistence
+from sonartrack.tracking.initiators import OnePointInitiator, PeakInitiator, bearing_covariance
+from sonartrack.tracking.measurements import BearingMeasurements, PositionMeasurements
+from sonartrack.tracking.motion import ImmConstantVelocity
+from sonartrack.tracking.multi_target import MultiTargetTracker
+from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
+from sonartrack.tracking.tracks import TrackArrays
+
+
+def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None) -> MultiTargetTracker:
+    """IPDA (one q) / IMM-IPDA (several q) position tracker with one-point initiation and existence-based
+    confirmation and deletion (paper P4). ``associator`` replaces PDA (e.g. ``JPDA()`` needs one mode and
+    no existence, so it is refused here)."""
+    s = settings or PositionTrackerSettings()
+    return MultiTargetTracker(
+        ImmConstantVelocity(tuple(s.q), dims=2, transition=s.transition_matrix()),
+        PositionMeasurements(s.pd, s.gate_probability, s.clutter_density_per_m2),
+        associator or PDA(),
+        existence=IpdaExistence(s.p_survive, s.p_birth),
+        initiator=OnePointInitiator(s.init_velocity_std_mps, s.initial_existence, s.max_tracks),
+        deleter=ExistenceDeleter(s.confirm_threshold, s.terminate_threshold))
+
+
+def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude_aided: bool = True,
+                    adaptive_strength: bool = True, initial: TrackArrays | None = None,
+                    time_s: float | None = None, associator=None) -> MultiTargetTracker:
+    """JPDA (``amplitude_aided=False``) / JPDA_A bearing tracker (paper P0).
+
+    With ``initial`` tracks (:func:`bearing_tracks`, starting at ``time_s``) it follows exactly those, as the
+    paper's runs do; without, it starts tracks on strong peaks and confirms them M-of-N (user data).
+    ``adaptive_strength``: track strengths by eq. 9 (real data) instead of known ones (the paper's synthetic
+    runs). ``associator`` replaces JPDA (e.g. ``PDA()``, each track on its own)."""
+    s = settings or BearingTrackerSettings()
+    auto = initial is None
+    return MultiTargetTracker(
+        ImmConstantVelocity((s.q,), dims=1),
+        BearingMeasurements(s.p_detect, s.gate_deg, s.clutter_density_per_deg, s.amplitude_threshold,
+                            s.false_amplitude_rate, amplitude_aided, adaptive_strength),
+        associator or JPDA(),
+        initiator=(PeakInitiator(s.init_amplitude, s.init_sigma_p_deg, s.init_amplitude_sd, s.gate_deg)
+                   if auto else None),
+        deleter=MOfNDeleter(s.confirm_m, s.confirm_n, s.delete_after) if auto else None,
+        tracks=initial, time_s=time_s)
+
+
+def bearing_tracks(bearing_deg, rate_deg_s, sigma_p_deg, strength, sigma_a, *, adaptive_strength: bool = False,
+                   time_s: float = 0.0) -> TrackArrays:
+    """Known (confirmed) bearing tracks to start :func:`bearing_tracker` with: bearings, rates, peak spread
+    sigma_p (deg), amplitude strength and spread; P(0) = [[s^2, s^2], [s^2, 2 s^2]] with s = sigma_p (P0).
+    With ``adaptive_strength`` the strengths start at eq. 9's 15000 instead."""
+    b = np.atleast_1d(np.asarray(bearing_deg, float))
+    n = len(b)
+    col = lambda v: np.broadcast_to(np.asarray(v, float), (n,)).copy()  # noqa: E731
+    x = np.stack([b, col(rate_deg_s)], -1)
+    sp = col(sigma_p_deg)
+    st = np.full(n, STRENGTH_INITIAL) if adaptive_strength else col(strength)
+    P = bearing_covariance(sp)
+    return TrackArrays(x[:, None].copy(), P[:, None].copy(), np.ones((n, 1)), np.full(n, np.nan), np.ones(n, bool),
+                       np.arange(1, n + 1, dtype=np.int64), np.full(n, float(time_s)), P,
+                       {"sigma_p": sp, "strength": st, "sigma_a": col(sigma_a)})

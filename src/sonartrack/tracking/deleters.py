@@ -1,0 +1,52 @@
+"""Deleter parts: after each update, confirm the tracks that earned it and delete the ones that lost it.
+
+* :class:`ExistenceDeleter` (IPDA, paper P4): confirmed once the existence probability exceeds
+  ``confirm_threshold`` (and then until deleted), deleted when it falls below ``terminate_threshold``.
+* :class:`MOfNDeleter` (bearing tracks, paper P0 on user data): confirmed after a validated peak in
+  ``confirm_m`` of its first ``confirm_n`` scans (else dropped), and deleted after ``delete_after``
+  consecutive scans with an empty gate. Keeps the counters ``hits``, ``age``, ``misses`` in the
+  tracks' ``attrs`` (a new track counts its initiating scan).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sonartrack.tracking.tracks import TrackArrays
+
+
+@dataclass(frozen=True)
+class ExistenceDeleter:
+    """Confirm above ``confirm_threshold``, delete below ``terminate_threshold`` (existence probability)."""
+
+    confirm_threshold: float
+    terminate_threshold: float
+
+    def new_track_attrs(self, k: int) -> dict:
+        return {}
+
+    def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        T = replace(T, confirmed=T.confirmed | (T.existence > self.confirm_threshold))
+        return T.select(T.existence >= self.terminate_threshold)
+
+
+@dataclass(frozen=True)
+class MOfNDeleter:
+    """M-of-N confirmation and deletion after consecutive misses (module doc)."""
+
+    confirm_m: int
+    confirm_n: int
+    delete_after: int
+
+    def new_track_attrs(self, k: int) -> dict:
+        return {"hits": np.ones(k, dtype=int), "age": np.ones(k, dtype=int), "misses": np.zeros(k, dtype=int)}
+
+    def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        a = T.attrs
+        hits, age = a["hits"] + hit, a["age"] + 1
+        misses = np.where(hit, 0, a["misses"] + 1)
+        keep = (misses < self.delete_after) & (T.confirmed | (age < self.confirm_n) | (hits >= self.confirm_m))
+        T = replace(T, confirmed=T.confirmed | (hits >= self.confirm_m)).with_attrs(hits=hits, age=age, misses=misses)
+        return T.select(keep)

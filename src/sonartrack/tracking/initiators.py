@@ -1,0 +1,79 @@
+"""Initiator parts: new tracks from the measurements of a scan that no existing track validated.
+
+* :class:`OnePointInitiator` (positions, paper P4): every unvalidated measurement z starts a tentative
+  track at [z, 0] with covariance diag(R_z, s_v^2 I), s_v the velocity prior's standard deviation.
+  One-point initiation needs no pairing of measurements across scans in dense clutter and lets the
+  existence probability do the discrimination (Musicki & Evans 2004, JIPDA, sec. VI uses the same).
+* :class:`PeakInitiator` (bearing peaks, paper P0 on user data): one track per cluster of unvalidated
+  peaks at least ``init_amplitude`` strong (the strongest of peaks closer than half a gate), at
+  [bearing, 0] with P(0) = [[s^2, s^2], [s^2, 2 s^2]], s = sigma_p (the paper's P(0)).
+
+Both keep the covariance at initiation (``P_init``, the CTT test of P4 eq. 23) and the time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.tracking.tracks import Scan, TrackArrays
+
+
+def _new_tracks(x, P, n_modes: int, first_id: int, time_s: float, existence: float, attrs: dict) -> TrackArrays:
+    """k tentative tracks with every mode at (x (k, d), P (k, d, d)) and equal mode probabilities."""
+    k = len(x)
+    return TrackArrays(np.repeat(x[:, None], n_modes, axis=1), np.repeat(P[:, None], n_modes, axis=1),
+                       np.full((k, n_modes), 1.0 / n_modes), np.full(k, existence), np.zeros(k, bool),
+                       np.arange(first_id, first_id + k, dtype=np.int64), np.full(k, float(time_s)), P, attrs)
+
+
+def bearing_covariance(sigma_p_deg) -> np.ndarray:
+    """P0's initial covariance of [bearing, rate]: [[s^2, s^2], [s^2, 2 s^2]] per track (deg, deg/s)."""
+    s2 = np.asarray(sigma_p_deg, dtype=float) ** 2
+    return np.stack([np.stack([s2, s2], -1), np.stack([s2, 2 * s2], -1)], -2)
+
+
+@dataclass(frozen=True)
+class OnePointInitiator:
+    """Position tracks from single measurements, with a zero-mean velocity prior."""
+
+    velocity_std: float
+    initial_existence: float
+    max_tracks: int
+
+    def initiate(self, scan: Scan, used, n_live: int, n_modes: int, first_id: int) -> TrackArrays:
+        new = np.nonzero(~used)[0][: max(0, self.max_tracks - n_live)]
+        z, R = scan.z[new], scan.R[new]
+        k, dims = z.shape
+        P = np.zeros((len(new), 2 * dims, 2 * dims))
+        P[:, :dims, :dims] = R
+        P[:, np.arange(dims, 2 * dims), np.arange(dims, 2 * dims)] = self.velocity_std**2
+        x = np.zeros((len(new), 2 * dims))
+        x[:, :dims] = z
+        return _new_tracks(x, P, n_modes, first_id, scan.time_s, self.initial_existence, {})
+
+
+@dataclass(frozen=True)
+class PeakInitiator:
+    """Bearing tracks from strong unvalidated peaks, one per cluster (module doc)."""
+
+    init_amplitude: float
+    sigma_p_deg: float
+    amplitude_sd: float
+    gate_deg: float
+
+    def initiate(self, scan: Scan, used, n_live: int, n_modes: int, first_id: int) -> TrackArrays:
+        z, a = scan.z[:, 0], scan.amplitude
+        new = np.nonzero(~used & (a >= self.init_amplitude))[0]
+        chosen: list[int] = []
+        for j in new[np.argsort(-a[new])]:  # strongest first; one per cluster of nearby peaks
+            if all(abs(z[j] - z[i]) > self.gate_deg / 2 for i in chosen):
+                chosen.append(int(j))
+        k = len(chosen)
+        x = np.zeros((k, 2))
+        x[:, 0] = z[chosen]
+        attrs = {"sigma_p": np.full(k, self.sigma_p_deg), "strength": a[chosen].astype(float),
+                 "sigma_a": np.full(k, self.amplitude_sd)}
+        return _new_tracks(x, bearing_covariance(np.full(k, self.sigma_p_deg)), n_modes, first_id, scan.time_s,
+                           np.nan, attrs)

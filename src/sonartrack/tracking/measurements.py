@@ -1,0 +1,83 @@
+"""Measurement parts of a tracker: from predicted tracks and a scan to the likelihoods an associator weighs.
+
+* :class:`PositionMeasurements` -- Cartesian points with their own covariances R_m (bistatic contacts,
+  paper P4), chi-square gate of any mode, P_G fixed by the gate, clutter density per m^2.
+* :class:`BearingMeasurements` -- cross-correlation peaks (paper P0): a bearing with the track's own
+  peak spread sigma_p (R = sigma_p^2 per track), the window gate of width V, and the amplitude
+  threshold tau that lowers P_D to P_D0 Phi((z_hat - tau) / sigma_a) (association/amplitude.py). With
+  ``amplitude_aided`` (JPDA_A) each pair weight is multiplied by the amplitude likelihood ratio r_tj,
+  and with ``adaptive_strength`` the track strength follows eq. 9 after every update.
+
+Equations: association/likelihood.py. Per-track quantities (sigma_p, strength, sigma_a) are the
+tracks' ``attrs``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.association.amplitude import amplitude_log_ratio, detection_probability_above, update_strength
+from sonartrack.association.gating import gate_threshold
+from sonartrack.association.likelihood import Likelihoods, position_likelihoods, window_likelihoods
+from sonartrack.tracking.tracks import Scan
+
+
+@dataclass(frozen=True)
+class PositionMeasurements:
+    """Position contacts z (m, 2) with covariances R (m, 2, 2) (P4)."""
+
+    pd: float
+    gate_probability: float
+    clutter_density_per_m2: float
+
+    measurement_dim = 2
+    scan_needs = ("R",)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_gamma", gate_threshold(self.gate_probability, 2))
+
+    def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
+        return position_likelihoods(x_pred, P_pred, scan.z, scan.R, pd=self.pd, pg=self.gate_probability,
+                                    gamma=self._gamma, clutter_density=self.clutter_density_per_m2)
+
+    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
+        return attrs
+
+
+@dataclass(frozen=True)
+class BearingMeasurements:
+    """Bearing peaks (deg) with amplitudes (P0); tracks carry ``sigma_p``, ``strength`` and ``sigma_a``."""
+
+    p_detect: float
+    gate_deg: float
+    clutter_density_per_deg: float
+    amplitude_threshold: float
+    false_amplitude_rate: float
+    amplitude_aided: bool  # JPDA_A: weigh the peak amplitudes
+    adaptive_strength: bool  # eq. 9 strength update (JPDA_A only, as in the paper)
+
+    measurement_dim = 1
+    scan_needs = ("amplitude",)
+
+    def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
+        strength, sigma_a = attrs["strength"], attrs["sigma_a"]
+        pd_eff = np.clip(detection_probability_above(self.p_detect, strength, np.maximum(sigma_a, 1e-9),
+                                                     self.amplitude_threshold), 1e-6, 1.0)
+        extra, pd_hit = None, pd_eff
+        if self.amplitude_aided:
+            # P_D x (true amplitude density above tau) = P_D0 N(a; z_hat, sigma_a^2): the hit weight takes P_D0
+            extra = amplitude_log_ratio(scan.amplitude, strength, sigma_a, self.false_amplitude_rate,
+                                        self.amplitude_threshold)
+            pd_hit = np.full(len(strength), self.p_detect)
+        return window_likelihoods(x_pred, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
+                                  pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
+                                  log_ratio_extra=extra)
+
+    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
+        """Eq. 9: z_hat = 0.7 z_hat + 0.3 (largest amplitude in the gate); tracks with an empty gate keep theirs."""
+        if not (self.amplitude_aided and self.adaptive_strength):
+            return attrs
+        amax = np.where(lik.gated, scan.amplitude[None, :], -np.inf).max(axis=1, initial=-np.inf)
+        return {**attrs, "strength": update_strength(attrs["strength"], np.where(np.isfinite(amax), amax, np.nan))}

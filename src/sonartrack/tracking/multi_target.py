@@ -1,0 +1,116 @@
+"""The multi-target tracker, composed of parts (like Stone Soup's MultiTargetTracker, on stacked arrays).
+
+Parts (each a small object; tracking/configurations.py builds the paper trackers from settings):
+
+* ``motion`` -- constant-velocity modes with an IMM mode chain (tracking/motion.py);
+* ``measurements`` -- likelihoods and gates of a scan against the predicted tracks (tracking/measurements.py);
+* ``associator`` -- association weights of all tracks at once: PDA or exact JPDA (tracking/associators.py);
+* ``existence`` -- optional IPDA existence Markov chain (tracking/existence.py);
+* ``initiator`` -- optional: new tracks from measurements no track validated (tracking/initiators.py);
+* ``deleter`` -- optional: confirmation and deletion (tracking/deleters.py).
+
+One scan (Park, Song, Lee 2017, Fig. 3 and eqs. 7-21 for the IMM-IPDA configuration; Park, Ryu & Lee
+1994 for the JPDA_A one), every step on the arrays of all tracks:
+
+1. interaction and prediction per mode (motion); existence prediction
+2. likelihoods and gates (measurements)
+3. association weights (associator), then the PDA Gaussian-mixture update with them (association/pda.py)
+4. mode probabilities mu_r ∝ c_r Lambda_r (filters/imm.py) and existence from Lambda = sum_r c_r Lambda_r
+5. confirmation and deletion (deleter), then initiation from the unvalidated measurements (initiator)
+
+The tracker keeps no history (memory is bounded by the live tracks); :meth:`step` returns a
+:class:`~sonartrack.tracking.tracks.TrackSnapshot` with the combined (IMM output) estimates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from sonartrack.association.pda import pda_mixture_update
+from sonartrack.core.errors import InputError
+from sonartrack.tracking.tracks import Scan, TrackArrays, TrackSnapshot
+
+
+class MultiTargetTracker:
+    """Tracker of parts (module doc); call :meth:`step` once per scan, in time order.
+
+    ``tracks`` and ``time_s`` start it with known tracks (e.g. on the truth, as paper P0's runs do);
+    their ``attrs`` must hold what the measurement part needs."""
+
+    def __init__(self, motion, measurements, associator, *, existence=None, initiator=None, deleter=None,
+                 tracks: TrackArrays | None = None, time_s: float | None = None):
+        if associator.single_mode_only and motion.n_modes > 1:
+            raise InputError(f"{associator!r} needs a single motion mode (IMM-JPDA is not implemented): give one q")
+        if existence is not None and not associator.supports_existence:
+            raise InputError(f"{associator!r} cannot drive an existence model (JIPDA is not implemented): use PDA")
+        self.motion, self.measurements, self.associator = motion, measurements, associator
+        self.existence, self.initiator, self.deleter = existence, initiator, deleter
+        self._tracks = tracks if tracks is not None else TrackArrays.empty(motion.n_modes, motion.state_dim)
+        if deleter is not None and len(self._tracks):
+            self._tracks = self._tracks.with_attrs(**deleter.new_track_attrs(len(self._tracks)))
+        self._time = time_s
+        self._next_id = int(self._tracks.track_id.max(initial=0)) + 1
+
+    @property
+    def tracks(self) -> TrackArrays:
+        """The live tracks (stacked arrays, mode-conditioned)."""
+        return self._tracks
+
+    def step(self, time_s: float, z, R=None, amplitude=None) -> TrackSnapshot:
+        """Process one scan: ``z (m, k)`` (or (m,) for bearings), ``R (m, k, k)`` if the measurement
+        part takes per-measurement covariances, ``amplitude (m,)`` for peaks."""
+        scan = self._scan(time_s, z, R, amplitude)
+        T = self._tracks
+        hit, used = np.zeros(len(T), bool), np.zeros(len(scan), bool)
+        if len(T):
+            T, hit, used = self._update(T, scan, time_s - self._time)
+        if self.deleter is not None and len(T):
+            T = self.deleter.manage(T, hit)
+        if self.initiator is not None:
+            new = self.initiator.initiate(scan, used, len(T), self.motion.n_modes, self._next_id)
+            self._next_id += len(new)
+            if self.deleter is not None:
+                new = new.with_attrs(**self.deleter.new_track_attrs(len(new)))
+            T = T.append(new)
+        self._tracks, self._time = T, float(time_s)
+        return TrackSnapshot.of(time_s, T)
+
+    def snapshot(self) -> TrackSnapshot:
+        """The live tracks now (combined estimates)."""
+        return TrackSnapshot.of(np.nan if self._time is None else self._time, self._tracks)
+
+    def _update(self, T: TrackArrays, scan: Scan, dt_s: float):
+        """Steps 1-4 of the module doc for the live tracks; returns them, hit (n,) and used (m,)."""
+        c, x0, P0 = self.motion.interact(T.mu, T.x, T.P)
+        x_pred, P_pred = self.motion.predict(x0, P0, dt_s)
+        lik = self.measurements.likelihoods(x_pred, P_pred, scan, T.attrs)
+        w = self.associator.weights(lik)
+        x, P = pda_mixture_update(x_pred, P_pred, lik, w.beta0, w.beta)
+        mu, log_total = self.motion.mode_update(c, w.log_lambda)
+        existence = T.existence
+        if self.existence is not None:
+            existence = self.existence.update(self.existence.predict(T.existence), log_total)
+        attrs = self.measurements.after_update(T.attrs, lik, scan)
+        T = replace(T, x=x, P=P, mu=mu, existence=existence, attrs=attrs)
+        return T, lik.gated.any(axis=1), lik.gated.any(axis=0)
+
+    def _scan(self, time_s, z, R, amplitude) -> Scan:
+        k = self.measurements.measurement_dim
+        z = np.asarray(z, float).reshape(-1, k)
+        for name, value in (("R", R), ("amplitude", amplitude)):
+            if value is None and name in self.measurements.scan_needs:
+                raise InputError(f"{type(self.measurements).__name__} needs {name} with every scan")
+        if R is not None:
+            R = np.broadcast_to(np.asarray(R, float), (len(z), k, k))
+        if amplitude is not None:
+            amplitude = np.asarray(amplitude, float).reshape(-1)
+            if len(amplitude) != len(z):
+                raise InputError(f"scan at t = {time_s} s has {len(z)} measurements but {len(amplitude)} amplitudes")
+        finite = np.all(np.isfinite(z)) and (R is None or np.all(np.isfinite(R)))
+        if not finite or (amplitude is not None and not np.all(np.isfinite(amplitude))):
+            raise InputError(f"scan at t = {time_s} s has NaN or infinite measurements: remove or fix those rows")
+        if self._time is not None and not time_s > self._time:
+            raise InputError(f"scan times must increase (got {time_s} s after {self._time} s)")
+        return Scan(float(time_s), z, R, amplitude)

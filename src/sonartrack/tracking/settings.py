@@ -1,0 +1,109 @@
+"""The tracker settings, each declared once: the position (IPDA / IMM-IPDA) and the bearing (JPDA / JPDA_A) tracker.
+
+These two classes are the only declarations of tracker settings in the package. The studies nest them
+in their configs (``tracker: ...``, a ``[tracker]`` table in TOML) and pass their paper values where
+those differ from the defaults here; ``sonartrack track --config`` reads the same ``[tracker]`` table;
+``sonartrack track --print-config`` prints them. Each default says in its doc where it comes from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import model_validator
+
+from sonartrack.core.settings import Settings, setting
+
+#: clutter density of paper P0's peak model above the tracking threshold: lambda V = 2 false peaks per
+#: 10 deg gate at threshold 0, times exp(-alpha tau) with alpha = 4e-4, tau = 5000 (the fraction above tau)
+P0_CLUTTER_DENSITY_PER_DEG = 2.0 / 10.0 * float(np.exp(-2.0))
+
+
+class PositionTrackerSettings(Settings):
+    """IPDA / IMM-IPDA position tracker (paper P4: Park, Song, Lee 2017); defaults are that paper's tracker."""
+
+    q: list[float] = setting(
+        default_factory=lambda: [1e-4, 0.05], min_length=1, unit="m^2/s^3",
+        doc="CV white-noise acceleration intensity, one per IMM mode (one value: single-model IPDA); "
+            "default P4's two-mode IMM-IPDA: 1e-4 for straight running, 0.05 for a maneuvering target")
+    transition_diagonal: float = setting(
+        0.99, "mode transition matrix diagonal (the rest spread evenly); 0.99, not 0.95, keeps the small-q mode "
+              "dominant on a straight target as P4's mode-probability plots show", unit="1", ge=0, le=1)
+    pd: float = setting(0.8, "probability of detection of a target (P4)", unit="1", gt=0, le=1)
+    gate_probability: float = setting(0.99, "chi-square(2) gate probability P_G (gamma = 9.21)", unit="1", gt=0, lt=1)
+    clutter_density_per_m2: float = setting(1e-6, "clutter density the tracker assumes (P4: 40 points in 4e7 m^2)",
+                                            unit="1/m^2", gt=0)
+    p_survive: float = setting(0.98, "existence Markov chain p11: a track's target survives one scan", unit="1",
+                               gt=0, le=1)
+    p_birth: float = setting(0.0, "existence Markov chain p21: a non-existing track's target appears", unit="1",
+                             ge=0, lt=1)
+    initial_existence: float = setting(0.05, "existence probability of a new one-point track", unit="1", gt=0, lt=1)
+    confirm_threshold: float = setting(0.9, "a track is confirmed when its existence exceeds this", unit="1",
+                                       gt=0, le=1)
+    terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
+                                         ge=0, lt=1)
+    init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "
+                                                "per axis", unit="m/s", gt=0)
+    max_tracks: int = setting(2000, "most live tracks; measurements beyond it start no track", unit="1", ge=1)
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if any(q < 0 for q in self.q):
+            raise ValueError("q must be non-negative (m^2/s^3)")
+        if not self.terminate_threshold < self.initial_existence < self.confirm_threshold:
+            raise ValueError("need terminate_threshold < initial_existence < confirm_threshold")
+        if len(self.q) > 1 and self.transition_diagonal < 1.0 / len(self.q):
+            raise ValueError("transition_diagonal must be in [1/modes, 1]")
+        return self
+
+    def transition_matrix(self) -> np.ndarray:
+        """Pi (r, r): ``transition_diagonal`` on the diagonal, the rest of each row spread evenly."""
+        r = len(self.q)
+        if r == 1:
+            return np.ones((1, 1))
+        Pi = np.full((r, r), (1.0 - self.transition_diagonal) / (r - 1))
+        np.fill_diagonal(Pi, self.transition_diagonal)
+        return Pi
+
+    def with_modes(self, q) -> PositionTrackerSettings:
+        """The same settings with the modes' q replaced (validated)."""
+        return type(self).model_validate({**self.model_dump(), "q": [float(v) for v in q]})
+
+
+class BearingTrackerSettings(Settings):
+    """JPDA / JPDA_A bearing tracker (paper P0: Park, Ryu, Lee 1994); defaults are that paper's tracker.
+
+    State [bearing (deg), bearing rate (deg/s)] of a cone angle; the scan period is taken from the scan
+    times (the paper's T = 1 s for 1 s scans)."""
+
+    q: float = setting(
+        0.01, "white-noise intensity of the bearing rate: Q = q [[T^3/3, T^2/2], [T^2/2, T]]. DEVIATION: P0's "
+              "'q = 0.1 deg' is read as a standard deviation, so q = 0.1^2 (as the variance, 0.1, weak tracks are "
+              "lost in clutter)", unit="deg^2/s^3", gt=0)
+    gate_deg: float = setting(10.0, "gate width V: a peak within V/2 of the predicted bearing is validated (P0)",
+                              unit="deg", gt=0)
+    p_detect: float = setting(1.0, "probability that a track's true peak is present before the amplitude threshold "
+                                   "(P0's model: always)", unit="1", gt=0, le=1)
+    clutter_density_per_deg: float = setting(P0_CLUTTER_DENSITY_PER_DEG,
+                                             "false-peak density above the threshold: P0's lambda V = 2 per 10 deg "
+                                             "times exp(-alpha tau)", unit="1/deg", gt=0)
+    false_amplitude_rate: float = setting(4e-4, "alpha of the exponential false-peak amplitudes (P0)",
+                                          unit="1/amplitude", gt=0)
+    amplitude_threshold: float = setting(5_000.0, "amplitude threshold tau applied to the peaks before tracking (P0)",
+                                         unit="amplitude", ge=0)
+    init_amplitude: float = setting(7_000.0, "a new track starts on an unassociated peak at least this strong",
+                                    unit="amplitude", ge=0)
+    init_sigma_p_deg: float = setting(1.5, "peak position standard deviation sigma_p of a new track (between P0's "
+                                           "strong 1.3 and weak 1.8 deg)", unit="deg", gt=0)
+    init_amplitude_sd: float = setting(3_000.0, "peak amplitude standard deviation sigma_a of a new track (between "
+                                                "P0's 2500 and 3500)", unit="amplitude", gt=0)
+    confirm_m: int = setting(3, "a new track is confirmed with gated peaks in M of its first N scans: M",
+                             unit="1", ge=1)
+    confirm_n: int = setting(4, "... N (a track failing M-of-N is dropped)", unit="1", ge=1)
+    delete_after: int = setting(5, "a track is dropped after this many consecutive scans with an empty gate",
+                                unit="1", ge=1)
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.confirm_m > self.confirm_n:
+            raise ValueError("need confirm_m <= confirm_n")
+        return self
