@@ -78,9 +78,6 @@ def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path,
     claims = _jsonable(as_dicts(study_mod.claims(summary, config)))
     names = []
     if figures is not None:
-        import matplotlib
-
-        matplotlib.use("Agg")
         for name, fig in figures(study_mod.STUDY_ID, summary, config).items():
             save_figure(fig, folder / f"{name}.png", dpi=110, bbox_inches="tight")
             names.append(name)

@@ -10,7 +10,6 @@ functions, so importing this package is cheap.
 from __future__ import annotations
 
 import importlib
-import importlib.util
 
 #: study id -> module holding that study's ``figures(summary, config)``.
 STUDY_FIGURES = {
@@ -28,15 +27,7 @@ def study_figures(study_id: str, summary: dict, config) -> dict:
 
     matplotlib.use("Agg")
     name = STUDY_FIGURES.get(study_id)
-    if name is None or importlib.util.find_spec(name) is None:
-        return _transition_study_figures(study_id, summary, config)
+    if name is None:  # a study without pictures (e.g. a user's own, run through the same pipeline)
+        return {}
     return importlib.import_module(name).figures(summary, config)
 
-
-def _transition_study_figures(study_id: str, summary: dict, config) -> dict:
-    """TRANSITION (the one place that knows it): a study whose figures have not moved to
-    ``report/figures/<module>.py`` yet still draws its own. Delete once every STUDY_FIGURES module exists."""
-    from sonartrack import studies
-
-    mod = studies.load(study_id)
-    return mod.figures(summary, config) if hasattr(mod, "figures") else {}
