@@ -52,7 +52,8 @@ def field_help(model_cls: type[BaseModel], name: str) -> str:
     return f"{doc} ({unit})" if unit and unit != "1" else doc
 
 
-def _toml_value(v) -> str:
+def toml_value(v) -> str:
+    """A TOML literal for a scalar or a (nested) list of scalars."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
@@ -66,7 +67,7 @@ def _toml_value(v) -> str:
     if isinstance(v, str):
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
 
@@ -86,7 +87,7 @@ def to_commented_toml(settings: BaseModel, _prefix: str = "") -> str:
             lines.append(f"# {name} = (not set)  # {field_help(cls, name)}")
             continue
         dumped = settings.model_dump(mode="json", include={name})[name]
-        lines.append(f"{name} = {_toml_value(dumped)}  # {field_help(cls, name)}")
+        lines.append(f"{name} = {toml_value(dumped)}  # {field_help(cls, name)}")
     for name, sub in tables:
         full = f"{_prefix}{name}"
         lines.append("")

@@ -7,31 +7,17 @@ pydantic as one-line :class:`InputError` messages.
 
 from __future__ import annotations
 
-import math
 import tomllib
 from pathlib import Path
 
 from sonartrack.core.errors import InputError
+from sonartrack.core.settings import toml_value
 
 
 def _scalar(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_scalar(x) for x in v) + "]"
     if v is None:
         raise TypeError("TOML has no null: leave the key out instead")
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+    return toml_value(v)
 
 
 def dumps(data: dict, _prefix: str = "") -> str:
