@@ -1,0 +1,54 @@
+"""Existence-based track management for Stone Soup (IPDA / JIPDA; Musicki, Evans & Stankovic 1994, sec. V).
+
+IPDA starts a tentative track on every detection that no track explains, with an initial existence
+probability P0, and lets the data decide: the track is confirmed once P(E) exceeds a confirmation
+threshold and deleted once it falls below a termination threshold (the thresholds trade confirmed
+true tracks against false tracks; paper P4 uses the same rule, tracking/deleters.py).
+
+* :class:`ExistenceInitiator` wraps any Stone Soup initiator and gives its tracks P(E) = P0
+  (they become :class:`~sonartrack.stonesoup.tracks.ExistenceTrack`).
+* :class:`ExistenceDeleter` deletes below ``deletion_threshold`` and marks ``metadata["confirmed"]``
+  once P(E) > ``confirmation_threshold`` (sticky: the metadata is carried to later states).
+"""
+
+from __future__ import annotations
+
+from stonesoup.base import Property
+from stonesoup.deleter.base import Deleter
+from stonesoup.initiator.base import Initiator
+from stonesoup.types.numeric import Probability
+
+from sonartrack.stonesoup.tracks import CONFIRMED, EXISTENCE, ExistenceTrack, existence_of
+
+
+class ExistenceInitiator(Initiator):
+    """Tracks of ``initiator`` with existence probability ``initial_existence`` (module doc)."""
+
+    initiator: Initiator = Property(doc="Initiator that makes the tracks' states (e.g. SimpleMeasurementInitiator)")
+    initial_existence: Probability = Property(default=Probability(0.1), doc="P0, the new tracks' existence probability")
+
+    def initiate(self, detections, timestamp, **kwargs):
+        """The wrapped initiator's tracks, as ExistenceTracks with P(E) = P0."""
+        return {ExistenceTrack(list(track.states), id=track.id,
+                               init_metadata={**track.init_metadata, EXISTENCE: float(self.initial_existence)})
+                for track in self.initiator.initiate(detections, timestamp, **kwargs)}
+
+
+class ExistenceDeleter(Deleter):
+    """Delete tracks whose existence probability is below ``deletion_threshold``; confirm above the other."""
+
+    deletion_threshold: Probability = Property(default=Probability(0.01), doc="delete when P(E) < this")
+    confirmation_threshold: Probability = Property(default=None,
+                                                   doc="mark metadata['confirmed'] = True once P(E) > this")
+
+    def check_for_deletion(self, track, **kwargs):
+        """True when P(E) < deletion_threshold; marks the track confirmed when P(E) > confirmation_threshold."""
+        p = existence_of(track)
+        if self.confirmation_threshold is not None and p > float(self.confirmation_threshold):
+            track.metadata[CONFIRMED] = True
+        return p < float(self.deletion_threshold)
+
+
+def confirmed_tracks(tracks) -> set:
+    """The tracks that an :class:`ExistenceDeleter` has confirmed."""
+    return {track for track in tracks if track.metadata.get(CONFIRMED, False)}
