@@ -4,8 +4,8 @@
   PDAHypothesiser + PDA + PDAUpdater. Target: >= 100x faster (compiled), same estimates.
 * IMM step with 2 CV modes: ours (compiled and NumPy) vs FilterPy's IMMEstimator. Target: >= 10x.
 * ``import sonartrack`` in a fresh interpreter (best of 5). Target: < 0.3 s.
-* The IPDA / IMM-IPDA tracker (tracking/configurations.py position_tracker) in the P4 scenario: ms per
-  scan. Target: <= 0.6 ms with 3 modes.
+* The IPDA / IMM-IPDA tracker (tracking/configurations.py position_tracker; its pre-gate, IMM mixing and
+  PDA mixture sums compiled) in the P4 scenario: ms per scan. Target: <= 0.6 ms with 3 modes.
 
 Timings are medians of repeated runs after a warm-up (numba compiled beforehand).
 """

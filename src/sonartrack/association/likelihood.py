@@ -18,6 +18,8 @@ The chi-square gate is evaluated in full only for the pairs that pass a cheap ne
 nu^T S^-1 nu >= nu_i^2 / S_ii for every axis i of an SPD S, a pair with nu_i^2 > gamma S_ii on some axis
 (in every mode) cannot be validated. With many tracks and a clutter-filled scan this skips most pairs;
 the pairs it keeps are computed with exactly the same arithmetic as a dense evaluation would use.
+The pre-gate and the kept pairs' innovations run compiled (association/likelihood_kernel.py: a loop
+that stops at the first failing axis), with the NumPy evaluation's results bit for bit.
 """
 
 from __future__ import annotations
@@ -70,47 +72,81 @@ def gaussian_log_ratio(logdet, d2, k: int, log_rho):
 PREGATE_MIN_PAIRS = 256
 
 
-def _chi_square_candidates(x_pred, P_pred, z, R, gamma: float):
+def _chi_square_candidates(x_pos, P_pos, z, R, gamma: float):
     """(track, measurement) pairs that may pass the chi-square gate of some mode: nu_i^2 <= gamma S_ii on
-    both axes (module doc), with a relative margin of 1e-6 so that round-off cannot drop a validated pair."""
+    both axes (module doc), with a relative margin of 1e-6 so that round-off cannot drop a validated pair.
+
+    ``x_pos (n, r, k)``, ``P_pos (n, r, k, k)``: the predicted measurement and its covariance H P H^T."""
     bound = gamma * (1.0 + 1e-6)
-    ok = np.ones(P_pred.shape[:2] + (len(z),), bool)
+    ok = None
     for i in range(z.shape[1]):
-        h = z[None, None, :, i] - x_pred[:, :, None, i]
-        ok &= h * h <= bound * (P_pred[:, :, None, i, i] + R[None, None, :, i, i])
+        h = z[:, i] - x_pos[:, :, i, None]  # (n, r, m)
+        h *= h
+        ok_i = h <= (bound * P_pos[:, :, i, i])[..., None] + bound * R[:, i, i]
+        ok = ok_i if ok is None else np.logical_and(ok, ok_i, out=ok)
     return np.nonzero(ok.any(axis=1))
 
 
-def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density) -> Likelihoods:
+def _rows(a, shape) -> np.ndarray:
+    """``a`` as a float array of ``shape``: itself, one row repeated, or a broadcast view."""
+    a = np.asarray(a, float)
+    if a.shape == shape:
+        return a
+    if a.shape == shape[1:]:  # one row for all: a copy is cheaper than np.broadcast_to on small arrays
+        return np.repeat(a[None], shape[0], axis=0)
+    return np.broadcast_to(a, shape)
+
+
+def _candidate_innovations(x_pos, P_pos, z, R, gamma: float, compiled: bool):
+    """The pre-gate's candidate pairs (ci, cj) and their nu (C, r, 2), S^-1 (C, r, 2, 2), log det S (C, r);
+    compiled (association/likelihood_kernel.py) or in NumPy, with identical results."""
+    if compiled:
+        from sonartrack.association import likelihood_kernel as kernel
+
+        R = np.ascontiguousarray(R)
+        ci, cj = kernel.candidate_pairs(x_pos, P_pos, z, R, gamma * (1.0 + 1e-6))
+        nu, S_inv, det = kernel.pair_innovations(x_pos, P_pos, z, R, ci, cj)
+        if not np.all(det > 0.0):
+            raise np.linalg.LinAlgError("covariance is singular or not positive definite")
+        return ci, cj, nu, S_inv, np.log(det)
+    ci, cj = _chi_square_candidates(x_pos, P_pos, z, R, gamma)
+    S_inv, logdet = inv_and_logdet(P_pos[ci] + R[cj][:, None])
+    return ci, cj, z[cj][:, None, :] - x_pos[ci], S_inv, logdet
+
+
+def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density,
+                         compiled: bool = True) -> Likelihoods:
     """Position measurements ``z (m, 2)`` with covariances ``R (m, 2, 2)`` or ``(2, 2)``, chi-square gate ``gamma``.
 
-    ``clutter_density`` scalar or ``(m,)`` (per m^2); ``pg`` the gate probability that goes with ``gamma``."""
+    ``clutter_density`` scalar or ``(m,)`` (per m^2); ``pg`` the gate probability that goes with ``gamma``.
+    ``compiled``: pre-gate large scans with the compiled kernel (identical results; False: NumPy only)."""
     x_pred = np.asarray(x_pred, float)
-    P_pred = np.asarray(P_pred, float)
     n, r, _ = x_pred.shape
     z = np.asarray(z, float).reshape(-1, 2)
     m = len(z)
-    R = np.broadcast_to(np.asarray(R, float), (m, 2, 2))
-    log_rho = np.log(np.broadcast_to(np.asarray(clutter_density, float), (m,)))
+    R = _rows(R, (m, 2, 2))
+    log_rho = np.log(np.asarray(clutter_density, float))  # one value, or (m,)
+    if log_rho.ndim:
+        log_rho = np.broadcast_to(log_rho, (m,))
+    x_pos = np.ascontiguousarray(x_pred[:, :, :2])  # (n, r, 2), (n, r, 2, 2): H x-, H P- H^T
+    P_pos = np.ascontiguousarray(np.asarray(P_pred, float)[:, :, :2, :2])
     if n * m > PREGATE_MIN_PAIRS:
-        ci, cj = _chi_square_candidates(x_pred, P_pred, z, R, gamma)
-        S, nu = P_pred[ci, :, :2, :2] + R[cj][:, None], z[cj][:, None, :] - x_pred[ci, :, :2]  # (C, r, ...)
-    else:  # every pair is a candidate, in row-major (track, measurement) order: the same values, no gathering
-        S = (P_pred[:, None, :, :2, :2] + R[None, :, None]).reshape(n * m, r, 2, 2)
-        nu = (z[None, :, None, :] - x_pred[:, None, :, :2]).reshape(n * m, r, 2)
-    S_inv, logdet = inv_and_logdet(S)
-    d2 = mahalanobis2(nu, S_inv)
-    g = (d2 < gamma).any(axis=1)
-    if n * m > PREGATE_MIN_PAIRS:
+        ci, cj, nu, S_inv, logdet = _candidate_innovations(x_pos, P_pos, z, R, gamma, compiled)
+        d2 = mahalanobis2(nu, S_inv)
+        g = (d2 < gamma).any(axis=1)
+        ti, mi = ci[g], cj[g]  # the gated pairs, still in row-major order
         gated = np.zeros((n, m), bool)
-        gated[ci[g], cj[g]] = True
+        gated[ti, mi] = True
         log_ratio = np.full((n, r, m), -np.inf)
-        log_ratio[ci, :, cj] = gaussian_log_ratio(logdet, d2, 2, log_rho[cj][:, None])
-    else:
-        gated = g.reshape(n, m)
-        log_ratio = gaussian_log_ratio(logdet.reshape(n, m, r), d2.reshape(n, m, r), 2, log_rho[None, :, None])
-        log_ratio = np.ascontiguousarray(log_ratio.transpose(0, 2, 1))  # (n, r, m), as the sums over m expect
-    ti, mi = np.nonzero(gated)
+        log_ratio[ci, :, cj] = gaussian_log_ratio(logdet, d2, 2, log_rho if log_rho.ndim == 0 else log_rho[cj, None])
+    else:  # every pair, in (track, mode, measurement) order: the same values as the pre-gated path, no gathering
+        nu = z - x_pos[:, :, None]  # (n, r, m, 2)
+        S_inv, logdet = inv_and_logdet(P_pos[:, :, None] + R)  # (n, r, m, 2, 2)
+        d2 = mahalanobis2(nu, S_inv)
+        gated = (d2 < gamma).any(axis=1)
+        ti, mi = np.nonzero(gated)
+        log_ratio = gaussian_log_ratio(logdet, d2, 2, log_rho)
+        return Likelihoods(log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu[ti, :, mi], S_inv[ti, :, mi])
     return Likelihoods(log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu[g], S_inv[g])
 
 

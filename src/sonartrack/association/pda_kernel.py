@@ -20,16 +20,18 @@ def _build():
     def kernel(x, P, z, R, pd, pg, gamma, log_rho):  # pragma: no cover - compiled
         n = x.shape[0]
         m = z.shape[0]
+        shared_R, shared_rho = R.shape[0] == 1, log_rho.shape[0] == 1  # one R (rho) for every measurement
         miss = 1.0 - pd * pg
         ratio = np.zeros(m)
         Sinv = np.empty((m, 2, 2))
         nu = np.empty((m, 2))
         lam = miss
         for j in range(m):
-            a = P[0, 0] + R[j, 0, 0]
-            b = P[0, 1] + R[j, 0, 1]
-            c = P[1, 0] + R[j, 1, 0]
-            d = P[1, 1] + R[j, 1, 1]
+            jr = 0 if shared_R else j
+            a = P[0, 0] + R[jr, 0, 0]
+            b = P[0, 1] + R[jr, 0, 1]
+            c = P[1, 0] + R[jr, 1, 0]
+            d = P[1, 1] + R[jr, 1, 1]
             det = a * d - b * c
             if not det > 0.0:
                 raise ValueError("innovation covariance is singular or not positive definite")
@@ -43,7 +45,7 @@ def _build():
             nu[j, 1] = nu1
             d2 = nu0 * (Sinv[j, 0, 0] * nu0 + Sinv[j, 0, 1] * nu1) + nu1 * (Sinv[j, 1, 0] * nu0 + Sinv[j, 1, 1] * nu1)
             if d2 < gamma:
-                lr = -0.5 * (2.0 * np.log(2.0 * np.pi) + np.log(det) + d2) - log_rho[j]
+                lr = -0.5 * (2.0 * np.log(2.0 * np.pi) + np.log(det) + d2) - log_rho[0 if shared_rho else j]
                 ratio[j] = np.exp(min(lr, 700.0))
                 lam += pd * ratio[j]
         beta0 = miss / lam
@@ -90,8 +92,13 @@ def pda_update_fast(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float,
         _KERNEL = _build()
     z = np.ascontiguousarray(z, dtype=float).reshape(-1, 2)
     m = len(z)
-    R = np.ascontiguousarray(np.broadcast_to(np.asarray(R, float), (m, 2, 2)))
-    log_rho = np.log(np.broadcast_to(np.asarray(clutter_density, float), (m,))).copy()
+    R = np.asarray(R, float)
+    if R.shape == (2, 2):  # shared by every measurement: the kernel reads R[0] (no (m, 2, 2) copy)
+        R = R.reshape(1, 2, 2)
+    R = np.ascontiguousarray(R if R.shape in ((1, 2, 2), (m, 2, 2)) else np.broadcast_to(R, (m, 2, 2)))
+    log_rho = np.log(np.asarray(clutter_density, float).reshape(-1))  # one value (kernel reads [0]) or (m,)
+    if len(log_rho) not in (1, m):
+        log_rho = np.ascontiguousarray(np.broadcast_to(log_rho, (m,)))
     try:
         return _KERNEL(np.ascontiguousarray(x_pred, dtype=float), np.ascontiguousarray(P_pred, dtype=float), z, R,
                        float(pd), float(pg), float(gamma), log_rho)

@@ -79,7 +79,8 @@ def _build():
         loglik = np.empty(r)
         for j in range(r):
             x0, P0 = mix(x, P, mu, Pi, j, c[j])
-            x_out[j], P_out[j], loglik[j] = predict_update(x0, P0, z, F[j], Q[j], H, R)
+            Fj = F[0] if F.shape[0] == 1 else F[j]  # one F shared by the modes, or one per mode
+            x_out[j], P_out[j], loglik[j] = predict_update(x0, P0, z, Fj, Q[j], H, R)
         mu_new = mode_probabilities(c, loglik)
         xc, Pc = combine(mu_new, x_out, P_out)
         return x_out, P_out, mu_new, xc, Pc
@@ -96,8 +97,8 @@ def imm_kf_step_fast(x, P, mu, z, F, Q, H, R, Pi):
     if _KERNEL is None:
         _KERNEL = _build()
     x = np.ascontiguousarray(x, dtype=float)
-    r = x.shape[0]
-    F = np.ascontiguousarray(np.broadcast_to(np.asarray(F, float), (r,) + np.shape(F)[-2:]))
+    F = np.asarray(F, float)
+    F = np.ascontiguousarray(F.reshape((1,) + F.shape) if F.ndim == 2 else F)  # (1, n, n): shared by the modes
     return _KERNEL(x, np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(mu, dtype=float),
                    np.ascontiguousarray(z, dtype=float), F, np.ascontiguousarray(Q, dtype=float),
                    np.ascontiguousarray(H, dtype=float), np.ascontiguousarray(R, dtype=float),

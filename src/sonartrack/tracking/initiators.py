@@ -48,7 +48,8 @@ class OnePointInitiator:
         k, dims = z.shape
         P = np.zeros((len(new), 2 * dims, 2 * dims))
         P[:, :dims, :dims] = R
-        P[:, np.arange(dims, 2 * dims), np.arange(dims, 2 * dims)] = self.velocity_std**2
+        for i in range(dims, 2 * dims):
+            P[:, i, i] = self.velocity_std**2
         x = np.zeros((len(new), 2 * dims))
         x[:, :dims] = z
         return _new_tracks(x, P, n_modes, first_id, scan.time_s, self.initial_existence, {})

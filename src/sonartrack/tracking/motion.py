@@ -9,7 +9,8 @@ Bar-Shalom 1988; Park, Song, Lee 2017, eqs. 7-11 and 19):
     prediction    x-_j = F x0_j,  P-_j = F P0_j F^T + Q_j
     mode update   mu_j = c_j Lambda_j / sum_l c_l Lambda_l   (Lambda_j from the associator)
 
-One mode is a plain (single-model) filter: the interaction and mode update are then identities.
+One mode is a plain (single-model) filter: the interaction and mode update are then identities. The
+mixing runs compiled (filters/imm_kernel.py, the same numbers as filters/imm.py's ``imm_mix``).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.linalg import symmetrize
-from sonartrack.filters.imm import imm_mix, imm_mixing, imm_mode_update, validate_transition_matrix
+from sonartrack.filters.imm import imm_mixing, imm_mode_update, validate_transition_matrix
 from sonartrack.models.motion import cv_process_noise_stack, cv_transition
 
 
@@ -52,8 +53,10 @@ class ImmConstantVelocity:
         """Predicted mode probabilities ``c (n, r)`` and mixed initial conditions ``x0, P0``."""
         if self.n_modes == 1:  # mixing one mode with itself: x0 = x, P0 = P (symmetrized, as imm_mix does)
             return mu, x, symmetrize(P)
+        from sonartrack.filters.imm_kernel import mix  # numba: loaded on first use
+
         c, w = imm_mixing(mu, self.transition)
-        x0, P0 = imm_mix(x, P, w)
+        x0, P0 = mix(x, P, w)  # filters/imm.py's imm_mix, compiled (identical results)
         return c, x0, P0
 
     def predict(self, x0, P0, dt_s: float):

@@ -14,7 +14,8 @@ One scan (Park, Song, Lee 2017, Fig. 3 and eqs. 7-21 for the IMM-IPDA configurat
 
 1. interaction and prediction per mode (motion); existence prediction
 2. likelihoods and gates (measurements)
-3. association weights (associator), then the PDA Gaussian-mixture update with them (association/pda.py)
+3. association weights (associator), then the PDA Gaussian-mixture update with them (association/pda.py;
+   its sums over the gated pairs compiled, association/pda_mixture_kernel.py, with identical results)
 4. mode probabilities mu_r ∝ c_r Lambda_r (filters/imm.py) and existence from Lambda = sum_r c_r Lambda_r
 5. confirmation and deletion (deleter), then initiation from the unvalidated measurements (initiator)
 
@@ -28,7 +29,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from sonartrack.association.pda import pda_mixture_update
 from sonartrack.core.errors import InputError
 from sonartrack.tracking.tracks import Scan, TrackArrays, TrackSnapshot
 
@@ -71,8 +71,8 @@ class MultiTargetTracker:
         if self.initiator is not None:
             new = self.initiator.initiate(scan, used, len(T), self.motion.n_modes, self._next_id)
             self._next_id += len(new)
-            if self.deleter is not None:
-                new = new.with_attrs(**self.deleter.new_track_attrs(len(new)))
+            if self.deleter is not None and (attrs := self.deleter.new_track_attrs(len(new))):
+                new = new.with_attrs(**attrs)
             T = T.append(new)
         self._tracks, self._time = T, float(time_s)
         return TrackSnapshot.of(time_s, T)
@@ -87,7 +87,9 @@ class MultiTargetTracker:
         x_pred, P_pred = self.motion.predict(x0, P0, dt_s)
         lik = self.measurements.likelihoods(x_pred, P_pred, scan, T.attrs)
         w = self.associator.weights(lik)
-        x, P = pda_mixture_update(x_pred, P_pred, lik, w.beta0, w.beta)
+        from sonartrack.association.pda_mixture_kernel import pda_mixture_update_fast  # numba: loaded on first use
+
+        x, P = pda_mixture_update_fast(x_pred, P_pred, lik, w.beta0, w.beta)
         mu, log_total = self.motion.mode_update(c, w.log_lambda)
         existence = T.existence
         if self.existence is not None:
@@ -103,13 +105,14 @@ class MultiTargetTracker:
             if value is None and name in self.measurements.scan_needs:
                 raise InputError(f"{type(self.measurements).__name__} needs {name} with every scan")
         if R is not None:
-            R = np.broadcast_to(np.asarray(R, float), (len(z), k, k))
+            R = np.asarray(R, float)
+            R = R if R.shape == (len(z), k, k) else np.broadcast_to(R, (len(z), k, k))
         if amplitude is not None:
             amplitude = np.asarray(amplitude, float).reshape(-1)
             if len(amplitude) != len(z):
                 raise InputError(f"scan at t = {time_s} s has {len(z)} measurements but {len(amplitude)} amplitudes")
-        finite = np.all(np.isfinite(z)) and (R is None or np.all(np.isfinite(R)))
-        if not finite or (amplitude is not None and not np.all(np.isfinite(amplitude))):
+        finite = np.isfinite(z).all() and (R is None or np.isfinite(R).all())
+        if not finite or (amplitude is not None and not np.isfinite(amplitude).all()):
             raise InputError(f"scan at t = {time_s} s has NaN or infinite measurements: remove or fix those rows")
         if self._time is not None and not time_s > self._time:
             raise InputError(f"scan times must increase (got {time_s} s after {self._time} s)")

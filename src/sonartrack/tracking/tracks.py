@@ -13,7 +13,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from sonartrack.core.linalg import symmetrize
-from sonartrack.filters.imm import imm_combine
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,7 +97,9 @@ class TrackSnapshot:
         if T.mu.shape[1] == 1:  # one mode: the combination is the mode's estimate (symmetrized, as imm_combine)
             xc, Pc = T.x[:, 0].copy(), symmetrize(T.P[:, 0])
         elif len(T):
-            xc, Pc = imm_combine(T.mu, T.x, T.P)
+            from sonartrack.filters.imm_kernel import combine  # numba: loaded on first use
+
+            xc, Pc = combine(T.mu, T.x, T.P)  # filters/imm.py's imm_combine, compiled (identical results)
         else:
             xc, Pc = np.zeros(T.x.shape[:1] + T.x.shape[2:]), np.zeros(T.P.shape[:1] + T.P.shape[2:])
         return cls(float(time_s), T.track_id.copy(), T.confirmed.copy(), T.existence.copy(), xc, Pc, T.mu.copy(),
