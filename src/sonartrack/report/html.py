@@ -52,13 +52,15 @@ def _section(folder: Path) -> str:
     claims = doc.get("claims", [])
     held = sum(1 for c in claims if c.get("holds"))
     title = f'{html.escape(doc["title"])} <span class="muted">({doc["study"]})</span>'
+    verdict = (f"claims holding: <b>{held}/{len(claims)}</b>" if claims
+               else "no claims of its own: it explains another study's claim (see its figures)")
     parts = [f'<h2 id="{doc["study"]}">{title}</h2>',
-             f'<p>{html.escape(doc["paper"])} — {doc["runs"]} Monte Carlo runs; claims holding: '
-             f'<b>{held}/{len(claims)}</b></p>']
+             f'<p>{html.escape(doc["paper"])} — {doc["runs"]} Monte Carlo runs; {verdict}</p>']
     figs = doc.get("figures", [])
     if "scenario" in figs and (folder / "scenario.png").exists():
         parts.append(_img(folder / "scenario.png"))
-    parts.append(f"<table>{_CLAIMS_HEADER}{''.join(_claim_row(c) for c in claims)}</table>")
+    if claims:
+        parts.append(f"<table>{_CLAIMS_HEADER}{''.join(_claim_row(c) for c in claims)}</table>")
     parts += [_img(folder / f"{name}.png") for name in figs
               if name != "scenario" and (folder / f"{name}.png").exists()]
     if (folder / "config.toml").exists():

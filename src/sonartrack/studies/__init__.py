@@ -43,6 +43,7 @@ STUDIES: dict[str, str] = {
     "jpda-amplitude": "sonartrack.studies.jpda_amplitude",
     "mftd": "sonartrack.studies.mftd",
     "bftma-imm": "sonartrack.studies.bftma_imm",
+    "bftma-sensitivity": "sonartrack.studies.bftma_sensitivity",
     "tma-propagation": "sonartrack.studies.tma_propagation",
     "bistatic-imm-ipda": "sonartrack.studies.bistatic_imm_ipda",
 }

@@ -16,6 +16,7 @@ STUDY_FIGURES = {
     "jpda-amplitude": "sonartrack.report.figures.jpda_amplitude",
     "mftd": "sonartrack.report.figures.mftd",
     "bftma-imm": "sonartrack.report.figures.bftma_imm",
+    "bftma-sensitivity": "sonartrack.report.figures.bftma_sensitivity",
     "tma-propagation": "sonartrack.report.figures.tma_propagation",
     "bistatic-imm-ipda": "sonartrack.report.figures.bistatic_imm_ipda",
 }
