@@ -1,0 +1,173 @@
+"""Geometry and received levels of a passive towed-array scene (settings: sim/scene.py).
+
+Platforms (x east, y north; bearings clockwise from north):
+
+* the ownship is a :class:`~sonartrack.sim.platforms.ManeuveringTrack` (a straight leg, one turn, a
+  straight leg); the array centre is towed ``tow_length_m`` behind it along its own track, so it sits
+  where the ship was L / v seconds earlier and its axis heading is the ship's heading then (the
+  array heading lags the ship's through the turn);
+* each ship moves at constant velocity from its position at t = 0.
+
+Seen from the array centre (what the array measures; the ship itself is ``tow_length_m`` ahead):
+
+    range r = |p_ship - p_array|,  true bearing b = atan2(dx, dy),
+    cone angle theta = arccos(u_axis . (p_ship - p_array) / r)   (0 = ahead along the array axis,
+                                                                  180 = astern; b = heading +- theta)
+    range rate rdot = (p_ship - p_array) . (v_ship - v_array) / r
+
+Received levels (passive sonar equation, per element; Urick, Principles of Underwater Sound, ch. 2):
+
+    broadband spectral level  RL_bb = SL_bb - TL(r, f_bb)       (dB re 1 uPa^2/Hz; f_bb = the band's
+                                                                 geometric centre)
+    tonal power               RL_t  = SL_t - TL(r, f_t)          (dB re 1 uPa^2)
+    received tonal frequency  f_r   = f_t (1 - rdot / c)         (models/passive.py, paper P2 eq. 3)
+    per-element SNRs          snr_db = RL_bb - NL (in the band), tonal_snr_db = RL_t - NL (in 1 Hz);
+                              a beam of N elements adds 10 log10 N to both.
+
+TL is ``spherical`` (20 log10 r + Thorp absorption, acoustics/transmission_loss.py) or ``ram`` (RAM in
+the scene's environment, source at the ship's depth, receiver at the array's depth, incoherently
+averaged over ``tl_average_m``; fields come from ``store``, e.g. io/environment.py's disk cache).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.units import KNOT_MPS
+from sonartrack.sim.platforms import ManeuveringTrack
+from sonartrack.sim.scene import PassiveSceneSettings, ShipSettings
+
+#: RAM fields are computed out to a whole number of these (m), so that scenes of different lengths
+#: share cached fields
+RAM_RANGE_STEP_M = 10_000.0
+
+
+@dataclass(frozen=True, slots=True)
+class SceneGeometry:
+    """Platforms at times ``time_s`` (T,); ship quantities are (S, T) (S ships), seen from the array centre."""
+
+    time_s: np.ndarray
+    own_xy: np.ndarray  # (T, 2)
+    own_heading_rad: np.ndarray  # (T,)
+    array_xy: np.ndarray  # (T, 2)
+    array_heading_rad: np.ndarray  # (T,)
+    ship_xy: np.ndarray  # (S, T, 2)
+    ship_velocity: np.ndarray  # (S, T, 2)
+    range_m: np.ndarray
+    bearing_rad: np.ndarray  # (-pi, pi]
+    cone_rad: np.ndarray  # 0..pi from the array axis (ahead)
+    range_rate_mps: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class ReceivedLevels:
+    """Per ship and time (S, T): broadband spectral level and tonal power at an element, received tonal frequency
+    (NaN for a ship without a tonal)."""
+
+    broadband_db: np.ndarray
+    tonal_db: np.ndarray
+    tonal_hz: np.ndarray
+
+
+def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
+    """The ownship's track: its turn (if any) starts at ``scene.turn_start_s``."""
+    o = scene.ownship
+    turns = ()
+    if o.turn_deg != 0:
+        t0 = scene.turn_start_s
+        rate = np.sign(o.turn_deg) * np.deg2rad(o.turn_rate_deg_s)
+        turns = ((t0, t0 + abs(o.turn_deg) / o.turn_rate_deg_s, float(rate)),)
+    return ManeuveringTrack(o.x_m, o.y_m, o.speed_kn * KNOT_MPS, float(np.deg2rad(o.course_deg)), turns)
+
+
+def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (T, 2) and velocities (T, 2) of a constant-velocity ship at times ``t_s``."""
+    course = np.deg2rad(ship.course_deg)
+    v = ship.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
+    t = np.asarray(t_s, dtype=float)
+    return np.array([ship.x_m, ship.y_m]) + t[:, None] * v, np.broadcast_to(v, (t.size, 2)).copy()
+
+
+def scene_geometry(scene: PassiveSceneSettings, t_s) -> SceneGeometry:
+    """Every platform at times ``t_s`` and each ship's range, bearing, cone angle and range rate (module doc)."""
+    t = np.atleast_1d(np.asarray(t_s, dtype=float))
+    track = ownship_track(scene)
+    own_xy, _, own_h = track.state(t)
+    lag_s = scene.array.tow_length_m / track.speed_mps
+    array_xy, array_v, array_h = track.state(t - lag_s)
+    motion = [ship_motion(s, t) for s in scene.ships]
+    ship_xy = np.stack([m[0] for m in motion]) if motion else np.zeros((0, t.size, 2))
+    ship_v = np.stack([m[1] for m in motion]) if motion else np.zeros((0, t.size, 2))
+    d = ship_xy - array_xy[None]
+    r = np.hypot(d[..., 0], d[..., 1])
+    axis = np.stack([np.sin(array_h), np.cos(array_h)], axis=-1)
+    cos_cone = np.einsum("stk,tk->st", d, axis) / np.maximum(r, 1e-9)
+    rdot = np.einsum("stk,stk->st", d, ship_v - array_v[None]) / np.maximum(r, 1e-9)
+    return SceneGeometry(t, own_xy, wrap_angle(own_h), array_xy, wrap_angle(array_h), ship_xy, ship_v, r,
+                         np.arctan2(d[..., 0], d[..., 1]), np.arccos(np.clip(cos_cone, -1.0, 1.0)), rdot)
+
+
+def broadband_tl_frequency_hz(scene: PassiveSceneSettings) -> float:
+    """The frequency at which the broadband noise's TL is taken: the band's geometric centre."""
+    lo, hi = scene.band_hz
+    return float(np.sqrt(max(lo, 1.0) * hi))
+
+
+def transmission_loss_db(scene: PassiveSceneSettings, ranges_m, freq_hz: float, source_depth_m: float,
+                         store=None) -> np.ndarray:
+    """TL (dB) at ``ranges_m`` by the scene's propagation model (module doc)."""
+    from sonartrack.acoustics.transmission_loss import thorp_absorption_db_per_km, transmission_loss
+
+    r = np.asarray(ranges_m, dtype=float)
+    if scene.propagation == "spherical":
+        return 20.0 * np.log10(np.maximum(r, 1.0)) + thorp_absorption_db_per_km(freq_hz) * r / 1e3
+    from sonartrack.acoustics.environment import load_environment
+
+    rmax = RAM_RANGE_STEP_M * np.ceil(max(float(r.max(initial=0.0)) * 1.05, 1.0) / RAM_RANGE_STEP_M)
+    return transmission_loss(load_environment(scene.environment), freq_hz, source_depth_m, scene.array.depth_m, r,
+                             rmax_m=rmax, average_m=scene.tl_average_m, store=store)
+
+
+def received_levels(scene: PassiveSceneSettings, geometry: SceneGeometry, store=None) -> ReceivedLevels:
+    """Broadband and tonal received levels and the Doppler-shifted tonal frequency of every ship (module doc)."""
+    f_bb = broadband_tl_frequency_hz(scene)
+    shape = geometry.range_m.shape
+    bb, tonal, f_r = np.empty(shape), np.full(shape, np.nan), np.full(shape, np.nan)
+    for i, ship in enumerate(scene.ships):
+        r = geometry.range_m[i]
+        bb[i] = ship.source_level_db - transmission_loss_db(scene, r, f_bb, ship.depth_m, store)
+        if ship.tonal_hz is not None:
+            tonal[i] = ship.tonal_level_db - transmission_loss_db(scene, r, ship.tonal_hz, ship.depth_m, store)
+            f_r[i] = ship.tonal_hz * (1.0 - geometry.range_rate_mps[i] / scene.sound_speed_mps)
+    return ReceivedLevels(bb, tonal, f_r)
+
+
+def nav_columns(geometry: SceneGeometry) -> dict[str, np.ndarray]:
+    """The navigation table: ownship position and heading, array centre position and axis heading (deg 0..360)."""
+    g = geometry
+    return {"time_s": g.time_s, "x_m": g.own_xy[:, 0], "y_m": g.own_xy[:, 1],
+            "heading_deg": np.rad2deg(g.own_heading_rad) % 360.0,
+            "array_x_m": g.array_xy[:, 0], "array_y_m": g.array_xy[:, 1],
+            "array_heading_deg": np.rad2deg(g.array_heading_rad) % 360.0}
+
+
+def truth_columns(scene: PassiveSceneSettings, geometry: SceneGeometry, levels: ReceivedLevels) -> dict:
+    """The truth table, a row per time and ship (time-major): kinematics, bearing, cone angle, side, SNRs."""
+    g = geometry
+    n_s, n_t = g.range_m.shape
+    names = np.array([s.name for s in scene.ships], dtype=object)
+    side = np.where(np.sin(g.bearing_rad - g.array_heading_rad[None]) >= 0.0, "starboard", "port")
+
+    def flat(a):  # (S, T) -> time-major rows
+        return np.asarray(a).T.reshape(-1)
+
+    return {"time_s": np.repeat(g.time_s, n_s), "ship": np.tile(names, n_t),
+            "x_m": flat(g.ship_xy[..., 0]), "y_m": flat(g.ship_xy[..., 1]),
+            "vx_mps": flat(g.ship_velocity[..., 0]), "vy_mps": flat(g.ship_velocity[..., 1]),
+            "bearing_deg": flat(np.rad2deg(g.bearing_rad) % 360.0), "cone_deg": flat(np.rad2deg(g.cone_rad)),
+            "side": flat(side), "range_m": flat(g.range_m), "range_rate_mps": flat(g.range_rate_mps),
+            "snr_db": flat(levels.broadband_db - scene.noise_level_db),
+            "tonal_hz": flat(levels.tonal_hz), "tonal_snr_db": flat(levels.tonal_db - scene.noise_level_db)}
