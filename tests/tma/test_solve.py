@@ -89,3 +89,31 @@ def test_a_failing_filter_is_an_input_error(scene, monkeypatch):
     with pytest.raises(InputError, match=r"failed numerically at t = 40 s .*initial_range_m") as e:
         solve_tma(record, own, TmaSettings(method="ekf"))
     assert "\n" not in str(e.value)
+
+
+def test_observable_range_limit_is_the_maneuver_over_the_bearing_standard_error():
+    from sonartrack.tma.batch_ml import observable_range_limit_m
+
+    # ownship on a straight line except one sample 100 m off it: deviation ~ 100 m (less the fit's share)
+    tau = np.arange(0.0, 100.0, 1.0)
+    own = np.column_stack([np.zeros(100), 3.0 * tau])
+    own[50, 0] = 100.0
+    lim = observable_range_limit_m(tau, own, np.deg2rad(1.0))
+    assert lim == pytest.approx(99.0 * 10.0 / np.deg2rad(1.0), rel=0.02)  # dev * sqrt(100) / sigma
+
+
+def test_ml_flags_a_range_the_record_cannot_resolve(scene):
+    record, own, _ = scene
+    good = solve_tma(record, own, TmaSettings(method="ml", sigma_bearing_deg=0.5))
+    assert good.solution.range_flags().all() and "NOT DETERMINED" not in good.summary()
+    # a 5 m/s target 1000 km away: the ownship's zig-zag turns the bearings by ~1e-4 deg, far below the noise
+    t = record.time_s
+    po = own.position_at(t)
+    b_far = np.arctan2(5.0 * t - po[:, 0], 1e6 - po[:, 1])
+    b_far = b_far + np.random.default_rng(5).normal(0, np.deg2rad(0.5), len(t))
+    res = solve_tma(BearingRecord(time_s=t, bearing_rad=b_far), own, TmaSettings(method="ml", sigma_bearing_deg=0.5))
+    flags = res.solution.range_flags()
+    if flags.all():  # the noise happened to give a range inside the resolvable limit: then it must be honest
+        pytest.fail(f"a target ~1e7 m away was given a determined range: {res.summary()}")
+    assert any("range not determined" in w for w in res.warnings)
+    assert "NOT DETERMINED" in res.summary() and "range 1" not in res.summary()

@@ -95,6 +95,18 @@ def check_observability(tau_s, own_xy, min_maneuver_m: float = MIN_MANEUVER_M) -
     return None
 
 
+def observable_range_limit_m(tau_s, own_xy, sigma_rad: float) -> float:
+    """Largest range (m) whose value a bearings-only record can resolve, from the ownship maneuver.
+
+    Range enters the bearings only through the ownship's departure from a straight constant-velocity line
+    (Nardone & Aidala 1981): a departure of ``dev`` metres turns the line of sight by about dev / R rad. With n
+    bearings of noise sigma, a turn is resolved only if it exceeds the standard error sigma / sqrt(n) of their
+    mean, so ranges beyond ``R_max = dev sqrt(n) / sigma`` are not determined by the data: the likelihood is flat
+    out there, and an ML solution that lands beyond R_max is an artefact of the noise, not a measurement."""
+    n = len(np.asarray(tau_s))
+    return ownship_deviation_m(tau_s, own_xy) * float(np.sqrt(n)) / float(sigma_rad)
+
+
 def pseudo_linear_estimate(z_rad, tau_s, own_xy) -> np.ndarray:
     """Pseudo-linear X0 (Lindgren & Gong 1978): least squares over the bearing-line equations."""
     c, s = np.cos(z_rad), np.sin(z_rad)

@@ -64,13 +64,22 @@ class TmaSolution:
     state: np.ndarray  # (n, 4)
     covariance: np.ndarray  # (n, 4, 4)
     method: str
+    #: (n,) False where the data cannot resolve the range (the state's range and speed then mean nothing;
+    #: bearings still do). None: determined everywhere.
+    range_determined: np.ndarray | None = None
+
+    def range_flags(self) -> np.ndarray:
+        """``range_determined`` as a boolean array (all True when not set)."""
+        n = len(np.asarray(self.time_s))
+        return np.ones(n, bool) if self.range_determined is None else np.asarray(self.range_determined, bool)
 
     def followed_by(self, later: TmaSolution) -> TmaSolution:
         """This solution, then ``later`` from its second row on (its first row restates this one's last time),
         under ``later``'s method name."""
         return TmaSolution(time_s=np.concatenate([self.time_s, later.time_s[1:]]),
                            state=np.concatenate([self.state, later.state[1:]]),
-                           covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method)
+                           covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method,
+                           range_determined=np.concatenate([self.range_flags(), later.range_flags()[1:]]))
 
 
 def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:

@@ -2,7 +2,8 @@
 its standard deviation (what ``sonartrack tma`` writes to ``tma_solution.csv`` and prints).
 
 Columns, one row per solution time: ``time_s, x_m, y_m, vx_mps, vy_mps, course_deg, speed_kn, range_m,
-bearing_deg`` and the standard deviation of each (``*_std`` columns, same unit), from the solution's
+bearing_deg``, the standard deviation of each (``*_std`` columns, same unit), and ``range_determined`` (False
+where the data cannot resolve range: the range, course and speed of that row mean nothing), from the solution's
 covariance by first-order propagation; range and bearing are from the ownship to the target; courses and
 bearings in degrees clockwise from north, 0..360.
 """
@@ -50,4 +51,5 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
             "bearing_deg": np.rad2deg(np.arctan2(dx, dy)) % 360.0,
             "x_std_m": sd[:, 0], "y_std_m": sd[:, 1], "vx_std_mps": sd[:, 2], "vy_std_mps": sd[:, 3],
             "course_std_deg": np.minimum(np.rad2deg(np.nan_to_num(course_std, nan=np.pi)), 180.0),
-            "speed_std_kn": speed_std / KNOT_MPS, "range_std_m": range_std, "bearing_std_deg": np.rad2deg(bearing_std)}
+            "speed_std_kn": speed_std / KNOT_MPS, "range_std_m": range_std, "bearing_std_deg": np.rad2deg(bearing_std),
+            "range_determined": solution.range_flags()}

@@ -48,11 +48,14 @@ class TmaResult:
         cols = solution_columns(self.solution, self.ownship)
         i, s, t = len(cols["time_s"]) - 1, self.settings, self.record.time_s
         what = "bearings + frequencies" if s.frequency else "bearings"
-        line = (f"tma {s.method}: {len(t)} {what} over {t[0]:g}..{t[-1]:g} s; at {cols['time_s'][i]:g} s the target "
-                f"is at range {cols['range_m'][i] / 1e3:.2f} ± {cols['range_std_m'][i] / 1e3:.2f} km, bearing "
-                f"{cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg, course "
-                f"{cols['course_deg'][i]:.0f} ± {cols['course_std_deg'][i]:.0f} deg, speed {cols['speed_kn'][i]:.1f} "
-                f"± {cols['speed_std_kn'][i]:.1f} kn")
+        line = f"tma {s.method}: {len(t)} {what} over {t[0]:g}..{t[-1]:g} s; at {cols['time_s'][i]:g} s the target "
+        if not cols["range_determined"][i]:
+            return line + (f"is at bearing {cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg; "
+                           "range, course and speed NOT DETERMINED by this record (see the warning)")
+        line += (f"is at range {cols['range_m'][i] / 1e3:.2f} ± {cols['range_std_m'][i] / 1e3:.2f} km, bearing "
+                 f"{cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg, course "
+                 f"{cols['course_deg'][i]:.0f} ± {cols['course_std_deg'][i]:.0f} deg, speed {cols['speed_kn'][i]:.1f} "
+                 f"± {cols['speed_std_kn'][i]:.1f} kn")
         if self.f0_hz is not None:
             line += f", f0 {self.f0_hz:.2f} ± {self.f0_std_hz:.2f} Hz"
         if self.mode_probabilities is not None:
@@ -89,14 +92,48 @@ def _solve_sequential(record, ownship, settings: TmaSettings) -> dict:
     return out
 
 
+def _flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_rad: float) -> TmaSolution:
+    """Bearings-only ML: flag the rows whose range lies beyond what the record can resolve
+    (:func:`~sonartrack.tma.batch_ml.observable_range_limit_m`), whose range standard deviation exceeds the range
+    itself (the one-sigma interval reaches the ownship), or whose covariance is not finite, and warn.
+    The numbers stay in the table (the bearing is still good); the flag column says the range is not."""
+    from dataclasses import replace
+
+    from sonartrack.tma.batch_ml import observable_range_limit_m
+    from sonartrack.tma.solution_table import solution_columns
+
+    t = np.asarray(record.time_s, float)
+    limit_m = observable_range_limit_m(t - t[0], ownship.position_at(t), sigma_bearing_rad)
+    cols = solution_columns(solution, ownship)
+    range_m, range_std_m = cols["range_m"], cols["range_std_m"]
+    P = np.asarray(solution.covariance, float)
+    bad_cov = ~np.all(np.isfinite(P), axis=(1, 2)) | (np.einsum("nii->n", P[:, :2, :2]) <= 0)
+    with np.errstate(invalid="ignore"):
+        ok = (range_m <= limit_m) & (range_std_m < range_m) & ~bad_cov
+    if not ok.all():
+        from sonartrack.tma.batch import UnobservableWarning
+
+        i = int(np.argmin(ok))
+        warnings.warn(f"range not determined: the bearings-only solution puts the target at {range_m[i] / 1e3:.3g} "
+                      f"± {range_std_m[i] / 1e3:.3g} km at {cols['time_s'][i]:g} s, and this record's ownship maneuver "
+                      f"resolves range only to {limit_m / 1e3:.3g} km; trust the bearing, not the range (flag column "
+                      "range_determined), or use a record with a larger maneuver or em-map with SNR",
+                      UnobservableWarning, stacklevel=2)
+    return replace(solution, range_determined=solution.range_flags() & ok)
+
+
 def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) -> dict:
     from sonartrack.tma.batch import solve_batch, solve_batch_then_ekf
 
     kw = dict(sigma_bearing_rad=float(np.deg2rad(settings.sigma_bearing_deg)), batch=settings.batch,
               em_map=settings.em_map, environment=environment, tl_store=tl_store)
     if settings.batch.window_s is None:
-        return {"solution": solve_batch(record, ownship, settings.method, **kw)}
-    return {"solution": solve_batch_then_ekf(record, ownship, settings.method, window_s=settings.batch.window_s, **kw)}
+        solution = solve_batch(record, ownship, settings.method, **kw)
+    else:
+        solution = solve_batch_then_ekf(record, ownship, settings.method, window_s=settings.batch.window_s, **kw)
+    if settings.method == "ml":  # em-map resolves range from the SNR, not from the maneuver
+        solution = _flag_unresolved_range(solution, record, ownship, kw["sigma_bearing_rad"])
+    return {"solution": solution}
 
 
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,
