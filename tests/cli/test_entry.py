@@ -84,8 +84,9 @@ def test_interrupt_is_status_130_with_the_resume_note(toy_app, capsys):
 
 
 def test_a_bug_is_not_hidden(toy_app, capsys):
+    assert main(["bug"]) == 1 and "internal error (ZeroDivisionError" in capsys.readouterr().err
     with pytest.raises(ZeroDivisionError):
-        main(["bug"])
+        main(["bug", "--debug"])
 
 
 def test_exit_status_of_a_command_is_kept(toy_app, capsys):
@@ -98,3 +99,34 @@ def test_console_script_no_arguments_exits_2_without_traceback():
     res = subprocess.run([sys.executable, "-m", "sonartrack.cli", "bearings", "--spacing"], capture_output=True,
                          text=True)
     assert res.returncode == 2 and "Traceback" not in res.stderr
+
+
+def test_an_internal_error_is_one_line_and_debug_shows_the_traceback(monkeypatch, capsys):
+    from sonartrack import cli
+
+    def boom(*args, **kwargs):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr(cli, "app", boom)
+    assert cli.main(["studies"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "internal error (ZeroDivisionError: a bug)" in err and "--debug" in err
+    with pytest.raises(ZeroDivisionError):
+        cli.main(["studies", "--debug"])
+
+
+def test_an_output_folder_that_cannot_be_made_is_one_line(tmp_path, capsys):
+    from sonartrack import cli
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    code = cli.main(["reproduce", "mftd", "--quick", "--runs", "1", "--out", str(blocker / "sub")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_negative_seed_is_refused(capsys):
+    from sonartrack import cli
+
+    assert cli.main(["reproduce", "mftd", "--quick", "--seed", "-1"]) == 2
+    assert "--seed" in capsys.readouterr().err

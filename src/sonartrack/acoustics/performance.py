@@ -32,7 +32,8 @@ MAX_RANGE_KM = 500.0
 class TLSettings(Settings):
     """Settings of a TL / detection-range computation (``sonartrack tl``; paper P3's values by default)."""
 
-    freq_hz: float = setting(200.0, "frequency of the tonal", unit="Hz", gt=0)
+    freq_hz: float = setting(200.0, "frequency of the tonal (RAM's grid grows as f^2: above 5 kHz it does not fit "
+                             "in memory at useful ranges)", unit="Hz", gt=0, le=5000)
     source_depth_m: float = setting(50.0, "source (target) depth, inside the water column", unit="m")
     receiver_depth_m: float | None = setting(None, "receiver (array) depth; default: the source depth", unit="m")
     rmax_km: float = setting(50.0, "maximum range of the field", unit="km", gt=0)

@@ -58,12 +58,23 @@ def main(argv: list[str] | None = None) -> int:
     click it ships: usage text and status 2 for a missing argument, an unknown option or command, and
     no arguments at all; help and ``--print-config`` end with status 0. A user mistake inside a
     command is an :class:`InputError`: its one-line message (``error: ...``), status 2. Ctrl-C is
-    status 130 with a note on resuming. Any other exception is a bug and is shown in full.
+    status 130 with a note on resuming. A file-system refusal (an output folder that cannot be made, a
+    file that cannot be written) is named in one line, status 2. Any other exception is a bug in sonartrack:
+    one line naming it and status 1, or, with ``--debug`` anywhere on the command line, the traceback.
     """
+    args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args
+    args = [a for a in args if a != "--debug"]
     try:
-        app(args=argv, prog_name="sonartrack", standalone_mode=True)
+        app(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
         typer.echo(f"error: {exc}", err=True)
+        return 2
+    except OSError as exc:
+        if debug:
+            raise
+        where = f": {exc.filename}" if exc.filename else ""
+        typer.echo(f"error: {exc.strerror or exc}{where} (check the path and its permissions)", err=True)
         return 2
     except KeyboardInterrupt:
         typer.echo(INTERRUPTED, err=True)
@@ -73,6 +84,13 @@ def main(argv: list[str] | None = None) -> int:
         if status == 130:
             typer.echo(INTERRUPTED, err=True)
         return status
+    except Exception as exc:  # a bug: say so in one line unless asked for the traceback
+        if debug:
+            raise
+        typer.echo(f"error: internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}) "
+                   "- a bug in sonartrack, not in your input as far as it checked; rerun with --debug for the "
+                   "traceback and report it", err=True)
+        return 1
     return 0
 
 

@@ -44,6 +44,7 @@ def reproduce_cmd(
     from sonartrack.io import toml as toml_io
     from sonartrack.report.figures import study_figures
 
+    require(seed >= 0, f"--seed must be a non-negative integer (got {seed}): seeds index SeedSequence streams")
     require(runs is None or runs >= 1, f"--runs must be at least 1 (got {runs})")
     require(workers >= 1, f"--workers must be at least 1 (got {workers})")
     ids = studies.available() if study == "all" else [study]
