@@ -41,10 +41,15 @@ def dumps(data: dict, _prefix: str = "") -> str:
 def load(path: str | Path) -> dict:
     """Read a TOML file; a missing or malformed file raises a one-line :class:`InputError`."""
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"config path {p} is a directory: give the TOML file inside it")
     if not p.is_file():
         raise InputError(f"config file not found: {p}")
     try:
-        return tomllib.loads(p.read_text())
+        return tomllib.loads(p.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(f"config file {p} is not UTF-8 text (a binary file, or another encoding): "
+                         "give a TOML text file saved as UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"config file {p} is not valid TOML: {exc}") from None
 
