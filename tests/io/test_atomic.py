@@ -21,16 +21,3 @@ def test_successful_write_replaces(tmp_path):
     assert target.read_text().splitlines() == ["a", "1", "2"]
     assert list(tmp_path.iterdir()) == [target]
 
-
-def test_toml_that_is_not_text_or_is_a_directory_is_one_line(tmp_path):
-    import pytest
-
-    from sonartrack.core.errors import InputError
-    from sonartrack.io import toml as toml_io
-
-    bad = tmp_path / "bad.toml"
-    bad.write_bytes(b"\xff\xfe\x00binary")
-    with pytest.raises(InputError, match="not UTF-8 text"):
-        toml_io.load(bad)
-    with pytest.raises(InputError, match="is a directory"):
-        toml_io.load(tmp_path)
