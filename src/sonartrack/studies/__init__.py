@@ -42,6 +42,7 @@ from sonartrack.core.errors import InputError
 STUDIES: dict[str, str] = {
     "jpda-amplitude": "sonartrack.studies.jpda_amplitude",
     "mftd": "sonartrack.studies.mftd",
+    "mftd-sensitivity": "sonartrack.studies.mftd_sensitivity",
     "bftma-imm": "sonartrack.studies.bftma_imm",
     "bftma-sensitivity": "sonartrack.studies.bftma_sensitivity",
     "tma-propagation": "sonartrack.studies.tma_propagation",

@@ -15,6 +15,7 @@ import importlib
 STUDY_FIGURES = {
     "jpda-amplitude": "sonartrack.report.figures.jpda_amplitude",
     "mftd": "sonartrack.report.figures.mftd",
+    "mftd-sensitivity": "sonartrack.report.figures.mftd_sensitivity",
     "bftma-imm": "sonartrack.report.figures.bftma_imm",
     "bftma-sensitivity": "sonartrack.report.figures.bftma_sensitivity",
     "tma-propagation": "sonartrack.report.figures.tma_propagation",
