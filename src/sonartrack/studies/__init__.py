@@ -46,6 +46,7 @@ STUDIES: dict[str, str] = {
     "bftma-imm": "sonartrack.studies.bftma_imm",
     "bftma-sensitivity": "sonartrack.studies.bftma_sensitivity",
     "tma-propagation": "sonartrack.studies.tma_propagation",
+    "tma-sensitivity": "sonartrack.studies.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.studies.bistatic_imm_ipda",
 }
 

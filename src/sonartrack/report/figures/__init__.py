@@ -19,6 +19,7 @@ STUDY_FIGURES = {
     "bftma-imm": "sonartrack.report.figures.bftma_imm",
     "bftma-sensitivity": "sonartrack.report.figures.bftma_sensitivity",
     "tma-propagation": "sonartrack.report.figures.tma_propagation",
+    "tma-sensitivity": "sonartrack.report.figures.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.report.figures.bistatic_imm_ipda",
 }
 
