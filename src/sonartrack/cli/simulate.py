@@ -36,12 +36,13 @@ def simulate_cmd(
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("scene"),
 ) -> None:
     """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command."""
-    from sonartrack.io.scene_files import check_only, scene_toml, shipped_scene_path, write_scene
+    from sonartrack.core.settings import to_commented_toml
+    from sonartrack.io.scene_files import check_only, shipped_scene_path, write_scene
 
     path = shipped_scene_path(scene) if scene is not None else None
     settings = resolve(PassiveSceneSettings, path, duration_s=duration_s, seed=seed, propagation=propagation)
     if print_config:
-        typer.echo(scene_toml(settings), nl=False)
+        typer.echo(to_commented_toml(settings), nl=False)
         raise typer.Exit(0)
     check_only(only)
     from sonartrack.cli._progress import TrialProgress, make_progress

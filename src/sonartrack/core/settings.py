@@ -71,26 +71,49 @@ def toml_value(v) -> str:
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
 
-def to_commented_toml(settings: BaseModel, _prefix: str = "") -> str:
-    """The resolved settings as TOML, each key followed by ``# doc [unit]`` (nested groups as tables).
-
-    The output is valid TOML and reads back to the same settings."""
-    cls = type(settings)
+def render_toml(data: dict, comments: dict | None = None, _prefix: str = "") -> str:
+    """Nested JSON-like ``data`` as TOML text: plain keys first, then tables (dicts), then arrays of tables
+    (lists of dicts). ``comments`` has the same shape (a string per key, a dict per table, a list of dicts per
+    array of tables); a key with a comment is followed by ``# comment``, and a None value with a comment is
+    written as a commented-out ``# key = (not set)`` line (without one it is left out: TOML has no null)."""
+    comments = comments or {}
     lines: list[str] = []
-    tables: list[tuple[str, BaseModel]] = []
+    tables, arrays = [], []
+    for key, value in data.items():
+        note = comments.get(key)
+        if isinstance(value, dict):
+            tables.append((key, value, note if isinstance(note, dict) else None))
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            arrays.append((key, value, note if isinstance(note, list) else [None] * len(value)))
+        elif value is None:
+            if isinstance(note, str):
+                lines.append(f"# {key} = (not set)  # {note}")
+        else:
+            lines.append(f"{key} = {toml_value(value)}" + (f"  # {note}" if isinstance(note, str) else ""))
+    for key, value, note in tables:
+        lines += ["", f"[{_prefix}{key}]", render_toml(value, note, f"{_prefix}{key}.").rstrip("\n")]
+    for key, items, notes in arrays:
+        for item, note in zip(items, notes, strict=True):
+            lines += ["", f"[[{_prefix}{key}]]", render_toml(item, note, f"{_prefix}{key}.").rstrip("\n")]
+    return "\n".join(lines).strip("\n") + "\n"
+
+
+def _field_comments(settings: BaseModel) -> dict:
+    """``render_toml`` comments of a settings object: 'doc (unit)' per field, nested for groups."""
+    cls = type(settings)
+    out: dict = {}
     for name in cls.model_fields:
         value = getattr(settings, name)
         if isinstance(value, BaseModel):
-            tables.append((name, value))
-            continue
-        if value is None:
-            lines.append(f"# {name} = (not set)  # {field_help(cls, name)}")
-            continue
-        dumped = settings.model_dump(mode="json", include={name})[name]
-        lines.append(f"{name} = {toml_value(dumped)}  # {field_help(cls, name)}")
-    for name, sub in tables:
-        full = f"{_prefix}{name}"
-        lines.append("")
-        lines.append(f"[{full}]")
-        lines.append(to_commented_toml(sub, _prefix=full + ".").rstrip("\n"))
-    return "\n".join(lines).strip("\n") + "\n"
+            out[name] = _field_comments(value)
+        elif isinstance(value, list | tuple) and value and all(isinstance(v, BaseModel) for v in value):
+            out[name] = [_field_comments(v) for v in value]
+        else:
+            out[name] = field_help(cls, name)
+    return out
+
+
+def to_commented_toml(settings: BaseModel) -> str:
+    """The resolved settings as TOML, each key followed by ``# doc (unit)``; nested groups as tables, lists of
+    groups as arrays of tables. The output is valid TOML and reads back to the same settings."""
+    return render_toml(settings.model_dump(mode="json"), _field_comments(settings))

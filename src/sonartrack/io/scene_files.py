@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
+from sonartrack.core.settings import to_commented_toml
 from sonartrack.io.atomic import atomic_path, write_csv, write_text
 from sonartrack.sim.scene import PassiveSceneSettings, scenes_dir
 
@@ -121,20 +122,6 @@ def shipped_scene_path(name_or_path) -> Path:
     return shipped
 
 
-def scene_toml(scene: PassiveSceneSettings) -> str:
-    """The resolved scene as commented TOML (the ships as ``[[ships]]`` tables), which ``--scene`` reads back."""
-    from sonartrack.core.settings import field_help, to_commented_toml
-
-    if not scene.ships:
-        return to_commented_toml(scene)
-    head = [line for line in to_commented_toml(scene.model_copy(update={"ships": []})).splitlines()
-            if not line.startswith("ships = ")]
-    out = "\n".join(head).rstrip("\n") + f"\n\n# ships: {field_help(PassiveSceneSettings, 'ships')}\n"
-    for ship in scene.ships:
-        out += "\n[[ships]]\n" + to_commented_toml(ship)
-    return out
-
-
 @dataclass
 class SceneFiles:
     """What :func:`write_scene` wrote: the paths, and a one-line summary of the scene."""
@@ -156,7 +143,7 @@ def write_scene(scene: PassiveSceneSettings, out, *, only: str = "all", progress
     folder.mkdir(parents=True, exist_ok=True)
     files = SceneFiles(folder)
     store = TLDiskCache(cache) if scene.propagation == "ram" else None
-    files.paths.append(write_text(folder / "scene.toml", scene_toml(scene)))
+    files.paths.append(write_text(folder / "scene.toml", to_commented_toml(scene)))
     if only in ("all", "passive"):
         files.paths += write_passive_files(scene, folder, progress=progress, store=store)
     if only in ("all", "samples"):

@@ -11,31 +11,12 @@ import tomllib
 from pathlib import Path
 
 from sonartrack.core.errors import InputError
-from sonartrack.core.settings import toml_value
+from sonartrack.core.settings import render_toml
 
 
-def _scalar(v) -> str:
-    if v is None:
-        raise TypeError("TOML has no null: leave the key out instead")
-    return toml_value(v)
-
-
-def dumps(data: dict, _prefix: str = "") -> str:
-    """Serialise a nested dict to TOML text (tables after plain keys, as TOML requires)."""
-    lines, tables = [], []
-    for k, v in data.items():
-        if v is None:
-            continue
-        if isinstance(v, dict):
-            tables.append((k, v))
-        else:
-            lines.append(f"{k} = {_scalar(v)}")
-    for k, v in tables:
-        name = f"{_prefix}{k}"
-        lines.append("")
-        lines.append(f"[{name}]")
-        lines.append(dumps(v, _prefix=name + ".").rstrip("\n"))
-    return "\n".join(lines).strip("\n") + "\n"
+def dumps(data: dict) -> str:
+    """Serialise a nested dict to TOML text (core/settings.py ``render_toml``: the one TOML writer)."""
+    return render_toml(data)
 
 
 def load(path: str | Path) -> dict:

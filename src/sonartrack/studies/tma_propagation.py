@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -156,11 +157,10 @@ def prepare(config: Config) -> None:
         snr_curve(config, env)
 
 
-@functools.lru_cache(maxsize=32)
-def _placement(config_json: str, env: str) -> tuple[float, float]:
-    """(initial range, min SNR over the track) of the target in ``env`` (Config doc)."""
-    config = Config.model_validate_json(config_json)
-    ranges, snr = snr_curve(config, env)
+def place_target(config: Config, env: str, ranges, snr) -> tuple[float, float]:
+    """(initial range, min SNR over the track) of the target on the SNR curve ``(ranges, snr)`` of ``env``
+    (Config doc): the range nearest the sea's nominal, in 250 m steps within +-40 %, whose SNR stays above the
+    detection threshold on every frame, or failing that the one with the highest minimum SNR."""
     t = config.times_s()
     po, _, _ = config.observer().state(t)
     nominal = config.nominal_range_m[config.sea(env)]
@@ -175,6 +175,12 @@ def _placement(config_json: str, env: str) -> tuple[float, float]:
         if s_min > best[1]:
             best = (float(r0), s_min)
     return best
+
+
+@functools.lru_cache(maxsize=32)
+def _placement(config_json: str, env: str) -> tuple[float, float]:
+    config = Config.model_validate_json(config_json)
+    return place_target(config, env, *snr_curve(config, env))
 
 
 def placement(config: Config, env: str) -> tuple[float, float]:
@@ -207,34 +213,59 @@ def _ml_x0(config: Config, z, t, po, sb):
     return None
 
 
-def _environment_trial(config: Config, env: str, rng: np.random.Generator, t, po, sweep: bool) -> dict:
-    """One draw of bearings and SNRs in ``env``; EM/MAP, ML and (if ``sweep``) the SL sweep."""
+@dataclass(frozen=True, slots=True)
+class Observation:
+    """One trial's data in one sea: bearings ``z`` (rad) and SNRs ``xi`` (dB) at the frame times, and the truth."""
+
+    z: np.ndarray
+    xi: np.ndarray
+    truth: np.ndarray  # [x, y] at the first frame, then at the last (m)
+    norm: np.ndarray  # the true range at those frames, per component (m)
+    range_m: np.ndarray  # true range at every frame (m)
+
+
+def observe(config: Config, ranges, snr, r0_m: float, t, po, noise) -> Observation:
+    """Bearings and SNRs of the target placed at ``r0_m`` on the curve ``(ranges, snr)``; ``noise`` =
+    (bearing noise (rad), SNR noise (dB)) per frame, drawn by the caller (so readings can share them)."""
+    pt, _, _ = config.target(r0_m).state(t)
+    d = pt - po
+    range_m = np.linalg.norm(d, axis=1)
+    return Observation(z=np.arctan2(d[:, 0], d[:, 1]) + noise[0], xi=np.interp(range_m, ranges, snr) + noise[1],
+                       truth=np.array([pt[0, 0], pt[0, 1], pt[-1, 0], pt[-1, 1]]),
+                       norm=np.array([range_m[0], range_m[0], range_m[-1], range_m[-1]]), range_m=range_m)
+
+
+def em_map_x0(config: Config, obs: Observation, t, po, ranges, snr, ml_x0, r_min_m: float, r_max_m: float):
+    """``x0(shift_db)``: the EM/MAP X0 with the SNR model shifted by ``shift_db`` (assumed SL = true + shift)."""
     from sonartrack.tma.em_map import make_problem, solve_em_map
 
-    ranges, snr = snr_curve(config, env)
-    r0, _ = placement(config, env)
-    pt, _, _ = config.target(r0).state(t)
-    d = pt - po
-    rng_true = np.linalg.norm(d, axis=1)
-    sb = np.deg2rad(config.sigma_bearing_deg)
-    z = np.arctan2(d[:, 0], d[:, 1]) + rng.normal(0.0, sb, len(t))
-    xi = np.interp(rng_true, ranges, snr) + rng.normal(0.0, config.sigma_snr_db, len(t))
-    truth = np.array([pt[0, 0], pt[0, 1], pt[-1, 0], pt[-1, 1]])
-    norm = np.array([rng_true[0], rng_true[0], rng_true[-1], rng_true[-1]])
-    ml_x0 = _ml_x0(config, z, t, po, sb)
-    em = config.em_map
+    sb, em = np.deg2rad(config.sigma_bearing_deg), config.em_map
 
-    def em_x0(shift_db):  # assumed SL = true + delta shifts the predicted SNR by delta
-        prob = make_problem(z, xi, t, po, sb, config.sigma_snr_db, lambda r: np.interp(r, ranges, snr) + shift_db,
-                            em.r_min_m, em.r_max_m, kappa=em.kappa)
+    def x0(shift_db):
+        def snr_model(r):
+            return np.interp(r, ranges, snr) + shift_db
+
+        prob = make_problem(obs.z, obs.xi, t, po, sb, config.sigma_snr_db, snr_model, r_min_m, r_max_m, kappa=em.kappa)
         return solve_em_map(prob, t0_s=0.0, extra_starts=[ml_x0], max_iter=em.max_iter, covariance=False).x0
 
+    return x0
+
+
+def _environment_trial(config: Config, env: str, rng: np.random.Generator, t, po, sweep: bool) -> dict:
+    """One draw of bearings and SNRs in ``env``; EM/MAP, ML and (if ``sweep``) the SL sweep."""
+    ranges, snr = snr_curve(config, env)
+    r0, _ = placement(config, env)
+    sb = np.deg2rad(config.sigma_bearing_deg)
+    noise = (rng.normal(0.0, sb, len(t)), rng.normal(0.0, config.sigma_snr_db, len(t)))
+    obs = observe(config, ranges, snr, r0, t, po, noise)
+    ml_x0 = _ml_x0(config, obs.z, t, po, sb)
+    em_x0 = em_map_x0(config, obs, t, po, ranges, snr, ml_x0, config.em_map.r_min_m, config.em_map.r_max_m)
     sw = np.full((len(config.sl_mismatch_db), 2), np.nan)
-    out = {"ml": np.full(4, np.nan) if ml_x0 is None else _normalised_errors(ml_x0, t, truth, norm),
-           "em": _normalised_errors(em_x0(0.0), t, truth, norm), "sweep": sw}
+    out = {"ml": np.full(4, np.nan) if ml_x0 is None else _normalised_errors(ml_x0, t, obs.truth, obs.norm),
+           "em": _normalised_errors(em_x0(0.0), t, obs.truth, obs.norm), "sweep": sw}
     if sweep:
         for i, delta in enumerate(config.sl_mismatch_db):
-            sw[i] = _range_errors(em_x0(delta), t, po, rng_true)
+            sw[i] = _range_errors(em_x0(delta), t, po, obs.range_m)
     return out
 
 

@@ -149,23 +149,8 @@ def snr_curve(config: Config, r: Reading) -> tuple[np.ndarray, np.ndarray]:
 
 
 def placement(config: Config, r: Reading) -> tuple[float, float]:
-    """(initial range, min SNR on the track): tma_propagation.placement's rule on the reading's curve."""
-    ranges, snr = snr_curve(config, r)
-    t = config.times_s()
-    po, _, _ = config.observer().state(t)
-    nominal = config.nominal_range_m[config.sea(r.env)]
-    cands = np.arange(0.6 * nominal, 1.4 * nominal + 1.0, 250.0)
-    cands = cands[np.argsort(np.abs(cands - nominal), kind="stable")]
-    best = (float(nominal), -np.inf)
-    for r0 in cands:
-        pt, _, _ = config.target(r0).state(t)
-        s_min = float(np.min(np.interp(np.linalg.norm(pt - po, axis=1), ranges, snr)))
-        if s_min >= config.detection_threshold_db:
-            return float(r0), s_min
-        if s_min > best[1]:
-            best = (float(r0), s_min)
-    return best
-
+    """(initial range, min SNR on the track): tma_propagation's placement rule on the reading's curve."""
+    return base.place_target(config, r.env, *snr_curve(config, r))
 
 def prepare(config: Config) -> None:
     """Compute (or load) every reading's TL field once, before the workers start."""
@@ -179,31 +164,17 @@ def deltas_of(config: Config, r: Reading) -> list[float]:
 
 def _reading_trial(config: Config, r: Reading, noise: tuple[np.ndarray, np.ndarray], t, po) -> dict:
     """tma_propagation._environment_trial for one reading, with the trial's noise (common random numbers)."""
-    from sonartrack.tma.em_map import make_problem, solve_em_map
-
     ranges, snr = snr_curve(config, r)
     r0, _ = placement(config, r)
-    pt, _, _ = config.target(r0).state(t)
-    d = pt - po
-    rng_true = np.linalg.norm(d, axis=1)
+    obs = base.observe(config, ranges, snr, r0, t, po, noise)
     sb = np.deg2rad(config.sigma_bearing_deg)
-    z = np.arctan2(d[:, 0], d[:, 1]) + noise[0]
-    xi = np.interp(rng_true, ranges, snr) + noise[1]
-    truth = np.array([pt[0, 0], pt[0, 1], pt[-1, 0], pt[-1, 1]])
-    norm = np.array([rng_true[0], rng_true[0], rng_true[-1], rng_true[-1]])
     cfg = config.model_copy(update={"em_map": config.em_map.model_copy(update={"r_max_m": r.r_max_m})})
-    ml_x0 = base._ml_x0(cfg, z, t, po, sb)
-
-    def em_x0(shift_db):  # assumed SL = true + delta shifts the predicted SNR by delta
-        prob = make_problem(z, xi, t, po, sb, config.sigma_snr_db, lambda q: np.interp(q, ranges, snr) + shift_db,
-                            r.r_min_m, r.r_max_m, kappa=config.em_map.kappa)
-        return solve_em_map(prob, t0_s=0.0, extra_starts=[ml_x0], max_iter=config.em_map.max_iter,
-                            covariance=False).x0
-
+    ml_x0 = base._ml_x0(cfg, obs.z, t, po, sb)
+    em_x0 = base.em_map_x0(config, obs, t, po, ranges, snr, ml_x0, r.r_min_m, r.r_max_m)
     x0 = em_x0(0.0)
     deltas = deltas_of(config, r)
-    sw = np.array([base._range_errors(x0 if dl == 0.0 else em_x0(dl), t, po, rng_true) for dl in deltas])
-    return {"em": base._normalised_errors(x0, t, truth, norm), "sweep": sw}
+    sw = np.array([base._range_errors(x0 if dl == 0.0 else em_x0(dl), t, po, obs.range_m) for dl in deltas])
+    return {"em": base._normalised_errors(x0, t, obs.truth, obs.norm), "sweep": sw}
 
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
