@@ -22,15 +22,13 @@ def option_help(model_cls, name: str, extra: str = "") -> str:
     return field_help(model_cls, name) + (f" {extra}" if extra else "")
 
 
-def resolve(model_cls, config: Path | None, *, section: str | None = None, source: str | None = None, **options):
-    """Settings from defaults <- TOML file ``config`` (its ``[section]`` table if given) <- non-None ``options``.
+def resolve(model_cls, config: Path | None, *, source: str | None = None, **options):
+    """Settings from defaults <- TOML file ``config`` <- non-None ``options``.
 
     ``options`` keys are field names; nested fields are given as ``"group__field"``."""
     from sonartrack.io import toml as toml_io
 
     data = toml_io.load(config) if config is not None else {}
-    if section is not None and config is not None:
-        data = data.get(section, data) if isinstance(data.get(section), dict) else data
     for key, value in options.items():
         if value is None:
             continue
