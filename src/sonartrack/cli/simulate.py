@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
 from sonartrack.sim.scene import PassiveSceneSettings
 
 
@@ -36,16 +36,16 @@ def simulate_cmd(
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("scene"),
 ) -> None:
     """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command."""
-    from sonartrack.core.settings import to_commented_toml
     from sonartrack.io.scene_files import check_only, shipped_scene_path, write_scene
 
     path = shipped_scene_path(scene) if scene is not None else None
     settings = resolve(PassiveSceneSettings, path, duration_s=duration_s, seed=seed, propagation=propagation)
     if print_config:
-        typer.echo(to_commented_toml(settings), nl=False)
-        raise typer.Exit(0)
+        print_config_and_exit(settings)
     check_only(only)
     from sonartrack.cli._progress import TrialProgress, make_progress
+
+    out.mkdir(parents=True, exist_ok=True)  # before the progress bar, so that a bad --out is one clean line
 
     with make_progress() as bar:
         files = write_scene(settings, out, only=only, progress=TrialProgress(bar))
