@@ -5,6 +5,7 @@ Layers (each imports only from layers below it)::
     cli/, report/, stonesoup/     faces: command line, HTML report and figures, Stone Soup components
     studies/                      one module per source paper
     experiment/                   Monte Carlo runner, result store, resume
+    passive/                      the passive chain: array recording + navigation -> target tracks and solutions
     io/                           user data in and out
     tracking/ tma/ detection/     trackers, TMA estimators, MFTD
     association/                  gating, PDA, JPDA, IPDA, IMM-IPDA

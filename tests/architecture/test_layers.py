@@ -6,6 +6,7 @@ The stack is DESIGN.md's picture (``sonartrack/__init__.py`` repeats it)::
     report                      HTML report and figures
     studies                     one module per paper
     experiment                  Monte Carlo runner, store, claims
+    passive                     the passive chain: recording + navigation -> targets
     io                          user data in and out
     tracking, tma, detection    trackers, TMA, MFTD
     association                 gating, PDA, JPDA, IPDA
@@ -33,7 +34,7 @@ PKG = Path(__file__).resolve().parents[2] / "src" / "sonartrack"
 #: sibling of the same rank unless it is itself (tracking / tma / detection stay independent).
 RANK = {
     "core": 0, "models": 1, "acoustics": 2, "sim": 3, "filters": 4, "association": 5,
-    "tracking": 6, "tma": 6, "detection": 6, "io": 7, "experiment": 8, "studies": 9,
+    "tracking": 6, "tma": 6, "detection": 6, "io": 7, "passive": 7.5, "experiment": 8, "studies": 9,
     "report": 10, "cli": 11, "stonesoup": 11,
 }
 #: metrics/ sits beside the algorithm layers: it may import core/ and models/ only, and anyone above
@@ -42,7 +43,7 @@ METRICS_MAY_IMPORT = {"core", "models", "metrics"}
 METRICS_RANK = 1.5
 #: estimators never depend on simulators: sim/ makes data, the estimators consume it (a simulator's
 #: helper that an estimator needs belongs in models/).
-ESTIMATORS = {"filters", "association", "tracking", "tma", "detection"}
+ESTIMATORS = {"filters", "association", "tracking", "tma", "detection", "passive"}
 
 
 def _layer_of(module_path: Path) -> str:
@@ -118,6 +119,7 @@ def test_every_subpackage_has_a_layer():
     ("acoustics", "io", False), ("metrics", "filters", False), ("studies", "metrics", True),
     ("models", "metrics", False), ("cli", "report", True), ("report", "cli", False),
     ("detection", "sim", False), ("studies", "sim", True), ("sim", "models", True),
+    ("passive", "io", True), ("passive", "sim", False), ("io", "passive", False), ("studies", "passive", True),
 ])
 def test_rule_itself(src, dst, ok):
     # the checker must be able to fail: a known upward import is refused, a downward one allowed

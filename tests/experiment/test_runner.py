@@ -173,3 +173,30 @@ def test_runner_runs_any_study_module_it_is_given(tmp_path, monkeypatch):
     assert plan.study_module == "toy_study_for_the_runner" and plan.todo_chunks == ((0, 1), (2,))
     trials = runner.execute(plan, cfg, workers=1)
     np.testing.assert_array_equal(trials["x"], [2.0 * trial_rng(5, i).normal(size=2) for i in range(3)])
+
+
+def test_an_interrupt_kills_the_workers_and_keeps_the_stored_chunks(tmp_path):
+    import multiprocessing as mp
+
+    mod, cfg = small_config(12)
+    plan = runner.plan_run(mod, cfg, 12, seed=7, out_dir=tmp_path, chunk_size=2)
+
+    def stop(n):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        runner.execute(plan, cfg, workers=2, on_chunk=stop)
+    assert mp.active_children() == []  # no worker left running, nor waiting for more work
+    assert runner.stored_trials(mod, cfg, 7, tmp_path) == 2  # the one chunk stored before the interrupt
+    assert not list(plan.cache_dir.glob(".*tmp*"))
+
+
+def test_a_signal_while_the_pool_starts_is_acted_on_once_it_has_started():
+    """Held, not lost: SIGINT during start-up raises KeyboardInterrupt (pytest's handler) on the way out."""
+    reached = []
+    with pytest.raises(KeyboardInterrupt), runner._stop_signals_held():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+        reached.append(True)
+    assert reached == [True]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import field_validator
+from pydantic import field_validator, model_validator
 
 from sonartrack.acoustics.environment import Environment
 from sonartrack.acoustics.sonar_equation import DI_DB, NL_DB, SL_DB, convergence_zones, detection_ranges, passive_snr_db
@@ -37,11 +37,12 @@ class TLSettings(Settings):
     source_depth_m: float = setting(50.0, "source (target) depth, inside the water column", unit="m")
     receiver_depth_m: float | None = setting(None, "receiver (array) depth; default: the source depth", unit="m")
     rmax_km: float = setting(50.0, "maximum range of the field", unit="km", gt=0)
-    sl_db: float = setting(SL_DB, "source level", unit="dB")
-    nl_db: float = setting(NL_DB, "noise level", unit="dB")
-    di_db: float = setting(DI_DB, "directivity index of the array", unit="dB")
-    threshold_db: float = setting(0.0, "detection threshold on the SNR", unit="dB")
-    average_m: float = setting(1000.0, "range window of the incoherent TL average", unit="m", gt=0)
+    sl_db: float = setting(SL_DB, "source level", unit="dB", ge=0, le=300)
+    nl_db: float = setting(NL_DB, "noise level", unit="dB", ge=-100, le=300)
+    di_db: float = setting(DI_DB, "directivity index of the array", unit="dB", ge=-50, le=100)
+    threshold_db: float = setting(0.0, "detection threshold on the SNR", unit="dB", ge=-200, le=200)
+    average_m: float = setting(1000.0, "range window of the incoherent TL average (up to the maximum range)", unit="m",
+                             gt=0)
 
     @field_validator("rmax_km")
     @classmethod
@@ -50,6 +51,13 @@ class TLSettings(Settings):
         if v > MAX_RANGE_KM:
             raise ValueError(f"{v:g} km: the maximum range is in kilometres, not metres")
         return v
+
+    @model_validator(mode="after")
+    def _average_within_field(self):
+        if self.average_m > self.rmax_km * KM_M:
+            raise ValueError(f"average_m = {self.average_m:g} m is longer than the field's maximum range rmax_km = "
+                             f"{self.rmax_km:g} km: shorten average_m (it is in metres) or lengthen rmax_km")
+        return self
 
     @property
     def zr_m(self) -> float:

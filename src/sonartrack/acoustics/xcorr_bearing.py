@@ -32,9 +32,9 @@ DEFAULT_THRESHOLD = 5_000.0
 class BearingSettings(Settings):
     """Settings of the cross-correlation bearing estimator (``sonartrack bearings``; paper P0's values)."""
 
-    spacing_m: float = setting(..., "sensor (or half-array centre) spacing d", unit="m", gt=0)
-    sound_speed_mps: float = setting(1500.0, "sound speed c at the array", unit="m/s", gt=0)
-    window_s: float = setting(1.0, "observation window of one correlation", unit="s", gt=0)
+    spacing_m: float = setting(..., "sensor (or half-array centre) spacing d", unit="m", gt=0, le=1000)
+    sound_speed_mps: float = setting(1500.0, "sound speed c at the array", unit="m/s", ge=1300, le=1700)
+    window_s: float = setting(1.0, "observation window of one correlation", unit="s", gt=0, le=3600)
     threshold: float = setting(DEFAULT_THRESHOLD, "peak amplitude threshold (amplitudes 0..30000 = normalised "
                                "correlation 0..1; 5000 = 1/6)", unit="1", ge=0)
     max_peaks: int = setting(20, "largest number of peaks kept per window (the highest)", unit="1", ge=1)

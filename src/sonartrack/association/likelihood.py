@@ -18,24 +18,30 @@ The chi-square gate is evaluated in full only for the pairs that pass a cheap ne
 nu^T S^-1 nu >= nu_i^2 / S_ii for every axis i of an SPD S, a pair with nu_i^2 > gamma S_ii on some axis
 (in every mode) cannot be validated. With many tracks and a clutter-filled scan this skips most pairs;
 the pairs it keeps are computed with exactly the same arithmetic as a dense evaluation would use.
-The pre-gate and the kept pairs' innovations run compiled (association/likelihood_kernel.py: a loop
-that stops at the first failing axis), with the NumPy evaluation's results bit for bit.
+The pre-gate, the kept pairs' innovations and the gate run compiled (association/likelihood_kernel.py:
+a loop that stops at the first failing axis, over each track's window of the measurements sorted by
+position), with the NumPy evaluation's results bit for bit; only the gated pairs leave it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from sonartrack.core.gaussian import LOG_2PI, inv_and_logdet
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True)
 class Likelihoods:
-    """Everything an associator and the PDA update need (n tracks, r modes, m measurements, k dims, G gated pairs)."""
+    """Everything an associator and the PDA update need (n tracks, r modes, m measurements, k dims, G gated pairs).
 
-    log_ratio: np.ndarray  # (n, r, m) log p_rm / rho_m (+ the amplitude log ratio for JPDA_A); valid where gated
+    The log ratios are kept at the gated pairs (``pair_log_ratio``); the dense (n, r, m) array
+    :attr:`log_ratio` is built on first use (the JPDA associator wants it; the PDA path never does, which
+    spares it n x r x m work on a scan with thousands of contacts and tracks)."""
+
+    pair_log_ratio: np.ndarray  # (G, r) log p_rm / rho_m (+ the amplitude log ratio for JPDA_A) of the gated pairs
     gated: np.ndarray  # (n, m) bool: measurement m validated by track n (union over modes)
     pd: np.ndarray | float  # (n,) P_D in the hit weight (or one value for every track)
     miss: np.ndarray | float  # (n, r) 1 - P_D P_G, the weight of "no measurement is the target's" (or one value)
@@ -43,11 +49,21 @@ class Likelihoods:
     pair_meas: np.ndarray  # (G,)
     nu: np.ndarray  # (G, r, k) innovations of the gated pairs
     S_inv: np.ndarray  # (G, r, k, k) their inverse innovation covariances
+    dense_log_ratio: np.ndarray | None = None  # (n, r, m) where the measurement model evaluated every pair anyway
 
     @property
     def shape(self) -> tuple[int, int, int]:
         """(n tracks, r modes, m measurements)."""
-        return self.log_ratio.shape
+        return self.gated.shape[0], self.pair_log_ratio.shape[1], self.gated.shape[1]
+
+    @cached_property
+    def log_ratio(self) -> np.ndarray:
+        """(n, r, m) log p_rm / rho_m, valid where gated (-inf elsewhere unless every pair was evaluated)."""
+        if self.dense_log_ratio is not None:
+            return self.dense_log_ratio
+        out = np.full(self.shape, -np.inf)
+        out[self.pair_track, :, self.pair_meas] = self.pair_log_ratio
+        return out
 
 
 def mahalanobis2(nu, S_inv):
@@ -97,21 +113,24 @@ def _rows(a, shape) -> np.ndarray:
     return np.broadcast_to(a, shape)
 
 
-def _candidate_innovations(x_pos, P_pos, z, R, gamma: float, compiled: bool):
-    """The pre-gate's candidate pairs (ci, cj) and their nu (C, r, 2), S^-1 (C, r, 2, 2), log det S (C, r);
-    compiled (association/likelihood_kernel.py) or in NumPy, with identical results."""
+def _gated_pairs(x_pos, P_pos, z, R, gamma: float, compiled: bool):
+    """The pairs that pass the pre-gate and then the chi-square gate, in row-major order: (ti, mi) and their
+    nu (G, r, 2), S^-1 (G, r, 2, 2), log det S (G, r), d2 (G, r); compiled (association/likelihood_kernel.py)
+    or in NumPy, with identical results."""
     if compiled:
         from sonartrack.association import likelihood_kernel as kernel
 
         R = np.ascontiguousarray(R)
-        ci, cj = kernel.candidate_pairs(x_pos, P_pos, z, R, gamma * (1.0 + 1e-6))
-        nu, S_inv, det = kernel.pair_innovations(x_pos, P_pos, z, R, ci, cj)
-        if not np.all(det > 0.0):
+        ti, mi, nu, S_inv, det, d2, all_positive = kernel.gated_pairs(x_pos, P_pos, z, R, gamma * (1.0 + 1e-6), gamma)
+        if not all_positive:
             raise np.linalg.LinAlgError("covariance is singular or not positive definite")
-        return ci, cj, nu, S_inv, np.log(det)
+        return ti, mi, nu, S_inv, np.log(det), d2
     ci, cj = _chi_square_candidates(x_pos, P_pos, z, R, gamma)
     S_inv, logdet = inv_and_logdet(P_pos[ci] + R[cj][:, None])
-    return ci, cj, z[cj][:, None, :] - x_pos[ci], S_inv, logdet
+    nu = z[cj][:, None, :] - x_pos[ci]
+    d2 = mahalanobis2(nu, S_inv)
+    g = (d2 < gamma).any(axis=1)
+    return ci[g], cj[g], nu[g], S_inv[g], logdet[g], d2[g]
 
 
 def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density,
@@ -131,14 +150,10 @@ def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: f
     x_pos = np.ascontiguousarray(x_pred[:, :, :2])  # (n, r, 2), (n, r, 2, 2): H x-, H P- H^T
     P_pos = np.ascontiguousarray(np.asarray(P_pred, float)[:, :, :2, :2])
     if n * m > PREGATE_MIN_PAIRS:
-        ci, cj, nu, S_inv, logdet = _candidate_innovations(x_pos, P_pos, z, R, gamma, compiled)
-        d2 = mahalanobis2(nu, S_inv)
-        g = (d2 < gamma).any(axis=1)
-        ti, mi = ci[g], cj[g]  # the gated pairs, still in row-major order
+        ti, mi, nu, S_inv, logdet, d2 = _gated_pairs(x_pos, P_pos, z, R, gamma, compiled)
         gated = np.zeros((n, m), bool)
         gated[ti, mi] = True
-        log_ratio = np.full((n, r, m), -np.inf)
-        log_ratio[ci, :, cj] = gaussian_log_ratio(logdet, d2, 2, log_rho if log_rho.ndim == 0 else log_rho[cj, None])
+        pair_log_ratio = gaussian_log_ratio(logdet, d2, 2, log_rho if log_rho.ndim == 0 else log_rho[mi, None])
     else:  # every pair, in (track, mode, measurement) order: the same values as the pre-gated path, no gathering
         nu = z - x_pos[:, :, None]  # (n, r, m, 2)
         S_inv, logdet = inv_and_logdet(P_pos[:, :, None] + R)  # (n, r, m, 2, 2)
@@ -146,8 +161,9 @@ def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: f
         gated = (d2 < gamma).any(axis=1)
         ti, mi = np.nonzero(gated)
         log_ratio = gaussian_log_ratio(logdet, d2, 2, log_rho)
-        return Likelihoods(log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu[ti, :, mi], S_inv[ti, :, mi])
-    return Likelihoods(log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu[g], S_inv[g])
+        return Likelihoods(log_ratio[ti, :, mi], gated, float(pd), 1.0 - pd * pg, ti, mi, nu[ti, :, mi],
+                           S_inv[ti, :, mi], log_ratio)
+    return Likelihoods(pair_log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu, S_inv)
 
 
 def window_likelihoods(x_pred, P_pred, z, sigma, *, gate_width: float, pd_hit, pd_miss, clutter_density,
@@ -169,6 +185,6 @@ def window_likelihoods(x_pred, P_pred, z, sigma, *, gate_width: float, pd_hit, p
     if log_ratio_extra is not None:
         log_ratio = log_ratio + np.asarray(log_ratio_extra, float)[:, None, :]
     ti, mi = np.nonzero(gated)
-    return Likelihoods(log_ratio, gated, np.asarray(pd_hit, float),
+    return Likelihoods(log_ratio[ti, :, mi], gated, np.asarray(pd_hit, float),
                        1.0 - np.asarray(pd_miss, float)[:, None] * erf(half / np.sqrt(2 * S)),
-                       ti, mi, nu[ti, :, mi][..., None], S_inv[ti][..., None, None])
+                       ti, mi, nu[ti, :, mi][..., None], S_inv[ti][..., None, None], log_ratio)

@@ -15,7 +15,8 @@ association/likelihood.py):
     K_rm = P-_r H^T S^-1,   x_rm = x-_r + K_rm nu,   P_rm = P-_r - K_rm S K_rm^T
     x_r = sum_m beta_rm x_rm (m = 0: x-_r),  P_r = sum_m beta_rm (P_rm + (x_rm - x_r)(x_rm - x_r)^T)
 
-The weights are :func:`pda_weights`, the update :func:`pda_mixture_update` (which also serves JPDA:
+The weights are :func:`pda_weights` (dense, (n, r, m)) or :func:`pda_pair_weights` (the same numbers at the
+gated pairs only, what the tracker uses), the update :func:`pda_mixture_update` (which also serves JPDA:
 only its weights differ, association/jpda.py). For IPDA, delta = 1 - sum_r c_r Lambda_r and the
 existence update is P(E)+ = (1 - delta) P(E)- / (1 - delta P(E)-) (association/ipda.py).
 """
@@ -35,8 +36,13 @@ class AssociationWeights:
     """Association probabilities of n tracks x r modes over m measurements."""
 
     beta0: np.ndarray  # (n, r) weight of "no measurement is the target's"
-    beta: np.ndarray  # (n, r, m) weight of measurement m (zero outside the gate)
+    beta: np.ndarray | None  # (n, r, m) weight of measurement m (zero outside the gate); None: only beta_pair
     log_lambda: np.ndarray | None  # (n, r) log Lambda_r (PDA; None where an associator has no such ratio)
+    beta_pair: np.ndarray | None = None  # (G, r) the weights of the gated pairs (Likelihoods.pair_track/pair_meas)
+
+    def of_pairs(self, lik: Likelihoods) -> np.ndarray:
+        """(G, r) the weights of the gated pairs of ``lik``."""
+        return self.beta_pair if self.beta_pair is not None else self.beta[lik.pair_track, :, lik.pair_meas]
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +65,21 @@ def pda_weights(lik: Likelihoods) -> AssociationWeights:
     lam = lik.miss + pd * ratio.sum(axis=-1)  # (n, r)
     beta = (pd if np.isscalar(pd) else pd[..., None]) * ratio / lam[..., None]
     return AssociationWeights(lik.miss / lam, beta, np.log(lam))
+
+
+def pda_pair_weights(lik: Likelihoods) -> AssociationWeights:
+    """:func:`pda_weights` from the gated pairs alone: ``beta`` None, ``beta_pair (G, r)`` instead; the same
+    numbers bit for bit (the sum over m is NumPy's dense row sum, association/pda_mixture_kernel.py), at a
+    cost in the gated pairs G, not in n x r x m."""
+    from sonartrack.association.pda_mixture_kernel import dense_row_sums  # numba: loaded on first use
+
+    n, r, m = lik.shape
+    ratio = np.exp(np.minimum(lik.pair_log_ratio, 700.0))  # (G, r), as pda_weights
+    ratio_sum = dense_row_sums(lik.pair_track, lik.pair_meas, np.ascontiguousarray(ratio), n, m)
+    scalar_pd = np.isscalar(lik.pd)
+    lam = lik.miss + (lik.pd if scalar_pd else lik.pd[:, None]) * ratio_sum  # (n, r)
+    beta_pair = (lik.pd if scalar_pd else lik.pd[lik.pair_track, None]) * ratio / lam[lik.pair_track]
+    return AssociationWeights(lik.miss / lam, None, np.log(lam), beta_pair)
 
 
 def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta):

@@ -1,4 +1,4 @@
-"""Compiled Gaussian-mixture reduction of the PDA update over the gated pairs (numba), for the tracker.
+"""Compiled PDA over the gated pairs (numba), for the tracker: the weights' sums and the mixture update.
 
 The same update as ``association.pda.pda_mixture_update`` (equations there and in association/pda.py's
 module doc), for n tracks x r modes and G gated (track, measurement) pairs g = (t, m):
@@ -7,11 +7,19 @@ module doc), for n tracks x r modes and G gated (track, measurement) pairs g = (
     x_t = x-_t + sum_g beta_g dx_g
     P_t = beta_0 P-_t + sum_g beta_g (P-_t - K_g H P-_t + dx_g dx_g^T) - dx dx^T,   dx = sum_g beta_g dx_g
 
-The gains K_g and the products K_g H P-_t stay NumPy matrix products (the wrapper computes them, as the
-reference does); the compiled loops do the rest -- the per-pair terms, their sums per track, the
-combination -- with the same floating-point operations in the same order as the reference (its sums
-accumulate pair after pair, 0 + v_1 + v_2 + ...), so the results are identical bit for bit, without
-the reference's (G, r, d, d) temporaries.
+The compiled loops do the per-pair terms, their sums per track and the combination with the same
+floating-point operations in the same order as the reference (its sums accumulate pair after pair,
+0 + v_1 + v_2 + ...), so the results are identical bit for bit, without the reference's (G, r, d, d)
+temporaries and reading only the G gated pairs (never an (n, r, m) array). The gains K_g and the
+products K_g H P-_t of 2-D measurements are computed in the loop too, as NumPy's matmul computes them
+on this machine (its BLAS accumulates c = a_0 b_0, then c = fma(a_1, b_1, c)); :func:`gains_match_numpy`
+checks that once per process on random matrices, and where it does not hold (another BLAS, no FMA)
+the wrapper takes NumPy's products instead, as before.
+
+:func:`dense_row_sums` gives the PDA weights' sums over measurements, sum_m p_rm / rho_m, from the
+gated pairs alone with exactly NumPy's result for the dense (n, r, m) row sum (its pairwise summation:
+blocks of at most 128 summed in 8 interleaved accumulators, longer rows split in halves rounded down
+to a multiple of 8; the zeros outside the gate add nothing), so the dense array is never formed.
 
 This module imports numba at the top; tracking/multi_target.py imports it on the first update, so
 ``import sonartrack`` stays fast. Compiled functions are cached on disk.
@@ -19,16 +27,60 @@ This module imports numba at the top; tracking/multi_target.py imports it on the
 
 from __future__ import annotations
 
+import functools
+
+import llvmlite.ir as llvm_ir
 import numba as nb
 import numpy as np
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from sonartrack.association.likelihood import Likelihoods
 from sonartrack.core.linalg import symmetrize
 
 
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """a * b + c rounded once (LLVM's fma intrinsic: the hardware instruction, or an exact software one)."""
+    sig = nb.types.float64(nb.types.float64, nb.types.float64, nb.types.float64)
+
+    def codegen(context, builder, signature, args):
+        dbl = llvm_ir.DoubleType()
+        fn = cgutils.get_or_insert_function(builder.module, llvm_ir.FunctionType(dbl, [dbl] * 3), "llvm.fma.f64")
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
 @nb.njit(cache=True)
-def _pair_sums(P_pred, beta, ti, mi, K, KHP, nu):  # pragma: no cover - compiled
-    """sum_g beta_g dx_g (n, r, d) and sum_g beta_g (P- - K H P- + dx_g dx_g^T) (n, r, d, d) per track."""
+def _dot2(a0, a1, b0, b1):  # pragma: no cover - compiled
+    """a0 b0 + a1 b1 as NumPy's matmul of 2-column matrices computes it (module doc)."""
+    return _fma(a1, b1, a0 * b0)
+
+
+@nb.njit(cache=True)
+def gains2(P_pred, ti, S_inv):  # pragma: no cover - compiled
+    """K_g = P-_t H^T S_g^-1 (G, r, d, 2) and K_g H P-_t (G, r, d, d) for 2-D measurements (H = [I 0])."""
+    r, d = P_pred.shape[1], P_pred.shape[2]
+    G = len(ti)
+    K = np.empty((G, r, d, 2))
+    KHP = np.empty((G, r, d, d))
+    for g in range(G):
+        t = ti[g]
+        for q in range(r):
+            for i in range(d):
+                for j in range(2):
+                    K[g, q, i, j] = _dot2(P_pred[t, q, i, 0], P_pred[t, q, i, 1], S_inv[g, q, 0, j], S_inv[g, q, 1, j])
+            for i in range(d):
+                for j in range(d):
+                    KHP[g, q, i, j] = _dot2(K[g, q, i, 0], K[g, q, i, 1], P_pred[t, q, j, 0], P_pred[t, q, j, 1])
+    return K, KHP
+
+
+@nb.njit(cache=True)
+def _pair_sums(P_pred, beta_pair, ti, K, KHP, nu):  # pragma: no cover - compiled
+    """sum_g beta_g dx_g (n, r, d) and sum_g beta_g (P- - K H P- + dx_g dx_g^T) (n, r, d, d) per track;
+    ``beta_pair (G, r)`` the weights of the gated pairs."""
     n, r, d = P_pred.shape[0], P_pred.shape[1], P_pred.shape[2]
     k = nu.shape[2]
     acc_x = np.zeros((n, r, d))
@@ -37,7 +89,7 @@ def _pair_sums(P_pred, beta, ti, mi, K, KHP, nu):  # pragma: no cover - compiled
     for g in range(len(ti)):
         t = ti[g]
         for q in range(r):
-            b = beta[t, q, mi[g]]
+            b = beta_pair[g, q]
             for i in range(d):
                 s = 0.0  # the reference's einsum sums into a zeroed output
                 for j in range(k):
@@ -47,6 +99,43 @@ def _pair_sums(P_pred, beta, ti, mi, K, KHP, nu):  # pragma: no cover - compiled
             for i in range(d):
                 for j in range(d):
                     acc_P[t, q, i, j] += ((P_pred[t, q, i, j] - KHP[g, q, i, j]) + dx[i] * dx[j]) * b
+    return acc_x, acc_P
+
+
+@nb.njit(cache=True)
+def _gain_row(P_t, i, s00, s01, s10, s11, n0, n1):  # pragma: no cover - compiled
+    """Row i of K = P-_t H^T S^-1 (as :func:`gains2`) and dx_i = (K nu)_i summed from 0 (as the reference's einsum)."""
+    k0 = _dot2(P_t[i, 0], P_t[i, 1], s00, s10)
+    k1 = _dot2(P_t[i, 0], P_t[i, 1], s01, s11)
+    s = 0.0
+    s += k0 * n0
+    s += k1 * n1
+    return k0, k1, s
+
+
+@nb.njit(cache=True)
+def _pair_sums_cv2(P_pred, beta_pair, ti, S_inv, nu):  # pragma: no cover - compiled
+    """:func:`_pair_sums` for a 4-D state and 2-D measurements (the position tracker) with K_g and K_g H P-_t
+    computed in the loop (as :func:`gains2`), in registers: no (G, r, d, d) array is written and read back."""
+    n, r = P_pred.shape[0], P_pred.shape[1]
+    acc_x = np.zeros((n, r, 4))
+    acc_P = np.zeros((n, r, 4, 4))
+    for g in range(len(ti)):
+        t = ti[g]
+        for q in range(r):
+            b = beta_pair[g, q]
+            s00, s01, s10, s11 = S_inv[g, q, 0, 0], S_inv[g, q, 0, 1], S_inv[g, q, 1, 0], S_inv[g, q, 1, 1]
+            n0, n1 = nu[g, q, 0], nu[g, q, 1]
+            P_t = P_pred[t, q]
+            K = (_gain_row(P_t, 0, s00, s01, s10, s11, n0, n1), _gain_row(P_t, 1, s00, s01, s10, s11, n0, n1),
+                 _gain_row(P_t, 2, s00, s01, s10, s11, n0, n1), _gain_row(P_t, 3, s00, s01, s10, s11, n0, n1))
+            ax, aP = acc_x[t, q], acc_P[t, q]
+            for i in range(4):
+                ki0, ki1, dxi = K[i]
+                ax[i] += b * dxi
+                for j in range(4):
+                    khp = _dot2(ki0, ki1, P_t[j, 0], P_t[j, 1])
+                    aP[i, j] += ((P_t[i, j] - khp) + dxi * K[j][2]) * b
     return acc_x, acc_P
 
 
@@ -69,17 +158,131 @@ def _combine(x_pred, P_pred, beta0, acc_x, acc_P):  # pragma: no cover - compile
     return x, P
 
 
+@nb.njit(cache=True)
+def _block_sums(col, val, a, b, lo, n, acc, res):  # pragma: no cover - compiled
+    """NumPy's sums (into ``res (r,)``) of a dense block [lo, lo + n), n <= 128, whose only non-zero entries are
+    ``val[a:b]`` (G, r) at the (increasing) columns ``col[a:b]``: one by one below 8 entries, else 8 interleaved
+    accumulators (``acc (8, r)``) over the first n - n % 8 entries, combined pairwise, then the rest one by
+    one (numpy's ``pairwise_sum``); every mode at once."""
+    r = val.shape[1]
+    res[:] = 0.0
+    p = a
+    if n >= 8:
+        acc[:] = 0.0
+        top = lo + n - n % 8
+        while p < b and col[p] < top:
+            for q in range(r):
+                acc[(col[p] - lo) % 8, q] += val[p, q]
+            p += 1
+        for q in range(r):
+            low4 = (acc[0, q] + acc[1, q]) + (acc[2, q] + acc[3, q])
+            res[q] = low4 + ((acc[4, q] + acc[5, q]) + (acc[6, q] + acc[7, q]))
+    while p < b:  # below 8 entries all of them, else the rest
+        for q in range(r):
+            res[q] += val[p, q]
+        p += 1
+
+
+@nb.njit(cache=True)
+def _push(frames, depth, col, lo, n, a, b):  # pragma: no cover - compiled
+    """A new segment [lo, lo + n) with non-zero entries a:b at ``depth`` of the stack, not yet started, and where
+    its entries split between the halves [lo, lo + n2) and the rest (n2 = n // 2 rounded down to a multiple of 8)."""
+    n2 = n // 2
+    n2 -= n2 % 8
+    split = a
+    while split < b and col[split] < lo + n2:
+        split += 1
+    frames[depth, 0], frames[depth, 1], frames[depth, 2], frames[depth, 3] = lo, n, a, b
+    frames[depth, 4], frames[depth, 5], frames[depth, 6] = 0, n2, split
+
+
+@nb.njit(cache=True)
+def _pairwise(col, val, a, b, m, frames, left, acc, ret):  # pragma: no cover - compiled
+    """NumPy's pairwise sums (into ``ret (r,)``) of the dense rows of m entries whose only non-zero entries are
+    ``val[a:b]`` (G, r) at the (increasing) columns ``col[a:b]``: rows longer than 128 are split at n2 (:func:`_push`)
+    and summed as sum(first n2) + sum(rest). Written with an explicit stack (numba cannot cache a recursive
+    function): ``frames (depth, 7)`` holds lo, n, a, b, stage, n2, split of each pending segment, ``left (depth, r)``
+    its left sums."""
+    _push(frames, 0, col, 0, m, a, b)
+    depth = 0
+    while depth >= 0:
+        lo, n, a, b, stage, n2, split = frames[depth]
+        if stage == 0 and (a == b or n <= 128):
+            if a < b:
+                _block_sums(col, val, a, b, lo, n, acc, ret)
+            else:
+                ret[:] = 0.0
+            depth -= 1
+        elif stage == 0:  # first the left half
+            frames[depth, 4] = 1
+            depth += 1
+            _push(frames, depth, col, lo, n2, a, split)
+        elif stage == 1:  # then the right half
+            left[depth] = ret
+            frames[depth, 4] = 2
+            depth += 1
+            _push(frames, depth, col, lo + n2, n - n2, split, b)
+        else:
+            ret[:] = left[depth] + ret
+            depth -= 1
+
+
+@nb.njit(cache=True)
+def dense_row_sums(pair_track, pair_meas, val, n, m):  # pragma: no cover - compiled
+    """(n, r) sums over m of the dense (n, r, m) array that is ``val (G, r)`` at the pairs and 0 elsewhere,
+    bit for bit as ``dense.sum(axis=-1)`` (pairs in row-major order; module doc)."""
+    r = val.shape[1]
+    out = np.zeros((n, r))
+    frames = np.empty((64, 7), np.int64)  # depth <= log2(m / 64): 64 levels hold any row
+    left, acc, ret = np.empty((64, r)), np.empty((8, r)), np.empty(r)
+    g, G = 0, len(pair_track)
+    while g < G:
+        e = g
+        while e < G and pair_track[e] == pair_track[g]:
+            e += 1
+        _pairwise(pair_meas, val, g, e, m, frames, left, acc, ret)
+        for q in range(r):
+            out[pair_track[g], q] = 0.0 + ret[q]  # numpy's reduction starts from 0
+        g = e
+    return out
+
+
+@functools.cache
+def gains_match_numpy() -> bool:
+    """Whether :func:`gains2` gives NumPy's ``P H^T @ S^-1`` and ``K @ H P`` bit for bit here (module doc)."""
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(256, 2, 4, 4))
+    P = A @ np.swapaxes(A, -1, -2)
+    B = rng.normal(size=(256, 2, 2, 2))
+    S_inv = B @ np.swapaxes(B, -1, -2)
+    ti = np.arange(256)
+    K, KHP = gains2(P, ti, S_inv)
+    K_np = P[..., :, :2] @ S_inv
+    return bool(np.array_equal(K, K_np) and np.array_equal(KHP, K_np @ np.swapaxes(P[..., :, :2], -1, -2)))
+
+
 def pda_mixture_update_fast(x_pred, P_pred, lik: Likelihoods, beta0, beta):
     """``pda_mixture_update`` (association/pda.py) with the sums compiled: same arguments, identical results."""
+    if lik.gated.shape[1] == 0:
+        return x_pred.copy(), P_pred.copy()
+    return pda_mixture_update_pairs(x_pred, P_pred, lik, beta0, beta[lik.pair_track, :, lik.pair_meas])
+
+
+def pda_mixture_update_pairs(x_pred, P_pred, lik: Likelihoods, beta0, beta_pair):
+    """:func:`pda_mixture_update_fast` with the weights of the gated pairs only, ``beta_pair (G, r)``."""
     k = lik.nu.shape[-1]
-    ti, mi = lik.pair_track, lik.pair_meas
+    ti = lik.pair_track
     if lik.gated.shape[1] == 0:
         return x_pred.copy(), P_pred.copy()
     if not len(ti):
         return x_pred.copy(), symmetrize(beta0[..., None, None] * P_pred)
-    PHt = P_pred[ti][..., :, :k]  # P H^T for H = [I 0], per pair (G, r, d, k)
-    K = PHt @ lik.S_inv
-    KHP = K @ np.swapaxes(PHt, -1, -2)
-    beta0, beta = np.ascontiguousarray(beta0, dtype=float), np.ascontiguousarray(beta, dtype=float)
-    acc_x, acc_P = _pair_sums(P_pred, beta, ti, mi, K, KHP, lik.nu)
+    P_pred = np.ascontiguousarray(P_pred, dtype=float)
+    beta0, beta_pair = np.ascontiguousarray(beta0, dtype=float), np.ascontiguousarray(beta_pair, dtype=float)
+    if k == 2 and P_pred.shape[-1] == 4 and gains_match_numpy():
+        acc_x, acc_P = _pair_sums_cv2(P_pred, beta_pair, ti, np.ascontiguousarray(lik.S_inv), lik.nu)
+    else:
+        PHt = P_pred[ti][..., :, :k]  # P H^T for H = [I 0], per pair (G, r, d, k)
+        K = PHt @ lik.S_inv
+        KHP = K @ np.swapaxes(PHt, -1, -2)
+        acc_x, acc_P = _pair_sums(P_pred, beta_pair, ti, K, KHP, lik.nu)
     return _combine(x_pred, P_pred, beta0, acc_x, acc_P)

@@ -11,9 +11,12 @@ with status 2 too. Any other exception is a bug and is shown in full.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import pkgutil
+import signal
 import sys
+import threading
 
 import typer
 
@@ -40,8 +43,66 @@ def _register_commands() -> None:
 _register_commands()
 
 
-#: what an interrupted run prints (exit status 130, as for SIGINT)
+#: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM)
 INTERRUPTED = "interrupted: finished trials are saved; rerun the same command to resume"
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT (Ctrl-C) or SIGTERM, raised in the main thread; a command may re-raise it with its own
+    one-line ``message`` (e.g. how many trials were kept). :func:`main` prints the message and returns
+    128 + the signal number, the shell's convention for a process ended by that signal."""
+
+    def __init__(self, signum: int = signal.SIGINT, message: str | None = None):
+        super().__init__(message or "")
+        self.signum = int(signum)
+        self.message = message
+
+
+def _raise_interrupted(signum, frame) -> None:
+    """Signal handler: stop the command once; further SIGINT/SIGTERM are ignored so that the clean-up
+    (stopping workers, counting what was kept) is not itself interrupted into a traceback."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def _stop_signals_raise():
+    """SIGINT and SIGTERM raise :class:`Interrupted` while the app runs, then the old handlers return.
+
+    A signal ignored on entry stays ignored (a job started in the background by a non-interactive
+    shell ignores SIGINT on purpose). Signal handlers can only be set from the main thread.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in old.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, _raise_interrupted)
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+
+
+def _interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind ``exc`` (typer turns one into ``Exit(130)``), if any."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def _report_interrupt(exc: BaseException | None) -> int:
+    """Print the interrupted command's one line; the status is 128 + the signal number (130 for SIGINT)."""
+    intr = _interrupt_of(exc)
+    typer.echo(getattr(intr, "message", None) or INTERRUPTED, err=True)
+    return 128 + getattr(intr, "signum", signal.SIGINT)
 
 
 def _exit_status(code) -> int:
@@ -57,16 +118,19 @@ def main(argv: list[str] | None = None) -> int:
     typer runs in its standalone mode, which handles its own (bundled click) usage errors whatever
     click it ships: usage text and status 2 for a missing argument, an unknown option or command, and
     no arguments at all; help and ``--print-config`` end with status 0. A user mistake inside a
-    command is an :class:`InputError`: its one-line message (``error: ...``), status 2. Ctrl-C is
-    status 130 with a note on resuming. A file-system refusal (an output folder that cannot be made, a
-    file that cannot be written) is named in one line, status 2. Any other exception is a bug in sonartrack:
+    command is an :class:`InputError`: its one-line message (``error: ...``), status 2. Ctrl-C (SIGINT)
+    and SIGTERM raise :class:`Interrupted` in the command; it ends with one line, the command's own
+    account or the generic note on resuming, and status 130 (SIGINT) or 143 (SIGTERM). A file-system
+    refusal (an output folder that cannot be made, a file that cannot be written) is named in one line,
+    status 2. Any other exception is a bug in sonartrack:
     one line naming it and status 1, or, with ``--debug`` anywhere on the command line, the traceback.
     """
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     args = [a for a in args if a != "--debug"]
     try:
-        app(args=args, prog_name="sonartrack", standalone_mode=True)
+        with _stop_signals_raise():
+            app(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
         typer.echo(f"error: {exc}", err=True)
         return 2
@@ -76,14 +140,11 @@ def main(argv: list[str] | None = None) -> int:
         where = f": {exc.filename}" if exc.filename else ""
         typer.echo(f"error: {exc.strerror or exc}{where} (check the path and its permissions)", err=True)
         return 2
-    except KeyboardInterrupt:
-        typer.echo(INTERRUPTED, err=True)
-        return 130
+    except KeyboardInterrupt as exc:
+        return _report_interrupt(exc)
     except SystemExit as exc:
         status = _exit_status(exc.code)
-        if status == 130:
-            typer.echo(INTERRUPTED, err=True)
-        return status
+        return _report_interrupt(exc) if status == 130 else status
     except Exception as exc:  # a bug: say so in one line unless asked for the traceback
         if debug:
             raise

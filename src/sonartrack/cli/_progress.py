@@ -24,5 +24,8 @@ class TrialProgress:
 
 
 def make_progress() -> Progress:
+    """The bar on stderr when it is a terminal; nothing otherwise (a log or a pipe gets the result lines only,
+    and an error stays the one line it is)."""
     return Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=False)
+                    TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=False,
+                    disable=not console.is_terminal)

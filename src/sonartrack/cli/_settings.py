@@ -8,6 +8,8 @@ settings as commented TOML (which ``--config`` reads back) and exits.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import typer
@@ -22,13 +24,32 @@ def option_help(model_cls, name: str, extra: str = "") -> str:
     return field_help(model_cls, name) + (f" {extra}" if extra else "")
 
 
+def _defaults(model_cls) -> dict:
+    """The declaration's defaults as plain data ({} when a field has no default)."""
+    from pydantic import ValidationError
+
+    try:
+        return model_cls().model_dump(mode="json")
+    except ValidationError:
+        return {}
+
+
+def merged(base: dict, over: dict) -> dict:
+    """``over`` laid onto ``base``: tables merge key by key (a partial ``[tracker]`` keeps the command's other
+    tracker defaults, which may differ from the class's own), everything else (values, lists) is replaced."""
+    out = dict(base)
+    for key, value in over.items():
+        out[key] = merged(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
 def resolve(model_cls, config: Path | None, *, source: str | None = None, **options):
     """Settings from defaults <- TOML file ``config`` <- non-None ``options``.
 
     ``options`` keys are field names; nested fields are given as ``"group__field"``."""
     from sonartrack.io import toml as toml_io
 
-    data = toml_io.load(config) if config is not None else {}
+    data = merged(_defaults(model_cls), toml_io.load(config) if config is not None else {})
     for key, value in options.items():
         if value is None:
             continue
@@ -38,10 +59,28 @@ def resolve(model_cls, config: Path | None, *, source: str | None = None, **opti
             node = node.setdefault(p, {})
         node[leaf] = value
     where = source or (f"config {config}" if config is not None else "settings")
-    return toml_io.validate(model_cls, data, source=where)
+    given = frozenset(key.replace("__", ".") for key, value in options.items() if value is not None)
+    return toml_io.validate(model_cls, data, source=where, given=given)
 
 
 def print_config_and_exit(settings) -> None:
     """Echo ``settings`` as commented TOML and end the command (exit 0)."""
     typer.echo(to_commented_toml(settings), nl=False)
     raise typer.Exit(0)
+
+
+@contextmanager
+def output_folder(out: Path) -> Iterator[Path]:
+    """Make the ``--out`` folder before the work, so that a folder that cannot be made fails at once in one line
+    (not after minutes of computing); if the work then fails, remove the folder again when this run made it and
+    it is still empty (a failed run leaves nothing behind)."""
+    out = Path(out)
+    made = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        yield out
+    except BaseException:
+        if made and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+

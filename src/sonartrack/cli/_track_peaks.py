@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sonartrack.cli._settings import print_config_and_exit, resolve
+from sonartrack.cli._settings import output_folder, print_config_and_exit, resolve
 from sonartrack.core.errors import InputError
 from sonartrack.io.track_config import PeaksTrackSettings
 
@@ -33,12 +33,12 @@ def track_peaks_command(peaks: Path, *, tracker: str | None, config: Path | None
 
     rec = read_peaks_csv(peaks)
     name = settings.associator.upper().replace("_", "-")
-    table = track_peaks(rec.time_s, rec.bearing_deg, rec.amplitude, settings.tracker,
-                        amplitude_aided=settings.associator == "jpda_a")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = write_csv(table, out / "bearing_tracks.csv", float_format="%.6g")
-    png = bearing_tracks_png(out / "bearing_tracks.png", rec, table, title=f"{peaks.name}: {name} tracks")
+    with output_folder(out):
+        table = track_peaks(rec.time_s, rec.bearing_deg, rec.amplitude, settings.tracker,
+                            amplitude_aided=settings.associator == "jpda_a")
+        csv = write_csv(table, out / "bearing_tracks.csv", float_format="%.6g")
+        png = bearing_tracks_png(out / "bearing_tracks.png", rec, table, title=f"{peaks.name}: {name} tracks")
     n_confirmed = table.loc[table["confirmed"].astype(bool), "track_id"].nunique()
     return (f"track {name.lower()}: {len(set(rec.time_s.tolist()))} scans, {len(rec.time_s)} peaks, {n_confirmed} "
             f"confirmed track(s) ({table['track_id'].nunique()} started); wrote {csv} and {png}")

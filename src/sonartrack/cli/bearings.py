@@ -14,7 +14,13 @@ from typing import Annotated
 import typer
 
 from sonartrack.acoustics.xcorr_bearing import BearingSettings
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import (
+    PRINT_CONFIG_HELP,
+    option_help,
+    output_folder,
+    print_config_and_exit,
+    resolve,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -49,9 +55,9 @@ def bearings_cmd(
         print_config_and_exit(s)
     require(wav is not None, "give the recording: --wav FILE (a two-channel WAV)")
     x, fs = read_two_channel_wav(wav)
-    rec = bearings_from_recording(x, fs, s)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = write_peaks_csv(out / "peaks.csv", rec)
-    title = f"{wav.name}: d = {s.spacing_m:g} m, c = {s.sound_speed_mps:g} m/s"
-    png = waterfall_png(out / "waterfall.png", rec, title=title)
+    with output_folder(out):
+        rec = bearings_from_recording(x, fs, s)
+        csv = write_peaks_csv(out / "peaks.csv", rec)
+        title = f"{wav.name}: d = {s.spacing_m:g} m, c = {s.sound_speed_mps:g} m/s"
+        png = waterfall_png(out / "waterfall.png", rec, title=title)
     typer.echo(f"bearings: {peaks_summary(rec, x.shape[1], fs, s.window_s)}; wrote {csv} and {png}")

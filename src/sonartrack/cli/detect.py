@@ -16,7 +16,13 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import (
+    PRINT_CONFIG_HELP,
+    option_help,
+    output_folder,
+    print_config_and_exit,
+    resolve,
+)
 from sonartrack.detection.mftd import MftdSettings
 from sonartrack.detection.threshold import ThresholdSettings
 
@@ -51,10 +57,11 @@ def detect_cmd(
     if print_config:
         print_config_and_exit(s)
     require(frames is not None, "give the frames: --frames FILE (a K x Nr x Nd .npy or .npz stack)")
-    det = detect_frames(read_frames(frames), s)
-    out.mkdir(parents=True, exist_ok=True)
-    csv_path = write_detection_csv(out / CSV_NAME, det)
-    png_path = detection_png(out / PNG_NAME, det)
+    y = read_frames(frames)
+    with output_folder(out):
+        det = detect_frames(y, s)
+        csv_path = write_detection_csv(out / CSV_NAME, det)
+        png_path = detection_png(out / PNG_NAME, det)
     typer.echo(f"detect: {_verdict(det)}; wrote {csv_path} and {png_path}")
 
 

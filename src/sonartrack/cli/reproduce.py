@@ -16,6 +16,19 @@ def register(app: typer.Typer) -> None:
     app.command("reproduce")(reproduce_cmd)
 
 
+def _interrupted(exc: KeyboardInterrupt, mods, configs, seed: int, out: Path) -> KeyboardInterrupt:
+    """The interrupt, carrying its one line: trials of this run complete on disk (all studies), of how many."""
+    import signal
+
+    from sonartrack.cli import Interrupted
+    from sonartrack.experiment.runner import stored_trials
+
+    kept = sum(stored_trials(m, c, seed, out) for m, c in zip(mods, configs, strict=True))
+    total = sum(int(c.runs) for c in configs)
+    return Interrupted(getattr(exc, "signum", signal.SIGINT),
+                       f"interrupted: {kept} trials kept (of {total}) in {out}; run the same command to resume")
+
+
 def studies_cmd() -> None:
     """List the studies (one per source paper) that `reproduce` can run."""
     from sonartrack import studies
@@ -57,11 +70,14 @@ def reproduce_cmd(
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     results = []
-    with make_progress() as prog:
-        bar = TrialProgress(prog)
-        for mod, cfg in zip(mods, configs, strict=True):
-            results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers,
-                                              scheduler=scheduler, progress=bar, figures=study_figures))
+    try:
+        with make_progress() as prog:
+            bar = TrialProgress(prog)
+            for mod, cfg in zip(mods, configs, strict=True):
+                results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers,
+                                                  scheduler=scheduler, progress=bar, figures=study_figures))
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the workers are stopped by now; say what was kept
+        raise _interrupted(exc, mods, configs, seed, out) from None
     from sonartrack.report.html import write_report
 
     report = write_report(out)

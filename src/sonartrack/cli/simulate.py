@@ -12,7 +12,13 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import (
+    PRINT_CONFIG_HELP,
+    option_help,
+    output_folder,
+    print_config_and_exit,
+    resolve,
+)
 from sonartrack.sim.scene import PassiveSceneSettings
 
 
@@ -45,8 +51,6 @@ def simulate_cmd(
     check_only(only)
     from sonartrack.cli._progress import TrialProgress, make_progress
 
-    out.mkdir(parents=True, exist_ok=True)  # before the progress bar, so that a bad --out is one clean line
-
-    with make_progress() as bar:
+    with output_folder(out), make_progress() as bar:  # the folder before the progress bar: a bad --out is one line
         files = write_scene(settings, out, only=only, progress=TrialProgress(bar))
     typer.echo(f"simulate: {files.summary}; wrote {len(files.paths)} files in {out}")

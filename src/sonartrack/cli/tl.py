@@ -16,7 +16,13 @@ from typing import Annotated
 import typer
 
 from sonartrack.acoustics.performance import TLSettings
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import (
+    PRINT_CONFIG_HELP,
+    option_help,
+    output_folder,
+    print_config_and_exit,
+    resolve,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -73,8 +79,8 @@ def tl_cmd(
     if (env is None) == (profile is None):
         raise InputError("give exactly one of --env NAME or --profile FILE (see sonartrack tl --list)")
     e = load_environment(env) if env is not None else read_profile(profile, water_depth)
-    field, perf = tl_performance(e, s, store=TLDiskCache())
-    out.mkdir(parents=True, exist_ok=True)
-    csv = write_csv(pd.DataFrame(perf.columns()), out / "tl.csv", float_format="%.4f")
-    png_field, png_range = save_tl_pictures(out, e, field, perf)
+    with output_folder(out):
+        field, perf = tl_performance(e, s, store=TLDiskCache())
+        csv = write_csv(pd.DataFrame(perf.columns()), out / "tl.csv", float_format="%.4f")
+        png_field, png_range = save_tl_pictures(out, e, field, perf)
     typer.echo(f"{performance_summary(e.name, s, perf)}; wrote {csv}, {png_field} and {png_range}")

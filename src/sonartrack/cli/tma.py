@@ -17,7 +17,7 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
 from sonartrack.tma.settings import BatchSettings, TmaSettings
 
 CSV_NAME = "tma_solution.csv"
@@ -72,10 +72,11 @@ def tma_cmd(
     require(bearings is not None and ownship is not None, "give the input files: --bearings FILE --ownship FILE")
     record = read_bearings(bearings, check_radians=settings.inputs.check_radians)
     own = read_ownship(ownship)
-    result = solve_tma(record, own, settings, environment=_environment(settings), tl_store=TLDiskCache())
-    for w in result.warnings:
-        typer.echo(f"warning: {w}", err=True)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = write_solution_csv(out / CSV_NAME, result.solution, own)
-    png = write_tactical_picture(out / PNG_NAME, result)
+    environment = _environment(settings)
+    with output_folder(out):
+        result = solve_tma(record, own, settings, environment=environment, tl_store=TLDiskCache())
+        for w in result.warnings:
+            typer.echo(f"warning: {w}", err=True)
+        csv = write_solution_csv(out / CSV_NAME, result.solution, own)
+        png = write_tactical_picture(out / PNG_NAME, result)
     typer.echo(f"{result.summary()}; wrote {csv} and {png}")

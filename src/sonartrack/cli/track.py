@@ -17,7 +17,7 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
 from sonartrack.core.errors import InputError
 from sonartrack.io.track_config import ContactsTrackSettings, PeaksTrackSettings
 
@@ -66,11 +66,11 @@ def track_contacts_command(contacts: Path, settings: ContactsTrackSettings, *, n
 
     b = settings.bistatic
     data = read_contacts(contacts, nav_path=nav, default_sigma_m=settings.default_sigma_m,
-                         bistatic_errors=b.errors(), sound_speed_mps=b.sound_speed_mps)
-    table = track_contacts(data.time_s, data.z, data.R, settings.tracker, confirmed_only=confirmed_only)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = write_csv(table, out / "tracks.csv")
-    png = tracks_png(out / "tracks.png", data.z, table)
+                         bistatic_errors=b.errors(), sound_speed_mps=b.sound_speed_mps, max_range_m=b.max_range_m)
+    with output_folder(out):
+        table = track_contacts(data.time_s, data.z, data.R, settings.tracker, confirmed_only=confirmed_only)
+        csv = write_csv(table, out / "tracks.csv")
+        png = tracks_png(out / "tracks.png", data.z, table)
     n_confirmed = table.loc[table.status == "confirmed", "track_id"].nunique()
     return (f"{len(set(data.time_s.tolist()))} scans, {len(data.time_s)} contacts -> {n_confirmed} confirmed "
             f"track(s); wrote {csv} and {png}")

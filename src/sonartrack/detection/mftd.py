@@ -78,11 +78,14 @@ from sonartrack.models.swerling import db_to_ratio
 class MftdSettings(Settings):
     """The MFTD detector's model and pruning (paper P1): defaults are the paper's (sec. V) and ours."""
 
-    snr_db: float = setting(5.0, "design SNR rho of a target cell at the square-law input (eq. 7)", unit="dB")
-    period_s: float = setting(2.0, "frame period T, the CPI of the motion model (eq. 23)", unit="s", gt=0)
+    snr_db: float = setting(5.0, "design SNR rho of a target cell at the square-law input (eq. 7)", unit="dB",
+                           ge=-100, le=100)
+    period_s: float = setting(2.0, "frame period T, the CPI of the motion model (eq. 23)", unit="s", gt=0,
+                             le=3600)
     sigma_a_mps2: float = setting(1.0, "standard deviation sigma_a of the target's range acceleration (eq. 23)",
-                                  unit="m/s^2", gt=0)
-    n_tracks: int = setting(10, "tracks N kept after each frame's pruning (sec. IV)", unit="1", ge=1)
+                                  unit="m/s^2", gt=0, le=1000)
+    n_tracks: int = setting(10, "tracks N kept after each frame's pruning (sec. IV)", unit="1", ge=1,
+                            le=100_000)
     prior_density: Literal["smoothed", "centre"] = setting(
         "smoothed", "track prior per cell: 'smoothed' N(v; w, B + R), or 'centre' N(v; w, B) (eq. 19 as printed)",
         unit="1")

@@ -25,10 +25,11 @@ class ThresholdSettings(Settings):
     """How the detector decides: a given threshold, or one calibrated for ``pfa`` on seeded noise."""
 
     threshold: float | None = setting(
-        None, "decision threshold on the log statistic S (not set: calibrated for pfa)", unit="1")
+        None, "decision threshold on the log statistic S (not set: calibrated for pfa)", unit="1", ge=-1e6,
+        le=1e12)
     pfa: float = setting(1e-2, "false-alarm probability of the calibrated threshold", unit="1", gt=0, lt=1)
     calibration_trials: int = setting(2000, "noise-only stacks simulated to calibrate the threshold", unit="1",
-                                      ge=10)
+                                      ge=10, le=10_000_000)
     seed: int = setting(0, "seed of the calibration's noise-only stacks", unit="1")
 
 

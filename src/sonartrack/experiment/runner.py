@@ -8,12 +8,28 @@ chunks in flight and a rerun computes only the trials not yet on disk.
 
 The runner knows a study only as the module it is given (:func:`plan_run`); workers re-import it by
 its dotted name (``RunPlan.study_module``), so this layer never imports the studies above it.
+
+Interrupts and orphans. Local workers ignore SIGINT (:func:`_worker_init`): a Ctrl-C from a terminal
+reaches the whole process group, and only the parent acts on it: it stops the pool, kills the workers
+(their chunks in flight are lost; every stored chunk stays) and re-raises. Workers must also never
+outlive the parent when it dies without cleaning up (SIGKILL). With the forkserver start method a
+worker's parent process is the fork server, not our process, so ``prctl(PR_SET_PDEATHSIG)`` in the
+worker would watch the wrong process; instead each worker waits, in a daemon thread, on
+``multiprocessing.parent_process().sentinel``, a pipe whose write end only our process holds: the
+kernel closes it when our process dies, however it dies, and the worker ends with ``os._exit`` as
+soon as its watcher thread gets the GIL (at once in Python code and in the ``nogil`` numba kernels; a
+compiled call that holds the GIL delays it to that call's end). The fork server then sees its "alive"
+pipe reach EOF (only our process and the workers held it) and exits, and the resource tracker exits
+when the last holder of its pipe is gone.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
+import signal
+import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -85,11 +101,19 @@ def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = 
     ``on_chunk(n)`` is called with the number of trials each time a chunk is stored.
     """
     cfg = config.model_dump(mode="json")
-    for indices, arrays in _iter_results(plan, cfg, workers, scheduler):
-        store.write_chunk(plan.cache_dir, indices, arrays)
-        if on_chunk:
-            on_chunk(len(indices))
+    # closing(): on an interrupt the pool is stopped here and now, not whenever the generator is collected
+    with contextlib.closing(_iter_results(plan, cfg, workers, scheduler)) as results:
+        for indices, arrays in results:
+            store.write_chunk(plan.cache_dir, indices, arrays)
+            if on_chunk:
+                on_chunk(len(indices))
     return store.load_trials(plan.cache_dir, plan.runs)
+
+
+def stored_trials(study_mod, config, seed: int, out_dir: Path) -> int:
+    """How many of trials ``0..config.runs-1`` of this (study, config, seed) are complete on disk."""
+    plan = plan_run(study_mod, config, config.runs, seed, out_dir)
+    return plan.runs - plan.n_todo
 
 
 def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None) -> Iterable:
@@ -105,21 +129,98 @@ def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None)
         yield from _iter_processes(plan, cfg, workers)
 
 
+def _worker_init() -> None:
+    """Worker start-up: leave SIGINT to the parent, and end when the parent process ends."""
+    import multiprocessing as mp
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):  # held since start-up (see _stop_signals_held); now ignored
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    parent = mp.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_when_gone, args=(parent.sentinel,), name="parent-watch", daemon=True).start()
+
+
+def _exit_when_gone(sentinel: int) -> None:
+    """Block until the parent's sentinel pipe reaches EOF (the parent is gone), then end this worker."""
+    from multiprocessing.connection import wait
+
+    wait([sentinel])
+    os._exit(1)
+
+
+@contextlib.contextmanager
+def _stop_signals_held():
+    """While the pool starts its processes, hold SIGINT and SIGTERM; act on them once it has started.
+
+    Children inherit the signal mask across fork and exec: the fork server started in here keeps SIGINT
+    blocked for good (it ignores it anyway), and so does each worker it forks until :func:`_worker_init`
+    has made SIGINT ignored, so a Ctrl-C during start-up cannot print a KeyboardInterrupt traceback from
+    a half-started child. In this process a signal arriving meanwhile is noted and handed to the handler
+    it was meant for on the way out, so no worker is ever started but missing from the pool's table
+    (and thus never stopped). Signal handlers belong to the main thread: elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    mask = hasattr(signal, "pthread_sigmask")
+    if mask:
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()  # started inside, it would unblock SIGINT on its way out
+    caught: list[int] = []
+    old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    held = {sig: h for sig, h in old.items() if h not in (signal.SIG_IGN, None)}
+    for sig in held:
+        signal.signal(sig, lambda signum, frame: caught.append(signum))
+    if mask:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if mask:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # a pending one is noted now
+        for sig, handler in held.items():
+            signal.signal(sig, handler)
+    if caught:
+        handler = held[caught[0]]
+        if callable(handler):
+            handler(caught[0], None)
+        else:
+            signal.raise_signal(caught[0])
+
+
+def _stop_pool(pool) -> None:
+    """Cancel queued chunks and kill the running ones (an interrupt: their results would be dropped anyway)."""
+    # taken before shutdown(), which drops the pool's table of processes (Python >= 3.14: pool.kill_workers())
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            proc.kill()
+    for proc in procs:
+        with contextlib.suppress(OSError, ValueError, AttributeError, AssertionError):
+            proc.join(5)
+    pool.shutdown(wait=True)
+
+
 def _iter_processes(plan: RunPlan, cfg: dict, workers: int):
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     # "spawn" would re-import everything per worker; "forkserver" is safe with threads in the parent.
     ctx = mp.get_context("forkserver" if os.name == "posix" else "spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = {pool.submit(run_chunk, plan.study_module, cfg, plan.seed, idx): idx for idx in plan.todo_chunks}
-        try:
-            for fut in as_completed(futures):
-                yield futures[fut], fut.result()
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            raise
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
+    try:
+        with _stop_signals_held():
+            futures = {pool.submit(run_chunk, plan.study_module, cfg, plan.seed, idx): idx
+                       for idx in plan.todo_chunks}
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+    except BaseException:  # KeyboardInterrupt, GeneratorExit (the consumer stopped), a failed trial
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
 
 
 def _iter_dask(plan: RunPlan, cfg: dict, scheduler: str):

@@ -9,6 +9,12 @@ Contacts file (CSV or Parquet), one row per contact, rows with the same ``time_s
   ``time_s``, ``tx_x_m, tx_y_m, rx_x_m, rx_y_m, array_heading_deg`` (linearly interpolated to the
   contact times; times outside the navigation span are an error). Each contact becomes a point with
   covariance J Sigma J^T (models/bistatic.py) using the configured input errors.
+
+Checks (io/tables.py, one line each, naming the file, column, first offending row and value): times sorted
+(refused, not re-sorted); no row repeated (same time and values: it would become two identical tracks);
+positions within +-1e7 m; variances positive; bearings in [-360, 360] deg and not radians (all within +-2 pi);
+sound speeds 1300..1700 m/s; travel times positive and at most 2 * max_range / c (the bistatic range sum
+c t = R_tx + R_rx of a target within ``max_range_m`` of both: longer ones are milliseconds written as seconds).
 """
 
 from __future__ import annotations
@@ -18,10 +24,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import InputError
-from sonartrack.io.tables import check_columns, check_sorted, numeric_column, read_table
+from sonartrack.io.tables import (
+    MAX_POSITION_M,
+    MAX_TIME_S,
+    check_columns,
+    check_no_duplicate_rows,
+    check_not_radians,
+    check_sorted,
+    numeric_column,
+    read_table,
+)
 
 RAW_COLUMNS = ["time_s", "travel_time_s", "bearing_deg"]
 NAV_COLUMNS = ["time_s", "tx_x_m", "tx_y_m", "rx_x_m", "rx_y_m", "array_heading_deg"]
+#: the sound speed in sea water lies in this band (m/s); outside it the column is in another unit
+SOUND_SPEED_BAND_MPS = (1300.0, 1700.0)
+#: default largest range of a target from the transmitter or receiver (m), for the travel-time check
+DEFAULT_MAX_RANGE_M = 100_000.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,26 +53,37 @@ class Contacts:
     R: np.ndarray
 
 
+def _times(df, what, path) -> np.ndarray:
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
+    check_sorted(t, what, path)
+    return t
+
+
+def _position(df, col, what, path) -> np.ndarray:
+    return numeric_column(df, col, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M,
+                          fix="metres in a local frame, at most 10 000 km from its origin")
+
+
 def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, bistatic_errors=None,
-                  sound_speed_mps: float = 1500.0) -> Contacts:
+                  sound_speed_mps: float = 1500.0, max_range_m: float = DEFAULT_MAX_RANGE_M) -> Contacts:
     """Read and validate a contacts file (and its navigation file for raw bistatic columns)."""
     df = read_table(path, "contacts")
     raw = "travel_time_s" in df.columns or "bearing_deg" in df.columns or "travel_time_ms" in df.columns
+    check_columns(df, RAW_COLUMNS if raw else ["time_s", "x_m", "y_m"], "contacts", path)
+    t = _times(df, "contacts", path)
     if raw:
-        check_columns(df, RAW_COLUMNS, "contacts", path)
-    else:
-        check_columns(df, ["time_s", "x_m", "y_m"], "contacts", path)
-    t = numeric_column(df, "time_s", "contacts", path)
-    check_sorted(t, "contacts", path)
-    if raw:
-        return _raw_bistatic(df, t, path, nav_path, bistatic_errors, sound_speed_mps)
-    z = np.stack([numeric_column(df, "x_m", "contacts", path), numeric_column(df, "y_m", "contacts", path)], axis=-1)
+        return _raw_bistatic(df, t, path, nav_path, bistatic_errors, sound_speed_mps, max_range_m)
+    z = np.stack([_position(df, "x_m", "contacts", path), _position(df, "y_m", "contacts", path)], axis=-1)
+    check_no_duplicate_rows({"time_s": t, "x_m": z[:, 0], "y_m": z[:, 1]}, "contacts", path)
     cov_cols = ["var_x_m2", "var_y_m2", "cov_xy_m2"]
     if any(c in df.columns for c in cov_cols):
         check_columns(df, cov_cols, "contacts", path)
-        vx, vy, cxy = (numeric_column(df, c, "contacts", path) for c in cov_cols)
+        big = MAX_POSITION_M**2
+        vx, vy = (numeric_column(df, c, "contacts", path, lo=0.0, hi=big, lo_open=True, fix="a variance, m^2")
+                  for c in cov_cols[:2])
+        cxy = numeric_column(df, "cov_xy_m2", "contacts", path, lo=-big, hi=big, fix="a covariance, m^2")
         R = np.stack([np.stack([vx, cxy], -1), np.stack([cxy, vy], -1)], -2)
-        bad = ~((vx > 0) & (vy > 0) & (vx * vy - cxy**2 > 0))
+        bad = ~(vx * vy - cxy**2 > 0)
         if bad.any():
             raise InputError(f"contacts file {path}: covariance at data row {int(np.argmax(bad)) + 1} is not positive "
                              "definite (need var_x_m2 > 0, var_y_m2 > 0, var_x_m2 * var_y_m2 > cov_xy_m2^2)")
@@ -65,32 +95,51 @@ def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, 
     return Contacts(t, z, R)
 
 
-def _raw_bistatic(df, t, path, nav_path, errors, c_default) -> Contacts:
+def _navigation(nav_path, t: np.ndarray) -> tuple[dict, np.ndarray]:
+    """Tx/Rx positions interpolated to the contact times, and the array heading (rad) on the unit circle."""
+    what = "navigation"
+    nav = read_table(nav_path, what)
+    check_columns(nav, NAV_COLUMNS, what, nav_path)
+    nt = numeric_column(nav, "time_s", what, nav_path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
+    check_sorted(nt, what, nav_path, strict=True)
+    if t[0] < nt[0] or t[-1] > nt[-1]:
+        raise InputError(f"contact times {t[0]}..{t[-1]} s are outside the navigation file's span {nt[0]}..{nt[-1]} s: "
+                         "extend the navigation record")
+    navv = {c: np.interp(t, nt, _position(nav, c, what, nav_path)) for c in NAV_COLUMNS[1:5]}
+    heading_deg = numeric_column(nav, "array_heading_deg", what, nav_path, lo=-360.0, hi=360.0, fix="degrees")
+    check_not_radians(heading_deg, "array_heading_deg", what, nav_path)
+    # the array heading is interpolated on the unit circle, not as a number (359 -> 1 deg)
+    h = np.deg2rad(heading_deg)
+    return navv, np.arctan2(np.interp(t, nt, np.sin(h)), np.interp(t, nt, np.cos(h)))
+
+
+def _raw_columns(df, path, c_default, max_range_m):
+    """(travel times s, bearings deg, sound speeds m/s) of raw bistatic contacts, checked (module doc)."""
+    what = "contacts"
+    lo_c, hi_c = SOUND_SPEED_BAND_MPS
+    c = (numeric_column(df, "sound_speed_mps", what, path, lo=lo_c, hi=hi_c, fix="metres per second")
+         if "sound_speed_mps" in df.columns else np.full(len(df), float(c_default)))
+    tt = numeric_column(df, "travel_time_s", what, path, lo=0.0, lo_open=True, fix="seconds, positive")
+    far = c * tt > 2.0 * max_range_m
+    if far.any():
+        row = int(np.argmax(far))
+        raise InputError(f"{what} file {path}: travel_time_s = {tt[row]:g} at data row {row + 1} gives a bistatic "
+                         f"range sum c t = {c[row] * tt[row] / 1e3:.6g} km, beyond twice the maximum range "
+                         f"({max_range_m / 1e3:g} km): milliseconds written as seconds? divide by 1000 (or raise "
+                         "max_range_m under [bistatic])")
+    bearing_deg = numeric_column(df, "bearing_deg", what, path, lo=-360.0, hi=360.0, fix="degrees")
+    check_not_radians(bearing_deg, "bearing_deg", what, path)
+    return tt, bearing_deg, c
+
+
+def _raw_bistatic(df, t, path, nav_path, errors, c_default, max_range_m) -> Contacts:
     from sonartrack.models.bistatic import BistaticErrors, bistatic_covariance, bistatic_position
 
     if nav_path is None:
         raise InputError(f"contacts file {path} has raw bistatic columns: give the Tx/Rx navigation file with --nav")
-    nav = read_table(nav_path, "navigation")
-    check_columns(nav, NAV_COLUMNS, "navigation", nav_path)
-    nt = numeric_column(nav, "time_s", "navigation", nav_path)
-    check_sorted(nt, "navigation", nav_path, strict=True)
-    if t[0] < nt[0] or t[-1] > nt[-1]:
-        raise InputError(f"contact times {t[0]}..{t[-1]} s are outside the navigation file's span {nt[0]}..{nt[-1]} s: "
-                         "extend the navigation record")
-    navv = {c: np.interp(t, nt, numeric_column(nav, c, "navigation", nav_path)) for c in NAV_COLUMNS[1:]}
-    # the array heading is interpolated on the unit circle, not as a number (359 -> 1 deg)
-    h = np.deg2rad(numeric_column(nav, "array_heading_deg", "navigation", nav_path))
-    phi = np.arctan2(np.interp(t, nt, np.sin(h)), np.interp(t, nt, np.cos(h)))
-    tt = numeric_column(df, "travel_time_s", "contacts", path)
-    bearing_deg = numeric_column(df, "bearing_deg", "contacts", path)
-    if np.any(tt <= 0):
-        raise InputError(f"contacts file {path}: travel_time_s must be positive (seconds)")
-    if np.any(np.abs(bearing_deg) > 360):
-        raise InputError(f"contacts file {path}: bearing_deg has values beyond ±360: give degrees")
-    c = (numeric_column(df, "sound_speed_mps", "contacts", path) if "sound_speed_mps" in df.columns
-         else np.full(len(t), c_default))
-    if np.any((c < 1300) | (c > 1700)):
-        raise InputError(f"contacts file {path}: sound_speed_mps outside 1300..1700 m/s: give metres per second")
+    tt, bearing_deg, c = _raw_columns(df, path, c_default, max_range_m)
+    check_no_duplicate_rows({"time_s": t, "travel_time_s": tt, "bearing_deg": bearing_deg}, "contacts", path)
+    navv, phi = _navigation(nav_path, t)
     tx = np.stack([navv["tx_x_m"], navv["tx_y_m"]], -1)
     rx = np.stack([navv["rx_x_m"], navv["rx_y_m"]], -1)
     theta = np.deg2rad(bearing_deg)

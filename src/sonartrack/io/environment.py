@@ -32,39 +32,65 @@ from sonartrack.io.atomic import atomic_path
 PROFILE_SUFFIXES = (".toml", ".csv")
 
 
-def _csv_columns(p: Path) -> dict:
-    """The profile columns of a CSV file as lists (one-line errors for unreadable or incomplete files)."""
-    import pandas as pd
+#: the keys a TOML profile may hold (acoustics/environment.py ``environment_from_mapping``); others are refused
+PROFILE_KEYS = frozenset({
+    "name", "description", "season", "sources", "depth_m", "sound_speed_mps", "temperature_c", "salinity_psu",
+    "water_depth_m", "latitude_deg", "longitude_deg", "bottom_sound_speed_mps", "bottom_density_gcc",
+    "bottom_attenuation_db_per_wavelength",
+})
+#: the deepest ocean is 11 km: depths beyond this are another unit
+MAX_DEPTH_M = 12_000.0
 
-    try:
-        df = pd.read_csv(p)
-    except Exception as exc:  # noqa: BLE001 - pandas raises many types for bad files
-        raise InputError(f"cannot read profile {p.name} as CSV: {exc}") from None
-    require(len(df) > 0, f"profile {p.name} has no rows")
+
+def _csv_columns(p: Path) -> dict:
+    """The profile columns of a CSV file as lists (io/tables.py checks: one line per problem)."""
+    from sonartrack.io.tables import numeric_column, read_table
+
+    what = "profile"
+    df = read_table(p, what)
     cols = set(df.columns)
     require("depth_m" in cols, f"profile {p.name} needs a depth_m column (has {', '.join(map(str, df.columns))})")
-    data = {"name": p.stem, "description": f"user profile {p.name}", "depth_m": df["depth_m"].to_list()}
+    depth = numeric_column(df, "depth_m", what, p, hi=MAX_DEPTH_M, fix="metres below the surface")
+    data = {"name": p.stem, "description": f"user profile {p.name}", "depth_m": depth.tolist()}
     if "sound_speed_mps" in cols:
-        data["sound_speed_mps"] = df["sound_speed_mps"].to_list()
+        data["sound_speed_mps"] = numeric_column(df, "sound_speed_mps", what, p, lo=0.0, hi=1e4, lo_open=True,
+                                                 fix="metres per second, about 1450-1550").tolist()
     elif {"temperature_c", "salinity_psu"} <= cols:
-        data["temperature_c"] = df["temperature_c"].to_list()
-        data["salinity_psu"] = df["salinity_psu"].to_list()
+        data["temperature_c"] = numeric_column(df, "temperature_c", what, p, lo=-5.0, hi=40.0,
+                                               fix="degrees Celsius").tolist()
+        data["salinity_psu"] = numeric_column(df, "salinity_psu", what, p, lo=0.0, hi=45.0, fix="PSU").tolist()
     else:
         raise InputError(f"profile {p.name} needs sound_speed_mps, or temperature_c and salinity_psu, next to depth_m")
     return data
 
 
-def read_profile(path: str | Path, water_depth_m: float | None = None) -> Environment:
-    """A user environment from a TOML or CSV profile file (module doc); ``water_depth_m`` overrides the file's."""
+def _toml_profile(p: Path) -> dict:
+    """A TOML profile's keys (unknown keys refused: a misspelt key would silently take its default)."""
     from sonartrack.io import toml as toml_io
 
+    data = toml_io.load(p)
+    unknown = sorted(set(data) - PROFILE_KEYS)
+    require(not unknown, f"profile {p}: unknown key(s) {', '.join(unknown)}: the keys are "
+                         f"{', '.join(sorted(PROFILE_KEYS))}")
+    return data
+
+
+def read_profile(path: str | Path, water_depth_m: float | None = None) -> Environment:
+    """A user environment from a TOML or CSV profile file (module doc); ``water_depth_m`` overrides the file's."""
     p = Path(path)
+    require(not p.is_dir(), f"profile file {p} is a directory: give the .toml or .csv file inside it")
     require(p.is_file(), f"profile file not found: {p}")
-    data = toml_io.load(p) if p.suffix.lower() == ".toml" else _csv_columns(p)
+    data = _toml_profile(p) if p.suffix.lower() == ".toml" else _csv_columns(p)
     if water_depth_m is not None:
         data["water_depth_m"] = float(water_depth_m)
-    data.setdefault("water_depth_m", float(np.max(np.asarray(data["depth_m"], dtype=float))))
-    return environment_from_mapping(data, source=p.name)
+    try:
+        data.setdefault("water_depth_m", float(np.max(np.asarray(data["depth_m"], dtype=float))))
+        return environment_from_mapping(data, source=p.name)
+    except InputError:
+        raise
+    except (KeyError, TypeError, ValueError) as exc:  # a TOML value of the wrong type (text for a number)
+        raise InputError(f"profile {p}: a value is missing or not a number ({type(exc).__name__}: {exc}): every "
+                         "depth, speed and seabed value must be a number") from None
 
 
 def environment_from_name_or_file(name_or_path: str | Path, water_depth_m: float | None = None) -> Environment:

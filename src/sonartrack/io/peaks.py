@@ -2,17 +2,31 @@
 
 Written by ``sonartrack bearings`` and read by ``sonartrack track --peaks``; bearings are cone angles
 (0..180 deg from the array axis), the record type is :class:`sonartrack.acoustics.xcorr_bearing.PeakRecord`.
+
+Checks (io/tables.py, one line each): the shared file checks; times sorted (peaks of one window share a
+time); no row repeated; bearings cone angles in [0, 180] deg and not radians (all within 2 pi);
+amplitudes in [0, :data:`MAX_AMPLITUDE`] (the bearings command writes normalised correlation x 30000).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from sonartrack.acoustics.xcorr_bearing import PeakRecord
-from sonartrack.core.errors import InputError, require
 from sonartrack.io.atomic import write_csv
+from sonartrack.io.tables import (
+    MAX_TIME_S,
+    check_columns,
+    check_no_duplicate_rows,
+    check_not_radians,
+    check_sorted,
+    numeric_column,
+    read_table,
+)
+
+PEAK_COLUMNS = ["time_s", "bearing_deg", "amplitude"]
+#: largest peak amplitude taken (33 x the 30000 of a perfect normalised correlation: another scale beyond it)
+MAX_AMPLITUDE = 1e6
 
 
 def write_peaks_csv(path, record: PeakRecord) -> Path:
@@ -25,29 +39,15 @@ def write_peaks_csv(path, record: PeakRecord) -> Path:
 
 def read_peaks_csv(path) -> PeakRecord:
     """A peaks file (time_s, bearing_deg, amplitude); one-line errors for missing, empty or bad files."""
-    import pandas as pd
-
-    p = Path(path)
-    require(p.is_file(), f"peaks file not found: {p}")
-    try:
-        df = pd.read_csv(p)
-    except pd.errors.EmptyDataError:
-        raise InputError(f"peaks file {p.name} is empty: expected columns time_s, bearing_deg, amplitude") from None
-    except Exception as exc:  # noqa: BLE001 - pandas raises many types for bad files
-        raise InputError(f"cannot read peaks file {p.name}: {exc}") from None
-    missing = [c for c in ("time_s", "bearing_deg", "amplitude") if c not in df.columns]
-    require(not missing, f"peaks file {p.name} lacks column(s) {', '.join(missing)} "
-                         f"(has {', '.join(map(str, df.columns))})")
-    require(len(df) > 0, f"peaks file {p.name} has no rows")
-    try:
-        cols = {c: df[c].to_numpy(dtype=float) for c in ("time_s", "bearing_deg", "amplitude")}
-    except (TypeError, ValueError):
-        raise InputError(f"peaks file {p.name}: time_s, bearing_deg and amplitude must be numbers") from None
-    for c, v in cols.items():
-        require(bool(np.all(np.isfinite(v))), f"peaks file {p.name}: column {c} has NaN or empty cells")
-    b = cols["bearing_deg"]
-    require(bool(np.all((b >= 0) & (b <= 180))), f"peaks file {p.name}: bearing_deg must be cone angles in 0..180 deg "
-                                                 f"(found {b.min():.3g}..{b.max():.3g}; radians or compass bearings?)")
-    require(bool(np.all(np.diff(cols["time_s"]) >= 0)),
-            f"peaks file {p.name}: time_s must not decrease (sort the rows)")
-    return PeakRecord(cols["time_s"], b, cols["amplitude"])
+    what = "peaks"
+    df = read_table(path, what)
+    check_columns(df, PEAK_COLUMNS, what, path)
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
+    check_sorted(t, what, path)
+    b = numeric_column(df, "bearing_deg", what, path, lo=0.0, hi=180.0,
+                       fix="cone angles 0..180 deg from the array axis; compass bearings?")
+    check_not_radians(b, "bearing_deg", what, path)
+    a = numeric_column(df, "amplitude", what, path, lo=0.0, hi=MAX_AMPLITUDE,
+                       fix="correlation peak amplitudes, normalised correlation x 30000")
+    check_no_duplicate_rows({"time_s": t, "bearing_deg": b, "amplitude": a}, what, path)
+    return PeakRecord(t, b, a)

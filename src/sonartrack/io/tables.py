@@ -1,8 +1,16 @@
-"""Reading user tables (CSV or Parquet) with clear one-line errors.
+"""Reading user tables (CSV or Parquet) with clear one-line errors: the one checking boundary for files.
 
-Shared checks for every user file: the file exists and parses; required columns are present;
-columns that carry a unit we do not take (``x_km``, ``time_ms``, ``bearing_rad`` where degrees are
-expected...) are named with the fix; no NaN or infinite values; times sorted.
+Shared checks for every user file, each failing with one line that names the file, the column, the
+first offending value and its data row, and the fix:
+
+* the file exists, is a file (not a directory) and parses; it has rows; required columns are present;
+* columns that carry a unit we do not take (``x_km``, ``time_ms``, ``bearing_rad`` ...) are named with the fix;
+* numbers: no text, NaN or infinity (:func:`numeric_column`); every value within the column's physical
+  range, and in any case within +-:data:`ABSURD` (a 1e300 reaches no numerics);
+* unit plausibility: a ``_deg`` column whose values all lie within +-2 pi, with some spread, holds radians
+  (:func:`check_not_radians`);
+* times sorted (refused, never silently re-sorted: a file out of order is usually a file put together
+  wrongly) and no repeated rows (:func:`check_sorted`, :func:`check_no_duplicate_rows`).
 """
 
 from __future__ import annotations
@@ -13,7 +21,7 @@ import numpy as np
 
 from sonartrack.core.errors import InputError
 
-#: column name with a unit we do not take -> (the column we want, factor to convert, unit word)
+#: column name with a unit we do not take -> (the column we want, unit word)
 WRONG_UNITS = {
     "x_km": ("x_m", "kilometres"), "y_km": ("y_m", "kilometres"),
     "time_ms": ("time_s", "milliseconds"), "time_min": ("time_s", "minutes"), "t_ms": ("time_s", "milliseconds"),
@@ -23,23 +31,59 @@ WRONG_UNITS = {
     "rx_x_km": ("rx_x_m", "kilometres"), "rx_y_km": ("rx_y_m", "kilometres"),
 }
 
+#: no number in a user file is larger in magnitude than this (whatever the column: 1e300 reaches no numerics)
+ABSURD = 1e15
+#: positions (m) beyond this from the local origin (10 000 km) are not in one local frame
+MAX_POSITION_M = 1e7
+#: times (s) beyond this (about 300 years; Unix seconds pass) are nanoseconds or garbage
+MAX_TIME_S = 1e10
+
+
+#: leading bytes of the binary files most often given by mistake -> what they are
+MAGIC = {b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image", b"%PDF": "a PDF document",
+         b"PK\x03\x04": "a ZIP archive (.npz, .xlsx ...)", b"\x93NUMPY": "a NumPy .npy array",
+         b"RIFF": "a WAV (RIFF) file", b"PAR1": "a Parquet file", b"\x89HDF": "an HDF5 file",
+         b"\x1f\x8b": "a gzip archive"}
+
+
+def sniff_file_type(path: str | Path) -> str | None:
+    """What a file is by its first bytes (:data:`MAGIC`), or None when it is none of those."""
+    with open(path, "rb") as f:
+        head = f.read(8)
+    return next((kind for magic, kind in MAGIC.items() if head.startswith(magic)), None)
+
+
+def check_file(path: str | Path, what: str) -> Path:
+    """The path exists and is a regular file (a directory is named as such)."""
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{what} file {p} is a directory: give the file inside it")
+    if not p.is_file():
+        raise InputError(f"{what} file not found: {p}")
+    return p
+
 
 def read_table(path: str | Path, what: str):
     """Read a CSV or Parquet file into a pandas DataFrame (one-line errors)."""
     import pandas as pd
 
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{what} file not found: {p}")
+    p = check_file(path, what)
+    if p.stat().st_size == 0:
+        raise InputError(f"{what} file {p} is empty (0 bytes): give a header line and data rows")
     parquet = p.suffix.lower() in (".parquet", ".pq")
+    kind = sniff_file_type(p)
+    if kind is not None and not (parquet and kind == "a Parquet file"):
+        raise InputError(f"{what} file {p} is {kind}, not a {'Parquet' if parquet else 'CSV'} table: give the "
+                         f"{'Parquet' if parquet else 'comma-separated text'} file")
     try:
         df = pd.read_parquet(p) if parquet else pd.read_csv(p, comment="#")
-    except Exception as exc:  # pandas raises many types for malformed files
-        raise InputError(f"{what} file {p} could not be read as {'Parquet' if parquet else 'CSV'}: "
-                         f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    except Exception as exc:  # noqa: BLE001 - pandas raises many types (and UnicodeDecodeError) for malformed files
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"{what} file {p} could not be read as {'Parquet' if parquet else 'CSV'} ({first}): "
+                         f"give a {'Parquet' if parquet else 'comma-separated text'} file") from None
     df.columns = [str(c).strip() for c in df.columns]
     if len(df) == 0:
-        raise InputError(f"{what} file {p} has no rows")
+        raise InputError(f"{what} file {p} has no rows (header only?): give at least one data row")
     return df
 
 
@@ -56,23 +100,65 @@ def check_columns(df, required: list[str], what: str, path) -> None:
                          f"(has: {', '.join(map(str, df.columns))})")
 
 
-def numeric_column(df, col: str, what: str, path) -> np.ndarray:
-    """A column as float64, refusing text, NaN and infinities with the row number."""
+def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: float = ABSURD,
+                   lo_open: bool = False, fix: str = "") -> np.ndarray:
+    """A column as float64, refusing text, NaN, infinities and values outside [lo, hi] (``lo_open``: (lo, hi]),
+    with the first offending data row and value."""
     import pandas as pd
 
-    values = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float)
+    raw = df[col]
+    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(values)
     if bad.any():
         row = int(np.argmax(bad))
-        raise InputError(f"{what} file {path}: column '{col}' has {int(bad.sum())} missing, NaN or non-numeric "
-                         f"value(s), first at data row {row + 1}: fix or remove those rows")
+        raise InputError(f"{what} file {path}: column '{col}' has {int(bad.sum())} missing, NaN, infinite or "
+                         f"non-numeric value(s), first at data row {row + 1} ({raw.iloc[row]!r}): fix or remove "
+                         "those rows")
+    check_range(values, col, what, path, lo=lo, hi=hi, lo_open=lo_open, fix=fix)
     return values
 
 
-def check_sorted(times: np.ndarray, what: str, path, strict: bool = False) -> None:
+def check_range(values: np.ndarray, col: str, what: str, path, *, lo: float = -ABSURD, hi: float = ABSURD,
+                lo_open: bool = False, fix: str = "") -> None:
+    """Every value within [lo, hi] (``lo_open``: lo excluded), else one line with the first offender."""
+    v = np.asarray(values, dtype=float)
+    bad = ~((v > lo) if lo_open else (v >= lo)) | (v > hi)
+    if bad.any():
+        row = int(np.argmax(bad))
+        span = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
+        raise InputError(f"{what} file {path}: column '{col}' = {v[row]:g} at data row {row + 1} is outside "
+                         f"{span}{f' ({fix})' if fix else ''}: fix that value")
+
+
+def check_not_radians(values: np.ndarray, col: str, what: str, path, *, min_rows: int = 5,
+                      switch: str = "") -> None:
+    """A degrees column whose values all lie within +-2 pi, with some spread, holds radians (needs ``min_rows``:
+    a few bearings within 6 deg are plausible). ``switch`` says how to turn the check off, if it can be."""
+    v = np.asarray(values, dtype=float)
+    if len(v) >= min_rows and np.ptp(v) > 0 and np.all(np.abs(v) <= 2.0 * np.pi):
+        raise InputError(f"{what} file {path}: every {col} lies within ±6.29 (from {v.min():.3g} to {v.max():.3g}), "
+                         f"so these look like radians: multiply by 180/pi{f' ({switch})' if switch else ''}")
+
+
+def check_sorted(times: np.ndarray, what: str, path, strict: bool = False, col: str = "time_s") -> None:
+    """Times in order (refused otherwise, never re-sorted); ``strict``: no time repeated."""
     d = np.diff(times)
     bad = (d <= 0) if strict else (d < 0)
     if bad.any():
         row = int(np.argmax(bad)) + 1
-        raise InputError(f"{what} file {path}: time_s is not {'strictly increasing' if strict else 'sorted'} "
-                         f"(data row {row + 1}: {times[row]} after {times[row - 1]}): sort the file by time")
+        raise InputError(f"{what} file {path}: {col} is not {'strictly increasing' if strict else 'sorted'} "
+                         f"(data row {row + 1}: {times[row]:g} after {times[row - 1]:g}): sort the file by {col}"
+                         f"{' and drop repeated times' if strict else ''}")
+
+
+def check_no_duplicate_rows(columns: dict[str, np.ndarray], what: str, path) -> None:
+    """No two rows with the same values in every column given (a contact listed twice is not two contacts)."""
+    import pandas as pd
+
+    df = pd.DataFrame(columns)
+    dup = df.duplicated(keep="first").to_numpy()
+    if dup.any():
+        row = int(np.argmax(dup))
+        first = int(np.argmax((df == df.iloc[row]).all(axis=1).to_numpy()))
+        raise InputError(f"{what} file {path}: data rows {first + 1} and {row + 1} repeat the same "
+                         f"{', '.join(columns)} ({int(dup.sum())} repeated row(s) in all): remove the repeats")

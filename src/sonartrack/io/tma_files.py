@@ -17,8 +17,9 @@ measurements is checked by the solver (tma/records.py ``check_coverage``).
 Checks with one-line errors: missing or non-numeric values, unsorted or repeated times, columns in
 the wrong unit (``bearing_rad``, ``x_km``, ``time_ms`` ...), bearings beyond +-360 deg, bearings that
 all lie within +-2 pi (radians written in a degrees column; switch off with ``check_radians=False``
-for a target genuinely within 6 deg of north), non-positive frequencies, an ownship moving faster
-than 40 m/s (about 78 kn: kilometres or minutes written as metres or seconds).
+for a target genuinely within 6 deg of north), frequencies outside (0, 1 MHz], SNRs beyond +-200 dB,
+positions beyond +-1e7 m, an ownship moving faster than 40 m/s (about 78 kn: kilometres or minutes
+written as metres or seconds).
 
 Solution table (CSV), one row per solution time: the columns of tma/solution_table.py (``time_s, x_m,
 y_m, vx_mps, vy_mps, course_deg, speed_kn, range_m, bearing_deg`` and their ``*_std`` standard
@@ -35,13 +36,26 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError
 from sonartrack.io.atomic import write_csv
 from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
-from sonartrack.io.tables import check_columns, check_sorted, numeric_column, read_table
+from sonartrack.io.tables import (
+    MAX_POSITION_M,
+    MAX_TIME_S,
+    check_columns,
+    check_not_radians,
+    check_range,
+    check_sorted,
+    numeric_column,
+    read_table,
+)
 from sonartrack.tma.solution_table import solution_columns
 
 BEARING_COLUMNS = ["time_s", "bearing_deg"]
 OWNSHIP_COLUMNS = ["time_s", "x_m", "y_m"]
 #: an ownship faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
 MAX_OWNSHIP_SPEED_MPS = 40.0
+#: largest received frequency taken (Hz): passive sonar tonals are far below; beyond it the column is another unit
+MAX_FREQUENCY_HZ = 1e6
+#: largest |SNR| taken (dB)
+SNR_LIMIT_DB = 200.0
 
 
 def _optional_column(df, col: str, what: str, path) -> np.ndarray:
@@ -63,27 +77,23 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
     what = "bearings"
     df = read_table(path, what)
     check_columns(df, BEARING_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path)
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
     check_sorted(t, what, path, strict=True)
-    b_deg = numeric_column(df, "bearing_deg", what, path)
-    if np.any(np.abs(b_deg) > 360.0):
-        row = int(np.argmax(np.abs(b_deg) > 360.0))
-        raise InputError(f"{what} file {path}: bearing_deg = {b_deg[row]:g} at data row {row + 1} is beyond ±360: "
-                         "give bearings in degrees clockwise from north")
-    if check_radians and len(b_deg) >= 5 and np.all(np.abs(b_deg) <= 2.0 * np.pi):
-        raise InputError(f"{what} file {path}: every bearing_deg lies within ±6.29, so these look like radians: "
-                         "multiply by 180/pi (or set check_radians = false under [inputs] if the target really stays "
-                         "within 6 deg of north)")
+    b_deg = numeric_column(df, "bearing_deg", what, path, lo=-360.0, hi=360.0,
+                           fix="beyond ±360: give bearings in degrees clockwise from north")
+    if check_radians:
+        check_not_radians(b_deg, "bearing_deg", what, path, switch="or set check_radians = false under [inputs] if "
+                                                                   "the target really stays within 6 deg of north")
     freq = snr = None
     if "frequency_hz" in df.columns:
         freq = _optional_column(df, "frequency_hz", what, path)
-        if np.any(freq <= 0):
-            row = int(np.argmax(freq <= 0))
-            raise InputError(f"{what} file {path}: frequency_hz must be positive (data row {row + 1}: {freq[row]:g})")
-        if not np.isfinite(freq).any():
+        given = np.isfinite(freq)
+        check_range(np.where(given, freq, 1.0), "frequency_hz", what, path, lo=0.0, hi=MAX_FREQUENCY_HZ,
+                    lo_open=True, fix="hertz, positive")
+        if not given.any():
             freq = None
     if "snr_db" in df.columns:
-        snr = numeric_column(df, "snr_db", what, path)
+        snr = numeric_column(df, "snr_db", what, path, lo=-SNR_LIMIT_DB, hi=SNR_LIMIT_DB, fix="decibels")
     return BearingRecord(time_s=t, bearing_rad=np.asarray(wrap_angle(np.deg2rad(b_deg))), frequency_hz=freq, snr_db=snr)
 
 
@@ -92,16 +102,16 @@ def read_ownship(path) -> OwnshipTrack:
     what = "ownship"
     df = read_table(path, what)
     check_columns(df, OWNSHIP_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path)
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
     check_sorted(t, what, path, strict=True)
     if len(t) < 2:
         raise InputError(f"{what} file {path} has one sample: give at least two (the ownship's velocity is needed)")
-    x = numeric_column(df, "x_m", what, path)
-    y = numeric_column(df, "y_m", what, path)
+    x, y = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M,
+                           fix="metres in a local frame, at most 10 000 km from its origin") for c in ("x_m", "y_m"))
     speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
     if np.any(speed > MAX_OWNSHIP_SPEED_MPS):
         row = int(np.argmax(speed > MAX_OWNSHIP_SPEED_MPS)) + 1
-        raise InputError(f"{what} file {path}: the ownship moves at {speed[row - 1]:.0f} m/s before data row "
+        raise InputError(f"{what} file {path}: the ownship moves at {speed[row - 1]:.3g} m/s before data row "
                          f"{row + 1}: positions must be metres and times seconds")
     return OwnshipTrack(time_s=t, x_m=x, y_m=y)
 

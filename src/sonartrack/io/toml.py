@@ -35,13 +35,68 @@ def load(path: str | Path) -> dict:
         raise InputError(f"config file {p} is not valid TOML: {exc}") from None
 
 
-def validate(model_cls, data: dict, source: str = "config"):
-    """Build a pydantic model from ``data``; the first validation error becomes an InputError."""
+def validate(model_cls, data: dict, source: str = "config", given: frozenset[str] = frozenset()):
+    """Build a pydantic model from ``data``; the first validation error becomes a one-line InputError.
+
+    A value outside a declared bound (``gt``/``ge``/``lt``/``le`` of ``core/settings.py`` ``setting``) names the
+    key, the value, the whole declared range with its unit, and says to check the unit (a km/s sound speed, a
+    1e300). ``given``: dotted keys set by command-line options; an error there is said to be the option's."""
     from pydantic import ValidationError
 
     try:
         return model_cls.model_validate(data)
     except ValidationError as exc:
         err = exc.errors()[0]
-        where = ".".join(str(x) for x in err.get("loc", ())) or "(top level)"
-        raise InputError(f"{source}: '{where}': {err.get('msg')}") from None
+        loc = tuple(err.get("loc", ()))
+        where = ".".join(str(x) for x in loc)
+        origin = "command-line option" if where in given else source
+        if err.get("type") in RANGE_ERRORS and isinstance(err.get("input"), int | float):
+            raise InputError(f"{origin}: {range_message(model_cls, loc, err)}") from None
+        if not loc:  # a check across fields (a model validator): its own message says which keys and the fix
+            raise InputError(f"{origin}: {str(err.get('msg')).removeprefix('Value error, ')}") from None
+        raise InputError(f"{origin}: '{where}': {err.get('msg')}") from None
+
+
+#: pydantic's error types of a numeric bound
+RANGE_ERRORS = frozenset({"greater_than", "greater_than_equal", "less_than", "less_than_equal"})
+
+
+def _field_at(model_cls, loc: tuple):
+    """The pydantic FieldInfo at error location ``loc`` of ``model_cls`` (nested groups, lists of groups), or None."""
+    from typing import get_args
+
+    from pydantic import BaseModel
+
+    cls, info = model_cls, None
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        if not (isinstance(cls, type) and issubclass(cls, BaseModel)) or part not in cls.model_fields:
+            return None
+        info = cls.model_fields[part]
+        kinds = [info.annotation, *get_args(info.annotation)]
+        cls = next((k for k in kinds if isinstance(k, type) and issubclass(k, BaseModel)), None)
+    return info
+
+
+def range_message(model_cls, loc: tuple, err: dict) -> str:
+    """'key' = value is outside its range lo <= key <= hi (unit): check its unit -- the bounds as declared."""
+    name = ".".join(str(x) for x in loc)
+    value = err["input"] if isinstance(err["input"], int) else f"{err['input']:g}"
+    info = _field_at(model_cls, loc)
+    lower, upper = "", ""
+    for m in info.metadata if info is not None else ():
+        for attr, side, op in (("gt", "lo", "<"), ("ge", "lo", "<="), ("lt", "hi", "<"), ("le", "hi", "<=")):
+            bound = getattr(m, attr, None)
+            if bound is not None and side == "lo":
+                lower = f"{bound:g} {op} "
+            elif bound is not None:
+                upper = f" {op} {bound:g}"
+    if not lower and not upper:  # not found in the declaration: pydantic's own account of the one bound
+        return f"'{name}' = {value}: {err.get('msg')}: check its unit (see --print-config)"
+    extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+    unit = extra.get("unit", "")
+    dimensioned = bool(unit) and unit != "1"
+    fix = "check its unit (see --print-config)" if dimensioned else "give a value in that range"
+    return (f"'{name}' = {value} is outside its range {lower}{name.rsplit('.', 1)[-1]}{upper}"
+            f"{f' ({unit})' if dimensioned else ''}: {fix}")

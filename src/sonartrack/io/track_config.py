@@ -51,7 +51,10 @@ class BistaticInputErrors(Settings):
     sigma_sound_speed_mps: float = setting(7.5, "error of the assumed mean sound speed", unit="m/s", ge=0)
     sigma_position_m: float = setting(30.0, "Tx and Rx position error per axis", unit="m", ge=0)
     sound_speed_mps: float = setting(1500.0, "mean sound speed where the contacts file has no sound_speed_mps",
-                                     unit="m/s", gt=0)
+                                     unit="m/s", ge=1300, le=1700)
+    max_range_m: float = setting(100_000.0, "largest target range from the transmitter or the receiver: a travel "
+                                 "time whose range sum c t exceeds twice this is refused (milliseconds?)", unit="m",
+                                 gt=0, le=1e7)
 
     def errors(self):
         from sonartrack.models.bistatic import BistaticErrors

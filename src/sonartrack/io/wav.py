@@ -3,7 +3,7 @@
 Accepted: 2-channel PCM 16/32-bit integer or 32/64-bit float WAV, read with scipy.io.wavfile; integer
 samples are scaled to [-1, 1). Refused with a one-line reason: mono or > 2 channels, 8-bit or 24-bit
 files (scipy reads 24-bit as padded int32 on some versions; convert with sox or ffmpeg), empty or
-unreadable files.
+unreadable files, a directory, NaN/inf samples, float samples beyond +-:data:`MAX_SAMPLE`.
 """
 
 from __future__ import annotations
@@ -14,6 +14,9 @@ import numpy as np
 
 from sonartrack.core.errors import InputError, require
 
+#: largest float sample magnitude taken (floats are nominally within [-1, 1]; any gain short of overflow)
+MAX_SAMPLE = 1e15
+
 
 def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
     """(signals (2, n) float64, sample rate Hz)."""
@@ -22,7 +25,9 @@ def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
     from scipy.io import wavfile
 
     p = Path(path)
+    require(not p.is_dir(), f"recording {p} is a directory: give the WAV file inside it")
     require(p.is_file(), f"recording not found: {p}")
+    require(p.stat().st_size > 0, f"recording {p.name} is empty (0 bytes): give a two-channel WAV file")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -44,5 +49,8 @@ def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
     else:
         raise InputError(f"{p.name} has {kind} samples ({'8-bit' if kind == np.uint8 else 'unsupported'} format): "
                          "convert to 16-bit PCM or 32-bit float WAV")
-    require(bool(np.all(np.isfinite(x))), f"{p.name} contains NaN/inf samples")
+    require(bool(np.all(np.isfinite(x))), f"{p.name} contains NaN/inf samples: clean the recording")
+    peak = float(np.max(np.abs(x)))
+    require(peak <= MAX_SAMPLE, f"{p.name} has a sample of magnitude {peak:g} (beyond {MAX_SAMPLE:g}): float samples "
+                                "are normally within [-1, 1]; rescale the recording")
     return np.ascontiguousarray(x.T), float(fs)

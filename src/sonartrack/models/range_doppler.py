@@ -159,9 +159,10 @@ class CwPlaneSettings(Settings):
     """Cell geometry of a CW pulse's range-Doppler plane (paper P1, sec. V); the plane's size comes
     from the frames (``detect``) or the scenario (the mftd study)."""
 
-    pulse_s: float = setting(0.125, "CW pulse length tau (sets both cell sizes)", unit="s", gt=0)
-    carrier_hz: float = setting(30e3, "carrier frequency f_c (Doppler cell to range-rate)", unit="Hz", gt=0)
-    sound_speed_mps: float = setting(1500.0, "sound speed c", unit="m/s", gt=0)
+    pulse_s: float = setting(0.125, "CW pulse length tau (sets both cell sizes)", unit="s", gt=0, le=100)
+    carrier_hz: float = setting(30e3, "carrier frequency f_c (Doppler cell to range-rate)", unit="Hz", gt=0,
+                             le=1e7)
+    sound_speed_mps: float = setting(1500.0, "sound speed c", unit="m/s", ge=1300, le=1700)
     range_min_m: float = setting(0.0, "lower range edge of the first range cell", unit="m")
     range_rate_min_mps: float | None = setting(
         None, "lower range-rate edge of the first Doppler cell (not set: the Doppler axis is centred on 0)",

@@ -109,7 +109,8 @@ def scenes_dir() -> Path:
 class PassiveSceneSettings(Settings):
     """A passive towed-array scene and its recording (``sonartrack simulate``; module doc for the default)."""
 
-    duration_s: float = setting(1200.0, "length of the recording", unit="s", gt=0)
+    # at most a day: a day of 16 channels at 4 kHz is already 22 GB
+    duration_s: float = setting(1200.0, "length of the recording", unit="s", gt=0, le=86_400)
     sample_rate_hz: float = setting(4000.0, "sample rate of the recording", unit="Hz", gt=0)
     block_s: float = setting(1.0, "synthesis block: geometry is held for a block, noise is drawn per block",
                              unit="s", gt=0)

@@ -48,6 +48,7 @@ STUDIES: dict[str, str] = {
     "tma-propagation": "sonartrack.studies.tma_propagation",
     "tma-sensitivity": "sonartrack.studies.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.studies.bistatic_imm_ipda",
+    "passive-chain": "sonartrack.studies.passive_chain",
 }
 
 

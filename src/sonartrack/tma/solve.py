@@ -92,7 +92,7 @@ def _solve_sequential(record, ownship, settings: TmaSettings) -> dict:
     return out
 
 
-def _flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_rad: float) -> TmaSolution:
+def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_rad: float) -> TmaSolution:
     """Bearings-only ML: flag the rows whose range lies beyond what the record can resolve
     (:func:`~sonartrack.tma.batch_ml.observable_range_limit_m`), whose range standard deviation exceeds the range
     itself (the one-sigma interval reaches the ownship), or whose covariance is not finite, and warn.
@@ -132,7 +132,7 @@ def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) 
     else:
         solution = solve_batch_then_ekf(record, ownship, settings.method, window_s=settings.batch.window_s, **kw)
     if settings.method == "ml":  # em-map resolves range from the SNR, not from the maneuver
-        solution = _flag_unresolved_range(solution, record, ownship, kw["sigma_bearing_rad"])
+        solution = flag_unresolved_range(solution, record, ownship, kw["sigma_bearing_rad"])
     return {"solution": solution}
 
 

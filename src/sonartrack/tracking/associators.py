@@ -17,7 +17,7 @@ import numpy as np
 
 from sonartrack.association.jpda import jpda_log_weights
 from sonartrack.association.likelihood import Likelihoods
-from sonartrack.association.pda import AssociationWeights, pda_weights
+from sonartrack.association.pda import AssociationWeights, pda_pair_weights
 
 
 class PDA:
@@ -27,7 +27,7 @@ class PDA:
     supports_existence = True
 
     def weights(self, lik: Likelihoods) -> AssociationWeights:
-        return pda_weights(lik)
+        return pda_pair_weights(lik)  # pda_weights' numbers at the gated pairs only
 
     def __repr__(self) -> str:
         return "PDA()"

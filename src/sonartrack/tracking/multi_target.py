@@ -21,6 +21,12 @@ One scan (Park, Song, Lee 2017, Fig. 3 and eqs. 7-21 for the IMM-IPDA configurat
 
 The tracker keeps no history (memory is bounded by the live tracks); :meth:`step` returns a
 :class:`~sonartrack.tracking.tracks.TrackSnapshot` with the combined (IMM output) estimates.
+
+Under load (hundreds of tracks, thousands of contacts a scan) steps 2-4 work on the gated (track,
+measurement) pairs only, never on an (n tracks, r modes, m measurements) array: a windowed pre-gate
+(association/likelihood_kernel.py), PDA weights from the pairs (``pda_pair_weights``) and the mixture
+update over the pairs, each giving the dense evaluation's numbers bit for bit (tests/association,
+tests/tracking/test_load_numerics.py; timing in benchmarks/bench_tracker_load.py).
 """
 
 from __future__ import annotations
@@ -87,16 +93,17 @@ class MultiTargetTracker:
         x_pred, P_pred = self.motion.predict(x0, P0, dt_s)
         lik = self.measurements.likelihoods(x_pred, P_pred, scan, T.attrs)
         w = self.associator.weights(lik)
-        from sonartrack.association.pda_mixture_kernel import pda_mixture_update_fast  # numba: loaded on first use
+        from sonartrack.association.pda_mixture_kernel import pda_mixture_update_pairs  # numba: loaded on first use
 
-        x, P = pda_mixture_update_fast(x_pred, P_pred, lik, w.beta0, w.beta)
+        x, P = pda_mixture_update_pairs(x_pred, P_pred, lik, w.beta0, w.of_pairs(lik))
         mu, log_total = self.motion.mode_update(c, w.log_lambda)
         existence = T.existence
         if self.existence is not None:
             existence = self.existence.update(self.existence.predict(T.existence), log_total)
         attrs = self.measurements.after_update(T.attrs, lik, scan)
         T = replace(T, x=x, P=P, mu=mu, existence=existence, attrs=attrs)
-        return T, lik.gated.any(axis=1), lik.gated.any(axis=0)
+        n, m = lik.gated.shape  # the gated pairs say the same as lik.gated.any(axis=1) and .any(axis=0)
+        return T, np.bincount(lik.pair_track, minlength=n) > 0, np.bincount(lik.pair_meas, minlength=m) > 0
 
     def _scan(self, time_s, z, R, amplitude) -> Scan:
         k = self.measurements.measurement_dim

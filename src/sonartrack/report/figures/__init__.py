@@ -21,6 +21,7 @@ STUDY_FIGURES = {
     "tma-propagation": "sonartrack.report.figures.tma_propagation",
     "tma-sensitivity": "sonartrack.report.figures.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.report.figures.bistatic_imm_ipda",
+    "passive-chain": "sonartrack.report.figures.passive_chain",
 }
 
 

@@ -1,0 +1,153 @@
+"""Left/right (port/starboard) ambiguity of a line array: cone angle -> the two mirror true bearings, and the
+side decided by which of them a constant-velocity target explains (issue 11, the passive chain).
+
+A line array measures only the cone angle theta in [0, pi] between its forward axis and the arrival
+direction; the true bearing (clockwise from north) is one of the two mirror images about the axis
+
+    b_starboard = h + theta,    b_port = h - theta        (h: the array's axis heading)
+
+(the convention of sim/passive_scene.py: side = starboard where sin(b - h) >= 0).
+
+While the array moves straight along its own axis the two hypotheses explain the cone angles equally
+well: the reflection of a constant-velocity (CV) target about the array's straight track is again a CV
+target, with the mirrored bearings. After a turn of the array the reflection axis has changed, so only
+the true side's bearings stay consistent with one CV track. We fit a CV target to each hypothesis by the
+bearings-only maximum likelihood of tma/batch_ml.py (Gauss-Newton / Levenberg-Marquardt, paper P3
+eqs. 15-18) and compare the maximised Gaussian likelihoods (a generalised likelihood ratio; both
+hypotheses have the same 4 parameters, so no dimension penalty):
+
+    J_side = min over X0 of sum_n wrap(b_side,n - h_n(X0))^2         (rad^2)
+    ln LR  = ln L_starboard - ln L_port = -(J_starboard - J_port) / (2 sigma^2)
+
+sigma (the bearing noise) is given, or measured from the better fit's residuals, the unbiased estimate
+of a 4-parameter least-squares fit, sigma^2 = min(J_s, J_p) / (n - 4), floored at ``sigma_floor_rad``
+(a floor keeps noise-free or quantised bearings from giving an infinite ratio out of model mismatch).
+The side is decided when |ln LR| >= ``min_log_lr`` (default ln 100, a 100:1 likelihood ratio).
+
+The ML cost of the wrong side after a turn is not convex and the right side's cost is flat in range
+before the turn, so each side is fitted from several starts (the pseudo-linear estimate and, for each
+of a few initial ranges R, the track from range R on the first bearing to range R on the last bearing),
+keeping the lowest cost.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sonartrack.core.angles import heading_unit, wrap_angle
+from sonartrack.core.errors import InputError, require
+from sonartrack.tma.batch_ml import BatchEstimate, ml_bearings_only
+
+#: fewest bearings for a side decision: 4 CV parameters plus at least 2 degrees of freedom for sigma
+MIN_BEARINGS = 6
+#: initial ranges (m) of the multi-start CV fits (module doc)
+INITIAL_RANGES_M = (2_000.0, 5_000.0, 10_000.0, 20_000.0)
+#: smallest bearing noise (rad) the measured sigma may take (0.1 deg, module doc)
+SIGMA_FLOOR_RAD = float(np.deg2rad(0.1))
+
+
+@dataclass(frozen=True)
+class SideDecision:
+    """Which side of the array a track's target is on, with the evidence.
+
+    ``side``: "starboard", "port" or "unresolved"; ``log_likelihood_ratio``: ln L_starboard - ln L_port
+    at each side's ML CV fit (0 when no decision could be computed); ``sigma_bearing_rad``: the bearing noise
+    used (given, or measured from the better fit); ``starboard`` / ``port``: the ML fits (covariances
+    scaled by sigma^2), None where a fit failed; ``note``: why the side is unresolved ("" otherwise)."""
+
+    side: str
+    log_likelihood_ratio: float
+    sigma_bearing_rad: float
+    starboard: BatchEstimate | None
+    port: BatchEstimate | None
+    note: str = ""
+
+
+def mirror_bearings_rad(cone_rad, array_heading_rad) -> tuple[np.ndarray, np.ndarray]:
+    """The two true bearings (rad, clockwise from north, wrapped to (-pi, pi]) of cone angles ``cone_rad``
+    (0..pi from the array's forward axis) for an array whose axis heads ``array_heading_rad``:
+    (starboard = h + theta, port = h - theta)."""
+    theta = np.asarray(cone_rad, dtype=float)
+    h = np.asarray(array_heading_rad, dtype=float)
+    return wrap_angle(h + theta), wrap_angle(h - theta)
+
+
+def _starts(z_rad, time_s, sensor_xy, initial_ranges_m) -> list[np.ndarray | None]:
+    """Initial X0s: None (the pseudo-linear estimate) and, per range R, the CV track from range R on the first
+    bearing line to range R on the last one."""
+    u = heading_unit(np.array([z_rad[0], z_rad[-1]]))
+    span_s = float(time_s[-1] - time_s[0])
+    starts: list[np.ndarray | None] = [None]
+    for r in initial_ranges_m:
+        p0, p1 = sensor_xy[0] + r * u[0], sensor_xy[-1] + r * u[1]
+        starts.append(np.concatenate([p0, (p1 - p0) / span_s]))
+    return starts
+
+
+def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -> BatchEstimate | None:
+    """The lowest-cost bearings-only ML CV fit over the starts of :func:`_starts` (objective = sum of squared
+    wrapped residuals, rad^2; covariance for unit noise), or None if every start fails."""
+    best = None
+    for x_init in _starts(z_rad, time_s, sensor_xy, initial_ranges_m):
+        try:
+            est = ml_bearings_only(z_rad, time_s, sensor_xy, 1.0, x_init=x_init, check=False)
+        except (InputError, np.linalg.LinAlgError, FloatingPointError):
+            continue
+        if np.isfinite(est.objective) and np.all(np.isfinite(est.x0)) and (
+                best is None or est.objective < best.objective):
+            best = est
+    return best
+
+
+def _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m):
+    """Arrays as float, or InputError naming the problem (NaNs, shapes, unsorted times, cone outside 0..pi)."""
+    t, cone = np.asarray(time_s, dtype=float), np.asarray(cone_rad, dtype=float)
+    head, xy = np.asarray(array_heading_rad, dtype=float), np.asarray(sensor_xy_m, dtype=float)
+    n = len(t)
+    require(t.ndim == 1 and cone.shape == (n,) and head.shape == (n,) and xy.shape == (n, 2),
+            f"resolve_side: time_s, cone_rad, array_heading_rad must be (n,) and sensor_xy_m (n, 2), got "
+            f"{t.shape}, {cone.shape}, {head.shape}, {xy.shape}")
+    for name, a in (("time_s", t), ("cone_rad", cone), ("array_heading_rad", head), ("sensor_xy_m", xy)):
+        require(bool(np.all(np.isfinite(a))), f"resolve_side: {name} holds NaN or infinite values: drop those rows")
+    require(bool(np.all(np.diff(t) > 0)), "resolve_side: times must increase strictly: sort and drop duplicates")
+    require(bool(np.all((cone >= 0) & (cone <= np.pi))),
+            "resolve_side: cone angles must lie in 0..pi rad from the array's forward axis")
+    return t, cone, head, xy
+
+
+def resolve_side(time_s, cone_rad, array_heading_rad, sensor_xy_m, *, sigma_bearing_rad: float | None = None,
+                 min_log_lr: float = float(np.log(100.0)), sigma_floor_rad: float = SIGMA_FLOOR_RAD,
+                 initial_ranges_m=INITIAL_RANGES_M) -> SideDecision:
+    """The side of the array a cone-angle track's target is on (module doc for the equations).
+
+    ``time_s`` (n,) s, ``cone_rad`` (n,) rad in 0..pi, ``array_heading_rad`` (n,) rad clockwise from north,
+    ``sensor_xy_m`` (n, 2) the array centre (x east, y north) at those times. ``sigma_bearing_rad``: the
+    bearing noise if known, else measured. Unresolved (ln LR 0, a ``note``) with fewer than 6 bearings or
+    when a side's fit fails; NaN inputs raise :class:`InputError`."""
+    t, cone, head, xy = _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m)
+    require(sigma_bearing_rad is None or (np.isfinite(sigma_bearing_rad) and sigma_bearing_rad > 0),
+            f"resolve_side: sigma_bearing_rad must be a positive number, got {sigma_bearing_rad}")
+    nan = float("nan") if sigma_bearing_rad is None else float(sigma_bearing_rad)
+    if len(t) < MIN_BEARINGS:
+        return SideDecision("unresolved", 0.0, nan, None, None,
+                            f"too few bearings ({len(t)} < {MIN_BEARINGS}) for a constant-velocity fit")
+    z_s, z_p = mirror_bearings_rad(cone, head)
+    fit_s = fit_cv_target(z_s, t, xy, initial_ranges_m)
+    fit_p = fit_cv_target(z_p, t, xy, initial_ranges_m)
+    failed = [name for name, f in (("starboard", fit_s), ("port", fit_p)) if f is None]
+    if failed:
+        return SideDecision("unresolved", 0.0, nan, fit_s, fit_p,
+                            f"constant-velocity fit failed on the {' and '.join(failed)} side")
+    j_s, j_p = fit_s.objective, fit_p.objective
+    if sigma_bearing_rad is None:
+        sigma = max(float(np.sqrt(min(j_s, j_p) / (len(t) - 4))), sigma_floor_rad)
+    else:
+        sigma = float(sigma_bearing_rad)
+    log_lr = -(j_s - j_p) / (2.0 * sigma**2)
+    side = "unresolved" if abs(log_lr) < min_log_lr else ("starboard" if log_lr > 0 else "port")
+    note = "" if side != "unresolved" else f"|ln LR| = {abs(log_lr):.3g} < {min_log_lr:.3g}: the array has not " \
+                                           "turned enough to tell the mirror images apart"
+    return SideDecision(side, float(log_lr), sigma, replace(fit_s, covariance=fit_s.covariance * sigma**2),
+                        replace(fit_p, covariance=fit_p.covariance * sigma**2), note)

@@ -1,0 +1,166 @@
+"""Line-array beamforming front end (acoustics/beamforming.py): steering convention, array gain, normaliser,
+peaks, the simulator's ships, refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonartrack.acoustics.beamforming import (
+    BeamformerSettings,
+    beam_powers,
+    bearing_time_record,
+    cbf_powers,
+    check_array,
+    normalise_across_bearing,
+    pick_beam_peaks,
+)
+from sonartrack.core.errors import InputError
+
+FS, N, D, C = 4000.0, 16, 2.5, 1500.0
+
+
+def plane_wave(rng, cone_deg, n=N, d=D, fs=FS, samples=4000, band=(50.0, 300.0)):
+    """White band-limited noise arriving from ``cone_deg``: X_n(f) = S(f) exp(-2 pi i f tau_n),
+    tau_n = -s_n cos(theta) / c, s_n = ((n_el - 1)/2 - n) d (the simulator's convention, written out here)."""
+    f = np.fft.rfftfreq(samples, 1 / fs)
+    spec = (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)) * ((f >= band[0]) & (f < band[1]))
+    s_n = ((n - 1) / 2 - np.arange(n)) * d
+    tau = -s_n * np.cos(np.deg2rad(cone_deg)) / C
+    x = np.fft.irfft(spec[None, :] * np.exp(-2j * np.pi * f[None, :] * tau[:, None]), samples, axis=1)
+    return x / x.std()  # unit power per element
+
+
+@pytest.mark.parametrize("cone", [60.0, 120.0, 33.3])
+def test_cbf_peaks_at_the_arrival_cone_angle_not_mirrored(cone):
+    s = BeamformerSettings(method="cbf")
+    x = plane_wave(np.random.default_rng(1), cone)
+    z = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
+    angle, amp = pick_beam_peaks(z, s.cone_deg, s)
+    best = angle[np.argmax(amp)]
+    assert abs(best - cone) < 0.2, (best, cone)
+
+
+def test_split_array_peaks_at_the_arrival_cone_angle():
+    s = BeamformerSettings(method="split-array")
+    for cone in (84.0, 97.0):  # the unsteered half-arrays hear only near broadside (module doc)
+        x = plane_wave(np.random.default_rng(2), cone)
+        z = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
+        angle, amp = pick_beam_peaks(z, s.cone_deg, s)
+        assert abs(angle[np.argmax(amp)] - cone) < 1.0
+
+
+def test_cbf_equals_the_direct_sum_over_elements_and_bins():
+    """The lag-domain matrix product (module doc) against Y = sum_n exp(+2 pi i f tau_n) X_n summed |Y|^2."""
+    rng = np.random.default_rng(4)
+    n, m = 5, 256
+    x = rng.standard_normal((n, m))
+    s = BeamformerSettings(band_hz=[200.0, 1500.0], beams=37, whiten=False)
+    got = cbf_powers(x[None], FS, 0.5, s)[0]
+    f = np.fft.rfftfreq(m, 1 / FS)
+    band = (f >= 200) & (f < 1500)
+    spec = np.fft.rfft(x, axis=1)[:, band]
+    s_n = ((n - 1) / 2 - np.arange(n)) * 0.5
+    want = []
+    for theta in np.deg2rad(s.cone_deg):
+        tau = -s_n * np.cos(theta) / C
+        y = (np.exp(2j * np.pi * f[band][None, :] * tau[:, None]) * spec).sum(axis=0)
+        want.append(np.sum(np.abs(y) ** 2))
+    np.testing.assert_allclose(got, want, rtol=1e-10)
+
+
+def test_cbf_array_gain_is_ten_log_n_for_white_noise():
+    """Signal power at the steered beam grows as N^2, independent noise as N: gain N = 12.0 dB for 16 elements."""
+    rng = np.random.default_rng(5)
+    s = BeamformerSettings(method="cbf", beams=181, band_hz=[50.0, 300.0], whiten=False)
+    beam = 75
+    sig_gain, noise_gain = [], []
+    for _ in range(8):
+        sig = plane_wave(rng, float(s.cone_deg[beam]))
+        noise = rng.standard_normal((N, 4000))
+        single_sig = np.sum(np.abs(np.fft.rfft(sig[0])[50:300]) ** 2)
+        single_noise = np.sum(np.abs(np.fft.rfft(noise[0])[50:300]) ** 2)
+        sig_gain.append(beam_powers(sig, FS, D, s.cone_deg, s)[beam] / single_sig)
+        noise_gain.append(beam_powers(noise, FS, D, s.cone_deg, s)[beam] / single_noise)
+    gain_db = 10 * np.log10(np.mean(sig_gain) / np.mean(noise_gain))
+    assert gain_db == pytest.approx(10 * np.log10(N), abs=0.7)
+
+
+@pytest.mark.parametrize("method", ["cbf", "split-array"])
+def test_normaliser_is_invariant_to_the_recording_level(method):
+    s = BeamformerSettings(method=method)
+    rng = np.random.default_rng(6)
+    x = plane_wave(rng, 80.0) + 3 * rng.standard_normal((N, 4000))
+    z1 = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
+    z2 = normalise_across_bearing(beam_powers(1000 * x, FS, D, s.cone_deg, s), s)
+    np.testing.assert_allclose(z1, z2, rtol=1e-9, atol=1e-9)
+    assert z1.max() > 4.0 or method == "split-array"
+
+
+def test_normaliser_median_and_mad_by_hand():
+    s = BeamformerSettings()
+    p = np.array([1.0, 2.0, 3.0, 4.0, 100.0])  # median 3, |p - 3| = 2 1 0 1 97 -> MAD 1
+    np.testing.assert_allclose(normalise_across_bearing(p, s), (p - 3.0) / 1.4826)
+    np.testing.assert_array_equal(normalise_across_bearing(np.zeros(5), s), np.zeros(5))
+
+
+def test_pick_beam_peaks_parabola_endfire_and_max_peaks():
+    s = BeamformerSettings(beams=11, threshold=2.0, max_peaks=2)  # 18 deg steps
+    z = np.array([9.0, 5.0, 0.0, 3.0, 4.0, 3.0, 0.0, 5.0, 6.0, 0.0, 0.0])
+    angle, amp = pick_beam_peaks(z, s.cone_deg, s)
+    # peaks at beam 0 (mirrored: 5, 9, 5 -> exactly 0 deg, 9), beam 4 (3, 4, 3 -> 72 deg), beam 8 (5, 6, 0)
+    # beam 8: delta = 0.5 (5 - 0) / (5 - 12 + 0) = -5/14; height 6 - 0.25 * 5 * delta
+    np.testing.assert_allclose(angle, [0.0, 8 * 18.0 - 5 / 14 * 18.0])
+    np.testing.assert_allclose(amp, [9.0, 6.0 + 0.25 * 5 * 5 / 14])
+    s3 = BeamformerSettings(beams=11, threshold=2.0, max_peaks=3)
+    angle3, _ = pick_beam_peaks(z, s3.cone_deg, s3)
+    np.testing.assert_allclose(angle3[1], 72.0)
+    high = BeamformerSettings(beams=11, threshold=8.0)
+    assert pick_beam_peaks(z, high.cone_deg, high)[0].tolist() == [0.0]
+
+
+def test_bearing_time_record_times_levels_and_progress():
+    rng = np.random.default_rng(7)
+    blocks = [plane_wave(rng, 100.0) + 0.5 * rng.standard_normal((N, 4000)) for _ in range(35)]
+    seen = []
+    btr = bearing_time_record(iter(blocks), FS, D, BeamformerSettings(), progress=seen.append)
+    assert seen == list(range(35))
+    np.testing.assert_allclose(btr.time_s, np.arange(35) + 0.5)
+    assert btr.level.shape == (35, 181) and btr.level.dtype == np.float32
+    assert set(np.unique(btr.peaks.time_s)) == set(btr.time_s)
+    near = np.abs(btr.peaks.bearing_deg - 100.0) < 0.5
+    assert len(np.unique(btr.peaks.time_s[near])) == 35
+    np.testing.assert_allclose(btr.level[3], normalise_across_bearing(
+        beam_powers(blocks[3], FS, D, btr.cone_deg, BeamformerSettings()), BeamformerSettings()), rtol=1e-5)
+
+
+def test_simulator_ships_are_found_within_one_degree():
+    """The simulator's plane-wave convention and truth cone angles agree with the beamformer's."""
+    from sonartrack.sim.array_signals import array_blocks
+    from sonartrack.sim.passive_scene import scene_geometry
+    from sonartrack.sim.scene import PassiveSceneSettings
+
+    scene = PassiveSceneSettings(duration_s=20.0)
+    s = BeamformerSettings()
+    btr = bearing_time_record(array_blocks(scene, np.random.default_rng(1)), scene.sample_rate_hz,
+                              scene.spacing_m, s)
+    truth = np.rad2deg(scene_geometry(scene, btr.time_s).cone_rad)
+    for ship in (0, 1):  # the merchant and the trawler, the two loud ships of the default scene
+        hits = 0
+        for k, tk in enumerate(btr.time_s):
+            at = btr.peaks.bearing_deg[btr.peaks.time_s == tk]
+            hits += bool(np.any(np.abs(at - truth[ship, k]) < 1.0))
+        assert hits >= 0.8 * len(btr.time_s), (scene.ships[ship].name, hits)
+
+
+def test_refusals_name_the_fix():
+    with pytest.raises(InputError, match=r"aliases above 300\.0 Hz.*<= 300 Hz"):
+        check_array(16, 2.5, BeamformerSettings(band_hz=[50.0, 1000.0]), fs_hz=4000.0)
+    check_array(16, 2.5, BeamformerSettings(band_hz=[50.0, 1000.0], allow_grating_lobes=True), fs_hz=4000.0)
+    check_array(16, 2.5, BeamformerSettings(), fs_hz=4000.0)  # default band [150, 300) Hz stops at c / (2 d)
+    with pytest.raises(InputError, match="half the sample rate"):
+        check_array(16, 0.5, BeamformerSettings(band_hz=[50.0, 1000.0]), fs_hz=1500.0)
+    with pytest.raises(InputError, match="at least 4 elements"):
+        check_array(3, 2.5, BeamformerSettings(method="split-array"))
+    with pytest.raises(InputError, match="aliases"):
+        bearing_time_record([np.zeros((16, 4000))], FS, 2.5, BeamformerSettings(band_hz=[50.0, 900.0]))
