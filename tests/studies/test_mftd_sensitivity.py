@@ -30,7 +30,11 @@ def test_contract_surface_and_toml_round_trip(tmp_path):
     assert study.STUDY_ID == "mftd-sensitivity" and study.TITLE and study.PAPER and study.TRIAL_VERSION >= 1
     cfg = study.Config()
     assert cfg.runs >= 1000 and study.Config.quick().runs <= 500
-    assert [16, 64] in cfg.planes and cfg.detector == MftdSettings()  # the mftd study's default detector
+    from sonartrack.studies import mftd
+
+    assert [16, 64] in cfg.planes and cfg.detector == mftd.Config().detector  # the mftd study's default detector
+    assert study.default_reading(cfg) == "16x64_smoothed_kept" and study.default_reading(cfg) in {
+        r["id"] for r in cfg.readings()}
     path = tmp_path / "c.toml"
     path.write_text(toml_io.dumps(cfg.model_dump(mode="json")))
     assert toml_io.validate(study.Config, toml_io.load(path)) == cfg
@@ -62,17 +66,39 @@ def test_summary_shapes_and_figures(quick):
         plt.close(f)
 
 
+def _mini(pds, var, cov=0.0, n=1000):
+    """An mftd-like summary: curves c0.. with Pd ``pds`` (n H1 trials), bootstrap variance ``var`` each and
+    covariance ``cov`` between any two (paired SE of a step: sqrt(2 (var - cov)))."""
+    k = len(pds)
+    c = np.full((k, k), cov) + np.eye(k) * (var - cov)
+    names = [f"c{i}" for i in range(k)]
+    return names, {"curves": {nm: {"pfa": [0.01], "pd": [p], "n_h1": n} for nm, p in zip(names, pds, strict=True)},
+                   "steps": {"pfa": 0.01, "names": names, "covariance": c.tolist()}}
+
+
 def test_verdicts_on_hand_worked_cases():
-    # falls: 0.5 -> 0.4 -> 0.3 with n = 1000 is two significant falls; 0.5 -> 0.49 is not
-    assert study.falls([0.5, 0.4, 0.3], 1000) == (True, False)
-    assert study.falls([0.5, 0.49, 0.3], 1000) == (False, False)
-    assert study.falls([0.3, 0.5, 0.2], 1000) == (False, True)
-    # rises and saturates: 0.2, 0.4, 0.5, 0.51 -> within 1.96 SE of 0.51 from N = 10
-    assert study.rises_and_saturates([0.2, 0.4, 0.5, 0.51], [1, 3, 10, 30], 1000) == (True, 10)
-    # still rising at the last step: no saturation before the largest N
-    assert study.rises_and_saturates([0.2, 0.3, 0.4, 0.5], [1, 3, 10, 30], 1000) == (False, 30)
+    from sonartrack.studies import mftd
+
+    # independent curves of n = 1000 (var = p(1-p)/n ~ 2.4e-4): 0.5 -> 0.4 -> 0.3 falls twice; 0.5 -> 0.49 not
+    names, s = _mini([0.5, 0.4, 0.3], 2.4e-4)
+    assert mftd.trend_verdict(s, names, 0.01, increasing=False) == (True, False, True)
+    names, s = _mini([0.5, 0.49, 0.3], 2.4e-4)
+    assert mftd.trend_verdict(s, names, 0.01, increasing=False) == (False, False, False)
+    # strongly paired curves: a step of 0.01 with paired SE sqrt(2 (2.4e-4 - 2.3e-4)) = 0.0045 is a fall
+    # (2.2 SE), though not by the unpaired binomial SE (0.022)
+    names, s = _mini([0.5, 0.49], 2.4e-4, cov=2.3e-4)
+    assert mftd.trend_verdict(s, names, 0.01, increasing=False) == (True, False, False)
+    assert mftd._step_se(s, "c0", "c1") == pytest.approx(np.sqrt(2e-5))
+    # rises and saturates: 0.2, 0.4, 0.5, 0.51 -> within 1.96 SE of 0.51 from N = 10 (both SEs)
+    names, s = _mini([0.2, 0.4, 0.5, 0.51], 2.4e-4)
+    assert mftd.saturation_verdict(s, names, [1, 3, 10, 30], 0.01, 0) == (True, 10)
+    assert mftd.saturation_verdict(s, names, [1, 3, 10, 30], 0.01, 1) == (True, 10)
+    # the same curves strongly paired: 0.5 -> 0.51 is significant, so no saturation before the largest N
+    names, s = _mini([0.2, 0.4, 0.5, 0.51], 2.4e-4, cov=2.35e-4)
+    assert mftd.saturation_verdict(s, names, [1, 3, 10, 30], 0.01, 0) == (False, 30)
     # flat: saturated from the start, but no rise
-    assert study.rises_and_saturates([0.3, 0.3, 0.3], [1, 3, 10], 1000) == (False, 1)
+    names, s = _mini([0.3, 0.3, 0.3], 2.4e-4)
+    assert mftd.saturation_verdict(s, names, [1, 3, 10], 0.01, 0) == (False, 1)
 
 
 def test_every_reading_is_exhaustive_when_nothing_is_pruned():

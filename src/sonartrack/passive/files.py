@@ -17,6 +17,8 @@ from sonartrack.passive.tables import peaks_table, targets_table
 def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress=None) -> PassiveResult:
     """Check the recording against the array and the navigation, then run the chain over it."""
     info = read_wav_info(wav_path)
+    if info.channels == 2:
+        settings = two_sensor_settings(settings, info.sample_rate_hz)
     check_inputs(info.channels, info.sample_rate_hz, settings)
     settings = settings.model_copy(update={"elements": info.channels})
     window = int(round(settings.front_end.window_s * info.sample_rate_hz))
@@ -27,6 +29,17 @@ def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress
     check_navigation_covers(nav, 0.0, n_windows * settings.front_end.window_s, path=f"navigation file {nav_path}")
     return run_passive(lambda: iter_wav_blocks(info, window, stop_frame=n_windows * window), info.sample_rate_hz,
                        n_windows, nav, settings, progress=progress)
+
+
+def two_sensor_settings(settings: PassiveSettings, fs_hz: float) -> PassiveSettings:
+    """A 2-channel recording is two sensors, as in paper P0: their cross-correlation (the split-array method with one
+    element per half) over a broad band, [fs / 80, fs / 4] (50-1000 Hz at 4 kHz) unless ``band_hz`` is given. A
+    time delay of broadband noise is unambiguous over the physical lags, so the sensor spacing may exceed half a
+    wavelength (P0's 20 m does) and grating lobes are accepted."""
+    fe = settings.front_end
+    band = fe.band_hz if fe.band_hz is not None else [fs_hz / 80.0, fs_hz / 4.0]
+    front_end = fe.model_copy(update={"method": "split-array", "band_hz": band, "allow_grating_lobes": True})
+    return settings.model_copy(update={"front_end": front_end})
 
 
 def write_passive_tables(result: PassiveResult, out: Path) -> list[Path]:

@@ -2,16 +2,19 @@
 
 Im & Kim 1996 (paper P1) leave open the plane size, how the prior density of eq. 19 meets a cell
 (printed: N(v; w_k, B_k) at the cell centre, "centre"; ours: N(v; w_k, B_k + R), "smoothed") and
-whether the statistic sums over the N tracks kept after the last frame (eq. 20, ``final="kept"``) or
-over all N x M branches of that frame (``final="branches"``, our default). This study re-runs the
-mftd study's claims
+whether the statistic sums over the N tracks kept after the last frame (eq. 20, ``final="kept"``, the
+mftd study's default since issue 13) or over all N x M branches of that frame (``final="branches"``, its
+earlier default). This study re-runs the mftd study's claims
 
 * ``pd_falls_with_sigma_a``          Pd(sigma_a) falls step by step at N = 10 (Fig. 5),
 * ``pd_falls_with_sigma_a_large_n``  the same at N = 100,
 * ``pd_rises_with_n_and_saturates``  Pd rises with N and is within 1.96 SE of Pd(N_max) before N_max (Fig. 6)
 
 under every reading plane x density x final, at Pfa = 1e-2 (or the lowest the H0 trials support),
-with the mftd study's tests (metrics/roc.py ``rise_is_significant``, Clopper-Pearson intervals).
+with the mftd study's tests (``mftd.trend_verdict`` and ``mftd.saturation_verdict``: a step counts when
+larger than 1.96 paired SE of the difference, from a bootstrap of the trials that re-estimates the
+thresholds; the verdict with the unpaired binomial SE of metrics/roc.py ``rise_is_significant`` is given
+beside it) and Clopper-Pearson intervals on each Pd.
 
 Planes: a sigma_a = 4 m/s^2 target changes its range-rate by T sigma_a = 8 m/s (sd) per frame and must
 stay on the plane for K frames, so every plane keeps at least the mftd study's 64 Doppler cells (11.3 m/s)
@@ -42,11 +45,11 @@ import numpy as np
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.mftd import MftdDetector, MftdSettings
-from sonartrack.metrics.roc import min_pfa, rise_is_significant, roc_curve, thresholds
-from sonartrack.metrics.statistics import paired_difference
+from sonartrack.metrics.roc import min_pfa, rise_is_significant, roc_curve
 from sonartrack.models.range_doppler import CwPlaneSettings
 from sonartrack.models.swerling import sample_cells
 from sonartrack.sim.range_doppler import simulate_target
+from sonartrack.studies import mftd
 
 STUDY_ID = "mftd-sensitivity"
 TITLE = "P1 sensitivity: the sigma_a and N claims under plane size, prior density and final decision"
@@ -75,7 +78,8 @@ class Config(Settings):
                                       doc="planes as [range cells, Doppler cells]", unit="1")
     n_frames: int = setting(6, "frames K", unit="1", ge=1)
     plane: CwPlaneSettings = setting(default_factory=CwPlaneSettings, doc="cell geometry (paper sec. V)")
-    detector: MftdSettings = setting(default_factory=MftdSettings, doc="the default detector (as in mftd)")
+    detector: MftdSettings = setting(default_factory=lambda: mftd.Config().detector,
+                                     doc="the default detector (as in mftd; the readings set density and final)")
     sigma_a_family_mps2: list[float] = setting(default_factory=lambda: [0.25, 1.0, 4.0],
                                                doc="sigma_a of the Fig. 5 families", unit="m/s^2")
     n_family: list[int] = setting(default_factory=lambda: [1, 3, 10, 30, 100], doc="N of the Fig. 6 family",
@@ -85,6 +89,8 @@ class Config(Settings):
                                          doc="prior density readings ('smoothed', 'centre')", unit="1")
     finals: list[str] = setting(default_factory=lambda: ["branches", "kept"],
                                 doc="final decision readings ('branches', 'kept' = eq. 20)", unit="1")
+    bootstrap: int = setting(1000, "bootstrap resamples of the trials for the paired SE of a step (as in mftd)",
+                             unit="1", ge=10)
 
     @classmethod
     def quick(cls) -> Config:
@@ -107,6 +113,12 @@ class Config(Settings):
 
 def reading_id(plane, density: str, final: str) -> str:
     return f"{plane[0]}x{plane[1]}_{density}_{final}"
+
+
+def default_reading(config: Config) -> str:
+    """Id of the reading that is the mftd study's default (its plane, and the detector's density and final)."""
+    m = mftd.Config()
+    return reading_id([m.n_range, m.n_doppler], config.detector.prior_density, config.detector.final)
 
 
 def plane_id(plane) -> str:
@@ -175,38 +187,6 @@ def _point(trials, cid: str, pfa: float) -> dict:
             "pfa_achieved": float(c.pfa_achieved[0]), "n_h1": int(c.n_h1)}
 
 
-def _detected(trials, cid: str, pfa: float) -> np.ndarray:
-    """Per H1 trial: 1 where the statistic exceeds the curve's threshold at ``pfa``, else 0."""
-    t = thresholds(trials[f"h0_{cid}"], [pfa])[0]
-    return (np.asarray(trials[f"h1_{cid}"], dtype=float) > t).astype(float)
-
-
-def paired_falls(trials, cids: list[str], pfa: float, z: float = 1.96) -> list[bool]:
-    """Per step of a family, whether Pd falls by more than ``z`` standard errors of the *paired* per-trial
-    difference of the detection indicators (the curves share their random numbers, so this SE is smaller
-    than the unpaired one of :func:`rise_is_significant`; the thresholds are taken as exact in both)."""
-    hits = [_detected(trials, c, pfa) for c in cids]
-    out = []
-    for a, b in zip(hits[:-1], hits[1:], strict=True):
-        mean, se = paired_difference(a, b)
-        out.append(bool(mean > z * max(se, 1e-12)))
-    return out
-
-
-def falls(pds: list[float], n: int) -> tuple[bool, bool]:
-    """(every step a significant fall, any step a significant rise)."""
-    steps = list(zip(pds[:-1], pds[1:], strict=True))
-    return all(rise_is_significant(b, a, n) for a, b in steps), any(rise_is_significant(a, b, n) for a, b in steps)
-
-
-def rises_and_saturates(pds: list[float], ns: list[int], n: int) -> tuple[bool, int]:
-    """The mftd claim on Fig. 6: (holds, first N within 1.96 SE of Pd at the largest N)."""
-    rises = rise_is_significant(pds[0], pds[-1], n) and not any(
-        rise_is_significant(b, a, n) for a, b in zip(pds[:-1], pds[1:], strict=True))
-    sat = next(ns[i] for i in range(len(pds)) if not rise_is_significant(pds[i], pds[-1], n))
-    return bool(rises and sat < ns[-1]), int(sat)
-
-
 def _reading_cell(trials, config: Config, reading: dict, pfa: float, kept: dict) -> dict:
     """One reading: Pd points of both sigma_a families and the N family, and the three claims' verdicts."""
     rid, d = reading["id"], config.detector
@@ -215,24 +195,35 @@ def _reading_cell(trials, config: Config, reading: dict, pfa: float, kept: dict)
            "n": [(d.sigma_a_mps2, n) for n in config.n_family]}
     points = {k: [_point(trials, curve_id(rid, a, n), pfa) for a, n in v] for k, v in fam.items()}
     pd = {k: [p["pd"] for p in v] for k, v in points.items()}
-    n1 = points["sigma"][0]["n_h1"]
-    ok_s, against_s = falls(pd["sigma"], n1)
-    ok_l, against_l = falls(pd["sigma_large_n"], n1)
-    ok_n, sat = rises_and_saturates(pd["n"], config.n_family, n1)
+    names = {k: [curve_id(rid, a, n) for a, n in v] for k, v in fam.items()}
+    mini = _mftd_summary(trials, points, names, pfa, config)
+    sig = {}
+    for k in ("sigma", "sigma_large_n"):
+        ok, against, unpaired = mftd.trend_verdict(mini, names[k], pfa, increasing=False)
+        sig[k] = {"holds": ok, "against": against, "unpaired_holds": unpaired,
+                  "paired_se": [mftd._step_se(mini, a, b) for a, b in zip(names[k][:-1], names[k][1:], strict=True)]}
+    ok_n, sat = mftd.saturation_verdict(mini, names["n"], config.n_family, pfa, 0)
+    ok_nu, sat_u = mftd.saturation_verdict(mini, names["n"], config.n_family, pfa, 1)
     pk = kept[plane_id(reading["plane"])]
-    paired = {k: paired_falls(trials, [curve_id(rid, a, n) for a, n in fam[k]], pfa)
-              for k in ("sigma", "sigma_large_n")}
     return {**reading, "points": points,
-            "claims": {"pd_falls_with_sigma_a": {"holds": ok_s, "against": against_s, "pd": pd["sigma"],
-                                                 "paired_step_falls": paired["sigma"],
+            "claims": {"pd_falls_with_sigma_a": {**sig["sigma"], "pd": pd["sigma"],
                                                  "first_cell_kept": pk[str(d.n_tracks)]},
-                       "pd_falls_with_sigma_a_large_n": {"holds": ok_l, "against": against_l,
-                                                         "pd": pd["sigma_large_n"],
-                                                         "paired_step_falls": paired["sigma_large_n"],
+                       "pd_falls_with_sigma_a_large_n": {**sig["sigma_large_n"], "pd": pd["sigma_large_n"],
                                                          "first_cell_kept": pk[str(config.large_n)]},
                        "pd_rises_with_n_and_saturates": {"holds": ok_n, "saturated_from_n": sat, "pd": pd["n"],
+                                                         "unpaired_holds": ok_nu, "unpaired_saturated_from_n": sat_u,
                                                          "first_cell_kept": [pk[str(n)][_sigma_index(config)]
                                                                              for n in config.n_family]}}}
+
+
+def _mftd_summary(trials, points: dict, names: dict, pfa: float, config: Config) -> dict:
+    """The part of an mftd summary its verdicts read: the curves' Pd at ``pfa`` and the bootstrap covariance."""
+    curves = {nm: {"pfa": [pfa], "pd": [p["pd"]], "n_h1": p["n_h1"]}
+              for k in names for nm, p in zip(names[k], points[k], strict=True)}
+    order = list(curves)
+    boot = mftd.pd_bootstrap(trials, order, pfa, config.bootstrap)
+    return {"curves": curves, "steps": {"pfa": pfa, "names": order,
+                                        "covariance": np.atleast_2d(np.cov(boot, rowvar=False)).tolist()}}
 
 
 def _sigma_index(config: Config) -> int:
@@ -257,12 +248,14 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     pfa = claim_pfa(runs)
     kept = first_cell_kept(trials, config)
     cells = [_reading_cell(trials, config, r, pfa, kept) for r in config.readings()]
+    ids = {c["id"] for c in cells}
     table = [{"reading": c["id"], "claim": cid, "holds": c["claims"][cid]["holds"], "pd": c["claims"][cid]["pd"]}
              for c in cells for cid in CLAIM_IDS]
     summary = {"runs": runs, "pfa": pfa, "sigma_a_family_mps2": list(config.sigma_a_family_mps2),
                "n_family": list(config.n_family), "n_default": config.detector.n_tracks, "large_n": config.large_n,
                "planes": {plane_id(p): {"n_cells": p[0] * p[1]} for p in config.planes},
-               "first_cell_kept": kept, "readings": cells, "table": table}
+               "first_cell_kept": kept, "readings": cells, "table": table,
+               "default_reading": default_reading(config) if default_reading(config) in ids else None}
     summary["findings"] = findings(summary)
     return summary
 
@@ -284,13 +277,13 @@ def findings(summary: dict) -> list[str]:
     out, a = [], summary["sigma_a_family_mps2"]
     for cid in CLAIM_IDS:
         held = [c["id"] for c in summary["readings"] if c["claims"][cid]["holds"]]
+        unpaired = [c["id"] for c in summary["readings"] if c["claims"][cid]["unpaired_holds"]]
         line = f"{cid}: holds in {len(held)} of {len(summary['readings'])} readings" + (
             f" ({', '.join(held)})" if held else "")
         if cid != "pd_rises_with_n_and_saturates":
-            paired = [c["id"] for c in summary["readings"] if all(c["claims"][cid]["paired_step_falls"])]
-            line += "; significant falls per step " + ", ".join(
+            line += "; significant falls per step (unpaired SE) " + ", ".join(
                 f"{a[i]:g}->{a[i + 1]:g}: {k}" for i, k in enumerate(_step_counts(summary, cid)))
-            line += "; every step a fall by the paired test in " + (", ".join(paired) or "none")
+        line += "; with the unpaired SE it holds in " + (", ".join(unpaired) or "none")
         out.append(line)
     n0 = str(summary["n_default"])
     out.append("true first cell kept by the first pruning (sigma_a-blind: the first frame has a flat prior), "

@@ -2,7 +2,8 @@
 optionally the batch on a first window only, with a sequential EKF taking over for the rest.
 
 For ``em-map`` the mean SNR against range is xi_bar(r) = SL - TL(r) + DI - NL, with TL from RAM
-(``acoustics/``) in the given environment, source and receiver at ``depth_m``, averaged over 1 km.
+(``acoustics/``) in the given environment, source and receiver at ``depth_m``, averaged incoherently over
+``EmMapSettings.tl_average_m`` (1 km by default).
 The environment is an :class:`~sonartrack.acoustics.environment.Environment` (a shipped one by name,
 or one read from a profile file by ``sonartrack.io.environment``); TL fields come from ``tl_store`` (any
 :class:`~sonartrack.acoustics.transmission_loss.FieldStore`, e.g. the disk cache of io/environment.py)
@@ -20,17 +21,15 @@ from sonartrack.tma.batch_ml import BatchEstimate, check_observability, ml_beari
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.tma.settings import BatchSettings, EmMapSettings
 
-#: TL range average (m): a passive sonar integrates over the interference pattern
-TL_AVERAGE_M = 1_000.0
-
 
 class UnobservableWarning(UserWarning):
     """Range is not observable from bearings alone (the ownship has not maneuvered)."""
 
 
 def snr_model(env, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m: float,
-              nl_db: float | None = None, di_db: float | None = None, tl_store=None):
-    """xi_bar(r) for an :class:`Environment` (or a shipped environment's name): (callable, environment, depth)."""
+              nl_db: float | None = None, di_db: float | None = None, tl_store=None, window_m: float | None = None):
+    """xi_bar(r) for an :class:`Environment` (or a shipped environment's name): (callable, environment, depth);
+    TL averaged over ``window_m`` (default: ``EmMapSettings().tl_average_m``)."""
     from sonartrack.acoustics.environment import load_environment
     from sonartrack.acoustics.sonar_equation import DI_DB, NL_DB, passive_snr_db
     from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field
@@ -40,7 +39,8 @@ def snr_model(env, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m:
     require(0 < z < env.water_depth_m,
             f"depth {z:g} m is outside the water column of {env.name} (0..{env.water_depth_m:g} m)")
     f = tl_field(env, freq_hz, z, rmax_m=r_max_m, store=tl_store)
-    line = smooth_tl(f.ranges_m, f.at_depth(z), TL_AVERAGE_M)
+    window = EmMapSettings().tl_average_m if window_m is None else window_m
+    line = smooth_tl(f.ranges_m, f.at_depth(z), window)
     nl = NL_DB if nl_db is None else nl_db
     di = DI_DB if di_db is None else di_db
 
@@ -84,7 +84,7 @@ def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_beari
     own = ownship.position_at(t)
     ml_start = _ml_start(record, t, own, sigma_bearing_rad)
     xi_bar, _, _ = snr_model(env, batch.sl_db, batch.freq_hz, batch.depth_m, em_map.r_max_m * 1.05, batch.nl_db,
-                             batch.di_db, tl_store=tl_store)
+                             batch.di_db, tl_store=tl_store, window_m=em_map.tl_average_m)
     prob = make_problem(record.bearing_rad, record.snr_db, t, own, sigma_bearing_rad, batch.sigma_snr_db, xi_bar,
                         em_map.r_min_m, em_map.r_max_m, kappa=em_map.kappa)
     est = solve_em_map(prob, t0_s=float(t[0]), extra_starts=[ml_start], max_iter=em_map.max_iter)

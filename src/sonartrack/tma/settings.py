@@ -74,6 +74,9 @@ class EmMapSettings(Settings):
     kappa: float = setting(KAPPA, "relative along-range spread of the position model (exact model: 0; why 1 %: "
                                   "tma/em_map.py)", unit="1", gt=0)
     max_iter: int = setting(500, "largest number of EM iterations from each starting point", unit="1", ge=1)
+    tl_average_m: float = setting(1_000.0, "range window of the incoherent TL average of the mean-SNR curve (a "
+                                           "passive sonar integrates over the interference pattern; 0: none)",
+                                  unit="m", ge=0)
 
 
 class InputSettings(Settings):

@@ -39,10 +39,11 @@ def _table_rows(summary: dict) -> list[list[str]]:
             kept = np.atleast_1d(v["first_cell_kept"])
             extra = (f"; saturated from N={v['saturated_from_n']}" if "saturated_from_n" in v
                      else ("; a significant rise against" if v.get("against") else ""))
-            paired = v.get("paired_step_falls")
-            paired_txt = "-" if paired is None else ("holds" if all(paired) else "fails")
-            rows.append([c["id"], SHORT[cid], _fmt_points(c["points"][key[cid]]) + extra,
-                         "/".join(f"{k:.0%}" for k in kept), "holds" if v["holds"] else "fails", paired_txt])
+            unpaired = v.get("unpaired_holds")
+            unpaired_txt = "-" if unpaired is None else ("holds" if unpaired else "fails")
+            label = c["id"] + (" (mftd default)" if c["id"] == summary.get("default_reading") else "")
+            rows.append([label, SHORT[cid], _fmt_points(c["points"][key[cid]]) + extra,
+                         "/".join(f"{k:.0%}" for k in kept), "holds" if v["holds"] else "fails", unpaired_txt])
     return rows
 
 
@@ -52,7 +53,7 @@ def _table_figure(summary: dict):
 
     rows = _table_rows(summary)
     head = ["reading (plane_density_final)", "claim", "Pd at Pfa [CP 95%] along the family",
-            "first cell kept (per σa, or per N)", "claim", "paired test"]
+            "first cell kept (per σa, or per N)", "claim", "unpaired SE"]
     fig, ax = plt.subplots(figsize=(16, 0.24 * len(rows) + 1.6))
     ax.axis("off")
     tab = ax.table(cellText=rows, colLabels=head, loc="center", cellLoc="left",
@@ -65,8 +66,9 @@ def _table_figure(summary: dict):
             if row[j] != "-":
                 tab[i, j].set_facecolor("#cfe3f7" if row[j] == "holds" else "#f7d0cb")
     ax.set_title(f"mftd claims under each reading ({summary['runs']} trials, Pfa = {summary['pfa']:g}; a step counts "
-                 "when larger than 1.96 SE of the difference; 'paired test': the same with the SE of the per-trial "
-                 "difference, the curves sharing their random numbers)", fontsize=9)
+                 "when larger than 1.96 SE of the difference, paired (bootstrap of the trials, thresholds "
+                 "re-estimated), as in mftd; 'unpaired SE': the same with the binomial SE of independent curves)",
+                 fontsize=9)
     note = "\n".join(textwrap.fill(f, 220) for f in summary.get("findings", []))
     fig.text(0.01, 0.0, note, fontsize=7, va="top", ha="left")
     fig.tight_layout()
