@@ -160,7 +160,10 @@ def test_refusals_name_the_fix():
     check_array(16, 2.5, BeamformerSettings(), fs_hz=4000.0)  # default band [150, 300) Hz stops at c / (2 d)
     with pytest.raises(InputError, match="half the sample rate"):
         check_array(16, 0.5, BeamformerSettings(band_hz=[50.0, 1000.0]), fs_hz=1500.0)
-    with pytest.raises(InputError, match="at least 4 elements"):
-        check_array(3, 2.5, BeamformerSettings(method="split-array"))
+    with pytest.raises(InputError, match="at least 2 elements"):
+        check_array(1, 2.5, BeamformerSettings(method="split-array"))
+    check_array(2, 2.5, BeamformerSettings(method="split-array"))  # two sensors: paper P0's correlator
+    with pytest.raises(InputError, match="in metres"):
+        check_array(16, 250.0, BeamformerSettings())  # centimetres given as metres: no usable band
     with pytest.raises(InputError, match="aliases"):
         bearing_time_record([np.zeros((16, 4000))], FS, 2.5, BeamformerSettings(band_hz=[50.0, 900.0]))
