@@ -40,6 +40,8 @@ def _bars(ax, names, values, low=None, high=None, line=None, ylabel="", title=""
         yerr = np.abs(np.vstack([v - np.asarray(low, float), np.asarray(high, float) - v]))
         yerr = np.nan_to_num(yerr)
     ax.bar(x, np.nan_to_num(v), yerr=yerr, color="C0", alpha=0.8, capsize=3)
+    for i in np.nonzero(~np.isfinite(v))[0]:
+        ax.text(x[i], 0.02, "not judged", ha="center", va="bottom", fontsize=8, color="0.4", rotation=90)
     if line is not None:
         ax.axhline(line, color="r", ls="--", lw=1)
     ax.set_xticks(x, names, fontsize=8)
@@ -54,11 +56,13 @@ def _checks(summary: dict):
     hold = np.array([summary["hold"][n] for n in names], float).reshape(-1, 3)
     _bars(axes[0, 0], names, hold[:, 0], hold[:, 1], hold[:, 2], HOLD_REQUIRED, "fraction held",
           "detectable time held by a confirmed track")
+    axes[0, 0].set_ylim(0.0, 1.05)
     _bars(axes[0, 1], names, [summary["rmse_over_crb"][n] for n in names], line=CRB_FACTOR,
           ylabel="RMSE / CRB", title="batch-ML final position RMSE over the CRB")
     k = summary["identity_kept"]
     _bars(axes[1, 0], ["JPDA_A", "JPDA"], [k["jpda_a"][0], k["jpda"][0]], [k["jpda_a"][1], k["jpda"][1]],
           [k["jpda_a"][2], k["jpda"][2]], ylabel="fraction of runs", title="crossing ships keep their tracks")
+    axes[1, 0].set_ylim(0.0, 1.05)
     _bars(axes[1, 1], ["false targets"], [summary["false_per_hour"]], [summary["false_per_hour"]],
           [summary["false_per_hour_upper95"]], FALSE_PER_HOUR, "per hour", "confirmed false targets (95 % upper)")
     fig.tight_layout()
