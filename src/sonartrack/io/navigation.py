@@ -16,15 +16,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.io.tables import check_columns, check_not_radians, check_sorted, numeric_column, read_table
+from sonartrack.io.tables import (
+    MAX_POSITION_M,
+    MAX_TIME_S,
+    check_columns,
+    check_not_radians,
+    check_sorted,
+    numeric_column,
+    read_table,
+)
 from sonartrack.tma.records import OwnshipTrack
 
 NAV_COLUMNS = ["time_s", "x_m", "y_m", "heading_deg"]
 ARRAY_COLUMNS = ["array_x_m", "array_y_m", "array_heading_deg"]
 #: a platform faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
 MAX_SPEED_MPS = 40.0
-#: positions beyond this (m) from the origin are not metres of a local plane
-MAX_POSITION_M = 1e7
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,7 +80,7 @@ def read_navigation(path) -> Navigation:
     what = "navigation"
     df = read_table(path, what)
     check_columns(df, NAV_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path)
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S)
     check_sorted(t, what, path, strict=True)
     require(len(t) >= 2, f"{what} file {path} has one row: give at least two times")
     x, y = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M) for c in ("x_m", "y_m"))
