@@ -41,10 +41,10 @@ def main() -> None:
             wall, peak_mb = run_measured(exe + ["passive", "--wav", str(scene / "recording.wav"), "--nav",
                                                 str(scene / "nav.csv"), "--spacing", "2.5", "--out",
                                                 str(Path(tmp) / f"out{minutes}")])
-            per_hour = wall * 60.0 / minutes
+            verdict = (f"target <= {TARGET_S_PER_HOUR:.0f} s: {'met' if wall <= TARGET_S_PER_HOUR else 'NOT met'}"
+                       if minutes == 60 else "start-up of a few seconds included; the target is for the hour")
             print(f"passive chain, {minutes} min of 16 ch x 4 kHz: {wall:.1f} s = {minutes * 60 / wall:.0f}x real time "
-                  f"({per_hour:.1f} s per hour; target <= {TARGET_S_PER_HOUR:.0f}), peak memory {peak_mb:.0f} MB "
-                  "(target < 1024)")
+                  f"({verdict}), peak memory {peak_mb:.0f} MB (target < 1024)")
             (scene / "recording.wav").unlink()
 
 
