@@ -92,7 +92,7 @@ def correlation_inflation(residuals_rad) -> float:
     The chain's bearing errors are not white: from window to window a neighbouring ship's sidelobes and the
     background normaliser move slowly, so consecutive peaks err alike. The white-noise ML covariance
     (inverse Fisher information) then claims n independent bearings where there are fewer, about
-    n (1 - rho) / (1 + rho) for an AR(1) error (the effective sample size of Bretherton et al. 1999, eq. 31);
+    n (1 - rho) / (1 + rho) for an AR(1) error (its effective sample size, e.g. Bretherton et al. 1999);
     the covariance is inflated by the inverse ratio so that the reported uncertainty covers the error."""
     r = np.asarray(residuals_rad, float)
     r = r - r.mean()
