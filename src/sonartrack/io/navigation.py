@@ -21,6 +21,7 @@ from sonartrack.io.tables import (
     MAX_TIME_S,
     check_columns,
     check_not_radians,
+    check_platform_speed,
     check_sorted,
     numeric_column,
     read_table,
@@ -29,8 +30,6 @@ from sonartrack.tma.records import OwnshipTrack
 
 NAV_COLUMNS = ["time_s", "x_m", "y_m", "heading_deg"]
 ARRAY_COLUMNS = ["array_x_m", "array_y_m", "array_heading_deg"]
-#: a platform faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
-MAX_SPEED_MPS = 40.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,14 +66,6 @@ def _heading_rad(df, col: str, path) -> np.ndarray:
     return np.unwrap(np.deg2rad(deg))
 
 
-def _check_speed(t, x, y, what: str, path) -> None:
-    speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
-    if np.any(speed > MAX_SPEED_MPS):
-        row = int(np.argmax(speed > MAX_SPEED_MPS)) + 1
-        raise InputError(f"navigation file {path}: the {what} moves at {speed[row - 1]:.0f} m/s before data row "
-                         f"{row + 1}: positions must be metres and times seconds")
-
-
 def read_navigation(path) -> Navigation:
     """Read and check a navigation file (module docstring) into a :class:`Navigation`."""
     what = "navigation"
@@ -84,7 +75,7 @@ def read_navigation(path) -> Navigation:
     check_sorted(t, what, path, strict=True)
     require(len(t) >= 2, f"{what} file {path} has one row: give at least two times")
     x, y = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M) for c in ("x_m", "y_m"))
-    _check_speed(t, x, y, "ownship", path)
+    check_platform_speed(t, x, y, what, path)
     heading = _heading_rad(df, "heading_deg", path)
     have = [c for c in ARRAY_COLUMNS if c in df.columns]
     if have and len(have) < len(ARRAY_COLUMNS):
@@ -94,7 +85,7 @@ def read_navigation(path) -> Navigation:
         return Navigation(t, x, y, heading, x, y, heading)
     ax, ay = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M) for c in ("array_x_m",
                                                                                                   "array_y_m"))
-    _check_speed(t, ax, ay, "array", path)
+    check_platform_speed(t, ax, ay, what, path, "array")
     return Navigation(t, x, y, heading, ax, ay, _heading_rad(df, "array_heading_deg", path))
 
 

@@ -162,3 +162,16 @@ def check_no_duplicate_rows(columns: dict[str, np.ndarray], what: str, path) -> 
         first = int(np.argmax((df == df.iloc[row]).all(axis=1).to_numpy()))
         raise InputError(f"{what} file {path}: data rows {first + 1} and {row + 1} repeat the same "
                          f"{', '.join(columns)} ({int(dup.sum())} repeated row(s) in all): remove the repeats")
+
+
+#: a platform faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
+MAX_PLATFORM_SPEED_MPS = 40.0
+
+
+def check_platform_speed(t, x, y, what: str, path, platform: str = "ownship") -> None:
+    """Positions that imply a speed above MAX_PLATFORM_SPEED_MPS between two rows are in the wrong units."""
+    speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
+    if np.any(speed > MAX_PLATFORM_SPEED_MPS):
+        row = int(np.argmax(speed > MAX_PLATFORM_SPEED_MPS)) + 1
+        raise InputError(f"{what} file {path}: the {platform} moves at {speed[row - 1]:.3g} m/s before data row "
+                         f"{row + 1}: positions must be metres and times seconds")

@@ -41,6 +41,7 @@ from sonartrack.io.tables import (
     MAX_TIME_S,
     check_columns,
     check_not_radians,
+    check_platform_speed,
     check_range,
     check_sorted,
     numeric_column,
@@ -50,8 +51,6 @@ from sonartrack.tma.solution_table import solution_columns
 
 BEARING_COLUMNS = ["time_s", "bearing_deg"]
 OWNSHIP_COLUMNS = ["time_s", "x_m", "y_m"]
-#: an ownship faster than this (m/s, about 78 kn) has kilometres or minutes written as metres or seconds
-MAX_OWNSHIP_SPEED_MPS = 40.0
 #: largest received frequency taken (Hz): passive sonar tonals are far below; beyond it the column is another unit
 MAX_FREQUENCY_HZ = 1e6
 #: largest |SNR| taken (dB)
@@ -108,11 +107,7 @@ def read_ownship(path) -> OwnshipTrack:
         raise InputError(f"{what} file {path} has one sample: give at least two (the ownship's velocity is needed)")
     x, y = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M,
                            fix="metres in a local frame, at most 10 000 km from its origin") for c in ("x_m", "y_m"))
-    speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
-    if np.any(speed > MAX_OWNSHIP_SPEED_MPS):
-        row = int(np.argmax(speed > MAX_OWNSHIP_SPEED_MPS)) + 1
-        raise InputError(f"{what} file {path}: the ownship moves at {speed[row - 1]:.3g} m/s before data row "
-                         f"{row + 1}: positions must be metres and times seconds")
+    check_platform_speed(t, x, y, what, path)
     return OwnshipTrack(time_s=t, x_m=x, y_m=y)
 
 

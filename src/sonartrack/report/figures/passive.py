@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from sonartrack.io.atomic import save_figure
-from sonartrack.report.figures.tma import CHI2_2DOF_95
+from sonartrack.report.figures.tma import ellipses
 
 
 def bearing_time_picture(result):
@@ -36,20 +36,6 @@ def bearing_time_picture(result):
     return fig
 
 
-def _ellipses(ax, state, cov, color, n: int = 6, alpha: float = 0.8) -> None:
-    from matplotlib.patches import Ellipse
-
-    k95 = np.sqrt(CHI2_2DOF_95)
-    for k in np.unique(np.linspace(0, len(state) - 1, n).round().astype(int)):
-        w, V = np.linalg.eigh(cov[k, :2, :2])
-        if not np.all(np.isfinite(w)):
-            continue
-        w = np.maximum(w, 0.0)
-        ax.add_patch(Ellipse((state[k, 0] / 1e3, state[k, 1] / 1e3), 2 * k95 * np.sqrt(w[1]) / 1e3,
-                             2 * k95 * np.sqrt(w[0]) / 1e3, angle=np.degrees(np.arctan2(V[1, 1], V[0, 1])),
-                             fill=False, color=color, lw=0.8, alpha=alpha))
-
-
 def _plausible(tma_result, min_range_m: float = 500.0) -> bool:
     """A fit worth drawing: range determined throughout and never on top of the array (a wrong side's best
     fit is often a 'target' travelling with the array a few metres away)."""
@@ -73,7 +59,7 @@ def tactical_picture(result, nav):
             continue  # an undetermined range would draw a meaningless track; the summary line says so
         ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "-", color=color, lw=1.5, label=f"target {tg.target_id}")
         ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "^", color=color, ms=8)
-        _ellipses(ax, X, P, color)
+        ellipses(ax, X, P, 6, color=color, alpha=0.8, label=None)
         mirror = tg.mirror_ml
         # the rejected side's fit often runs off to no range at all (it explains nothing): draw it only where
         # its own range is determined, near the picture

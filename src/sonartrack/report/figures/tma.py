@@ -22,11 +22,12 @@ def _bearing_lines(ax, record, ownship, length_m: float, n_lines: int = 40) -> N
     ax.plot([], [], color="0.8", lw=0.6, label="measured bearings")
 
 
-def _ellipses(ax, solution, n_ellipses: int) -> None:
-    """95 % position ellipses at ``n_ellipses`` evenly spread solution times."""
+def ellipses(ax, state, covariance, n_ellipses: int, color: str = "r", alpha: float = 0.7,
+             label: str | None = "95 % position ellipses") -> None:
+    """95 % position ellipses (km axes) at ``n_ellipses`` evenly spread rows of ``state`` / ``covariance``."""
     from matplotlib.patches import Ellipse
 
-    X, P = np.asarray(solution.state, float), np.asarray(solution.covariance, float)
+    X, P = np.asarray(state, float), np.asarray(covariance, float)
     k95 = np.sqrt(CHI2_2DOF_95)
     idx = np.unique(np.linspace(0, len(X) - 1, n_ellipses).round().astype(int)) if n_ellipses > 0 else []
     for j, k in enumerate(idx):
@@ -36,8 +37,8 @@ def _ellipses(ax, solution, n_ellipses: int) -> None:
         w = np.maximum(w, 0.0)
         angle_deg = np.degrees(np.arctan2(V[1, 1], V[0, 1]))
         ax.add_patch(Ellipse((X[k, 0] / 1e3, X[k, 1] / 1e3), 2 * k95 * np.sqrt(w[1]) / 1e3,
-                             2 * k95 * np.sqrt(w[0]) / 1e3, angle=angle_deg, fill=False, color="r", lw=0.8, alpha=0.7,
-                             zorder=2, label="95 % position ellipses" if j == 0 else None))
+                             2 * k95 * np.sqrt(w[0]) / 1e3, angle=angle_deg, fill=False, color=color, lw=0.8,
+                             alpha=alpha, zorder=2, label=label if j == 0 else None))
 
 
 def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str = "TMA"):
@@ -53,7 +54,7 @@ def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str 
     ax.plot(ownship.x_m[0] / 1e3, ownship.y_m[0] / 1e3, "bo", zorder=3)
     ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "r-", lw=1.5, label="target (estimated)", zorder=3)
     ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "r^", ms=8, zorder=4)
-    _ellipses(ax, solution, n_ellipses)
+    ellipses(ax, solution.state, solution.covariance, n_ellipses)
     ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title=title)
     ax.legend(fontsize=8, loc="best")
     return fig
