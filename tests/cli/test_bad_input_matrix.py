@@ -491,6 +491,9 @@ CASES: list[Case] = [
     Case("ok-tma-comment-line", cmd_tma(), {"brg": comment_first("brg.csv")}, "ok", answer="13 bearings over 0..120 s"),
     Case("ok-tl-extra-column", cmd_tl(), {"profile": csv_edit("ctd.csv", add_column("note", "ctd cast"))}, "ok",
          answer="tl ctd: 300 Hz, source 50 m, receiver 80 m, to 3 km"),
+    Case("contacts-positions-km", cmd_contacts(),
+         {"contacts": csv_edit("contacts.csv", lambda df: scale("y_m", 1e-3)(scale("x_m", 1e-3)(df)))},
+         match="kilometres"),
     # ---- passive (the lead's new command): its rows go in PASSIVE_CASES below
     *PASSIVE_CASES,
 ]

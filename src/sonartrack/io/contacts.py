@@ -92,7 +92,21 @@ def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, 
             raise InputError(f"contacts file {path} has no covariance columns (var_x_m2, var_y_m2, cov_xy_m2): "
                              "add them or set default_sigma_m in the config")
         R = np.broadcast_to(np.eye(2) * default_sigma_m**2, (len(t), 2, 2)).copy()
+    _check_spread(z, R, path)
     return Contacts(t, z, R)
+
+
+def _check_spread(z: np.ndarray, R: np.ndarray, path) -> None:
+    """Many contacts spanning less than one of their own position standard deviations are not metres: a scene in
+    kilometres written into the _m columns (20 or more rows: noise alone then spans several standard deviations)."""
+    if len(z) < 20:
+        return
+    for k, col in enumerate(("x_m", "y_m")):
+        extent, sd = float(np.ptp(z[:, k])), float(np.median(np.sqrt(R[:, k, k])))
+        if extent < sd:
+            raise InputError(f"contacts file {path}: the {len(z)} contacts span only {extent:.3g} m in {col}, less "
+                             f"than their own position standard deviation ({sd:.3g} m): positions in kilometres? "
+                             "give metres")
 
 
 def _navigation(nav_path, t: np.ndarray) -> tuple[dict, np.ndarray]:

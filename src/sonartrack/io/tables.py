@@ -100,6 +100,11 @@ def check_columns(df, required: list[str], what: str, path) -> None:
                          f"(has: {', '.join(map(str, df.columns))})")
 
 
+def cell_text(value) -> str:
+    """A table cell as a message shows it: text quoted, numbers plain (nan, not np.float64(nan))."""
+    return repr(value) if isinstance(value, str) else str(value)
+
+
 def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: float = ABSURD,
                    lo_open: bool = False, fix: str = "") -> np.ndarray:
     """A column as float64, refusing text, NaN, infinities and values outside [lo, hi] (``lo_open``: (lo, hi]),
@@ -112,8 +117,8 @@ def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: fl
     if bad.any():
         row = int(np.argmax(bad))
         raise InputError(f"{what} file {path}: column '{col}' has {int(bad.sum())} missing, NaN, infinite or "
-                         f"non-numeric value(s), first at data row {row + 1} ({raw.iloc[row]!r}): fix or remove "
-                         "those rows")
+                         f"non-numeric value(s), first at data row {row + 1} ({cell_text(raw.iloc[row])}): fix or "
+                         "remove those rows")
     check_range(values, col, what, path, lo=lo, hi=hi, lo_open=lo_open, fix=fix)
     return values
 

@@ -39,6 +39,7 @@ from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.io.tables import (
     MAX_POSITION_M,
     MAX_TIME_S,
+    cell_text,
     check_columns,
     check_not_radians,
     check_platform_speed,
@@ -67,7 +68,7 @@ def _optional_column(df, col: str, what: str, path) -> np.ndarray:
     if bad.any():
         row = int(np.argmax(bad))
         raise InputError(f"{what} file {path}: column '{col}' has a non-numeric value at data row {row + 1} "
-                         f"({raw.iloc[row]!r}): fix it or leave the cell empty")
+                         f"({cell_text(raw.iloc[row])}): fix it or leave the cell empty")
     return values
 
 
