@@ -193,6 +193,15 @@ def test_an_interrupt_kills_the_workers_and_keeps_the_stored_chunks(tmp_path):
 
 def test_a_signal_while_the_pool_starts_is_acted_on_once_it_has_started():
     """Held, not lost: SIGINT during start-up raises KeyboardInterrupt (pytest's handler) on the way out."""
+    # a test run started as a background job inherits an ignored SIGINT: give Python's handler for this test
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _signal_held_during_start_up()
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _signal_held_during_start_up():
     reached = []
     with pytest.raises(KeyboardInterrupt), runner._stop_signals_held():
         os.kill(os.getpid(), signal.SIGINT)
