@@ -1,4 +1,4 @@
-"""Benchmarks for bearing + frequency TMA (issue 5, paper P2).
+"""Benchmarks for bearing + frequency TMA (paper P2).
 
 Prints one line per figure:
 * one IMM-MGEKF step with 3 modes (numba kernel) against the NumPy reference of the same step and

@@ -3,7 +3,6 @@
 * PDA update of one track with 40 measurements: ours (compiled and NumPy) vs Stone Soup's
   PDAHypothesiser + PDA + PDAUpdater. Target: >= 100x faster (compiled), same estimates.
 * IMM step with 2 CV modes: ours (compiled and NumPy) vs FilterPy's IMMEstimator. Target: >= 10x.
-* ``import sonartrack`` in a fresh interpreter (best of 5). Target: < 0.3 s.
 * The IPDA / IMM-IPDA tracker (tracking/configurations.py position_tracker; its pre-gate, IMM mixing and
   PDA mixture sums compiled) in the P4 scenario: ms per scan. Target: <= 0.6 ms with 3 modes.
 
@@ -11,8 +10,6 @@ Timings are medians of repeated runs after a warm-up (numba compiled beforehand)
 """
 
 import datetime
-import subprocess
-import sys
 import time
 
 import numpy as np
@@ -130,16 +127,6 @@ def bench_imm():
           f"(target >= 10 x)")
 
 
-def bench_import():
-    times = []
-    for _ in range(5):
-        out = subprocess.run([sys.executable, "-X", "importtime", "-c", "import sonartrack"], capture_output=True,
-                             text=True)
-        total = [ln for ln in out.stderr.splitlines() if ln.rstrip().endswith("| sonartrack")]
-        times.append(int(total[-1].split("|")[1]) / 1e6)
-    print(f"import sonartrack: {min(times) * 1e3:.0f} ms (best of 5, cumulative import time; target < 300 ms)")
-
-
 def bench_tracker():
     from sonartrack.sim.bistatic_sonar import simulate_scan
     from sonartrack.studies.bistatic_imm_ipda import Config
@@ -164,5 +151,4 @@ def bench_tracker():
 if __name__ == "__main__":
     bench_pda()
     bench_imm()
-    bench_import()
     bench_tracker()

@@ -1,4 +1,4 @@
-"""Benchmark: exact JPDA marginals, 8 targets converging in clutter (issue 3, paper P0).
+"""Benchmark: exact JPDA marginals, 8 targets converging in clutter (paper P0).
 
 Eight constant-velocity targets start on a 1 km circle and fly towards its centre at 10 m/s; the
 scan used is taken when they are close enough that their gates overlap (one cluster). Identical

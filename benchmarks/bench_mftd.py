@@ -1,4 +1,4 @@
-"""Benchmarks for multi-frame track-before-detect (issue 4, paper P1).
+"""Benchmarks for multi-frame track-before-detect (paper P1).
 
 Prints one line per figure:
 * one K = 6, N = 10 detection on a 64 x 64 plane: the compiled detector against the NumPy

@@ -1,4 +1,4 @@
-"""Benchmark: the full jpda-amplitude study (issue 3), extrapolated linearly from two measured reproduces
+"""Benchmark: the full jpda-amplitude study (paper P0), extrapolated linearly from two measured reproduces
 (10 and 30 runs, 2 workers): per-run cost from the difference, plus the fixed cost (start-up, the
 end-to-end run from sound, figures)."""
 

@@ -1,4 +1,4 @@
-"""Benchmarks for propagation-aware TMA (issue 6, paper P3).
+"""Benchmarks for propagation-aware TMA (paper P3).
 
 Prints one line per figure:
 * RAM TL for the East Sea deep case (200 m source) to 80 km, cold (pyram import and numba compile

@@ -1,5 +1,5 @@
 """Benchmark: the whole passive chain (``sonartrack passive``) on 10 and 60 minutes of 16-channel 4 kHz
-recording (issue 11, item 4): wall time, real-time factor and peak memory (the chain's process only).
+recording: wall time, real-time factor and peak memory (the chain's process only).
 
 The recordings are the default scene of ``sonartrack simulate`` (4 ships, ownship turn), written to a
 temporary folder first (not timed). Target: one hour through the whole chain (beamforming, tracking,

@@ -1,4 +1,4 @@
-"""Benchmark: the position tracker (IMM-IPDA, paper P4 defaults) under load (issue 12, item 5).
+"""Benchmark: the position tracker (IMM-IPDA, paper P4 defaults) under load.
 
 Scenario (:func:`scenario`): targets on constant-velocity tracks (5 m/s, random headings, reflected at
 the edges of the square) detected with P_D = 0.8 and 20 m position noise per axis, plus uniform clutter
@@ -17,7 +17,7 @@ Prints one line per figure:
   definite at the end of a scan (exact symmetry and a Cholesky test on all of them), and repairs
   (the tracker has no repair step: it symmetrizes every update, and a non-SPD covariance would show here).
 
-The goal (issue 12): 100 targets with 2000 clutter per scan in <= 20 ms a scan on this (2-core) machine.
+The goal: 100 targets with 2000 clutter per scan in <= 20 ms a scan on this (2-core) machine.
 """
 
 from __future__ import annotations

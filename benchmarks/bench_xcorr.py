@@ -1,4 +1,4 @@
-"""Benchmark: the cross-correlation bearing estimator on a two-channel 1 s window at 8 kHz (issue 3, P0).
+"""Benchmark: the cross-correlation bearing estimator on a two-channel 1 s window at 8 kHz (paper P0).
 
 Ours: one FFT cross-correlation restricted to the physical lags, peak picking with parabolic
 refinement and the arccos; peer: scipy.signal.correlate (method 'fft', full output) on the same

@@ -1,20 +1,23 @@
 """sonartrack: underwater target detection, tracking and target motion analysis.
 
-Layers (each imports only from layers below it)::
+Layers, top to bottom (each imports only from layers below it; layers on one line do not import each
+other)::
 
-    cli/, report/, stonesoup/     faces: command line, HTML report and figures, Stone Soup components
-    studies/                      one module per source paper
-    experiment/                   Monte Carlo runner, result store, resume
-    passive/                      the passive chain: array recording + navigation -> target tracks and solutions
-    io/                           user data in and out
-    tracking/ tma/ detection/     trackers, TMA estimators, MFTD
-    association/                  gating, PDA, JPDA, IPDA, IMM-IPDA
-    filters/                      KF, EKF, MGEKF, IMM on arrays
-    sim/                          platforms, trajectories, sensor simulators (not used by estimators)
-    acoustics/                    sound speed, propagation, sonar equation, bearings
-    models/                       motion and measurement models, clutter
-    core/                         angles, Gaussians, linear algebra, random streams, settings, units
-    metrics/                      RMSE, CTT, ROC, CRLB (imports core/ and models/ only)
+    cli/   stonesoup/             the faces: command line (may use report/); Stone Soup components
+    report/                       HTML report and figures
+    studies/                      one module per source paper: config, one trial, summary, claims
+    experiment/                   Monte Carlo runner (seeds, processes), result store, resume, claims
+    systems/                      end-to-end pipelines, one run function and one settings tree each:
+                                  passive, track, tma, detect, simulate
+    io/                           user data in and out: contacts, bearings, navigation, WAV, TOML (atomic)
+    tracking/   tma/   detection/ trackers and track management; batch and sequential TMA; MFTD
+    association/                  gating, PDA, JPDA (+ amplitude), IPDA, IMM-IPDA weights
+    filters/                      KF, EKF, MGEKF, IMM: predict/update on arrays
+    sim/                          platforms, trajectories, sensor simulators (never imported by estimators)
+    acoustics/                    sound speed, propagation and TL, sonar equation, signals, beamforming, bearings
+    metrics/                      beside the algorithms (imports core/, models/ only): RMSE, CTT, ROC, CRLB
+    models/                       motion and measurement models, clutter, Swerling statistics
+    core/                         angles, Gaussians, linear algebra, random streams, settings, units, errors
 
 The order is enforced by tests/architecture/test_layers.py. ``import sonartrack`` is kept light: heavy
 dependencies are imported lazily by the modules that need them.

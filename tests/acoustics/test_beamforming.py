@@ -11,13 +11,15 @@ from sonartrack.acoustics.beamforming import (
     beam_powers,
     bearing_time_record,
     cbf_powers,
-    check_array,
+    front_end_band,
     normalise_across_bearing,
     pick_beam_peaks,
 )
+from sonartrack.acoustics.line_array import Band, LineArray
 from sonartrack.core.errors import InputError
 
 FS, N, D, C = 4000.0, 16, 2.5, 1500.0
+ARRAY = LineArray(N, D, C)
 
 
 def plane_wave(rng, cone_deg, n=N, d=D, fs=FS, samples=4000, band=(50.0, 300.0)):
@@ -35,7 +37,7 @@ def plane_wave(rng, cone_deg, n=N, d=D, fs=FS, samples=4000, band=(50.0, 300.0))
 def test_cbf_peaks_at_the_arrival_cone_angle_not_mirrored(cone):
     s = BeamformerSettings(method="cbf")
     x = plane_wave(np.random.default_rng(1), cone)
-    z = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
+    z = normalise_across_bearing(beam_powers(x, FS, ARRAY, s.cone_deg, s), s)
     angle, amp = pick_beam_peaks(z, s.cone_deg, s)
     best = angle[np.argmax(amp)]
     assert abs(best - cone) < 0.2, (best, cone)
@@ -45,7 +47,7 @@ def test_split_array_peaks_at_the_arrival_cone_angle():
     s = BeamformerSettings(method="split-array")
     for cone in (84.0, 97.0):  # the unsteered half-arrays hear only near broadside (module doc)
         x = plane_wave(np.random.default_rng(2), cone)
-        z = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
+        z = normalise_across_bearing(beam_powers(x, FS, ARRAY, s.cone_deg, s), s)
         angle, amp = pick_beam_peaks(z, s.cone_deg, s)
         assert abs(angle[np.argmax(amp)] - cone) < 1.0
 
@@ -56,7 +58,7 @@ def test_cbf_equals_the_direct_sum_over_elements_and_bins():
     n, m = 5, 256
     x = rng.standard_normal((n, m))
     s = BeamformerSettings(band_hz=[200.0, 1500.0], beams=37, whiten=False)
-    got = cbf_powers(x[None], FS, 0.5, s)[0]
+    got = cbf_powers(x[None], FS, LineArray(n, 0.5, C), s)[0]
     f = np.fft.rfftfreq(m, 1 / FS)
     band = (f >= 200) & (f < 1500)
     spec = np.fft.rfft(x, axis=1)[:, band]
@@ -80,8 +82,8 @@ def test_cbf_array_gain_is_ten_log_n_for_white_noise():
         noise = rng.standard_normal((N, 4000))
         single_sig = np.sum(np.abs(np.fft.rfft(sig[0])[50:300]) ** 2)
         single_noise = np.sum(np.abs(np.fft.rfft(noise[0])[50:300]) ** 2)
-        sig_gain.append(beam_powers(sig, FS, D, s.cone_deg, s)[beam] / single_sig)
-        noise_gain.append(beam_powers(noise, FS, D, s.cone_deg, s)[beam] / single_noise)
+        sig_gain.append(beam_powers(sig, FS, ARRAY, s.cone_deg, s)[beam] / single_sig)
+        noise_gain.append(beam_powers(noise, FS, ARRAY, s.cone_deg, s)[beam] / single_noise)
     gain_db = 10 * np.log10(np.mean(sig_gain) / np.mean(noise_gain))
     assert gain_db == pytest.approx(10 * np.log10(N), abs=0.7)
 
@@ -91,8 +93,8 @@ def test_normaliser_is_invariant_to_the_recording_level(method):
     s = BeamformerSettings(method=method)
     rng = np.random.default_rng(6)
     x = plane_wave(rng, 80.0) + 3 * rng.standard_normal((N, 4000))
-    z1 = normalise_across_bearing(beam_powers(x, FS, D, s.cone_deg, s), s)
-    z2 = normalise_across_bearing(beam_powers(1000 * x, FS, D, s.cone_deg, s), s)
+    z1 = normalise_across_bearing(beam_powers(x, FS, ARRAY, s.cone_deg, s), s)
+    z2 = normalise_across_bearing(beam_powers(1000 * x, FS, ARRAY, s.cone_deg, s), s)
     np.testing.assert_allclose(z1, z2, rtol=1e-9, atol=1e-9)
     assert z1.max() > 4.0 or method == "split-array"
 
@@ -123,7 +125,7 @@ def test_bearing_time_record_times_levels_and_progress():
     rng = np.random.default_rng(7)
     blocks = [plane_wave(rng, 100.0) + 0.5 * rng.standard_normal((N, 4000)) for _ in range(35)]
     seen = []
-    btr = bearing_time_record(iter(blocks), FS, D, BeamformerSettings(), progress=seen.append)
+    btr = bearing_time_record(iter(blocks), FS, ARRAY, BeamformerSettings(), progress=seen.append)
     assert seen == list(range(35))
     np.testing.assert_allclose(btr.time_s, np.arange(35) + 0.5)
     assert btr.level.shape == (35, 181) and btr.level.dtype == np.float32
@@ -131,7 +133,7 @@ def test_bearing_time_record_times_levels_and_progress():
     near = np.abs(btr.peaks.bearing_deg - 100.0) < 0.5
     assert len(np.unique(btr.peaks.time_s[near])) == 35
     np.testing.assert_allclose(btr.level[3], normalise_across_bearing(
-        beam_powers(blocks[3], FS, D, btr.cone_deg, BeamformerSettings()), BeamformerSettings()), rtol=1e-5)
+        beam_powers(blocks[3], FS, ARRAY, btr.cone_deg, BeamformerSettings()), BeamformerSettings()), rtol=1e-5)
 
 
 def test_simulator_ships_are_found_within_one_degree():
@@ -142,8 +144,8 @@ def test_simulator_ships_are_found_within_one_degree():
 
     scene = PassiveSceneSettings(duration_s=20.0)
     s = BeamformerSettings()
-    btr = bearing_time_record(array_blocks(scene, np.random.default_rng(1)), scene.sample_rate_hz,
-                              scene.spacing_m, s)
+    array = LineArray(scene.array.elements, scene.spacing_m, scene.sound_speed_mps)
+    btr = bearing_time_record(array_blocks(scene, np.random.default_rng(1)), scene.sample_rate_hz, array, s)
     truth = np.rad2deg(scene_geometry(scene, btr.time_s).cone_rad)
     for ship in (0, 1):  # the merchant and the trawler, the two loud ships of the default scene
         hits = 0
@@ -153,17 +155,34 @@ def test_simulator_ships_are_found_within_one_degree():
         assert hits >= 0.8 * len(btr.time_s), (scene.ships[ship].name, hits)
 
 
+def test_line_array_aliasing_beamwidth_and_automatic_band_by_hand():
+    # f_a = c / (2 d) = 1500 / 5 = 300 Hz; the automatic band is the octave below it
+    assert ARRAY.aliasing_hz() == 300.0 and ARRAY.aliasing_hz(400.0) == 200.0
+    assert ARRAY.band(FS) == Band(150.0, 300.0)
+    assert ARRAY.band(400.0) == Band(100.0, 200.0)  # capped at fs / 2
+    # 0.89 lambda / (N d) at 225 Hz: lambda = 6.667 m, N d = 40 m -> 0.14833 rad = 8.4989 deg
+    assert ARRAY.beamwidth_deg(225.0) == pytest.approx(np.rad2deg(0.89 * (1500.0 / 225.0) / 40.0), rel=1e-12)
+    assert ARRAY.beamwidth_deg(225.0) == pytest.approx(8.4989, abs=1e-4)
+    assert ARRAY.band(FS, [50.0, 1000.0], allow_grating_lobes=True).centre_hz == 525.0
+
+
 def test_refusals_name_the_fix():
     with pytest.raises(InputError, match=r"aliases above 300\.0 Hz.*<= 300 Hz"):
-        check_array(16, 2.5, BeamformerSettings(band_hz=[50.0, 1000.0]), fs_hz=4000.0)
-    check_array(16, 2.5, BeamformerSettings(band_hz=[50.0, 1000.0], allow_grating_lobes=True), fs_hz=4000.0)
-    check_array(16, 2.5, BeamformerSettings(), fs_hz=4000.0)  # default band [150, 300) Hz stops at c / (2 d)
+        ARRAY.band(FS, [50.0, 1000.0])
+    ARRAY.band(FS, [50.0, 1000.0], allow_grating_lobes=True)
+    ARRAY.band(FS)  # default band [150, 300) Hz stops at c / (2 d)
     with pytest.raises(InputError, match="half the sample rate"):
-        check_array(16, 0.5, BeamformerSettings(band_hz=[50.0, 1000.0]), fs_hz=1500.0)
+        LineArray(16, 0.5, C).band(1500.0, [50.0, 1000.0])
     with pytest.raises(InputError, match="at least 2 elements"):
-        check_array(1, 2.5, BeamformerSettings(method="split-array"))
-    check_array(2, 2.5, BeamformerSettings(method="split-array"))  # two sensors: paper P0's correlator
+        LineArray(1, 2.5, C)
+    LineArray(2, 2.5, C).band(FS)  # two sensors: paper P0's correlator
     with pytest.raises(InputError, match="in metres"):
-        check_array(16, 250.0, BeamformerSettings())  # centimetres given as metres: no usable band
+        LineArray(16, 250.0, C).band(FS)  # centimetres given as metres: no usable band
+    with pytest.raises(InputError, match="spacing must be positive"):
+        LineArray(16, -2.5, C)
+    with pytest.raises(InputError, match="fewer than 16 samples"):
+        front_end_band(ARRAY, BeamformerSettings(window_s=0.002), FS)
     with pytest.raises(InputError, match="aliases"):
-        bearing_time_record([np.zeros((16, 4000))], FS, 2.5, BeamformerSettings(band_hz=[50.0, 900.0]))
+        bearing_time_record([np.zeros((16, 4000))], FS, ARRAY, BeamformerSettings(band_hz=[50.0, 900.0]))
+    with pytest.raises(InputError, match=r"\(16, 4000\), got \(8, 4000\)"):
+        bearing_time_record([np.zeros((8, 4000))], FS, ARRAY, BeamformerSettings())

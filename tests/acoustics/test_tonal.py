@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sonartrack.acoustics.line_array import LineArray
 from sonartrack.acoustics.tonal import (
     TonalAccumulator,
     TonalSettings,
@@ -18,6 +19,7 @@ FS = 4000.0
 N_EL = 16
 D_M = 2.5
 C = 1500.0
+ARRAY = LineArray(N_EL, D_M, C)
 
 
 def _delays_s(cone_deg: float, n_el: int = N_EL) -> np.ndarray:
@@ -50,7 +52,7 @@ def _accumulate(settings, n_windows, cone_deg, seed=1, **kw):
     rng = np.random.default_rng(seed)
     acc = None
     for k in range(n_windows):
-        f, p = beam_spectra(_window(rng, k, **kw), FS, D_M, [cone_deg], settings)
+        f, p = beam_spectra(_window(rng, k, **kw), FS, ARRAY, [cone_deg], settings)
         acc = acc or TonalAccumulator(settings, f.size)
         acc.add(k + 0.5, p[0], f)
     return acc
@@ -61,7 +63,7 @@ def test_hann_parabola_bias_is_removed():
     t = np.arange(int(FS)) / FS
     errors = []
     for f0 in 123.0 + np.linspace(0.0, 0.5, 11):
-        f, p = beam_spectra(np.cos(2 * np.pi * f0 * t)[None], FS, D_M, [90.0], s)
+        f, p = beam_spectra(np.cos(2 * np.pi * f0 * t)[None], FS, ARRAY, [90.0], s)
         errors.append(spectral_peaks(p[0], f, s, max_peaks=1)[0][0] - f0)
     assert np.max(np.abs(errors)) < 1e-3
     table_hat, table_true = _hann_bias_table()
@@ -73,7 +75,7 @@ def test_beam_spectra_matches_loop_over_bins_and_psd_scale():
     rng = np.random.default_rng(3)
     x = rng.standard_normal((N_EL, int(FS)))
     cones = [20.0, 70.0, 135.0]
-    f, p = beam_spectra(x, FS, D_M, cones, s)
+    f, p = beam_spectra(x, FS, ARRAY, cones, s)
     w = np.hanning(int(FS) + 1)[:-1]  # periodic Hann
     spec = np.fft.rfft(x * w, axis=1)
     fall = np.fft.rfftfreq(int(FS), 1.0 / FS)
@@ -82,7 +84,7 @@ def test_beam_spectra_matches_loop_over_bins_and_psd_scale():
             b = int(np.flatnonzero(fall == f[i])[0])
             beam = np.mean(np.exp(2j * np.pi * fall[b] * _delays_s(cone)) * spec[:, b])
             assert p[j, i] == pytest.approx(2.0 * abs(beam) ** 2 / (FS * np.sum(w**2)), rel=1e-9)
-    _, p1 = beam_spectra(x[:1], FS, D_M, [90.0], s)
+    _, p1 = beam_spectra(x[:1], FS, ARRAY, [90.0], s)
     assert np.mean(p1) == pytest.approx(2.0 / FS, rel=0.1)  # white noise, variance 1: one-sided PSD 2 / fs
 
 
@@ -102,9 +104,9 @@ def test_plane_wave_tonal_frequency_and_array_gain():
     beam, element = 0.0, 0.0
     for k in range(20):
         x = _window(rng, k, tone_hz=123.4, tone_snr_db=10.0)
-        f, p = beam_spectra(x, FS, D_M, [70.0], s)
+        f, p = beam_spectra(x, FS, ARRAY, [70.0], s)
         beam = beam + p[0]
-        element = element + sum(beam_spectra(row[None], FS, D_M, [90.0], s)[1][0] for row in x)
+        element = element + sum(beam_spectra(row[None], FS, ARRAY, [90.0], s)[1][0] for row in x)
     gain_db = 10 * np.log10(_tonal_snr(beam, f, 123.4) / _tonal_snr(element, f, 123.4))
     assert gain_db == pytest.approx(10 * np.log10(N_EL), abs=1.0)
 

@@ -1,4 +1,4 @@
-"""The bad-input matrix (issue 12): every command x every class of bad input ends in one line, never a traceback.
+"""The bad-input matrix: every command x every class of bad input ends in one line, never a traceback.
 
 Classes: missing file, empty file, header only, missing column, NaN / inf, unsorted / duplicated times, wrong
 unit, 1e300, negative, wrong file type (PNG bytes under a data file's name), a directory, a non-UTF-8 config,

@@ -130,3 +130,16 @@ def test_negative_seed_is_refused(capsys):
 
     assert cli.main(["reproduce", "mftd", "--quick", "--seed", "-1"]) == 2
     assert "--seed" in capsys.readouterr().err
+
+
+def test_help_lists_every_command_in_module_order_whatever_was_loaded_first(capsys, monkeypatch):
+    """A command line loads only its command's module (cli/__init__.py); help still lists all of them, in order."""
+    monkeypatch.setenv("COLUMNS", "200")
+    assert main(["studies"]) == 0
+    capsys.readouterr()
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    names = [c.name for c in cli.load_commands().registered_commands]
+    assert names.index("reproduce") < names.index("studies") < names.index("tl")  # module order
+    positions = [out.index(f"\u2502 {name} ") for name in names]  # the first column of rich's command table
+    assert positions == sorted(positions)

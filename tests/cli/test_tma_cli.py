@@ -147,8 +147,9 @@ def test_missing_inputs(tmp_path, capsys):
 
 
 def test_the_command_calls_the_library_with_the_resolved_settings(files, tmp_path, capsys, monkeypatch):
-    """The face only wires: options and config become TmaSettings, solve_tma gets the files' records, and
-    what it returns is written and summarised."""
+    """The face only wires: options and config become TmaSettings, the tma system's solve (tma/solve.py
+    solve_tma) gets the files' records and the environment, and what it returns is written and summarised."""
+    import sonartrack.systems.tma.run as run_mod
     import sonartrack.tma.solve as solve_mod
 
     d, truth = files
@@ -161,7 +162,7 @@ def test_the_command_calls_the_library_with_the_resolved_settings(files, tmp_pat
         return solve_mod.TmaResult(solution=sol, record=record, ownship=ownship, settings=settings,
                                    warnings=("a warning",))
 
-    monkeypatch.setattr(solve_mod, "solve_tma", fake_solve_tma)
+    monkeypatch.setattr(run_mod, "solve_tma", fake_solve_tma)
     cfg = tmp_path / "c.toml"
     cfg.write_text("[batch]\nsl_db = 140.0\nfreq_hz = 300.0\n")
     code, stdout, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",

@@ -137,7 +137,7 @@ def test_needs_exactly_one_input(tmp_path):
 def test_print_config_reads_back_to_the_same_settings(tmp_path, kind):
     """The printed TOML is the library's declarations with their defaults, and --config reads it back unchanged."""
     from sonartrack.io import toml as toml_io
-    from sonartrack.io.track_config import ContactsTrackSettings, PeaksTrackSettings
+    from sonartrack.systems.track.settings import ContactsTrackSettings, PeaksTrackSettings
     from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
 
     model, tracker = ((ContactsTrackSettings, PositionTrackerSettings) if kind == "--contacts"

@@ -1,4 +1,4 @@
-"""Generated files for every reader (issue 12): the reader returns arrays that keep its contract, or raises
+"""Generated files for every reader: the reader returns arrays that keep its contract, or raises
 InputError (one line) -- never another exception.
 
 Files are CSV text built from the reader's own column names (sometimes one missing, sometimes a stray or

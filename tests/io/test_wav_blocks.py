@@ -79,7 +79,7 @@ def test_extensible_header_and_list_chunk_with_odd_padding(tmp_path):
 
 
 def test_simulator_wav_reads_back_exactly(tmp_path):
-    from sonartrack.io.scene_files import wav_block_writer
+    from sonartrack.io.wav_writer import wav_block_writer
 
     rng = np.random.default_rng(3)
     blocks = [rng.standard_normal((16, 400)) * 1e-3 for _ in range(3)]
@@ -113,7 +113,7 @@ def test_refusals(tmp_path):
     stub = tmp_path / "stub.wav"
     stub.write_bytes(b"RIFF\x10\x00")
     _expect(stub, "stub.wav", "truncated")
-    for bits in (8, 24):
+    for bits in (8,):  # 24-bit PCM is read (test_recording_formats.py)
         p = tmp_path / f"b{bits}.wav"
         p.write_bytes(_riff([(b"fmt ", _fmt(1, 2, bits)), (b"data", bytes(2 * bits // 8 * 10))]))
         _expect(p, f"{bits}-bit", "sox")

@@ -11,11 +11,13 @@ from scipy.io import wavfile
 
 from sonartrack.core.random import trial_rng
 from sonartrack.core.units import KNOT_MPS
-from sonartrack.io import scene_files
-from sonartrack.io.scene_files import write_scene
+from sonartrack.io import wav_writer
 from sonartrack.sim.array_signals import array_blocks, plan_blocks, simulate_recording
 from sonartrack.sim.passive_scene import scene_geometry
 from sonartrack.sim.scene import PassiveSceneSettings
+from sonartrack.systems.simulate import files as scene_files
+from sonartrack.systems.simulate.files import write_scene
+from sonartrack.systems.simulate.run import STREAMS
 
 C = 1500.0
 D = 2.5  # half a wavelength at 300 Hz
@@ -154,7 +156,7 @@ def test_files_round_trip_and_are_deterministic(tmp_path):
     assert a == b and a != c
     fs, data = wavfile.read(tmp_path / "a" / "recording.wav")
     assert fs == 4000 and data.dtype == np.float32 and data.shape == (22000, 16)
-    direct = simulate_recording(s, trial_rng(s.seed, scene_files.STREAMS["recording"]))
+    direct = simulate_recording(s, trial_rng(s.seed, STREAMS["recording"]))
     np.testing.assert_array_equal(data.T, direct.astype(np.float32))
     _, pair = wavfile.read(tmp_path / "a" / "pair.wav")
     np.testing.assert_array_equal(pair, data[:, [0, 8]])
@@ -171,13 +173,13 @@ def test_blocks_are_written_one_at_a_time_and_memory_stays_small(tmp_path, monke
     """120 s x 16 channels is 61 MB as float64: written block by block, the peak allocation stays below a tenth."""
     s = PassiveSceneSettings(duration_s=120.0)
     calls = []
-    original = scene_files.WavBlockWriter.write
+    original = wav_writer.WavBlockWriter.write
 
     def counting(self, block):
         calls.append(np.shape(block))
         return original(self, block)
 
-    monkeypatch.setattr(scene_files.WavBlockWriter, "write", counting)
+    monkeypatch.setattr(wav_writer.WavBlockWriter, "write", counting)
     tracemalloc.start()
     try:
         scene_files.write_passive_files(s, tmp_path)
@@ -242,7 +244,7 @@ def test_sample_inputs_agree_with_the_scene(tmp_path):
 
 def test_int16_writer_states_its_scale(tmp_path):
     x = np.array([[0.0, 1.0, -1.0, 0.5, 3.0], [0.25, -0.25, 2.0, -2.0, -9.0]])
-    with scene_files.wav_block_writer(tmp_path / "a.wav", 2, 8000, "int16", full_scale=2.0) as w:
+    with wav_writer.wav_block_writer(tmp_path / "a.wav", 2, 8000, "int16", full_scale=2.0) as w:
         w.write(x[:, :2])
         w.write(x[:, 2:])
     fs, data = wavfile.read(tmp_path / "a.wav")

@@ -1,13 +1,17 @@
 """Study passive-chain: its scoring helpers on hand-made tracks, and one short trial through the contract."""
 
 import numpy as np
-import pandas as pd
 
 from sonartrack.studies import passive_chain as pc
+from sonartrack.tracking.run import BearingTracks
 
 
 def _tracks(rows):
-    return pd.DataFrame(rows, columns=["time_s", "track_id", "bearing_deg", "confirmed"])
+    """BearingTracks from (time, id, cone, confirmed) rows."""
+    t, tid, cone, conf = (np.array(c) for c in zip(*rows, strict=True))
+    zeros = np.zeros(len(t))
+    return BearingTracks(time_s=t.astype(float), track_id=tid.astype(int), bearing_deg=cone.astype(float),
+                         bearing_rate_deg_s=zeros, bearing_std_deg=zeros, strength=zeros, confirmed=conf.astype(bool))
 
 
 def test_held_only_by_a_confirmed_track_near_the_ship():

@@ -35,7 +35,7 @@ def test_contract_surface():
     assert min(cfg.sl_mismatch_db) == -18 and max(cfg.sl_mismatch_db) == 18 and len(cfg.own_turns) == 2
     assert set(cfg.environments) == set(study.PAPER_TABLE1) == set(study.PAPER_TABLE2)
     # the EM/MAP group is the one of sonartrack tma; the latent range interval (3-50 vs 0.5-60 km) and the TL
-    # average (none vs 1 km) differ (issue 13: the paper's readings)
+    # average (none vs 1 km) differ (the readings of the paper adopted by the fidelity review)
     assert cfg.em_map == EmMapSettings(r_min_m=3_000.0, r_max_m=50_000.0, tl_average_m=0.0)
     assert cfg.em_map.kappa == EmMapSettings().kappa
 

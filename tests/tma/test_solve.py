@@ -117,3 +117,65 @@ def test_ml_flags_a_range_the_record_cannot_resolve(scene):
         pytest.fail(f"a target ~1e7 m away was given a determined range: {res.summary()}")
     assert any("range not determined" in w for w in res.warnings)
     assert "NOT DETERMINED" in res.summary() and "range 1" not in res.summary()
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.8])
+def test_correlation_inflation_matches_ar1(rho):
+    """An AR(1) series e_k = rho e_(k-1) + w_k: n / n_eff = (1 + rho) / (1 - rho) (Bretherton et al. 1999)."""
+    from sonartrack.tma.solve import correlation_inflation
+
+    rng = np.random.default_rng(3)
+    e = np.zeros(20000)
+    w = rng.normal(size=e.size)
+    for k in range(1, e.size):
+        e[k] = rho * e[k - 1] + w[k]
+    assert correlation_inflation(e) == pytest.approx((1 + rho) / (1 - rho), rel=0.05)
+    assert correlation_inflation(e[:2]) == 1.0 and correlation_inflation(np.zeros(10)) == 1.0
+
+
+def test_ml_fit_is_the_solution_and_the_inflation_scales_its_covariance(scene):
+    """A given ML estimate of the record (e.g. a multi-start search's) is the solution, as computed here by hand:
+    the CV propagation of its X0 and covariance, the covariance times (1 + rho) / (1 - rho) of its own residuals."""
+    from sonartrack.core.angles import wrap_angle
+    from sonartrack.tma.batch_ml import bearing_model
+    from sonartrack.tma.solve import correlation_inflation
+
+    record, own, _ = scene
+    t = record.time_s
+    sb = np.deg2rad(0.5)
+    start = np.array([-2000.0, 9000.0, 4.0, -1.0])  # off the pseudo-linear start: the fit must be used as given
+    fit = ml_bearings_only(record.bearing_rad, t, own.position_at(t), sb, x_init=start)
+    plain = solve_tma(record, own, TmaSettings(method="ml", sigma_bearing_deg=0.5), ml_fit=fit)
+    tau = t - t[0]
+    np.testing.assert_allclose(plain.solution.state[:, 0], fit.x0[0] + fit.x0[2] * tau, rtol=1e-12)
+    np.testing.assert_allclose(plain.solution.covariance[0], fit.covariance, rtol=1e-12)
+    s = TmaSettings(method="ml", sigma_bearing_deg=0.5, batch=BatchSettings(correlation_inflation=True))
+    inflated = solve_tma(record, own, s, ml_fit=fit)
+    h, _, _ = bearing_model(fit.x0, tau, own.position_at(t))
+    factor = correlation_inflation(wrap_angle(record.bearing_rad - h))
+    np.testing.assert_allclose(inflated.solution.covariance, plain.solution.covariance * factor, rtol=1e-12)
+    np.testing.assert_array_equal(inflated.solution.state, plain.solution.state)
+    with pytest.raises(InputError, match="ml_fit must be an ML estimate of this record"):
+        solve_tma(BearingRecord(time_s=t[1:], bearing_rad=record.bearing_rad[1:]), own, TmaSettings(method="ml"),
+                  ml_fit=fit)
+
+
+def test_unobservable_record_is_flagged_on_request_and_refused_otherwise():
+    """Ownship on a straight line at constant speed: range is unobservable from bearings (Nardone & Aidala 1981)."""
+    t = np.arange(0.0, 600.0, 10.0)
+    own = OwnshipTrack(time_s=t, x_m=np.zeros_like(t), y_m=3.0 * t)
+    b = np.arctan2(5000.0 + 2.0 * t, 8000.0 - 3.0 * t)
+    b = b + np.random.default_rng(1).normal(0, np.deg2rad(0.3), len(t))
+    record = BearingRecord(time_s=t, bearing_rad=b)
+    with pytest.raises(InputError, match="ownship has not maneuvered"):
+        solve_tma(record, own, TmaSettings(method="ml", sigma_bearing_deg=0.3))
+    res = solve_tma(record, own, TmaSettings(method="ml", sigma_bearing_deg=0.3), unobservable="flag")
+    assert not res.solution.range_flags().any()
+    assert any("ownship has not maneuvered" in w for w in res.warnings)
+    assert "NOT DETERMINED" in res.summary()
+    # the bearing is still a measurement: the solution's bearing follows the bearings
+    own_xy = own.position_at(t)
+    sol_b = np.arctan2(res.solution.state[:, 0] - own_xy[:, 0], res.solution.state[:, 1] - own_xy[:, 1])
+    assert np.rad2deg(np.max(np.abs(np.angle(np.exp(1j * (sol_b - b)))))) < 1.5
+    with pytest.raises(InputError, match="apply to method ml over the whole record"):
+        solve_tma(record, own, TmaSettings(method="ekf"), unobservable="flag")

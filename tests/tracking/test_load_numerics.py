@@ -1,4 +1,4 @@
-"""The position tracker under load (issue 12, item 5): numerical health over a long heavy-clutter run, and
+"""The position tracker under load: numerical health over a long heavy-clutter run, and
 the load-oriented fast paths (windowed pre-gate, pair-only PDA weights, in-loop gains) giving the NumPy
 references' numbers bit for bit on large scans.
 

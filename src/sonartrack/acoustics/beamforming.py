@@ -21,6 +21,9 @@ Split-array (``split-array``; paper P0 applied to a line array): the front and r
 (acoustics/xcorr_bearing.py ``correlate_window``); their centres are D = (N - floor(N/2)) d apart, and lag
 tau maps to cone angle theta = arccos(c tau / D). The correlation is sampled on the cone grid at
 tau_b = D cos(theta_b) / c by linear interpolation between lags.
+
+The array (N, d, c) is one :class:`~sonartrack.acoustics.line_array.LineArray`; the processing band is
+resolved and checked once per recording (:func:`front_end_band`) and handed to the power functions.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from typing import Literal
 
 import numpy as np
 
+from sonartrack.acoustics.line_array import Band, LineArray
 from sonartrack.acoustics.xcorr_bearing import PeakRecord, correlate_window
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, setting
@@ -40,11 +44,6 @@ from sonartrack.core.settings import Settings, setting
 MAD_TO_SIGMA = 1.4826
 #: windows per batched steering product (memory: batch x (2 N n_bins) float64, ~8 MB for the defaults)
 BATCH_WINDOWS = 32
-
-
-#: the automatic band (the octave below aliasing) must reach at least this: a lower one means a spacing in the
-#: wrong unit (centimetres as metres), not an array
-MIN_AUTO_BAND_HZ = 10.0
 
 
 class BeamformerSettings(Settings):
@@ -75,18 +74,24 @@ class BeamformerSettings(Settings):
     10 % of the exponential's) with rate alpha = 1.39 per unit z (95 % interval 1.14..1.64; 1.3..1.4 at
     thresholds 3..5)."""
 
-    method: Literal["cbf", "split-array"] = setting("cbf", "beamformer: cbf = conventional frequency-domain "
-                                                    "beamforming over the band; split-array = P0's cross-correlation "
-                                                    "of the two half-array sums", unit="")
-    band_hz: list[float] | None = setting(None, "processing band [low, high) (not set: the octave below the array's "
-                                                "aliasing frequency f_a = min(c / (2 d), fs / 2), [f_a / 2, f_a])",
+    method: Literal["cbf", "split-array", "mvdr"] = setting("cbf", "beamformer: cbf = conventional frequency-domain "
+                                                            "beamforming over the band; split-array = P0's cross-"
+                                                            "correlation of the two half-array sums; mvdr = Capon "
+                                                            "beams with diagonal loading (acoustics/mvdr.py)", unit="")
+    band_hz: list[float] | None = setting(None, "processing band [low, high) (not set: auto_band_hz capped at fs / 2, "
+                                                "grating lobes above c / (2 d) accepted)",
                                           unit="Hz", min_length=2, max_length=2)
-    allow_grating_lobes: bool = setting(False, "accept a band above the aliasing frequency c / (2 d) (grating "
+    auto_band_hz: list[float] = setting(default_factory=lambda: [50.0, 1000.0],
+                                        doc="the automatic processing band when band_hz is not set: the band where "
+                                            "ships' broadband radiated noise stands above the sea noise, capped at "
+                                            "fs / 2 (measured better than the octave below aliasing and than "
+                                            "combining per-octave statistics: class doc)", unit="Hz",
+                                        min_length=2, max_length=2)
+    allow_grating_lobes: bool = setting(False, "accept a band_hz above the aliasing frequency c / (2 d) (grating "
                                                "lobes, smeared over a broad band) instead of refusing it", unit="")
     window_s: float = setting(1.0, "observation window of one line of the bearing-time record", unit="s", gt=0)
     beams: int = setting(181, "cone-angle grid: this many beams uniform in 0..180 deg (181 = 1 deg steps)",
                          unit="1", ge=3)
-    sound_speed_mps: float = setting(1500.0, "sound speed c at the array", unit="m/s", gt=0)
     threshold: float = setting(4.0, "detection threshold on the normalised statistic z = (P - median) / "
                                     "(1.4826 MAD) across bearing", unit="1")
     max_peaks: int = setting(8, "largest number of peaks kept per window (the highest z)", unit="1", ge=1)
@@ -94,17 +99,6 @@ class BeamformerSettings(Settings):
                                  "every bin weighs the same (a loud tonal line does not dominate the band)", unit="")
     spread_floor: float = setting(1e-3, "normaliser: the spread is at least this fraction of the background "
                                         "(guards against a zero or constant recording)", unit="1", gt=0)
-
-    def band_for(self, spacing_m: float, fs_hz: float | None = None) -> tuple[float, float]:
-        """The band (Hz) used with element spacing ``spacing_m``: ``band_hz`` as given, else the octave below the
-        aliasing frequency (where the beams are narrow: below it, the wide low-frequency beams of a loud ship
-        raise the background over all bearings and bury the others; measured in the class doc)."""
-        if self.band_hz is not None:
-            return float(self.band_hz[0]), float(self.band_hz[1])
-        f_alias = self.sound_speed_mps / (2.0 * spacing_m)
-        if fs_hz is not None:
-            f_alias = min(f_alias, fs_hz / 2.0)
-        return 0.5 * f_alias, f_alias
 
     @property
     def cone_deg(self) -> np.ndarray:
@@ -123,29 +117,29 @@ class BearingTimeRecord:
     peaks: PeakRecord
 
 
-def check_array(n_elements: int, spacing_m: float, settings: BeamformerSettings, *,
-                fs_hz: float | None = None) -> None:
-    """InputError unless the array and band can be beamformed: >= 2 elements (>= 4 for split-array), a band
-    inside (0, fs/2) and no spatial aliasing, i.e. d <= c / (2 f_max) (grating lobes otherwise)."""
-    s = settings
-    require(spacing_m > 0, f"element spacing must be positive, got {spacing_m:g} m (--spacing)")
-    lo, hi = s.band_for(spacing_m, fs_hz)
-    need = 2  # split-array with 2 elements: the halves are the two sensors, P0's two-sensor correlator
-    require(n_elements >= need, f"the {s.method} beamformer needs at least {need} elements, got {n_elements}: "
-                                "give a line-array recording (or use `sonartrack bearings` for 2 channels)")
-    require(0 < lo < hi, f"band_hz {[lo, hi]} must satisfy 0 < low < high: fix the beamformer's band_hz")
-    if fs_hz is not None:
-        require(hi <= fs_hz / 2, f"band_hz {[lo, hi]} reaches above half the sample rate ({fs_hz / 2:g} Hz): "
-                                 "lower the band's upper edge")
-        require(s.window_s * fs_hz >= 16, f"window_s {s.window_s:g} s holds fewer than 16 samples at {fs_hz:g} Hz")
-    f_alias = s.sound_speed_mps / (2.0 * spacing_m)
-    require(s.band_hz is not None or f_alias >= MIN_AUTO_BAND_HZ,
-            f"element spacing {spacing_m:g} m leaves no band free of grating lobes above {f_alias:.2g} Hz: is the "
-            "spacing in metres (--spacing)? Or give band_hz and allow_grating_lobes")
-    require(s.allow_grating_lobes or hi <= f_alias * (1 + 1e-9),
-            f"element spacing {spacing_m:g} m aliases above {f_alias:.1f} Hz (grating lobes: d > c / (2 f)): set "
-            f"band_hz upper edge <= {f_alias:.0f} Hz or check --spacing (or accept grating lobes: "
-            "--allow-grating-lobes, allow_grating_lobes = true)")
+def front_end_band(array: LineArray, settings: BeamformerSettings, fs_hz: float) -> Band:
+    """The front end's band on ``array``, resolved and checked once before the first window.
+
+    Parameters
+    ----------
+    array : LineArray
+        The line array (element count, spacing, sound speed).
+    settings : BeamformerSettings
+        The front end's settings (its ``band_hz``, ``allow_grating_lobes`` and ``window_s``).
+    fs_hz : float
+        Sample rate of the recording (Hz).
+
+    Returns
+    -------
+    Band
+        ``settings.band_hz``, or ``settings.auto_band_hz`` capped at fs / 2 (:meth:`LineArray.band`).
+        Raises :class:`~sonartrack.core.errors.InputError` when the band does not fit the array or the sample
+        rate, or when a window holds fewer than 16 samples.
+    """
+    band = array.band(fs_hz, settings.band_hz, settings.allow_grating_lobes, settings.auto_band_hz)
+    require(settings.window_s * fs_hz >= 16,
+            f"window_s {settings.window_s:g} s holds fewer than 16 samples at {fs_hz:g} Hz")
+    return band
 
 
 def _band_bins(n_samples: int, fs_hz: float, band_hz) -> tuple[np.ndarray, np.ndarray]:
@@ -177,14 +171,40 @@ def _lag_vectors(spectra: np.ndarray) -> np.ndarray:
     return np.concatenate([r0[:, None], r.real.reshape(k, -1), r.imag.reshape(k, -1)], axis=1)
 
 
-def cbf_powers(blocks: np.ndarray, fs_hz: float, spacing_m: float, settings: BeamformerSettings) -> np.ndarray:
-    """CBF beam powers (K, B) of K windows (K, N, M) at once (module doc)."""
+def _band_of(array: LineArray, settings: BeamformerSettings, fs_hz: float, band: Band | None) -> Band:
+    return band if band is not None else array.band(fs_hz, settings.band_hz, settings.allow_grating_lobes,
+                                                    settings.auto_band_hz)
+
+
+def cbf_powers(blocks: np.ndarray, fs_hz: float, array: LineArray, settings: BeamformerSettings,
+               band: Band | None = None) -> np.ndarray:
+    """CBF beam powers P(theta) of K windows at once (module doc).
+
+    Parameters
+    ----------
+    blocks : ndarray (K, N, M)
+        K windows of M samples of the N elements (element 0 = front).
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array (spacing and sound speed of the steering delays).
+    settings : BeamformerSettings
+        ``beams`` and ``whiten``; its ``band_hz`` when ``band`` is None.
+    band : Band, optional
+        The processing band, resolved once by the caller (:func:`front_end_band`); None resolves it here.
+
+    Returns
+    -------
+    ndarray (K, B)
+        Beam power over the band at each of the B cone angles ``settings.cone_deg`` (input units^2).
+    """
     s = settings
     k, n, m = blocks.shape
-    idx, steer = _steering_matrix(n, m, float(fs_hz), float(spacing_m), float(s.sound_speed_mps),
-                                  s.band_for(spacing_m, fs_hz), int(s.beams))
-    band = slice(idx[0], idx[-1] + 1) if idx.size else slice(0, 0)  # contiguous bins: a view, not a copy
-    spectra = np.fft.rfft(blocks, axis=2)[:, :, band]
+    band = _band_of(array, s, fs_hz, band)
+    idx, steer = _steering_matrix(n, m, float(fs_hz), float(array.spacing_m), float(array.sound_speed_mps),
+                                  band.as_tuple(), int(s.beams))
+    bins = slice(idx[0], idx[-1] + 1) if idx.size else slice(0, 0)  # contiguous bins: a view, not a copy
+    spectra = np.fft.rfft(blocks, axis=2)[:, :, bins]
     if s.whiten:
         power = np.mean(spectra.real**2 + spectra.imag**2, axis=1, keepdims=True)
         spectra *= 1.0 / np.sqrt(np.where(power > 0, power, 1.0))
@@ -193,34 +213,79 @@ def cbf_powers(blocks: np.ndarray, fs_hz: float, spacing_m: float, settings: Bea
     return np.einsum("kj,bj->kb", _lag_vectors(spectra), steer)
 
 
-def split_array_powers(block: np.ndarray, fs_hz: float, spacing_m: float, settings: BeamformerSettings) -> np.ndarray:
-    """Cross-correlation of the two half-array sums sampled on the cone grid (B,) (module doc, paper P0)."""
+def split_array_powers(block: np.ndarray, fs_hz: float, array: LineArray, settings: BeamformerSettings,
+                       band: Band | None = None) -> np.ndarray:
+    """Cross-correlation of the two half-array sums sampled on the cone grid (module doc, paper P0).
+
+    Parameters
+    ----------
+    block : ndarray (N, M)
+        One window of the N elements.
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array (spacing and sound speed: the halves' centres are (N - floor(N/2)) d apart).
+    settings : BeamformerSettings
+        ``beams``; its ``band_hz`` when ``band`` is None.
+    band : Band, optional
+        The processing band (:func:`front_end_band`); None resolves it here.
+
+    Returns
+    -------
+    ndarray (B,)
+        The correlation at the lag of each cone angle of ``settings.cone_deg``.
+    """
     s = settings
+    c = array.sound_speed_mps
     n, m = block.shape
     half = n // 2
-    separation_m = (n - half) * spacing_m
+    separation_m = (n - half) * array.spacing_m
     sums = np.stack([block[:half].sum(axis=0), block[n - half:].sum(axis=0)])
     spectra = np.fft.rfft(sums - sums.mean(axis=1, keepdims=True), axis=1)
-    idx, _ = _band_bins(m, fs_hz, s.band_for(spacing_m, fs_hz))
+    idx, _ = _band_bins(m, fs_hz, _band_of(array, s, fs_hz, band).as_tuple())
     keep = np.zeros(spectra.shape[1], dtype=bool)
     keep[idx] = True
     front, rear = np.fft.irfft(np.where(keep, spectra, 0.0), m, axis=1)
-    max_lag = int(np.ceil(separation_m / s.sound_speed_mps * fs_hz)) + 1
+    max_lag = int(np.ceil(separation_m / c * fs_hz)) + 1
     cc = correlate_window(front, rear, max_lag)
-    lag_samples = separation_m * np.cos(np.deg2rad(s.cone_deg)) / s.sound_speed_mps * fs_hz
+    lag_samples = separation_m * np.cos(np.deg2rad(s.cone_deg)) / c * fs_hz
     return np.interp(lag_samples, np.arange(-max_lag, max_lag + 1), cc)
 
 
-def beam_powers(block: np.ndarray, fs_hz: float, spacing_m: float, cone_deg: np.ndarray,
+def beam_powers(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg: np.ndarray,
                 settings: BeamformerSettings) -> np.ndarray:
-    """Beam powers (B,) of one window (N, M) on ``cone_deg`` (must be ``settings.cone_deg``)."""
+    """Beam powers of one window with the method of ``settings`` (:func:`cbf_powers`, :func:`split_array_powers` or
+    acoustics/mvdr.py ``mvdr_powers``).
+
+    Parameters
+    ----------
+    block : ndarray (N, M)
+        One window of the N elements.
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array.
+    cone_deg : ndarray (B,)
+        The beams' cone angles (deg); must be ``settings.cone_deg``.
+    settings : BeamformerSettings
+        The front end's settings.
+
+    Returns
+    -------
+    ndarray (B,)
+        The beam powers.
+    """
     x = np.asarray(block, dtype=float)
     cone = np.asarray(cone_deg, dtype=float)
     require(cone.shape == settings.cone_deg.shape and np.allclose(cone, settings.cone_deg),
             f"cone_deg must be settings.cone_deg ({settings.beams} beams uniform in 0..180 deg)")
     if settings.method == "split-array":
-        return split_array_powers(x, fs_hz, spacing_m, settings)
-    return cbf_powers(x[None], fs_hz, spacing_m, settings)[0]
+        return split_array_powers(x, fs_hz, array, settings)
+    if settings.method == "mvdr":
+        from sonartrack.acoustics.mvdr import mvdr_powers
+
+        return mvdr_powers(x[None], fs_hz, array, settings)[0]
+    return cbf_powers(x[None], fs_hz, array, settings)[0]
 
 
 def normalise_across_bearing(power: np.ndarray, settings: BeamformerSettings) -> np.ndarray:
@@ -275,27 +340,58 @@ def _batches(blocks: Iterable[np.ndarray], size: int):
         yield np.stack(batch)
 
 
-def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, spacing_m: float,
-                        settings: BeamformerSettings, *,
-                        progress: Callable[[int], None] | None = None) -> BearingTimeRecord:
-    """Beamform, normalise and pick peaks in every window (N, window_s fs) of ``blocks`` (e.g.
-    io/wav_blocks.py ``iter_wav_blocks``); time_s = window centres (k + 0.5) window_s; ``progress(k)`` after
-    window k. CBF windows are processed in batches of ``BATCH_WINDOWS`` (one matrix product each)."""
+def _batch_powers(batch: np.ndarray, fs_hz: float, array: LineArray, s: BeamformerSettings, band: Band,
+                  mvdr) -> np.ndarray:
+    """Beam powers (K, B) of a batch of windows with the method of ``s`` (split-array: a batch of one)."""
+    if s.method == "cbf":
+        return cbf_powers(batch, fs_hz, array, s, band)
+    if s.method == "mvdr":
+        from sonartrack.acoustics.mvdr import mvdr_powers
+
+        return mvdr_powers(batch, fs_hz, array, s, band, mvdr)
+    return split_array_powers(batch[0], fs_hz, array, s, band)[None]
+
+
+def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, settings: BeamformerSettings,
+                        *, band: Band | None = None, progress: Callable[[int], None] | None = None,
+                        mvdr=None) -> BearingTimeRecord:
+    """Beamform, normalise and pick peaks in every window of ``blocks``; CBF windows in batches of
+    ``BATCH_WINDOWS`` (one matrix product each).
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray (N, window_s fs)
+        The recording's windows in order (e.g. io/wav_blocks.py ``iter_wav_blocks``), N = ``array.elements``.
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The line array.
+    settings : BeamformerSettings
+        The front end's settings.
+    band : Band, optional
+        The processing band, resolved and checked once by the caller (:func:`front_end_band`); None resolves
+        and checks it here.
+    progress : callable, optional
+        Called with k after window k.
+    mvdr : MvdrSettings, optional
+        Segment and loading of the ``mvdr`` method (acoustics/mvdr.py; its defaults when None).
+
+    Returns
+    -------
+    BearingTimeRecord
+        Window centres time_s = (k + 0.5) window_s (s), the beams' cone angles (deg), the normalised level z per
+        window and beam, and the peaks.
+    """
     s = settings
+    band = front_end_band(array, s, fs_hz) if band is None else band
     cone = s.cone_deg
     nw = int(round(s.window_s * fs_hz))
     levels, ts, bs, amps = [], [], [], []
-    checked = False
     k = 0
-    for batch in _batches(blocks, BATCH_WINDOWS if s.method == "cbf" else 1):
-        require(batch.shape[2] == nw, f"blocks must hold window_s * fs = {nw} samples, got {batch.shape[2]}")
-        if not checked:
-            check_array(batch.shape[1], spacing_m, s, fs_hz=fs_hz)
-            checked = True
-        if s.method == "cbf":
-            power = cbf_powers(batch, fs_hz, spacing_m, s)
-        else:
-            power = split_array_powers(batch[0], fs_hz, spacing_m, s)[None]
+    for batch in _batches(blocks, 1 if s.method == "split-array" else BATCH_WINDOWS):
+        require(batch.shape[1:] == (array.elements, nw), f"blocks must be (elements, window_s * fs) = "
+                                                         f"({array.elements}, {nw}), got {batch.shape[1:]}")
+        power = _batch_powers(batch, fs_hz, array, s, band, mvdr)
         z = normalise_across_bearing(power, s)
         for row in z:
             angle, height = pick_beam_peaks(row, cone, s)

@@ -44,7 +44,13 @@ class Environment:
     sources: str = ""
 
     def key(self) -> dict:
-        """Everything that changes a propagation result, as plain data (for cache keys)."""
+        """Everything that changes a propagation result, as plain data (for cache keys).
+
+        Returns
+        -------
+        dict
+            Water depth (m), profile depths (m), sound speeds (m/s, rounded to 1e-6) and the seabed values.
+        """
         return {"water_depth_m": float(self.water_depth_m), "depth_m": [float(v) for v in self.depth_m],
                 "sound_speed_mps": [round(float(v), 6) for v in self.sound_speed_mps],
                 "bottom": [float(self.bottom_sound_speed_mps), float(self.bottom_density_gcc),
@@ -58,14 +64,36 @@ def _data_dir() -> Path:
 
 
 def list_environments() -> list[str]:
-    """Names of the shipped environments (east-summer, east-winter, yellow-..., south-...)."""
+    """Names of the shipped environments, east, yellow then south sea.
+
+    Returns
+    -------
+    list of str
+        E.g. ``["east-summer", "east-winter", "yellow-summer", ...]``.
+    """
     order = {"east": 0, "yellow": 1, "south": 2}
     names = [p.stem for p in _data_dir().glob("*.toml")]
     return sorted(names, key=lambda n: (order.get(n.split("-")[0], 9), n))
 
 
 def load_environment(name: str) -> Environment:
-    """A shipped environment by name; an unknown name lists the choices."""
+    """A shipped environment by name (paper P3's Korean-seas cases).
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`list_environments`.
+
+    Returns
+    -------
+    Environment
+        The environment.
+
+    Raises
+    ------
+    InputError
+        If the name is unknown (the message lists the choices).
+    """
     names = list_environments()
     if name not in names:
         raise InputError(f"unknown environment '{name}': choose one of {', '.join(names)}, or give --profile FILE")
@@ -131,7 +159,26 @@ def environment_from_mapping(d: dict, source: str) -> Environment:
     Keys: ``depth_m`` and either ``sound_speed_mps`` or ``temperature_c`` + ``salinity_psu``
     (then c from TEOS-10 at ``latitude_deg``/``longitude_deg``); optional ``water_depth_m`` (default:
     the last depth), seabed keys (default :data:`DEFAULT_BOTTOM`), ``name``, ``description``,
-    ``season``, ``sources``. ``source`` names the input in error messages (one line each)."""
+    ``season``, ``sources``. The profile is cut or extended to end exactly at the water depth.
+
+    Parameters
+    ----------
+    d : dict
+        The data (depths in m positive down, speeds in m/s, temperatures in deg C, salinities in PSU,
+        seabed speed m/s, density g/cm^3, attenuation dB/wavelength).
+    source : str
+        Names the input in error messages (one line each).
+
+    Returns
+    -------
+    Environment
+        The checked environment.
+
+    Raises
+    ------
+    InputError
+        On any failed check (unsorted or negative depths, a profile short of the bottom, km/s speeds ...).
+    """
     z, depth = _checked_depths(d, source)
     lat = float(d.get("latitude_deg", DEFAULT_LATITUDE_DEG))
     lon = float(d.get("longitude_deg", 0.0))

@@ -28,6 +28,12 @@ from sonartrack.core.errors import require
 
 @dataclass(frozen=True, slots=True)
 class FittedPeakModel:
+    """Paper P0's peak model as fitted (module docstring).
+
+    ``false_rate`` lambda V at threshold 0 (false peaks per gate width); ``false_amplitude_rate`` alpha
+    (1 / amplitude unit); per track ``sigma_p_deg`` (deg), ``amplitude_mean`` z_a and ``amplitude_sd``
+    sigma_a (amplitude units); ``n_background`` the number of background peaks behind alpha.
+    """
     false_rate: float  # lambda V at threshold 0
     false_amplitude_rate: float  # alpha
     sigma_p_deg: np.ndarray  # per track
@@ -38,7 +44,27 @@ class FittedPeakModel:
 
 def fit_peak_model(scans, reference_deg, gate_deg: float = 10.0, threshold: float = 5000.0,
                    sector_deg: tuple[float, float] = (0.0, 180.0)) -> FittedPeakModel:
-    """Estimate the model (module doc) from ``scans`` [(bearings deg, amplitudes)] and ``reference_deg`` (K, n)."""
+    """Estimate paper P0's stochastic peak model from peaks around reference tracks (module docstring).
+
+    Parameters
+    ----------
+    scans : sequence of (array_like, array_like)
+        Per scan, the peak bearings (deg) and amplitudes.
+    reference_deg : array_like, shape (K, n)
+        Reference bearing of each of n tracks at each of the K scans (deg).
+    gate_deg : float, default 10.0
+        Gate width V (deg), centred on each reference.
+    threshold : float, default 5000.0
+        Amplitude threshold tau the peaks passed.
+    sector_deg : tuple of float, default (0.0, 180.0)
+        Bearing sector searched (deg).
+
+    Returns
+    -------
+    FittedPeakModel
+        lambda V, alpha, and per track sigma_p, z_a, sigma_a (NaN where a track had no peak). InputError if
+        the references do not match the scans or the gates cover the whole sector.
+    """
     ref = np.atleast_2d(np.asarray(reference_deg, dtype=float))
     require(len(scans) == len(ref) and len(scans) > 0, "need one reference row per scan, and at least one scan")
     n = ref.shape[1]

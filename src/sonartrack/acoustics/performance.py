@@ -79,13 +79,47 @@ class RangePerformance:
     threshold_db: float
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The table ``range_m, tl_db, tl_avg_db, snr_db`` as named columns."""
+        """The table ``range_m, tl_db, tl_avg_db, snr_db`` as named columns.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Range (m), TL, averaged TL and SNR (dB).
+        """
         return {"range_m": self.ranges_m, "tl_db": self.tl_db, "tl_avg_db": self.tl_avg_db, "snr_db": self.snr_db}
 
 
 def range_performance(field: TLField, receiver_depth_m: float, *, sl_db: float = SL_DB, di_db: float = DI_DB,
                       nl_db: float = NL_DB, threshold_db: float = 0.0, average_m: float = 1000.0) -> RangePerformance:
-    """TL, averaged TL, SNR and detection ranges along ``field`` at ``receiver_depth_m`` (module doc)."""
+    """TL, averaged TL, SNR and detection ranges along ``field`` at ``receiver_depth_m`` (module docstring).
+
+    Parameters
+    ----------
+    field : TLField
+        TL field of the source.
+    receiver_depth_m : float
+        Receiver depth (m), inside the water column.
+    sl_db : float, default 140.0
+        Source level (dB; paper P3).
+    di_db : float, default 12.5
+        Directivity index (dB).
+    nl_db : float, default 73.0
+        Noise level (dB).
+    threshold_db : float, default 0.0
+        Detection threshold on the SNR (dB).
+    average_m : float, default 1000.0
+        Incoherent range-averaging window (m).
+
+    Returns
+    -------
+    RangePerformance
+        The curves and the detection intervals and convergence zones (m).
+
+    Raises
+    ------
+    InputError
+        If the receiver depth is outside the water column.
+    """
     water_m = float(field.depths_m[-1])
     require(0 < receiver_depth_m < water_m,
             f"receiver depth {receiver_depth_m:g} m must lie inside the water column (0..{water_m:g} m)")
@@ -99,8 +133,29 @@ def range_performance(field: TLField, receiver_depth_m: float, *, sl_db: float =
 
 def tl_performance(env: Environment, settings: TLSettings,
                    store: FieldStore | None = None) -> tuple[TLField, RangePerformance]:
-    """The TL field of ``env`` (through ``store``, see :func:`~sonartrack.acoustics.transmission_loss.tl_field`)
-    and the performance against range it gives, for the ``settings`` of ``sonartrack tl``."""
+    """The TL field of ``env`` and the performance against range it gives, for the settings of ``sonartrack tl``.
+
+    Parameters
+    ----------
+    env : Environment
+        The environment.
+    settings : TLSettings
+        Frequency, depths, maximum range, sonar-equation terms, threshold and averaging window.
+    store : FieldStore, optional
+        Cache of fields (see :func:`~sonartrack.acoustics.transmission_loss.tl_field`).
+
+    Returns
+    -------
+    field : TLField
+        The TL field.
+    performance : RangePerformance
+        TL, SNR and detection ranges at the receiver depth.
+
+    Raises
+    ------
+    InputError
+        If the receiver depth is outside the water column (or as ``tl_field``).
+    """
     s = settings
     require(0 < s.zr_m < env.water_depth_m,
             f"receiver depth {s.zr_m:g} m must lie inside the water column (0..{env.water_depth_m:g} m)")
@@ -115,7 +170,22 @@ def _intervals_km(intervals: list[tuple[float, float]], n: int) -> str:
 
 
 def performance_summary(env_name: str, settings: TLSettings, perf: RangePerformance) -> str:
-    """One line: the case and where the SNR exceeds the threshold (first six intervals, first four CZs)."""
+    """One line: the case and where the SNR exceeds the threshold (first six intervals, first four CZs).
+
+    Parameters
+    ----------
+    env_name : str
+        Environment name.
+    settings : TLSettings
+        The settings used.
+    perf : RangePerformance
+        The result.
+
+    Returns
+    -------
+    str
+        The summary line (ranges in km).
+    """
     s = settings
     det = _intervals_km(perf.detection_ranges_m, 6) or "none"
     cz = f"; convergence zones at {_intervals_km(perf.convergence_zones_m, 4)}" if perf.convergence_zones_m else ""

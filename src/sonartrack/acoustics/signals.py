@@ -25,6 +25,10 @@ from sonartrack.core.errors import require
 
 @dataclass(frozen=True, slots=True)
 class Multipath:
+    """A further arrival of a source: delayed by ``extra_delay_s`` (s), scaled by ``relative_amplitude``
+    (linear, against the direct arrival), from a cone angle ``bearing_offset_deg`` (deg) away from the
+    direct one (module docstring).
+    """
     extra_delay_s: float
     relative_amplitude: float
     bearing_offset_deg: float
@@ -39,6 +43,18 @@ class SourceSpec:
     multipath: tuple = ()
 
     def bearing_at(self, t_s: float) -> float:
+        """The source's cone angle at time ``t_s``, clipped to [0, 180] deg.
+
+        Parameters
+        ----------
+        t_s : float
+            Time (s).
+
+        Returns
+        -------
+        float
+            Cone angle (deg from the array axis, 0 pointing from sensor 1 to sensor 2).
+        """
         b = self.bearing_deg(t_s) if callable(self.bearing_deg) else self.bearing_deg
         return float(np.clip(b, 0.0, 180.0))
 
@@ -46,7 +62,33 @@ class SourceSpec:
 def simulate_two_channel(rng: np.random.Generator, *, duration_s: float, fs_hz: float, spacing_m: float,
                          sound_speed_mps: float = 1500.0, sources=(), noise_std: float = 1.0,
                          band_hz: tuple[float, float] = (100.0, 1000.0), block_s: float = 1.0) -> np.ndarray:
-    """(2, n) samples of the two channels (module doc)."""
+    """Two sensors' signals: broadband sources by plane-wave delay ``D = d cos(theta) / c``, plus noise (paper P0).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    duration_s, fs_hz : float
+        Length (s) and sample rate (Hz).
+    spacing_m : float
+        Sensor spacing d (m).
+    sound_speed_mps : float, default 1500.0
+        Sound speed c (m/s).
+    sources : sequence of SourceSpec
+        Sources (cone angle, SNR per channel in dB, multipath).
+    noise_std : float, default 1.0
+        Standard deviation of each channel's independent noise.
+    band_hz : tuple of float, default (100.0, 1000.0)
+        Band of the sources (Hz), within 0..fs/2.
+    block_s : float, default 1.0
+        Block over which each source's angle is held (s).
+
+    Returns
+    -------
+    ndarray, shape (2, n)
+        Samples of sensor 1 and sensor 2, n = round(duration_s fs_hz). InputError if the spacing, rate,
+        duration or band are invalid.
+    """
     require(spacing_m > 0, f"sensor spacing must be positive, got {spacing_m:g} m")
     require(fs_hz > 0 and duration_s > 0, "sample rate and duration must be positive")
     require(0 <= band_hz[0] < band_hz[1] <= fs_hz / 2, f"band {band_hz} Hz must lie within 0..fs/2 = {fs_hz / 2:g} Hz")

@@ -14,12 +14,44 @@ SL_DB, NL_DB, DI_DB = 140.0, 73.0, 12.5
 
 
 def passive_snr_db(sl_db, tl_db, di_db=DI_DB, nl_db=NL_DB):
-    """SNR = SL - TL + DI - NL (dB), broadcast over arrays."""
+    """Passive sonar equation ``SNR = SL - TL + DI - NL`` (Urick, ch. 2; paper P3, eq. 30).
+
+    Parameters
+    ----------
+    sl_db : float or array_like
+        Source level (dB re 1 uPa at 1 m).
+    tl_db : float or array_like
+        Transmission loss (dB).
+    di_db : float, default 12.5
+        Directivity index (dB; paper P3).
+    nl_db : float, default 73.0
+        Noise level (dB; paper P3).
+
+    Returns
+    -------
+    ndarray
+        SNR (dB), broadcast over the inputs.
+    """
     return np.asarray(sl_db, dtype=float) - np.asarray(tl_db, dtype=float) + di_db - nl_db
 
 
 def detection_ranges(ranges_m, snr_db, threshold_db: float = 0.0) -> list[tuple[float, float]]:
-    """Intervals [start, end] (m) of range where SNR exceeds the threshold, in order."""
+    """Intervals of range where the SNR exceeds the threshold, in order.
+
+    Parameters
+    ----------
+    ranges_m : array_like, shape (n,)
+        Ranges (m), increasing.
+    snr_db : array_like, shape (n,)
+        SNR at those ranges (dB).
+    threshold_db : float, default 0.0
+        Detection threshold (dB).
+
+    Returns
+    -------
+    list of tuple of float
+        (first, last) range of each run of samples above the threshold (m).
+    """
     r = np.asarray(ranges_m, dtype=float)
     ok = np.asarray(snr_db, dtype=float) > threshold_db
     if not ok.any():
@@ -31,7 +63,26 @@ def detection_ranges(ranges_m, snr_db, threshold_db: float = 0.0) -> list[tuple[
 
 def convergence_zones(ranges_m, snr_db, threshold_db: float = 0.0,
                       min_gap_m: float = 2_000.0) -> list[tuple[float, float]]:
-    """Detection intervals that begin after a shadow of at least ``min_gap_m`` beyond the direct path."""
+    """Detection intervals that begin at least ``min_gap_m`` beyond the end of the previous one (the shadow zone).
+
+    The first interval (the direct path) is never a convergence zone.
+
+    Parameters
+    ----------
+    ranges_m : array_like, shape (n,)
+        Ranges (m), increasing.
+    snr_db : array_like, shape (n,)
+        SNR (dB).
+    threshold_db : float, default 0.0
+        Detection threshold (dB).
+    min_gap_m : float, default 2000.0
+        Shortest shadow before a convergence zone (m).
+
+    Returns
+    -------
+    list of tuple of float
+        (first, last) range of each convergence zone (m).
+    """
     zones = detection_ranges(ranges_m, snr_db, threshold_db)
     if not zones:
         return []

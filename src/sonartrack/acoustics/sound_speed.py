@@ -15,7 +15,31 @@ from sonartrack.core.errors import require
 
 
 def sound_speed_from_ts(depth_m, temperature_c, salinity_psu, latitude_deg: float, longitude_deg: float) -> np.ndarray:
-    """Sound speed (m/s) at each depth from in-situ temperature (deg C) and practical salinity."""
+    """Sound speed from in-situ temperature and practical salinity with TEOS-10 (module docstring).
+
+    Parameters
+    ----------
+    depth_m : array_like, shape (n,)
+        Depths (m, positive down).
+    temperature_c : array_like, shape (n,)
+        In-situ temperature (deg C).
+    salinity_psu : array_like, shape (n,)
+        Practical salinity (PSU).
+    latitude_deg : float
+        Latitude (deg), for the pressure.
+    longitude_deg : float
+        Longitude (deg), for the absolute salinity.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Sound speed (m/s).
+
+    Raises
+    ------
+    InputError
+        If the columns differ in length, hold NaN, or are not sea temperatures / practical salinities.
+    """
     import gsw
 
     z = np.asarray(depth_m, dtype=float)

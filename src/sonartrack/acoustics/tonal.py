@@ -1,4 +1,4 @@
-"""A tracked target's tonal line, measured on its beam window by window (issue 11; frequency input of paper P2).
+"""A tracked target's tonal line, measured on its beam window by window (the frequency input of paper P2).
 
 Per window (``window_s``) of an N-element uniform line array (element 0 = front, element n sits
 s_n = ((N - 1)/2 - n) d ahead of the centre, as sim/array_signals.py), a plane wave from cone angle theta
@@ -46,9 +46,8 @@ from functools import cache
 
 import numpy as np
 from pydantic import model_validator
-from scipy.ndimage import median_filter
-from scipy.signal import get_window
 
+from sonartrack.acoustics.line_array import LineArray
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, setting
 
@@ -83,7 +82,6 @@ class TonalSettings(Settings):
     outlier_sigmas: float = setting(4.0, "an estimate this many sigma_hz from the running median is a noise "
                                          "peak (set to NaN)", unit="1", gt=0)
     sigma_floor_hz: float = setting(0.005, "floor of the measured frequency noise sigma_hz", unit="Hz", gt=0)
-    sound_speed_mps: float = setting(1500.0, "sound speed at the array (steering delays)", unit="m/s", gt=0)
 
     @model_validator(mode="after")
     def _band(self):
@@ -104,12 +102,34 @@ class TonalTrack:
     sigma_hz: float
 
 
-def beam_spectra(block: np.ndarray, fs_hz: float, spacing_m: float, cone_deg, settings: TonalSettings
+def beam_spectra(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg, settings: TonalSettings
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(band frequencies (F,), beam power spectral densities (k, F)) of one window ``block`` (N, n) (module doc).
+    """Conventional beams' power spectral densities of one window (module doc).
 
     The k beams are one batched matrix product over the band's bins (k x N steering times N x 1 spectra);
-    the steering phases are built by a recursion along the elements (:func:`_steering`)."""
+    the steering phases are built by a recursion along the elements (:func:`_steering`).
+
+    Parameters
+    ----------
+    block : ndarray (N, n)
+        One window of n samples of the N elements (element 0 = front).
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array: spacing and sound speed of the steering delays (N is the block's rows: the whole array, or
+        its first N elements).
+    cone_deg : array_like (k,)
+        Cone angles of the beams (deg).
+    settings : TonalSettings
+        ``band_hz``: the frequencies kept.
+
+    Returns
+    -------
+    freqs_hz : ndarray (F,)
+        The band's rfft frequencies (Hz).
+    power : ndarray (k, F)
+        One-sided power spectral density of each beam (input units^2 / Hz).
+    """
     x = np.atleast_2d(np.asarray(block, dtype=float))
     n_el, n = x.shape
     w = _hann(n)
@@ -118,17 +138,27 @@ def beam_spectra(block: np.ndarray, fs_hz: float, spacing_m: float, cone_deg, se
     band = (f_all >= lo) & (f_all <= hi)
     spec = np.fft.rfft(x * w, axis=1)[:, band]  # (N, F)
     f = f_all[band]
-    offsets = ((n_el - 1) / 2.0 - np.arange(n_el)) * spacing_m
+    offsets = ((n_el - 1) / 2.0 - np.arange(n_el)) * array.spacing_m
     tau = -np.cos(np.deg2rad(np.atleast_1d(np.asarray(cone_deg, dtype=float))))[:, None] * offsets / \
-        settings.sound_speed_mps  # (k, N)
+        array.sound_speed_mps  # (k, N)
     steer = _steering(f, tau)  # (F, k, N)
     beams = np.matmul(steer, spec.T[:, :, None])[:, :, 0].T / n_el  # (k, F)
     return f, (2.0 / (fs_hz * np.sum(w**2))) * np.abs(beams) ** 2
 
 
+def _median_filter(x: np.ndarray, size: int, mode: str) -> np.ndarray:
+    """scipy.ndimage's running median, imported on first use (scipy.ndimage takes ~0.3 s to import, and the
+    command line imports this module's settings at start)."""
+    from scipy.ndimage import median_filter
+
+    return median_filter(x, size=size, mode=mode)
+
+
 @cache
 def _hann(n: int) -> np.ndarray:
     """The periodic Hann window of n samples (the DFT-even one: its spectrum is the three-term main lobe)."""
+    from scipy.signal import get_window  # scipy.signal takes ~0.3 s to import: only when a spectrum is computed
+
     w = get_window("hann", n)
     w.flags.writeable = False
     return w
@@ -189,7 +219,7 @@ def _peak_bins(p: np.ndarray, df_hz: float, settings: TonalSettings, min_snr_db:
     """(bins of the local maxima of p (> 0) standing min_snr_db above the running median, strongest first;
     their SNRs in dB)."""
     width = max(3, int(round(settings.background_hz / df_hz)) | 1)
-    snr_db = 10.0 * np.log10(p / np.maximum(median_filter(p, size=width, mode="reflect"), np.finfo(float).tiny))
+    snr_db = 10.0 * np.log10(p / np.maximum(_median_filter(p, size=width, mode="reflect"), np.finfo(float).tiny))
     inner = np.arange(1, p.size - 1)
     is_peak = (p[inner] > p[inner - 1]) & (p[inner] >= p[inner + 1]) & (snr_db[inner] >= min_snr_db)
     k = inner[is_peak]
@@ -241,7 +271,7 @@ def pick_line(mean_power: np.ndarray, freqs_hz: np.ndarray, settings: TonalSetti
 def _line_excess(power: np.ndarray, settings: TonalSettings, df_hz: float) -> np.ndarray:
     """Power above the running median background (F,): a line's power on this beam, whatever its background."""
     width = max(3, int(round(settings.background_hz / df_hz)) | 1)
-    return power - median_filter(power, size=width, mode="reflect")
+    return power - _median_filter(power, size=width, mode="reflect")
 
 
 def follow_line(candidates_hz: np.ndarray, line_hz: float, settings: TonalSettings) -> np.ndarray:
@@ -289,7 +319,7 @@ def frequency_sigma_hz(frequency_hz: np.ndarray, settings: TonalSettings) -> tup
     if valid.size < 3:
         return settings.sigma_floor_hz, f
     w = settings.smooth_windows
-    resid = f[valid] - median_filter(f[valid], size=min(w, valid.size | 1), mode="nearest")
+    resid = f[valid] - _median_filter(f[valid], size=min(w, valid.size | 1), mode="nearest")
     scale = max(settings.sigma_floor_hz, MAD_TO_SIGMA * float(np.median(np.abs(resid))))
     outlier = np.abs(resid) > settings.outlier_sigmas * scale
     f[valid[outlier]] = np.nan

@@ -59,7 +59,23 @@ class TLField:
     env_name: str
 
     def at_depth(self, depth_m: float) -> np.ndarray:
-        """TL along range at one receiver depth (linear in depth between grid rows)."""
+        """TL along range at one receiver depth (linear in depth between grid rows).
+
+        Parameters
+        ----------
+        depth_m : float
+            Receiver depth (m), inside the water column.
+
+        Returns
+        -------
+        ndarray, shape (n_ranges,)
+            TL (dB) at ``ranges_m``.
+
+        Raises
+        ------
+        InputError
+            If the depth is outside the grid.
+        """
         z = self.depths_m
         require(0 <= depth_m <= z[-1] + 1e-9,
                 f"receiver depth {depth_m:g} m is outside the water column (0..{z[-1]:g} m)")
@@ -72,14 +88,50 @@ class FieldStore(Protocol):
     """Where computed TL fields are kept between calls (e.g. :class:`sonartrack.io.environment.TLDiskCache`)."""
 
     def load(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(ranges_m, depths_m, tl_db) stored under ``key``, or None (absent or unreadable)."""
+        """The field stored under ``key``, or None (absent or unreadable).
+
+        Parameters
+        ----------
+        key : str
+            Field key (:func:`field_key`).
+
+        Returns
+        -------
+        tuple of ndarray or None
+            (ranges_m, depths_m, tl_db).
+        """
 
     def save(self, key: str, ranges_m: np.ndarray, depths_m: np.ndarray, tl_db: np.ndarray) -> None:
-        """Keep a field under ``key``."""
+        """Keep a field under ``key``.
+
+        Parameters
+        ----------
+        key : str
+            Field key.
+        ranges_m : ndarray
+            Range grid (m).
+        depths_m : ndarray
+            Depth grid (m).
+        tl_db : ndarray, shape (n_depths, n_ranges)
+            TL (dB).
+        """
 
 
 def thorp_absorption_db_per_km(freq_hz) -> np.ndarray:
-    """Thorp's seawater absorption (dB/km) at frequency ``freq_hz`` (Hz)."""
+    """Thorp's seawater absorption ``alpha(f) = 0.11 f^2/(1 + f^2) + 44 f^2/(4100 + f^2) + 2.75e-4 f^2 + 0.003``.
+
+    f in kHz in the formula (module docstring).
+
+    Parameters
+    ----------
+    freq_hz : float or array_like
+        Frequency (Hz).
+
+    Returns
+    -------
+    ndarray
+        Absorption (dB/km).
+    """
     f = np.asarray(freq_hz, dtype=float) / 1e3
     f2 = f * f
     return 0.11 * f2 / (1 + f2) + 44 * f2 / (4100 + f2) + 2.75e-4 * f2 + 0.003
@@ -96,14 +148,48 @@ def _pyram_version() -> str:
 
 def field_key(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float, dr_m: float, dz_m: float,
               ndz: int) -> str:
-    """A short hash of everything that changes a field (the store key)."""
+    """A short hash of everything that changes a field (the store key).
+
+    Parameters
+    ----------
+    env : Environment
+        The environment (its values, through ``env.key()``).
+    freq_hz : float
+        Frequency (Hz).
+    source_depth_m : float
+        Source depth (m).
+    rmax_m : float
+        Largest range (m).
+    dr_m, dz_m : float
+        Range and depth steps (m).
+    ndz : int
+        Depth decimation.
+
+    Returns
+    -------
+    str
+        First 24 hex digits of a SHA-256 (the pyram version and ``TL_VERSION`` included).
+    """
     spec = {"env": env.key(), "freq_hz": float(freq_hz), "zs": float(source_depth_m), "rmax_m": float(rmax_m),
             "dr_m": float(dr_m), "dz_m": float(dz_m), "ndz": int(ndz), "pyram": _pyram_version(), "v": TL_VERSION}
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:24]
 
 
 def grid_steps_m(freq_hz: float, dr_m: float | None = None, dz_m: float | None = None) -> tuple[float, float]:
-    """(range step, depth step) in metres: the given ones, else 6 and 1/20 wavelengths (module doc)."""
+    """Range and depth steps: the given ones, else 6 and 1/20 wavelengths at 1500 m/s (module docstring).
+
+    Parameters
+    ----------
+    freq_hz : float
+        Frequency (Hz).
+    dr_m, dz_m : float, optional
+        Explicit steps (m).
+
+    Returns
+    -------
+    tuple of float
+        (range step, depth step) in m.
+    """
     wavelength = GRID_SOUND_SPEED_MPS / freq_hz
     dr = float(dr_m) if dr_m is not None else RANGE_STEP_WAVELENGTHS * wavelength
     dz = float(dz_m) if dz_m is not None else DEPTH_STEP_WAVELENGTHS * wavelength
@@ -113,7 +199,37 @@ def grid_steps_m(freq_hz: float, dr_m: float | None = None, dz_m: float | None =
 def tl_field(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float = 50_000.0,
              dr_m: float | None = None, dz_m: float | None = None, ndz: int = DEPTH_DECIMATION,
              store: FieldStore | None = None) -> TLField:
-    """TL field of a source at ``source_depth_m`` out to ``rmax_m`` (module doc), from ``store`` if it has it."""
+    """TL field (RAM, Collins 1993, plus Thorp absorption) of a source at ``source_depth_m`` out to ``rmax_m``.
+
+    Taken from ``store`` if it holds the field, else computed with pyram and saved there (module docstring).
+
+    Parameters
+    ----------
+    env : Environment
+        Range-independent environment.
+    freq_hz : float
+        Frequency (Hz), > 0.
+    source_depth_m : float
+        Source depth (m), inside the water column.
+    rmax_m : float, default 50000.0
+        Largest range (m).
+    dr_m, dz_m : float, optional
+        Range and depth steps (m); default :func:`grid_steps_m`.
+    ndz : int, default 10
+        Keep every ndz-th depth point.
+    store : FieldStore, optional
+        Cache of fields.
+
+    Returns
+    -------
+    TLField
+        TL (dB) on a depth x range grid (float32 precision).
+
+    Raises
+    ------
+    InputError
+        If an input is out of range.
+    """
     require(freq_hz > 0, f"frequency must be positive, got {freq_hz:g} Hz")
     require(0 < source_depth_m < env.water_depth_m,
             f"source depth {source_depth_m:g} m must lie inside the water column (0..{env.water_depth_m:g} m)")
@@ -164,11 +280,40 @@ def _run_pyram(env: Environment, freq_hz, zs, rmax, dr, dz, ndz):
 def transmission_loss(env: Environment, freq_hz: float, source_depth_m: float, receiver_depth_m: float, ranges_m,
                       *, rmax_m: float | None = None, average_m: float = 0.0,
                       store: FieldStore | None = None) -> np.ndarray:
-    """TL (dB) at ``ranges_m`` between the two depths (interpolated from the field).
+    """TL between two depths at given ranges, interpolated from the field (module docstring).
 
     ``average_m`` > 0 averages the intensity over a window of that length in range first (the usual
     way to compare PE results and to remove the interference detail a passive sonar integrates over).
     Below the first range step the TL is spherical spreading 20 log10(r / 1 m).
+
+    Parameters
+    ----------
+    env : Environment
+        The environment.
+    freq_hz : float
+        Frequency (Hz).
+    source_depth_m : float
+        Source depth (m).
+    receiver_depth_m : float
+        Receiver depth (m).
+    ranges_m : array_like
+        Ranges (m), finite and >= 0.
+    rmax_m : float, optional
+        Largest range of the field (m); default 1.05 x the largest range, at least 2 km.
+    average_m : float, default 0.0
+        Incoherent range-averaging window (m); 0 for none.
+    store : FieldStore, optional
+        Cache of fields.
+
+    Returns
+    -------
+    ndarray
+        TL (dB), shape of ``ranges_m``.
+
+    Raises
+    ------
+    InputError
+        If a range is negative or not finite (or as :func:`tl_field`).
     """
     r = np.asarray(ranges_m, dtype=float)
     require(bool(np.all(np.isfinite(r)) and np.all(r >= 0)), "ranges must be finite and non-negative")
@@ -184,7 +329,22 @@ def transmission_loss(env: Environment, freq_hz: float, source_depth_m: float, r
 
 
 def smooth_tl(ranges_m, tl_db, window_m: float) -> np.ndarray:
-    """Incoherent range average: -10 log10 of the running mean of 10^(-TL/10) over ``window_m``."""
+    """Incoherent range average: ``-10 log10`` of the running mean of ``10^(-TL/10)`` over ``window_m``.
+
+    Parameters
+    ----------
+    ranges_m : array_like, shape (n,)
+        Range grid (m), uniform.
+    tl_db : array_like, shape (n,)
+        TL along range (dB).
+    window_m : float
+        Window length (m); a window under one step leaves TL unchanged.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Averaged TL (dB); the ends use edge padding.
+    """
     r = np.asarray(ranges_m, dtype=float)
     dr = float(np.median(np.diff(r)))
     n = max(int(round(window_m / dr)), 1)

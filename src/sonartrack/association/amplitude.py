@@ -25,7 +25,24 @@ STRENGTH_INITIAL = 15_000.0
 
 
 def detection_probability_above(pd0, strength, sigma_a, threshold):
-    """P_D after the amplitude threshold: P_D0 Phi((z_hat - tau) / sigma_a)."""
+    """Detection probability after the amplitude threshold: P_D0 Phi((z_hat - tau) / sigma_a) (paper P0, app. A).
+
+    Parameters
+    ----------
+    pd0 : float or array_like
+        Detection probability before the threshold.
+    strength : float or array_like, shape (n,)
+        Track strength z_hat (peak amplitude, the unit of the correlator output).
+    sigma_a : float or array_like
+        Spread of a true peak's amplitude (same unit).
+    threshold : float
+        Amplitude threshold tau (same unit).
+
+    Returns
+    -------
+    ndarray
+        Thresholded P_D, broadcast shape of the inputs.
+    """
     from scipy.special import ndtr
 
     z = (np.asarray(strength, dtype=float) - threshold) / np.asarray(sigma_a, dtype=float)
@@ -33,7 +50,28 @@ def detection_probability_above(pd0, strength, sigma_a, threshold):
 
 
 def amplitude_log_ratio(amplitudes, strength, sigma_a, alpha, threshold) -> np.ndarray:
-    """log r_tj (n_tracks, n_meas): true-amplitude Gaussian over the shifted false-amplitude exponential."""
+    """Amplitude log likelihood ratio of JPDA_A (paper P0, appendix A).
+
+    ``log r_tj = log N(z_j; z_hat_t, sigma_a,t^2) - log(alpha exp(-alpha (z_j - tau)))``.
+
+    Parameters
+    ----------
+    amplitudes : array_like, shape (n_meas,)
+        Peak amplitudes z_j (correlator output unit), all above ``threshold``.
+    strength : array_like, shape (n_tracks,)
+        Track strengths z_hat_t (same unit).
+    sigma_a : array_like, shape (n_tracks,)
+        Spread of a true peak's amplitude (same unit).
+    alpha : float
+        Rate of the false peaks' exponential amplitude density (1 / amplitude unit).
+    threshold : float
+        Amplitude threshold tau.
+
+    Returns
+    -------
+    ndarray, shape (n_tracks, n_meas)
+        log r_tj.
+    """
     z = np.asarray(amplitudes, dtype=float)[None, :]
     mu = np.asarray(strength, dtype=float)[:, None]
     s = np.asarray(sigma_a, dtype=float)[:, None]
@@ -43,7 +81,20 @@ def amplitude_log_ratio(amplitudes, strength, sigma_a, alpha, threshold) -> np.n
 
 
 def update_strength(strength, gated_amplitudes_max):
-    """eq. 9: z_hat(k) = 0.7 z_hat(k-1) + 0.3 max_j z(k, j); tracks with an empty gate keep theirs."""
+    """Track strength update, paper P0 eq. 9: ``z_hat(k) = 0.7 z_hat(k-1) + 0.3 max_j z(k, j)``.
+
+    Parameters
+    ----------
+    strength : array_like, shape (n,)
+        Strengths z_hat(k-1) (correlator output unit).
+    gated_amplitudes_max : array_like, shape (n,)
+        Largest amplitude in each track's gate at k; NaN or inf for an empty gate.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Updated strengths; tracks with an empty gate keep theirs.
+    """
     s = np.asarray(strength, dtype=float)
     mx = np.asarray(gated_amplitudes_max, dtype=float)
     return np.where(np.isfinite(mx), STRENGTH_MEMORY * s + (1 - STRENGTH_MEMORY) * mx, s)

@@ -12,7 +12,27 @@ import math
 
 
 def gate_threshold(gate_probability: float, dim: int = 2) -> float:
-    """gamma such that a chi-square(dim) variable is below it with ``gate_probability``."""
+    """Chi-square gate size gamma with ``F_chi2(gamma; dim) = gate_probability`` (Bar-Shalom et al. 2001, sec. 2.6).
+
+    Closed form for dim = 2: ``gamma = -2 log(1 - P_G)``; scipy's chi2.ppf otherwise.
+
+    Parameters
+    ----------
+    gate_probability : float
+        P_G, the probability that a Gaussian innovation falls in the gate, in (0, 1).
+    dim : int, default 2
+        Measurement dimension.
+
+    Returns
+    -------
+    float
+        gamma, the threshold on the squared Mahalanobis distance.
+
+    Raises
+    ------
+    ValueError
+        If ``gate_probability`` is not in (0, 1).
+    """
     if not 0.0 < gate_probability < 1.0:
         raise ValueError("gate probability must be in (0, 1)")
     if dim == 2:
@@ -23,7 +43,22 @@ def gate_threshold(gate_probability: float, dim: int = 2) -> float:
 
 
 def gate_probability(gamma: float, dim: int = 2) -> float:
-    """P_G of a chi-square(dim) gate of size gamma."""
+    """Gate probability ``P_G = F_chi2(gamma; dim)`` of a chi-square gate of size gamma.
+
+    Closed form for dim = 2: ``P_G = 1 - exp(-gamma / 2)``.
+
+    Parameters
+    ----------
+    gamma : float
+        Threshold on the squared Mahalanobis distance.
+    dim : int, default 2
+        Measurement dimension.
+
+    Returns
+    -------
+    float
+        P_G in [0, 1].
+    """
     if dim == 2:
         return -math.expm1(-gamma / 2.0)
     from scipy.stats import chi2

@@ -45,16 +45,42 @@ def _kernels():
 
 
 def clusters(gated: np.ndarray) -> list[np.ndarray]:
-    """Track indices grouped into clusters that share gated measurements (connected components)."""
+    """Track indices grouped into clusters that share gated measurements (connected components).
+
+    Parameters
+    ----------
+    gated : ndarray of bool, shape (n_tracks, n_meas)
+        True where measurement j is in track t's gate.
+
+    Returns
+    -------
+    list of ndarray of int
+        One array of track indices per cluster.
+    """
     labels = _kernels().cluster_labels(np.ascontiguousarray(gated, dtype=bool))
     return [np.nonzero(labels == lab)[0] for lab in np.unique(labels)]
 
 
 def jpda_log_weights(log_lik, log_miss) -> np.ndarray:
-    """log beta (n_tracks, n_meas + 1): exact JPDA marginals, column 0 = no measurement (module doc).
+    """Exact JPDA marginal association probabilities, in log space (recursion in the module docstring).
 
-    ``log_lik`` (n_tracks, n_meas): log w_tj, -inf where measurement j is outside track t's gate.
-    ``log_miss`` (n_tracks,): log w_t0 = log(1 - P_D P_G).
+    Parameters
+    ----------
+    log_lik : array_like, shape (n_tracks, n_meas)
+        log w_tj (log of P_D times the likelihood ratio against clutter); -inf where measurement j is
+        outside track t's gate.
+    log_miss : array_like, shape (n_tracks,)
+        log w_t0 = log(1 - P_D P_G).
+
+    Returns
+    -------
+    ndarray, shape (n_tracks, n_meas + 1)
+        log beta; column 0 is "no measurement is the track's", column j + 1 measurement j.
+
+    Raises
+    ------
+    InputError
+        If the shapes disagree, or a cluster gates more than 62 measurements.
     """
     ll = np.ascontiguousarray(log_lik, dtype=float)
     lmiss = np.ascontiguousarray(log_miss, dtype=float)
@@ -72,12 +98,38 @@ def jpda_log_weights(log_lik, log_miss) -> np.ndarray:
 
 
 def jpda_weights(log_lik, log_miss) -> np.ndarray:
-    """beta (n_tracks, n_meas + 1), the exact JPDA marginals (see :func:`jpda_log_weights`)."""
+    """Exact JPDA marginals beta = exp(:func:`jpda_log_weights`).
+
+    Parameters
+    ----------
+    log_lik : array_like, shape (n_tracks, n_meas)
+        log w_tj, -inf outside the gate.
+    log_miss : array_like, shape (n_tracks,)
+        log(1 - P_D P_G).
+
+    Returns
+    -------
+    ndarray, shape (n_tracks, n_meas + 1)
+        beta; column 0 = no measurement. Each row sums to 1.
+    """
     return np.exp(jpda_log_weights(log_lik, log_miss))
 
 
 def jpda_brute_force(log_lik, log_miss) -> np.ndarray:
-    """The reference: enumerate every joint event (tests only; exponential cost)."""
+    """Reference JPDA marginals by enumerating every joint event (tests only; exponential cost).
+
+    Parameters
+    ----------
+    log_lik : array_like, shape (n_tracks, n_meas)
+        log w_tj, -inf outside the gate.
+    log_miss : array_like, shape (n_tracks,)
+        log(1 - P_D P_G).
+
+    Returns
+    -------
+    ndarray, shape (n_tracks, n_meas + 1)
+        beta; column 0 = no measurement.
+    """
     import itertools
 
     ll = np.asarray(log_lik, dtype=float)

@@ -67,8 +67,23 @@ class Likelihoods:
 
 
 def mahalanobis2(nu, S_inv):
-    """d2 = nu^T S^-1 nu over the last axes; written out for k = 1 and for large batches with k = 2 (the same
-    sums, in the same order, as ``einsum("...i,...ij,...j", ...)``, several times faster there)."""
+    """Squared Mahalanobis distance ``d2 = nu^T S^-1 nu`` over the last axes.
+
+    Written out for k = 1 and for large batches with k = 2 (the same sums, in the same order, as
+    ``einsum("...i,...ij,...j", ...)``, several times faster there).
+
+    Parameters
+    ----------
+    nu : ndarray, shape (..., k)
+        Innovations.
+    S_inv : ndarray, shape (..., k, k)
+        Inverse innovation covariances.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        d2 (dimensionless).
+    """
     k = nu.shape[-1]
     if k == 1:
         return nu[..., 0] * S_inv[..., 0, 0] * nu[..., 0]
@@ -80,7 +95,26 @@ def mahalanobis2(nu, S_inv):
 
 
 def gaussian_log_ratio(logdet, d2, k: int, log_rho):
-    """log N(nu; 0, S) - log rho = -(k log 2 pi + log det S + d2) / 2 - log rho."""
+    """Log likelihood ratio of a measurement against clutter: ``log N(nu; 0, S) - log rho``.
+
+    ``-(k log 2 pi + log det S + d2) / 2 - log rho`` (module docstring).
+
+    Parameters
+    ----------
+    logdet : float or ndarray
+        ``log det S``.
+    d2 : float or ndarray
+        Squared Mahalanobis distance of the innovation.
+    k : int
+        Measurement dimension.
+    log_rho : float or ndarray
+        Log clutter density (per unit measurement volume: per m^2 for positions, per rad for bearings).
+
+    Returns
+    -------
+    float or ndarray
+        ``log p / rho``, broadcast over the inputs.
+    """
     return -0.5 * (k * LOG_2PI + logdet + d2) - log_rho
 
 
@@ -135,10 +169,37 @@ def _gated_pairs(x_pos, P_pos, z, R, gamma: float, compiled: bool):
 
 def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density,
                          compiled: bool = True) -> Likelihoods:
-    """Position measurements ``z (m, 2)`` with covariances ``R (m, 2, 2)`` or ``(2, 2)``, chi-square gate ``gamma``.
+    """Likelihood ratios of position measurements for n tracks x r modes, with a chi-square gate (module docstring).
 
-    ``clutter_density`` scalar or ``(m,)`` (per m^2); ``pg`` the gate probability that goes with ``gamma``.
-    ``compiled``: pre-gate large scans with the compiled kernel (identical results; False: NumPy only)."""
+    The measurement observes the state's first two entries, [x, y] (m, x east, y north).
+
+    Parameters
+    ----------
+    x_pred, P_pred : ndarray, shapes (n, r, d) and (n, r, d, d)
+        Predicted mode-conditioned states (first two entries x, y in m) and their covariances.
+    z : array_like, shape (m, 2)
+        Measured positions [x, y] (m).
+    R : array_like, shape (m, 2, 2) or (2, 2)
+        Measurement covariances (m^2).
+    pd, pg : float
+        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
+    gamma : float
+        Chi-square gate size (association/gating.py).
+    clutter_density : float or array_like, shape (m,)
+        Clutter density at each measurement (per m^2).
+    compiled : bool, default True
+        Pre-gate large scans with the compiled kernel (identical results); False: NumPy only.
+
+    Returns
+    -------
+    Likelihoods
+        Gated pairs, log ratios ``log p_rm / rho_m``, innovations, inverse covariances, P_D, ``1 - P_D P_G``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If an innovation covariance is not positive definite.
+    """
     x_pred = np.asarray(x_pred, float)
     n, r, _ = x_pred.shape
     z = np.asarray(z, float).reshape(-1, 2)
@@ -168,11 +229,36 @@ def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: f
 
 def window_likelihoods(x_pred, P_pred, z, sigma, *, gate_width: float, pd_hit, pd_miss, clutter_density,
                        log_ratio_extra=None) -> Likelihoods:
-    """Scalar measurements ``z (m,)`` with per-track standard deviation ``sigma (n,)`` and a window gate.
+    """Likelihood ratios of scalar (bearing) measurements with a window gate |nu| <= V / 2 (paper P0).
 
-    The window |nu| <= gate_width / 2 has P_G = erf(gate_width / (2 sqrt(2 S))) per track and mode.
-    ``pd_hit (n,)`` goes in the hit weight, ``pd_miss (n,)`` in the miss weight (they differ for JPDA_A,
-    association/amplitude.py); ``log_ratio_extra (n, m)`` is added to every mode's log ratio."""
+    Per track and mode ``S = P-[0, 0] + sigma^2`` and ``P_G = erf(V / (2 sqrt(2 S)))``.
+
+    Parameters
+    ----------
+    x_pred : ndarray, shape (n, r, d)
+        Predicted mode-conditioned states; entry 0 is the measured quantity (bearing, rad).
+    P_pred : ndarray, shape (n, r, d, d)
+        Their covariances.
+    z : array_like, shape (m,)
+        Measurements (rad for bearings).
+    sigma : array_like, shape (n,)
+        Per-track measurement standard deviation (same unit as z).
+    gate_width : float
+        Window width V (same unit as z).
+    pd_hit : array_like, shape (n,)
+        P_D in the hit weight.
+    pd_miss : array_like, shape (n,)
+        P_D in the miss weight ``1 - P_D P_G`` (differs from ``pd_hit`` for JPDA_A, association/amplitude.py).
+    clutter_density : float
+        Clutter density (per unit of z, e.g. per rad).
+    log_ratio_extra : array_like, shape (n, m), optional
+        Added to every mode's log ratio (the amplitude log ratio of JPDA_A).
+
+    Returns
+    -------
+    Likelihoods
+        Gated pairs and every pair's log ratio (``dense_log_ratio`` is filled).
+    """
     from scipy.special import erf
 
     z = np.asarray(z, float).reshape(-1)

@@ -82,11 +82,36 @@ def pda_pair_weights(lik: Likelihoods) -> AssociationWeights:
     return AssociationWeights(lik.miss / lam, None, np.log(lam), beta_pair)
 
 
-def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta):
+def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta, cross=None):
     """Gaussian-mixture reduction of the per-measurement Kalman updates with weights ``beta0``, ``beta``.
 
-    x = x- + sum_m beta_m K_m nu_m;  P = beta_0 P- + sum_m beta_m (P- - K_m H P- + dx_m dx_m^T) - dx dx^T
-    with dx_m = K_m nu_m and dx = sum_m beta_m dx_m (module doc; H = [I_k 0]), over the gated pairs."""
+    x = x- + sum_m beta_m K_m nu_m;  P = beta_0 P- + sum_m beta_m (P- - K_m C_m^T + dx_m dx_m^T) - dx dx^T
+    with C_m = P- H_m^T, K_m = C_m S_m^-1, dx_m = K_m nu_m and dx = sum_m beta_m dx_m (module doc), over the
+    gated pairs (K_m C_m^T = K_m S_m K_m^T, the optimal gain's covariance reduction).
+
+    Parameters
+    ----------
+    x_pred : ndarray, shape (n, r, d)
+        Predicted mode-conditioned states of n tracks in r modes.
+    P_pred : ndarray, shape (n, r, d, d)
+        Their covariances.
+    lik : Likelihoods
+        The gated pairs' innovations nu and inverse innovation covariances S^-1 (association/likelihood.py).
+    beta0 : ndarray, shape (n, r)
+        Weight of "no measurement is the target's".
+    beta : ndarray, shape (n, r, m)
+        Weight of each measurement (zero outside the gate).
+    cross : ndarray, shape (G, r, d, k), optional
+        Cross-covariances C = P- H^T of the gated pairs, for a measurement model of its own per pair (a Stone
+        Soup detection's, linearised for a nonlinear one). None: H = [I_k 0], the first k state entries measured.
+
+    Returns
+    -------
+    x : ndarray, shape (n, r, d)
+        Updated mode-conditioned states.
+    P : ndarray, shape (n, r, d, d)
+        Their covariances (symmetrised).
+    """
     n, r, d = x_pred.shape
     k = lik.nu.shape[-1]
     if lik.gated.shape[1] == 0:
@@ -96,11 +121,11 @@ def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta):
     if not len(ti):
         return x_pred.copy(), symmetrize(P_upd)
     Pg = P_pred[ti]  # (G, r, d, d)
-    PHt = Pg[..., :, :k]  # P H^T for H = [I 0]
+    PHt = Pg[..., :, :k] if cross is None else cross  # P H^T (H = [I 0]: the first k columns of P)
     K = PHt @ lik.S_inv  # (G, r, d, k)
     dx = np.einsum("grij,grj->gri", K, lik.nu)  # (G, r, d)
     b = beta[ti, :, mi]  # (G, r)
-    # P_rm + dx dx^T  with  P_rm = P - K S K^T = P - K H P  (optimal gain)
+    # P_rm + dx dx^T  with  P_rm = P - K S K^T = P - K C^T  (optimal gain)
     term = Pg - K @ np.swapaxes(PHt, -1, -2) + dx[..., :, None] * dx[..., None, :]
     acc_x = np.zeros((n, r, d))
     acc_P = np.zeros((n, r, d, d))

@@ -1,8 +1,11 @@
 """The ``sonartrack`` command line (typer + rich).
 
 Each sub-command lives in its own module in this package and exposes ``register(app)``; the
-modules are discovered here, so adding a command means adding a file. Heavy imports stay inside
-the command functions so that ``sonartrack --help`` is quick.
+modules are discovered here, so adding a command means adding a file. A command line imports only
+the module named like its command (``sonartrack studies`` imports ``cli/studies.py``, not the
+settings of every other command), and all of them for ``--help`` or a name no module has; a module
+may register more commands than its own, found that way. Heavy imports stay inside the command
+functions so that the start is quick (tests/cli/test_startup.py, benchmarks/bench_cli_start.py).
 
 User mistakes raise :class:`sonartrack.InputError`; :func:`main` prints its one-line message
 (``error: ...``) and exits with status 2, with no traceback; usage errors print the usage and exit
@@ -31,16 +34,58 @@ app = typer.Typer(
 )
 
 
-def _register_commands() -> None:
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        mod = importlib.import_module(f"{__name__}.{info.name}")
-        if hasattr(mod, "register"):
-            mod.register(app)
 
 
-_register_commands()
+@app.callback()
+def _root() -> None:
+    # a callback keeps the app a group of commands when one module registered one command: typer would
+    # otherwise run that lone command directly and read its name as an argument
+    pass
+
+
+#: the app that :func:`load_commands` fills (tests may swap :data:`app` for a stand-in)
+_APP = app
+_LOADED: set[str] = set()
+
+
+def command_modules() -> list[str]:
+    """Names of the command modules of this package (every module whose name does not start with ``_``)."""
+    return sorted(info.name for info in pkgutil.iter_modules(__path__) if not info.name.startswith("_"))
+
+
+def load_commands(names: list[str] | None = None) -> typer.Typer:
+    """Import the command modules ``names`` (None: all) and register their commands on the app, once each.
+
+    Parameters
+    ----------
+    names : list of str, optional
+        Module names from :func:`command_modules`.
+
+    Returns
+    -------
+    typer.Typer
+        The app, its commands in module order whatever order they were loaded in.
+    """
+    order = {name: i for i, name in enumerate(command_modules())}
+    for name in order if names is None else names:
+        if name not in _LOADED:
+            mod = importlib.import_module(f"{__name__}.{name}")
+            _LOADED.add(name)
+            if hasattr(mod, "register"):
+                mod.register(_APP)
+    _APP.registered_commands.sort(key=lambda c: order.get(c.callback.__module__.rpartition(".")[2], len(order)))
+    return _APP
+
+
+def _modules_for(args: list[str]) -> list[str] | None:
+    """The command modules a command line needs: the one named like its command, or None (all) for help, no
+    command, or a command that no module is named after."""
+    command = next((a for a in args if not a.startswith("-")), None)
+    module = command.replace("-", "_") if command else None
+    if module is None or module not in command_modules():
+        return None
+    load_commands([module])
+    return [module] if command in {c.name for c in _APP.registered_commands} else None
 
 
 #: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM)
@@ -129,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in args
     args = [a for a in args if a != "--debug"]
     try:
+        if app is _APP:
+            load_commands(_modules_for(args))
         with _stop_signals_raise():
             app(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:

@@ -1,9 +1,9 @@
 """``sonartrack detect``: multi-frame track-before-detect (paper P1) on a user's range-Doppler frames.
 
-Input: a K x Nr x Nd stack of square-law cell values (``--frames``, .npy or .npz, io/frames.py).
-Settings: :class:`sonartrack.detection.detect.DetectSettings` (``--config`` TOML with ``[plane]``,
-``[detector]`` and ``[decision]`` tables; ``--print-config`` shows them resolved). The library call is
-:func:`sonartrack.detection.detect.detect_frames`.
+Input: a K x Nr x Nd stack of square-law cell values (``--frames``, .npy or .npz, systems/detect/files.py).
+Settings: the detect system's tree, :class:`sonartrack.detection.detect.DetectSettings` (``--config`` TOML with
+``[plane]``, ``[detector]`` and ``[decision]`` tables; ``--print-config`` shows them resolved). The system call
+is :func:`sonartrack.systems.detect.run.run_detect`.
 
 Outputs (atomic): ``detection.csv`` (the best track, a row per frame), ``detection.png`` (the
 frames with the best track drawn over them) and a one-line decision.
@@ -23,11 +23,7 @@ from sonartrack.cli._settings import (
     print_config_and_exit,
     resolve,
 )
-from sonartrack.detection.mftd import MftdSettings
-from sonartrack.detection.threshold import ThresholdSettings
-
-CSV_NAME = "detection.csv"
-PNG_NAME = "detection.png"
+from sonartrack.systems.detect.settings import MftdSettings, ThresholdSettings
 
 
 def register(app: typer.Typer) -> None:
@@ -47,9 +43,10 @@ def detect_cmd(
 ) -> None:
     """Multi-frame track-before-detect: frames -> decision, statistic, best track (CSV and PNG)."""
     from sonartrack.core.errors import require
-    from sonartrack.detection.detect import DetectSettings, detect_frames
-    from sonartrack.io.frames import read_frames, write_detection_csv
     from sonartrack.report.figures.detection import detection_png
+    from sonartrack.systems.detect.files import PNG_NAME, read_frames_file, write_detection
+    from sonartrack.systems.detect.run import run_detect, verdict
+    from sonartrack.systems.detect.settings import DetectSettings
 
     s = resolve(DetectSettings, config, source="detect config" if config is None else f"detect config {config}",
                 decision__threshold=threshold, decision__pfa=pfa, detector__snr_db=snr_db,
@@ -57,18 +54,10 @@ def detect_cmd(
     if print_config:
         print_config_and_exit(s)
     require(frames is not None, "give the frames: --frames FILE (a K x Nr x Nd .npy or .npz stack)")
-    y = read_frames(frames)
+    y = read_frames_file(frames)
     with output_folder(out):
-        det = detect_frames(y, s)
-        csv_path = write_detection_csv(out / CSV_NAME, det)
+        det = run_detect(y, s)
+        csv_path = write_detection(det, out)
         png_path = detection_png(out / PNG_NAME, det)
-    typer.echo(f"detect: {_verdict(det)}; wrote {csv_path} and {png_path}")
+    typer.echo(f"detect: {verdict(det)}; wrote {csv_path} and {png_path}")
 
-
-def _verdict(det) -> str:
-    """The decision in one line: statistic against threshold, the plane, where the best track runs."""
-    K, nr, nd = det.frames.shape
-    c = det.best_track_centres()
-    return (f"{'TARGET PRESENT' if det.present else 'no target'}: statistic {det.statistic:.3f} vs threshold "
-            f"{det.threshold:.3f} ({det.threshold_source}); {K} frames of {nr} x {nd} cells; best track from range "
-            f"{c[0, 0]:.0f} m, {c[0, 1]:+.2f} m/s to {c[-1, 0]:.0f} m, {c[-1, 1]:+.2f} m/s")

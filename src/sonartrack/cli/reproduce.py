@@ -1,4 +1,4 @@
-"""``sonartrack studies`` and ``sonartrack reproduce``: the papers' experiments."""
+"""``sonartrack reproduce``: run the papers' experiments (``sonartrack studies`` lists them, cli/studies.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,6 @@ from sonartrack.core.errors import require
 
 
 def register(app: typer.Typer) -> None:
-    app.command("studies")(studies_cmd)
     app.command("reproduce")(reproduce_cmd)
 
 
@@ -27,16 +26,6 @@ def _interrupted(exc: KeyboardInterrupt, mods, configs, seed: int, out: Path) ->
     total = sum(int(c.runs) for c in configs)
     return Interrupted(getattr(exc, "signum", signal.SIGINT),
                        f"interrupted: {kept} trials kept (of {total}) in {out}; run the same command to resume")
-
-
-def studies_cmd() -> None:
-    """List the studies (one per source paper) that `reproduce` can run."""
-    from sonartrack import studies
-
-    for sid in studies.available():
-        mod = studies.load(sid)
-        typer.echo(f"{sid:20s} {mod.TITLE}  [{mod.PAPER}]  full: {mod.Config().runs} runs, "
-                   f"quick: {mod.Config.quick().runs}")
 
 
 def reproduce_cmd(

@@ -1,7 +1,7 @@
 """``sonartrack simulate``: a passive towed-array scene (recording, navigation, truth) and a sample input for
-every other command, written into ``--out`` (io/scene_files.py lists the files).
+every other command, written into ``--out`` (the simulate system; systems/simulate/files.py lists the files).
 
-The scene's settings are :class:`sonartrack.sim.scene.PassiveSceneSettings`: defaults, then the
+The scene's settings are the system's tree, :class:`sonartrack.sim.scene.PassiveSceneSettings`: defaults, then the
 ``--scene`` TOML file (or a shipped scene's name), then the options; ``--print-config`` prints them.
 """
 
@@ -19,7 +19,7 @@ from sonartrack.cli._settings import (
     print_config_and_exit,
     resolve,
 )
-from sonartrack.sim.scene import PassiveSceneSettings
+from sonartrack.systems.simulate.settings import PassiveSceneSettings
 
 
 def register(app: typer.Typer) -> None:
@@ -39,18 +39,53 @@ def simulate_cmd(
     only: Annotated[str, typer.Option(help="all; passive (recording, nav, truth); samples (the other commands' "
                                            "inputs).")] = "all",
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
-    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("scene"),
+    out: Annotated[str, typer.Option(help="Output folder.")] = "scene",
+    format: Annotated[str, typer.Option("--format", help="Recording format: wav (32-bit float), rf64, wav24 (24-bit "
+                                                         "PCM) or flac (24-bit, <= 8 channels); the integer ones come "
+                                                         "with calibration.toml.")] = "wav",
+    split_s: Annotated[float | None, typer.Option(help="Write the recording as consecutive files of this many "
+                                                       "seconds in recording/, named rec_YYYYmmdd_HHMMSS.")] = None,
+    gap_s: Annotated[float | None, typer.Option(help="Leave out this many seconds at the start of the second file "
+                                                     "(a gap between the first two files).")] = None,
+    nmea: Annotated[bool, typer.Option("--nmea", help="Also write the ship's navigation as an NMEA 0183 log "
+                                                      "nav.nmea (RMC + HDT, UTC); the recording goes in recording/ "
+                                                      "named by its start.")] = False,
+    start_utc: Annotated[str | None, typer.Option(help="UTC time of the first sample (ISO 8601), for the file names "
+                                                       "and nav.nmea; default 2024-05-17T12:00:00Z.")] = None,
+    manifest: Annotated[bool, typer.Option("--manifest", help="Also write manifest.csv: this recording's line of a "
+                                                              "survey manifest (sonartrack survey).")] = False,
 ) -> None:
     """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command."""
-    from sonartrack.io.scene_files import check_only, shipped_scene_path, write_scene
+    from sonartrack.io.run_outputs import check_out_path, discard_on_failure
+    from sonartrack.systems.simulate.files import check_only, check_recording_fits, shipped_scene_path, write_scene
+    from sonartrack.systems.simulate.recording_layout import describe_layout, make_layout
 
     path = shipped_scene_path(scene) if scene is not None else None
     settings = resolve(PassiveSceneSettings, path, duration_s=duration_s, seed=seed, propagation=propagation)
     if print_config:
         print_config_and_exit(settings)
     check_only(only)
+    layout = make_layout(format, split_s, gap_s, nmea, start_utc, manifest)
+    folder = check_out_path(out)
+    check_recording_fits(settings, only, folder, layout)
     from sonartrack.cli._progress import TrialProgress, make_progress
 
-    with output_folder(out), make_progress() as bar:  # the folder before the progress bar: a bad --out is one line
-        files = write_scene(settings, out, only=only, progress=TrialProgress(bar))
-    typer.echo(f"simulate: {files.summary}; wrote {len(files.paths)} files in {out}")
+    try:  # the folder before the progress bar: a bad --out is one line; a failed run leaves none of its files
+        with output_folder(folder), discard_on_failure(folder), make_progress() as bar:
+            files = write_scene(settings, folder, only=only, progress=TrialProgress(bar), layout=layout)
+    except KeyboardInterrupt as exc:
+        raise _interrupted(exc, folder) from None
+    typer.echo(f"simulate: {files.summary}; wrote {len(files.paths)} files in {folder}")
+    if layout != make_layout() and only != "samples":
+        typer.echo(describe_layout(layout, settings.duration_s, settings.sample_rate_hz))
+
+
+def _interrupted(exc: KeyboardInterrupt, folder: Path) -> KeyboardInterrupt:
+    """The interrupt with simulate's own line: an unfinished scene is not kept (nothing resumes)."""
+    import signal
+
+    from sonartrack.cli import Interrupted
+
+    return Interrupted(getattr(exc, "signum", signal.SIGINT),
+                       f"interrupted: simulate keeps no part of an unfinished scene (the files it had written in "
+                       f"{folder} were removed); run the same command again to make it from the start")

@@ -1,10 +1,11 @@
-"""``sonartrack tma``: target motion analysis of a user's bearing (and frequency) record.
+"""``sonartrack tma``: target motion analysis of a user's bearing (and frequency) record (systems/tma/).
 
-Reads the bearings and ownship files (io/tma_files.py), solves with :func:`sonartrack.tma.solve.solve_tma`
-(every method: sequential ``ekf``, ``mgekf``, ``imm-ekf``, ``imm-mgekf`` on bearings or bearings + frequency,
-paper P2; batch ``ml`` and ``em-map`` with a propagation model, paper P3), and writes atomically into
-``--out``: ``tma_solution.csv`` (the target solution over time with standard deviations) and
-``tactical_picture.png`` (report/figures/tma.py), plus a one-line summary on stdout.
+Reads the bearings and ownship files (systems/tma/files.py), solves with
+:func:`sonartrack.systems.tma.run.run_tma` (every method: sequential ``ekf``, ``mgekf``, ``imm-ekf``,
+``imm-mgekf`` on bearings or bearings + frequency, paper P2; batch ``ml`` and ``em-map`` with a propagation
+model, paper P3), and writes atomically into ``--out``: ``tma_solution.csv`` (the target solution over time
+with standard deviations) and ``tactical_picture.png`` (report/figures/tma.py), plus a one-line summary on
+stdout.
 
 Settings: :class:`sonartrack.tma.settings.TmaSettings`, from its defaults, then a ``--config`` TOML file,
 then the options; ``--print-config`` prints the resolved settings.
@@ -18,10 +19,7 @@ from typing import Annotated
 import typer
 
 from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
-from sonartrack.tma.settings import BatchSettings, TmaSettings
-
-CSV_NAME = "tma_solution.csv"
-PNG_NAME = "tactical_picture.png"
+from sonartrack.systems.tma.settings import BatchSettings, TmaSettings
 
 
 def register(app: typer.Typer) -> None:
@@ -30,15 +28,6 @@ def register(app: typer.Typer) -> None:
 
 def _help(name: str, model=TmaSettings) -> str:
     return option_help(model, name)
-
-
-def _environment(settings: TmaSettings):
-    """em-map's environment: a shipped one by name or a profile file (io/environment.py), else None."""
-    if settings.is_sequential or settings.batch.env is None:
-        return None
-    from sonartrack.io.environment import environment_from_name_or_file
-
-    return environment_from_name_or_file(settings.batch.env)
 
 
 def tma_cmd(
@@ -60,9 +49,9 @@ def tma_cmd(
     """Target motion analysis: bearings (+ frequency) and ownship navigation -> target solution CSV and picture."""
     from sonartrack.core.errors import require
     from sonartrack.io.environment import TLDiskCache
-    from sonartrack.io.tma_files import read_bearings, read_ownship, write_solution_csv
     from sonartrack.report.figures.tma import write_tactical_picture
-    from sonartrack.tma.solve import solve_tma
+    from sonartrack.systems.tma.files import PNG_NAME, read_tma_inputs, write_tma_solution
+    from sonartrack.systems.tma.run import run_tma
 
     settings = resolve(TmaSettings, config, method=method, frequency=frequency,
                        sigma_bearing_deg=sigma_bearing_deg, sigma_freq_hz=sigma_freq_hz, batch__env=env,
@@ -70,13 +59,12 @@ def tma_cmd(
     if print_config:
         print_config_and_exit(settings)
     require(bearings is not None and ownship is not None, "give the input files: --bearings FILE --ownship FILE")
-    record = read_bearings(bearings, check_radians=settings.inputs.check_radians)
-    own = read_ownship(ownship)
-    environment = _environment(settings)
+    inputs = read_tma_inputs(bearings, ownship, settings)
     with output_folder(out):
-        result = solve_tma(record, own, settings, environment=environment, tl_store=TLDiskCache())
+        result = run_tma(inputs.record, inputs.ownship, settings, environment=inputs.environment,
+                         tl_store=TLDiskCache())
         for w in result.warnings:
             typer.echo(f"warning: {w}", err=True)
-        csv = write_solution_csv(out / CSV_NAME, result.solution, own)
+        csv = write_tma_solution(result, out)
         png = write_tactical_picture(out / PNG_NAME, result)
     typer.echo(f"{result.summary()}; wrote {csv} and {png}")

@@ -1,13 +1,14 @@
-"""``sonartrack track``: the trackers on a user's own data.
+"""``sonartrack track``: the trackers on a user's own data (the track system, systems/track/).
 
 * ``--contacts FILE`` (with ``--nav FILE`` for raw bistatic columns): IPDA / IMM-IPDA position
-  tracking with track management (the P4 tracker; tracking/run.py ``track_contacts``); writes
+  tracking with track management (the P4 tracker; systems/track/run.py ``run_contacts``); writes
   ``tracks.csv`` (one row per live track per scan, with existence and status) and ``tracks.png``
   (tracks over contacts).
-* ``--peaks FILE``: JPDA / JPDA_A bearing tracking of cross-correlation peaks (the P0 tracker;
-  cli/_track_peaks.py).
+* ``--peaks FILE``: JPDA / JPDA_A bearing tracking of cross-correlation peaks with automatic initiation
+  (the P0 tracker; ``run_peaks``); writes ``bearing_tracks.csv`` and ``bearing_tracks.png`` (the waterfall
+  with the confirmed tracks drawn over the peaks).
 
-Settings: io/track_config.py (``--config`` TOML with a ``[tracker]`` table; ``--print-config``).
+Settings: systems/track/settings.py (``--config`` TOML with a ``[tracker]`` table; ``--print-config``).
 """
 
 from __future__ import annotations
@@ -19,10 +20,12 @@ import typer
 
 from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
 from sonartrack.core.errors import InputError
-from sonartrack.io.track_config import ContactsTrackSettings, PeaksTrackSettings
+from sonartrack.systems.track.settings import ContactsTrackSettings, PeaksTrackSettings
 
 CONTACTS_HELP = ("Contacts CSV/Parquet: time_s, x_m, y_m [+ var_x_m2, var_y_m2, cov_xy_m2] or raw bistatic time_s, "
                  "travel_time_s, bearing_deg.")
+#: --tracker values -> the associator setting
+TRACKER_CHOICES = {"jpda": "jpda", "jpda-a": "jpda_a", "jpda_a": "jpda_a"}
 
 
 def register(app: typer.Typer) -> None:
@@ -46,9 +49,12 @@ def track_cmd(
     if (contacts is None) == (peaks is None):
         raise InputError("give exactly one of --contacts FILE or --peaks FILE")
     if peaks is not None:
-        from sonartrack.cli._track_peaks import track_peaks_command
-
-        typer.echo(track_peaks_command(peaks, tracker=tracker, config=config, out=out, print_config=print_config))
+        if tracker is not None and tracker not in TRACKER_CHOICES:
+            raise InputError(f"unknown --tracker '{tracker}' for --peaks: choose jpda or jpda-a")
+        peak_settings = resolve(PeaksTrackSettings, config, associator=TRACKER_CHOICES.get(tracker))
+        if print_config:
+            print_config_and_exit(peak_settings)
+        typer.echo(track_peaks_command(peaks, peak_settings, out=out))
         return
     settings = resolve(ContactsTrackSettings, config)
     if print_config:
@@ -58,19 +64,30 @@ def track_cmd(
 
 def track_contacts_command(contacts: Path, settings: ContactsTrackSettings, *, nav: Path | None, out: Path,
                            confirmed_only: bool = False) -> str:
-    """Read the contacts, track them (tracking/run.py), write tracks.csv and tracks.png; the one-line summary."""
-    from sonartrack.io.atomic import write_csv
-    from sonartrack.io.contacts import read_contacts
+    """Read the contacts, track them (systems/track), write tracks.csv and tracks.png; the one-line summary."""
     from sonartrack.report.figures.tracks import tracks_png
-    from sonartrack.tracking.run import track_contacts
+    from sonartrack.systems.track.files import read_contacts_file, write_contact_tracks
+    from sonartrack.systems.track.run import run_contacts
 
-    b = settings.bistatic
-    data = read_contacts(contacts, nav_path=nav, default_sigma_m=settings.default_sigma_m,
-                         bistatic_errors=b.errors(), sound_speed_mps=b.sound_speed_mps, max_range_m=b.max_range_m)
+    data = read_contacts_file(contacts, settings, nav=nav)
     with output_folder(out):
-        table = track_contacts(data.time_s, data.z, data.R, settings.tracker, confirmed_only=confirmed_only)
-        csv = write_csv(table, out / "tracks.csv")
-        png = tracks_png(out / "tracks.png", data.z, table)
-    n_confirmed = table.loc[table.status == "confirmed", "track_id"].nunique()
-    return (f"{len(set(data.time_s.tolist()))} scans, {len(data.time_s)} contacts -> {n_confirmed} confirmed "
-            f"track(s); wrote {csv} and {png}")
+        result = run_contacts(data, settings, confirmed_only=confirmed_only)
+        csv = write_contact_tracks(result, out)
+        png = tracks_png(out / "tracks.png", data.z, result.tracks.to_frame())
+    return f"{result.summary()}; wrote {csv} and {png}"
+
+
+def track_peaks_command(peaks: Path, settings: PeaksTrackSettings, *, out: Path) -> str:
+    """Read the peaks, track them (systems/track), write bearing_tracks.csv and .png; the one-line summary."""
+    from sonartrack.report.figures.bearings import bearing_tracks_png
+    from sonartrack.systems.track.files import read_peaks_file, write_peak_tracks
+    from sonartrack.systems.track.run import run_peaks
+
+    rec = read_peaks_file(peaks)
+    out = Path(out)
+    with output_folder(out):
+        result = run_peaks(rec, settings)
+        csv = write_peak_tracks(result, out)
+        png = bearing_tracks_png(out / "bearing_tracks.png", rec, result.tracks.to_frame(),
+                                 title=f"{peaks.name}: {result.name} tracks")
+    return f"{result.summary()}; wrote {csv} and {png}"

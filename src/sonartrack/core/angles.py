@@ -12,7 +12,17 @@ def wrap_angle(angle_rad):
     """Wrap angles to the half-open interval (-pi, pi].
 
     ``wrap(a) = a - 2 pi * ceil((a - pi) / (2 pi))``: exact at the boundaries, so ``wrap(pi) == pi``
-    and ``wrap(-pi) == pi``. Works elementwise on scalars and arrays.
+    and ``wrap(-pi) == pi``. Every angular residual in the package goes through this function.
+
+    Parameters
+    ----------
+    angle_rad : float or array_like
+        Angles (rad), any shape.
+
+    Returns
+    -------
+    float or ndarray
+        Wrapped angles (rad), same shape; a float for a scalar input.
     """
     a = np.asarray(angle_rad, dtype=float)
     wrapped = a - TWO_PI * np.ceil((a - np.pi) / TWO_PI)
@@ -20,11 +30,35 @@ def wrap_angle(angle_rad):
 
 
 def bearing_rad(dx, dy):
-    """Bearing clockwise from north of the displacement (dx east, dy north), in (-pi, pi]."""
+    """Bearing of a displacement, clockwise from north: ``atan2(dx, dy)`` in (-pi, pi].
+
+    Parameters
+    ----------
+    dx : float or array_like
+        East component of the displacement from the observer to the target (m).
+    dy : float or array_like
+        North component (m), broadcast with ``dx``.
+
+    Returns
+    -------
+    float or ndarray
+        Bearing (rad, clockwise from north, 0 = north, pi/2 = east).
+    """
     return wrap_angle(np.arctan2(dx, dy))
 
 
 def heading_unit(heading_rad):
-    """Unit vector [east, north] of a heading measured clockwise from north."""
+    """Unit vector ``[east, north] = [sin h, cos h]`` of a heading measured clockwise from north.
+
+    Parameters
+    ----------
+    heading_rad : float or array_like, shape (...)
+        Heading (rad, clockwise from north).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Unit vectors [east, north].
+    """
     h = np.asarray(heading_rad, dtype=float)
     return np.stack([np.sin(h), np.cos(h)], axis=-1)

@@ -12,6 +12,19 @@ class InputError(ValueError):
 
 
 def require(condition: bool, message: str) -> None:
-    """Raise :class:`InputError` with ``message`` unless ``condition`` holds."""
+    """Raise :class:`InputError` with ``message`` unless ``condition`` holds.
+
+    Parameters
+    ----------
+    condition : bool
+        What must be true of the user's input.
+    message : str
+        One line naming the problem and the fix.
+
+    Raises
+    ------
+    InputError
+        When ``condition`` is false.
+    """
     if not condition:
         raise InputError(message)

@@ -11,10 +11,26 @@ LOG_2PI = float(np.log(2.0 * np.pi))
 
 
 def inv_and_logdet(S):
-    """Inverse and log-determinant of symmetric positive-definite matrices S (..., m, m).
+    """Inverse and log-determinant of symmetric positive-definite matrices.
 
-    Closed form for m = 2 (``inv = [[d, -b], [-b, a]] / det``); Cholesky-free ``np.linalg`` otherwise.
-    Raises ``np.linalg.LinAlgError`` if any determinant is not positive (singular or indefinite S).
+    Closed form for m = 2 (``inv = [[d, -b], [-b, a]] / det``) and m = 1; ``np.linalg`` otherwise.
+
+    Parameters
+    ----------
+    S : array_like, shape (..., m, m)
+        Covariance matrices (e.g. innovation covariances).
+
+    Returns
+    -------
+    S_inv : ndarray, shape (..., m, m)
+        Inverses.
+    logdet : ndarray, shape (...)
+        Natural log of the determinants.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If any determinant (or variance) is not positive (singular or indefinite S).
     """
     S = np.asarray(S, dtype=float)
     m = S.shape[-1]
@@ -41,24 +57,78 @@ def inv_and_logdet(S):
 
 
 def mahalanobis_sq(nu, S_inv):
-    """Squared Mahalanobis distance ``nu^T S^-1 nu`` for innovations nu (..., m), S_inv (..., m, m)."""
+    """Squared Mahalanobis distance ``d2 = nu^T S^-1 nu``.
+
+    Parameters
+    ----------
+    nu : ndarray, shape (..., m)
+        Innovations.
+    S_inv : ndarray, shape (..., m, m)
+        Inverse innovation covariances.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Squared distances (dimensionless).
+    """
     return np.einsum("...i,...ij,...j->...", nu, S_inv, nu)
 
 
 def gaussian_logpdf(nu, S):
-    """log N(nu; 0, S) = -0.5 (m log 2 pi + log|S| + nu^T S^-1 nu), broadcast over leading axes."""
+    """Log-density ``log N(nu; 0, S) = -0.5 (m log 2 pi + log|S| + nu^T S^-1 nu)``.
+
+    Parameters
+    ----------
+    nu : ndarray, shape (..., m)
+        Innovations (measurement units).
+    S : ndarray, shape (..., m, m)
+        Their covariances (measurement units squared).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Log-densities (natural log, per unit of measurement volume).
+    """
     S_inv, logdet = inv_and_logdet(S)
     m = np.shape(nu)[-1]
     return -0.5 * (m * LOG_2PI + logdet + mahalanobis_sq(nu, S_inv))
 
 
 def gaussian_logpdf_from_inv(d2, logdet, m):
-    """log N given a precomputed squared Mahalanobis distance ``d2`` and ``log|S|``."""
+    """Log-density ``-0.5 (m log 2 pi + log|S| + d2)`` from a precomputed distance and log-determinant.
+
+    Parameters
+    ----------
+    d2 : float or ndarray
+        Squared Mahalanobis distance ``nu^T S^-1 nu``.
+    logdet : float or ndarray
+        ``log|S|``, broadcast with ``d2``.
+    m : int
+        Measurement dimension.
+
+    Returns
+    -------
+    float or ndarray
+        ``log N(nu; 0, S)``.
+    """
     return -0.5 * (m * LOG_2PI + logdet + d2)
 
 
 def logsumexp(a, axis=-1):
-    """Numerically safe ``log(sum(exp(a)))`` along ``axis`` (NumPy only; -inf rows give -inf)."""
+    """Numerically safe ``log(sum(exp(a)))`` along ``axis`` (NumPy only).
+
+    Parameters
+    ----------
+    a : array_like
+        Log-values.
+    axis : int, default -1
+        Axis summed over.
+
+    Returns
+    -------
+    ndarray
+        ``a`` reduced over ``axis``; a row of -inf gives -inf.
+    """
     a = np.asarray(a, dtype=float)
     amax = np.max(a, axis=axis, keepdims=True)
     amax = np.where(np.isfinite(amax), amax, 0.0)

@@ -10,10 +10,36 @@ import numpy as np
 
 
 def trial_seed_sequence(seed: int, trial_index: int) -> np.random.SeedSequence:
-    """The SeedSequence of trial ``trial_index`` under master ``seed``."""
+    """The SeedSequence of trial ``trial_index`` under master ``seed``: ``SeedSequence(seed, spawn_key=(i,))``.
+
+    Parameters
+    ----------
+    seed : int
+        Master seed of the run.
+    trial_index : int
+        Index i of the trial (0-based).
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+        The i-th child that ``SeedSequence(seed).spawn`` would return.
+    """
     return np.random.SeedSequence(int(seed), spawn_key=(int(trial_index),))
 
 
 def trial_rng(seed: int, trial_index: int) -> np.random.Generator:
-    """The Generator of trial ``trial_index`` under master ``seed`` (PCG64)."""
+    """The random Generator (PCG64) of trial ``trial_index`` under master ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        Master seed of the run.
+    trial_index : int
+        Index of the trial (0-based).
+
+    Returns
+    -------
+    numpy.random.Generator
+        A generator that depends on (seed, trial_index) only.
+    """
     return np.random.Generator(np.random.PCG64(trial_seed_sequence(seed, trial_index)))

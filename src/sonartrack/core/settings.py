@@ -16,9 +16,11 @@ a silently ignored value.
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+from pydantic.fields import FieldInfo
 
 
 class Settings(BaseModel):
@@ -28,16 +30,104 @@ class Settings(BaseModel):
 
 
 def setting(default: Any = ..., doc: str = "", *, unit: str = "", default_factory=None, **constraints) -> Any:
-    """A settings field: ``default``, a one-line ``doc``, its ``unit`` ("1" for dimensionless), and
-    pydantic constraints (``gt``, ``ge``, ``le``, ``lt``, ``min_length``, ...)."""
+    """Declare a settings field: its default, a one-line doc, its unit and pydantic constraints.
+
+    Parameters
+    ----------
+    default : object, optional
+        Default value; ``...`` (the default) makes the field required.
+    doc : str, default ""
+        One-line description (shown by ``--print-config`` and the command-line help).
+    unit : str, default ""
+        Unit of the value ("1" for dimensionless, "" for none, e.g. a name).
+    default_factory : callable, optional
+        Makes the default (for lists and nested groups); used instead of ``default``.
+    **constraints
+        pydantic constraints (``gt``, ``ge``, ``le``, ``lt``, ``min_length``, ...).
+
+    Returns
+    -------
+    pydantic.fields.FieldInfo
+        The field, to be assigned in a :class:`Settings` subclass.
+    """
     extra = {"unit": unit}
     if default_factory is not None:
         return Field(default_factory=default_factory, description=doc, json_schema_extra=extra, **constraints)
     return Field(default, description=doc, json_schema_extra=extra, **constraints)
 
 
+def derived_settings(base: type[Settings], name: str, doc: str, *, drop: tuple[str, ...] = (),
+                     defaults: dict[str, tuple[Any, str]] | None = None) -> type[Settings]:
+    """A settings class for one stage of a system: ``base``'s fields less ``drop``, with the defaults and docs of
+    ``defaults`` (field -> (value, doc)) replaced.
+
+    A system declares each physical quantity (array, sound speed, window, threshold) once at the root of its
+    settings tree, so the stage's own group must not declare it again (``drop``); and where the system runs a
+    library component with other defaults than the library's (the passive chain's tracker on a normalised
+    statistic), the new values are the system's declarations, with docs that describe them (``defaults``), so
+    ``--print-config`` never prints a value beside a doc written for another one.
+
+    Parameters
+    ----------
+    base : type[Settings]
+        The library's settings class of the stage (its validators still run: :meth:`build` makes a ``base``).
+    name, doc : str
+        Class name and docstring of the derived class.
+    drop : tuple of str
+        Fields of ``base`` that the system's root declares; :meth:`build` takes their values.
+    defaults : dict
+        Field name -> (new default, new one-line doc); the unit and bounds stay ``base``'s.
+
+    Returns
+    -------
+    type[Settings]
+        A frozen settings class with a method ``build(**root_values) -> base``.
+    """
+    defaults = defaults or {}
+    unknown = (set(drop) | set(defaults)) - set(base.model_fields)
+    if unknown:
+        raise TypeError(f"{base.__name__} has no field(s) {sorted(unknown)}")
+    fields: dict[str, Any] = {}
+    for field_name, info in base.model_fields.items():
+        if field_name in drop:
+            continue
+        if field_name in defaults:
+            value, new_doc = defaults[field_name]
+            info = FieldInfo.merge_field_infos(info, default=value, default_factory=None, description=new_doc)
+        fields[field_name] = (info.annotation, info)
+
+    def build(self, **root_values):
+        return base(**self.model_dump(), **root_values)
+
+    def check_with_base(self):
+        # the library class's own cross-field checks, with the dropped fields at the library's defaults
+        if not any(base.model_fields[k].is_required() for k in drop):
+            base(**self.model_dump())
+        return self
+
+    # the caller's module: pickle (a study's worker processes) finds a class by its module and name
+    module = sys._getframe(1).f_globals.get("__name__", __name__)
+    cls = create_model(name, __base__=Settings, __doc__=doc, __module__=module,
+                       __validators__={"_check_with_base": model_validator(mode="after")(check_with_base)}, **fields)
+    cls.build = build
+    return cls
+
+
 def field_unit(model_cls: type[BaseModel], name: str) -> str:
-    """The unit declared for field ``name`` of a settings class ('' if none)."""
+    """The unit declared for field ``name`` of a settings class.
+
+    Parameters
+    ----------
+    model_cls : type of pydantic.BaseModel
+        The settings class.
+    name : str
+        Field name.
+
+    Returns
+    -------
+    str
+        The unit ('' if none).
+    """
     extra = model_cls.model_fields[name].json_schema_extra or {}
     return str(extra.get("unit", "")) if isinstance(extra, dict) else ""
 
@@ -45,7 +135,21 @@ def field_unit(model_cls: type[BaseModel], name: str) -> str:
 def field_help(model_cls: type[BaseModel], name: str) -> str:
     """'doc (unit)' of field ``name``: the text a command-line option shows.
 
-    Round brackets, because typer's rich help would read '[dB]' as a markup tag and drop it."""
+    Round brackets, because typer's rich help would read '[dB]' as a markup tag and drop it; a
+    dimensionless ("1") or unitless field shows its doc alone.
+
+    Parameters
+    ----------
+    model_cls : type of pydantic.BaseModel
+        The settings class.
+    name : str
+        Field name.
+
+    Returns
+    -------
+    str
+        The help text (the field name if it has no doc).
+    """
     f = model_cls.model_fields[name]
     unit = field_unit(model_cls, name)
     doc = f.description or name
@@ -53,7 +157,23 @@ def field_help(model_cls: type[BaseModel], name: str) -> str:
 
 
 def toml_value(v) -> str:
-    """A TOML literal for a scalar or a (nested) list of scalars."""
+    """A TOML literal for a scalar or a (nested) list of scalars.
+
+    Parameters
+    ----------
+    v : bool, int, float, str, list or tuple
+        The value (NaN and infinities become TOML's ``nan``/``inf``).
+
+    Returns
+    -------
+    str
+        The literal.
+
+    Raises
+    ------
+    TypeError
+        For any other type.
+    """
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
@@ -72,10 +192,24 @@ def toml_value(v) -> str:
 
 
 def render_toml(data: dict, comments: dict | None = None, _prefix: str = "") -> str:
-    """Nested JSON-like ``data`` as TOML text: plain keys first, then tables (dicts), then arrays of tables
-    (lists of dicts). ``comments`` has the same shape (a string per key, a dict per table, a list of dicts per
-    array of tables); a key with a comment is followed by ``# comment``, and a None value with a comment is
-    written as a commented-out ``# key = (not set)`` line (without one it is left out: TOML has no null)."""
+    """Nested JSON-like ``data`` as TOML text: plain keys first, then tables (dicts), then arrays of tables.
+
+    ``comments`` has the same shape (a string per key, a dict per table, a list of dicts per array of
+    tables); a key with a comment is followed by ``# comment``, and a None value with a comment is written
+    as a commented-out ``# key = (not set)`` line (without one it is left out: TOML has no null).
+
+    Parameters
+    ----------
+    data : dict
+        Values: scalars, lists of scalars, dicts (tables), lists of dicts (arrays of tables).
+    comments : dict, optional
+        Comments, shaped as ``data``.
+
+    Returns
+    -------
+    str
+        TOML text ending in a newline.
+    """
     comments = comments or {}
     lines: list[str] = []
     tables, arrays = [], []
@@ -114,6 +248,19 @@ def _field_comments(settings: BaseModel) -> dict:
 
 
 def to_commented_toml(settings: BaseModel) -> str:
-    """The resolved settings as TOML, each key followed by ``# doc (unit)``; nested groups as tables, lists of
-    groups as arrays of tables. The output is valid TOML and reads back to the same settings."""
+    """The resolved settings as TOML, each key followed by ``# doc (unit)``.
+
+    Nested groups become tables, lists of groups arrays of tables. The output is valid TOML and reads back
+    to the same settings.
+
+    Parameters
+    ----------
+    settings : pydantic.BaseModel
+        A settings object.
+
+    Returns
+    -------
+    str
+        TOML text.
+    """
     return render_toml(settings.model_dump(mode="json"), _field_comments(settings))

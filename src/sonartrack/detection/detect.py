@@ -58,12 +58,25 @@ class FrameDetection:
         return self.mftd.tracks[0]
 
     def best_track_centres(self) -> np.ndarray:
-        """(K, 2) [range m, range-rate m/s] of the best track's cell centres."""
+        """Cell centres of the best track, frame by frame.
+
+        Returns
+        -------
+        ndarray, shape (K, 2)
+            [range (m), range-rate (m/s)].
+        """
         best = self.best_track
         return self.grid.centres()[best[:, 0] * self.grid.n_doppler + best[:, 1]]
 
     def best_track_table(self) -> dict[str, np.ndarray]:
-        """The best track as columns, a row per frame (1-based): cells, their centres and values."""
+        """The best track as columns, a row per frame (frames numbered from 1): cells, their centres and values.
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (K,)
+            ``frame``, ``range_index``, ``doppler_index``, ``range_m`` (m), ``range_rate_mps`` (m/s) and
+            ``cell_value`` (the normalised square-law value the detector saw).
+        """
         best, centres = self.best_track, self.best_track_centres()
         K = len(best)
         return {"frame": np.arange(1, K + 1), "range_index": best[:, 0], "doppler_index": best[:, 1],
@@ -72,10 +85,29 @@ class FrameDetection:
 
 
 def detect_frames(frames, settings: DetectSettings | None = None) -> FrameDetection:
-    """Decide whether a target is present in a K x Nr x Nd stack of square-law cell values.
+    """Decide whether a target is present in a stack of square-law cell values (MFTD, paper P1; module docstring).
 
     The plane is ``settings.plane`` with the frames' Nr x Nd cells; the threshold is settled first
     (a calibration that cannot work fails before the detection runs).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values (powers, >= 0), frame by frame, range index then Doppler index.
+    settings : DetectSettings, optional
+        Normalisation, plane geometry, detector and decision; None for the defaults (paper P1, sec. V).
+
+    Returns
+    -------
+    FrameDetection
+        The decision S > threshold, the statistic, the threshold and its source, the normalised frames,
+        the plane and the detector's result (best tracks).
+
+    Raises
+    ------
+    InputError
+        If the frames are malformed (see :func:`detection.frames.validate_frames`) or the threshold
+        cannot be calibrated.
     """
     settings = DetectSettings() if settings is None else settings
     y = normalise_frames(validate_frames(frames), settings.normalisation)

@@ -11,7 +11,23 @@ from sonartrack.core.errors import InputError, require
 
 
 def validate_frames(frames) -> np.ndarray:
-    """Check a K x Nr x Nd stack of square-law cell values; return it as float64 (one-line errors)."""
+    """Check a stack of square-law cell values and return it as float64 (one-line errors).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values (powers).
+
+    Returns
+    -------
+    ndarray of float64, shape (K, Nr, Nd)
+        The same values.
+
+    Raises
+    ------
+    InputError
+        If the stack is not numeric, not rank 3, empty, holds NaN/inf or a negative value.
+    """
     try:
         y = np.asarray(frames, dtype=float)
     except (TypeError, ValueError):
@@ -32,7 +48,22 @@ def validate_frames(frames) -> np.ndarray:
 
 
 def check_frames_match(y: np.ndarray, grid, n_prior_frames: int) -> None:
-    """The frames must cover ``grid`` cell for cell and hold as many frames as the prior was built for."""
+    """Require the frames to cover ``grid`` cell for cell and to hold as many frames as the prior was built for.
+
+    Parameters
+    ----------
+    y : ndarray, shape (K, Nr, Nd)
+        Frames.
+    grid : RangeDopplerGrid
+        The detector's plane.
+    n_prior_frames : int
+        K of the prior.
+
+    Raises
+    ------
+    InputError
+        If the plane or the number of frames differ.
+    """
     require(y.shape[1:] == (grid.n_range, grid.n_doppler),
             f"frames are {y.shape[1]} x {y.shape[2]} cells but the grid is {grid.n_range} x {grid.n_doppler}")
     require(n_prior_frames == y.shape[0], f"the prior is for K = {n_prior_frames} frames but {y.shape[0]} were given")

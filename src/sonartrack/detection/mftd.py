@@ -97,16 +97,46 @@ class MftdSettings(Settings):
 
     @property
     def snr(self) -> float:
-        """rho as a power ratio."""
+        """Design SNR rho as a linear power ratio."""
         return float(db_to_ratio(self.snr_db))
 
 
 def pruned_detect_fast(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float, n_tracks: int,
                        restrict: bool = True, tol: float = RESTRICT_TOL, n_best: int | None = None,
                        checked: bool = False, final: str = "branches") -> MftdResult:
-    """:func:`~sonartrack.detection.mftd_reference.pruned_detect` compiled with numba
-    (``detection/mftd_kernel.py``): same arguments, same result (the restricted window is chosen per
-    track, so it leaves out at most what the reference does)."""
+    """The N-best pruned MFTD detector compiled with numba (paper P1, sec. IV, eqs. 20-22).
+
+    Same arguments and result as :func:`~sonartrack.detection.mftd_reference.pruned_detect` (the
+    restricted window is chosen per track, so it leaves out at most what the reference does).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values on the noise model's scale (noise mean 2).
+    grid : RangeDopplerGrid
+        The plane.
+    prior : KalmanPrior
+        Track prior for K frames (detection/prior.py).
+    snr : float
+        Design SNR rho (linear power ratio).
+    n_tracks : int
+        N, tracks kept after each frame's pruning.
+    restrict : bool, default True
+        Branch only to cells whose prior weight is not negligible.
+    tol : float, default 1e-12
+        Relative weight the restriction may leave out.
+    n_best : int, optional
+        Best tracks returned (default N).
+    checked : bool, default False
+        True: the caller validated the inputs.
+    final : {"branches", "kept"}, default "branches"
+        The statistic sums all N x M last-frame branches, or only the N kept (eq. 20).
+
+    Returns
+    -------
+    MftdResult
+        Statistic S = log sum c_theta LR_theta (natural log) and the best tracks, best first.
+    """
     from sonartrack.detection.mftd_kernel import pruned_kernel
 
     y, N, n_best = pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final)
@@ -133,16 +163,53 @@ class MftdDetector:
 
     @property
     def snr(self) -> float:
+        """Design SNR rho as a linear power ratio (from the settings)."""
         return self.settings.snr
 
     def prior(self, n_frames: int, own_accel_mps2=None) -> KalmanPrior:
+        """Kalman-predictor track prior for ``n_frames`` frames on this plane (paper P1, eqs. 16-19).
+
+        Parameters
+        ----------
+        n_frames : int
+            K, frames in the stack.
+        own_accel_mps2 : float or sequence of float, optional
+            Known own-sensor inputs u_1..u_{K-1} (m/s^2); None: no input, and the prior is memoised.
+
+        Returns
+        -------
+        KalmanPrior
+            The prior.
+        """
         s = self.settings
         if own_accel_mps2 is None:
             return cached_prior(self.grid, float(s.period_s), float(s.sigma_a_mps2), int(n_frames), s.prior_density)
         return kalman_prior(self.grid, s.period_s, s.sigma_a_mps2, n_frames, own_accel_mps2, s.prior_density)
 
     def detect(self, frames, own_accel_mps2=None, n_best: int | None = None, checked: bool = False) -> MftdResult:
-        """Run the detector on a K x Nr x Nd stack (``checked=True``: the caller validated it)."""
+        """Run the pruned detector on a stack of frames.
+
+        Parameters
+        ----------
+        frames : array_like, shape (K, Nr, Nd)
+            Square-law cell values on the noise model's scale; Nr x Nd must match the plane.
+        own_accel_mps2 : float or sequence of float, optional
+            Known own-sensor inputs u_1..u_{K-1} (m/s^2).
+        n_best : int, optional
+            Best tracks returned (default N).
+        checked : bool, default False
+            True: the caller validated the frames.
+
+        Returns
+        -------
+        MftdResult
+            Statistic and best tracks.
+
+        Raises
+        ------
+        InputError
+            If the frames are malformed or do not match the plane.
+        """
         y = np.asarray(frames, dtype=float) if checked else validate_frames(frames)
         prior = self.prior(y.shape[0], own_accel_mps2)
         s = self.settings

@@ -203,7 +203,15 @@ def _build():
 
 
 def pruned_kernel():
-    """The compiled kernel (built on first use; numba caches it on disk)."""
+    """The compiled pruned-MFTD kernel, built on first use (numba caches it on disk).
+
+    Returns
+    -------
+    callable
+        ``pruned(y, plane, arrays, g, margin, N, n_best, restrict, final_kept)`` returning
+        (S - const, flat cell numbers of the best tracks, their scores J, n_branches);
+        :func:`detection.mftd.pruned_detect_fast` wraps it.
+    """
     global _kernel
     if _kernel is None:
         _kernel = _build()

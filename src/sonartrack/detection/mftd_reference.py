@@ -27,10 +27,28 @@ MAX_EXHAUSTIVE_TRACKS = 4_000_000
 
 
 def track_log_weights(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float, tracks) -> np.ndarray:
-    """log c_theta LR_theta (eq. 21) of explicit tracks (n, K, 2) [range idx, Doppler idx]: the reference.
+    """``log c_theta LR_theta`` (paper P1, eq. 21) of explicit tracks, term by term: the reference.
 
-    Runs the Kalman predictor of eq. 16 along each track and sums eq. 19 and eq. 10 term by term:
-    sum_k [ a y_{k,theta_k} + log_norm_k - d2_k / 2 ] - K log(1 + rho), a = rho / (2 (1 + rho)).
+    Runs the Kalman predictor of eq. 16 along each track and sums eq. 19 and eq. 10:
+    ``sum_k [ a y_{k,theta_k} + log_norm_k - d2_k / 2 ] - K log(1 + rho)``, a = rho / (2 (1 + rho)).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values (noise mean 2).
+    grid : RangeDopplerGrid
+        The plane.
+    prior : KalmanPrior
+        Track prior for K frames.
+    snr : float
+        Design SNR rho (linear).
+    tracks : array_like of int, shape (n, K, 2)
+        [range index, Doppler index] per frame.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Log weights (natural log).
     """
     y = np.asarray(frames, dtype=float)
     tracks = np.asarray(tracks, dtype=np.int64)
@@ -50,7 +68,31 @@ def track_log_weights(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: f
 
 
 def exhaustive_detect(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float, n_best: int = 5) -> MftdResult:
-    """The optimal statistic (eq. 9) over all M^K tracks: feasible only on tiny planes."""
+    """The optimal statistic ``log sum_theta c_theta LR_theta`` over all M^K tracks (paper P1, eq. 9): tiny planes only.
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values (noise mean 2).
+    grid : RangeDopplerGrid
+        The plane (M cells).
+    prior : KalmanPrior
+        Track prior for K frames.
+    snr : float
+        Design SNR rho (linear).
+    n_best : int, default 5
+        Best tracks returned.
+
+    Returns
+    -------
+    MftdResult
+        Statistic, best tracks and their log weights; ``n_branches`` = M^K.
+
+    Raises
+    ------
+    InputError
+        If M^K exceeds 4 000 000 tracks, or the frames are malformed.
+    """
     y = validate_frames(frames)
     check_frames_match(y, grid, prior.n_frames)
     K, M = y.shape[0], grid.n_cells
@@ -119,12 +161,35 @@ def _best_branches(Jb: np.ndarray, keep_n: int) -> np.ndarray:
 def pruned_detect(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float, n_tracks: int,
                   restrict: bool = True, tol: float = RESTRICT_TOL, n_best: int | None = None,
                   checked: bool = False, final: str = "branches") -> MftdResult:
-    """The N-best pruned detector (sec. IV, eqs. 20-22), vectorised over the N x M branches of a frame.
+    """The N-best pruned detector (paper P1, sec. IV, eqs. 20-22), vectorised over the N x M branches of a frame.
 
-    ``restrict`` branches only to cells whose prior is not negligible (module doc of mftd; ``tol``
-    bounds the relative weight left out). ``n_best`` tracks are returned (default N). ``checked=True``
-    skips input validation. ``final``: "branches" sums the statistic over all N x M branches of the
-    last frame (our default); "kept" sums over the N tracks kept after the last pruning (eq. 20).
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values (noise mean 2).
+    grid : RangeDopplerGrid
+        The plane.
+    prior : KalmanPrior
+        Track prior for K frames.
+    snr : float
+        Design SNR rho (linear).
+    n_tracks : int
+        N, tracks kept after each frame's pruning.
+    restrict : bool, default True
+        Branch only to cells whose prior is not negligible (module doc of mftd).
+    tol : float, default 1e-12
+        Bound on the relative weight the restriction leaves out.
+    n_best : int, optional
+        Best tracks returned (default N).
+    checked : bool, default False
+        True skips input validation.
+    final : {"branches", "kept"}, default "branches"
+        Sum the statistic over all N x M last-frame branches (our default), or over the N kept (eq. 20).
+
+    Returns
+    -------
+    MftdResult
+        Statistic S (natural log) and the best tracks, best first.
     """
     y, N, n_best = pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final)
     K = y.shape[0]

@@ -20,7 +20,23 @@ NOISE_MEDIAN = NOISE_MEAN * np.log(2.0)
 
 
 def normalise_to_noise_median(frames) -> np.ndarray:
-    """y * (2 ln 2 / median(y)): the frames scaled so that their median is a noise cell's."""
+    """Scale frames so that their median is a noise cell's: ``y * (2 ln 2 / median(y))`` (paper P1, eq. 8).
+
+    Parameters
+    ----------
+    frames : array_like
+        Square-law cell values (any gain).
+
+    Returns
+    -------
+    ndarray
+        Scaled values, on the noise model's scale (noise mean 2).
+
+    Raises
+    ------
+    InputError
+        If the median is 0.
+    """
     y = np.asarray(frames, dtype=float)
     med = float(np.median(y))
     require(med > 0, "the median cell value is 0: cannot normalise by it; set normalisation = 'none' and give "
@@ -29,6 +45,24 @@ def normalise_to_noise_median(frames) -> np.ndarray:
 
 
 def normalise_frames(frames, how: str = "median") -> np.ndarray:
-    """The frames normalised ``how`` ("median": :func:`normalise_to_noise_median`; "none": as given)."""
+    """Frames normalised ``how``: "median" (:func:`normalise_to_noise_median`) or "none" (as given).
+
+    Parameters
+    ----------
+    frames : array_like
+        Square-law cell values.
+    how : {"median", "none"}, default "median"
+        Normalisation.
+
+    Returns
+    -------
+    ndarray of float
+        The normalised frames.
+
+    Raises
+    ------
+    InputError
+        If ``how`` is unknown (or as :func:`normalise_to_noise_median`).
+    """
     require(how in NORMALISATIONS, f"normalisation must be one of {NORMALISATIONS}, got '{how}'")
     return normalise_to_noise_median(frames) if how == "median" else np.asarray(frames, dtype=float)

@@ -60,6 +60,7 @@ class KalmanPrior:
 
     @property
     def n_frames(self) -> int:
+        """K, the number of frames the prior is for."""
         return len(self.log_norm)
 
 
@@ -99,11 +100,37 @@ def _inverse_where_set(S_inv: np.ndarray) -> np.ndarray:
 
 def kalman_prior(grid: RangeDopplerGrid, period_s: float, sigma_a_mps2: float, n_frames: int,
                  own_accel_mps2=None, prior_density: str = "centre", b1=None, w1=None) -> KalmanPrior:
-    """Covariances and predictor gains of eqs. 16-17 for ``n_frames`` frames on ``grid``.
+    """Covariances and predictor gains of paper P1's eqs. 16-17 (and eq. 19's density) for ``n_frames`` frames.
 
-    ``own_accel_mps2``: the known inputs u_1..u_{K-1} (scalar or K-1 values, m/s^2), entering as
-    g u_k with g = [T^2/2, T] (eq. 23). ``b1``/``w1``: a finite B_1 and its w_1 (literal eq. 16-19);
-    by default the B_1 -> infinity limit with a uniform first cell.
+    Parameters
+    ----------
+    grid : RangeDopplerGrid
+        The plane (cell area A and quantisation covariance R).
+    period_s : float
+        Frame period T (s), > 0.
+    sigma_a_mps2 : float
+        Standard deviation of the target's range acceleration (m/s^2), >= 0.
+    n_frames : int
+        K, >= 1.
+    own_accel_mps2 : float or sequence of float, optional
+        Known inputs u_1..u_{K-1} (m/s^2), entering as g u_k with g = [T^2/2, T] (eq. 23).
+    prior_density : {"centre", "smoothed"}, default "centre"
+        N(v; w_k, B_k) at the cell centre (eq. 19 as printed), or N(v; w_k, B_k + R).
+    b1 : array_like, shape (2, 2), optional
+        A finite B_1 (m^2, m^2/s, m^2/s^2), run with the literal eqs. 16-19; None: the B_1 -> infinity
+        limit with a uniform first cell.
+    w1 : array_like, shape (2,), optional
+        w_1 = [range (m), range-rate (m/s)] that goes with ``b1``; default zeros.
+
+    Returns
+    -------
+    KalmanPrior
+        Per-frame covariances, density inverses and log normalisers, and predictor gains.
+
+    Raises
+    ------
+    InputError
+        If an argument is out of range.
     """
     _check_prior_args(period_s, sigma_a_mps2, n_frames, prior_density)
     K = int(n_frames)
@@ -131,15 +158,47 @@ def kalman_prior(grid: RangeDopplerGrid, period_s: float, sigma_a_mps2: float, n
 @functools.lru_cache(maxsize=64)
 def cached_prior(grid: RangeDopplerGrid, period_s: float, sigma_a_mps2: float, n_frames: int,
                  prior_density: str = "centre") -> KalmanPrior:
-    """:func:`kalman_prior` without own-sensor input, memoised (Monte Carlo trials reuse it)."""
+    """:func:`kalman_prior` without own-sensor input, memoised (Monte Carlo trials reuse it).
+
+    Parameters
+    ----------
+    grid : RangeDopplerGrid
+        The plane (hashable: a frozen dataclass).
+    period_s : float
+        Frame period (s).
+    sigma_a_mps2 : float
+        Range acceleration standard deviation (m/s^2).
+    n_frames : int
+        K.
+    prior_density : {"centre", "smoothed"}, default "centre"
+        Density of eq. 19.
+
+    Returns
+    -------
+    KalmanPrior
+        The (shared, read-only) prior.
+    """
     return kalman_prior(grid, period_s, sigma_a_mps2, n_frames, None, prior_density)
 
 
 def prior_constant(prior: KalmanPrior, snr: float) -> float:
-    """The track-independent part of eq. 21's log weight,
+    """The track-independent part of paper P1's eq. 21 log weight.
 
         const = -K log(1 + rho) + sum_k log_norm[k]
               = -K log(1 + rho) - log M + sum_{k>=2} [ log A - log 2 pi - log|B_k| / 2 ],
 
-    so that log c_theta LR_theta = J_theta / 2 + const."""
+    so that ``log c_theta LR_theta = J_theta / 2 + const``.
+
+    Parameters
+    ----------
+    prior : KalmanPrior
+        The prior.
+    snr : float
+        Design SNR rho (linear).
+
+    Returns
+    -------
+    float
+        const (natural log).
+    """
     return float(np.sum(prior.log_norm) - prior.n_frames * np.log1p(snr))

@@ -35,7 +35,41 @@ class MftdResult:
 
 
 def pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final) -> tuple[np.ndarray, int, int]:
-    """Validated frames, N and the number of best tracks to return (``checked=True``: trust the caller)."""
+    """Validated frames, N and the number of best tracks to return (``checked=True``: trust the caller).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, Nr, Nd)
+        Square-law cell values.
+    grid : RangeDopplerGrid
+        The plane.
+    prior : KalmanPrior
+        Track prior (its K must match).
+    n_tracks : int
+        N, tracks kept (>= 1).
+    tol : float
+        Restriction tolerance, in (0, 1).
+    n_best : int or None
+        Best tracks to return; None for N.
+    checked : bool
+        Skip the checks.
+    final : str
+        "branches" or "kept".
+
+    Returns
+    -------
+    y : ndarray, shape (K, Nr, Nd)
+        Frames as float.
+    N : int
+        Tracks kept.
+    n_best : int
+        Tracks returned.
+
+    Raises
+    ------
+    InputError
+        If a check fails.
+    """
     y = np.asarray(frames, dtype=float) if checked else validate_frames(frames)
     if not checked:
         check_frames_match(y, grid, prior.n_frames)
@@ -47,11 +81,39 @@ def pruned_args(frames, grid, prior, n_tracks, tol, n_best, checked, final) -> t
 
 
 def restriction_margin(n_cells: int, tol: float) -> float:
-    """margin = 2 (log M - log tol): cells scoring this far below a parent's reference branch weigh
-    less than tol / M each, so all M of them less than ``tol`` of the kept weight (module doc of mftd)."""
+    """``margin = 2 (log M - log tol)``: cells scoring this far below a parent's reference branch are negligible.
+
+    They weigh less than tol / M each, so all M of them less than ``tol`` of the kept weight (module doc
+    of mftd).
+
+    Parameters
+    ----------
+    n_cells : int
+        M, cells in the plane.
+    tol : float
+        Relative weight allowed to be left out.
+
+    Returns
+    -------
+    float
+        The margin on the score J (twice a natural-log weight).
+    """
     return 2.0 * (np.log(n_cells) - np.log(tol))
 
 
 def flat_to_cells(flat: np.ndarray, n_doppler: int) -> np.ndarray:
-    """Row-major flat cell numbers m = i n_doppler + j -> [..., 2] of [range index i, Doppler index j]."""
+    """Row-major flat cell numbers ``m = i n_doppler + j`` to [range index i, Doppler index j].
+
+    Parameters
+    ----------
+    flat : ndarray of int, shape (...)
+        Flat cell numbers.
+    n_doppler : int
+        Doppler cells per range row.
+
+    Returns
+    -------
+    ndarray of int, shape (..., 2)
+        [i, j].
+    """
     return np.stack([flat // n_doppler, flat % n_doppler], axis=-1)

@@ -34,13 +34,54 @@ class ThresholdSettings(Settings):
 
 
 def noise_only_statistics(detector, shape, trials: int, seed: int) -> np.ndarray:
-    """The detector's statistic on ``trials`` noise-only stacks of ``shape`` (stack i from trial_rng(seed, i))."""
+    """The detector's statistic on ``trials`` noise-only stacks (cells exponential, mean 2; paper P1, eq. 8).
+
+    Parameters
+    ----------
+    detector : MftdDetector
+        Anything with ``detect(frames, checked=True).statistic``.
+    shape : tuple of int
+        (K, Nr, Nd) of each stack.
+    trials : int
+        Number of stacks.
+    seed : int
+        Master seed; stack i draws from ``trial_rng(seed, i)``.
+
+    Returns
+    -------
+    ndarray, shape (trials,)
+        Statistics.
+    """
     return np.array([detector.detect(sample_cells(trial_rng(seed, i), shape), checked=True).statistic
                      for i in range(trials)])
 
 
 def calibrate_threshold(detector, shape, pfa: float, trials: int, seed: int) -> float:
-    """Threshold with P(S > t | noise only) = pfa from ``trials`` seeded noise stacks of ``shape``."""
+    """Threshold t with ``P(S > t | noise only) = pfa`` from ``trials`` seeded noise stacks of ``shape``.
+
+    Parameters
+    ----------
+    detector : MftdDetector
+        The detector.
+    shape : tuple of int
+        (K, Nr, Nd).
+    pfa : float
+        False-alarm probability.
+    trials : int
+        Noise-only stacks simulated.
+    seed : int
+        Master seed.
+
+    Returns
+    -------
+    float
+        Threshold on the statistic S.
+
+    Raises
+    ------
+    InputError
+        If ``pfa * trials`` < 5 (too few exceedances to mean anything).
+    """
     require(pfa * trials >= MIN_CALIBRATION_EXCEEDANCES,
             f"pfa {pfa:g} needs at least {int(np.ceil(MIN_CALIBRATION_EXCEEDANCES / pfa))} calibration trials "
             f"(have {trials}): raise calibration_trials or give a threshold")
@@ -48,7 +89,24 @@ def calibrate_threshold(detector, shape, pfa: float, trials: int, seed: int) -> 
 
 
 def decision_threshold(detector, shape, settings: ThresholdSettings) -> tuple[float, str]:
-    """(threshold, where it came from): the given one, or :func:`calibrate_threshold` for ``settings.pfa``."""
+    """The decision threshold and its source: the given one, or :func:`calibrate_threshold` for ``settings.pfa``.
+
+    Parameters
+    ----------
+    detector : MftdDetector
+        The detector.
+    shape : tuple of int
+        (K, Nr, Nd) of the frames.
+    settings : ThresholdSettings
+        Given threshold, or Pfa, trials and seed for the calibration.
+
+    Returns
+    -------
+    threshold : float
+        Threshold on S.
+    source : str
+        "given", or the Pfa and the number of calibration trials.
+    """
     if settings.threshold is not None:
         return float(settings.threshold), "given"
     t = calibrate_threshold(detector, shape, settings.pfa, settings.calibration_trials, settings.seed)

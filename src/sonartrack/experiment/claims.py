@@ -24,9 +24,27 @@ class Claim:
         object.__setattr__(self, "holds", bool(self.holds))
 
     def as_dict(self) -> dict:
+        """The claim as a plain dict (for ``summary.json``).
+
+        Returns
+        -------
+        dict
+            Its fields by name.
+        """
         return asdict(self)
 
 
 def as_dicts(claims) -> list[dict]:
-    """Claims (records or already dicts) as plain dicts, for JSON."""
+    """Claims (records or already dicts) as plain dicts, for JSON.
+
+    Parameters
+    ----------
+    claims : iterable of Claim or dict
+        The claims.
+
+    Returns
+    -------
+    list of dict
+        One dict per claim.
+    """
     return [c.as_dict() if isinstance(c, Claim) else dict(c) for c in claims]

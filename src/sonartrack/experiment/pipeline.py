@@ -26,6 +26,9 @@ FigureMaker = Callable[[str, dict, object], dict]
 
 @dataclass(frozen=True, slots=True)
 class StudyResult:
+    """What :func:`reproduce` did: the study, its output folder, the runs asked for, the claims and how many
+    hold, and the number of trials computed this time (the rest came from the store).
+    """
     study_id: str
     out_dir: Path
     runs: int
@@ -35,7 +38,29 @@ class StudyResult:
 
 
 def resolve_config(study_mod, quick: bool = False, runs: int | None = None, overrides: dict | None = None):
-    """The study's config: defaults (or the quick preset), a TOML override dict, then ``runs``."""
+    """The study's config: defaults (or the quick preset), then a TOML override dict, then ``runs``.
+
+    Parameters
+    ----------
+    study_mod : module
+        The study module (``Config``, ``STUDY_ID``).
+    quick : bool, default False
+        Start from ``Config.quick()`` instead of the defaults.
+    runs : int, optional
+        Number of Monte Carlo runs, overriding the config's.
+    overrides : dict, optional
+        Nested values (e.g. a parsed ``--config`` TOML file) merged over the base.
+
+    Returns
+    -------
+    Config
+        The validated config of the study.
+
+    Raises
+    ------
+    InputError
+        If the merged values do not validate.
+    """
     base = study_mod.Config.quick() if quick else study_mod.Config()
     data = base.model_dump(mode="json")
     if overrides:
@@ -71,7 +96,28 @@ def _jsonable(x):
 
 def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path,
            figures: FigureMaker | None = None) -> tuple[dict, list[dict]]:
-    """Summarise stored trials, write summary.json, config.toml, figures and trials.parquet."""
+    """Summarise stored trials and write summary.json, config.toml, the figures and trials.parquet (atomically).
+
+    Parameters
+    ----------
+    study_mod : module
+        The study module (``summarize``, ``claims``, ``STUDY_ID``, ``TITLE``, ``PAPER``).
+    config : Config
+        The study's resolved config.
+    trials : dict of str to ndarray
+        All trials' outputs, stacked over the runs.
+    out : path-like
+        Output root; files go to ``<out>/<study>/``.
+    figures : callable, optional
+        ``figures(study_id, summary, config) -> {name: Figure}``; None: no PNGs.
+
+    Returns
+    -------
+    summary : dict
+        The JSON-ready summary (non-finite numbers become None).
+    claims : list of dict
+        The claims, as dicts.
+    """
     folder = Path(out) / study_mod.STUDY_ID
     folder.mkdir(parents=True, exist_ok=True)
     summary = _jsonable(study_mod.summarize(trials, config))
@@ -91,8 +137,32 @@ def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path,
 
 def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, scheduler: str | None = None,
               progress=None, figures: FigureMaker | None = None) -> StudyResult:
-    """Run or resume a study's trials and write its outputs. ``progress(total, done, advance)`` hooks a bar;
-    ``figures`` (e.g. :func:`sonartrack.report.figures.study_figures`) draws the PNGs."""
+    """Run or resume a study's trials and write its outputs (module docstring).
+
+    Parameters
+    ----------
+    study_mod : module
+        The study module.
+    config : Config
+        Its resolved config (``config.runs`` trials).
+    seed : int
+        Master seed (trial i draws from ``trial_rng(seed, i)``).
+    out : path-like
+        Output root.
+    workers : int, default 1
+        Local worker processes.
+    scheduler : str, optional
+        Address of a Dask scheduler (instead of local processes).
+    progress : optional
+        Progress bar with ``start(study_id, total, done)`` and ``advance(n)``.
+    figures : callable, optional
+        Figure maker (e.g. :func:`sonartrack.report.figures.study_figures`) that draws the PNGs.
+
+    Returns
+    -------
+    StudyResult
+        Output folder, runs, claims and how many hold, trials computed this time.
+    """
     plan = runner.plan_run(study_mod, config, config.runs, seed, out)
     if plan.n_todo and hasattr(study_mod, "prepare"):
         # shared, expensive inputs (e.g. transmission-loss fields) computed once here and cached on

@@ -56,12 +56,29 @@ class RunPlan:
 
     @property
     def n_todo(self) -> int:
+        """Number of trials still to compute."""
         return sum(len(c) for c in self.todo_chunks)
 
 
 def run_chunk(study_module: str, config_json: dict, seed: int, indices: tuple[int, ...]) -> dict[str, np.ndarray]:
-    """Run trials ``indices`` of the study module ``study_module`` (dotted path) and stack their outputs
-    (executed in a worker)."""
+    """Run trials ``indices`` of a study and stack their outputs (executed in a worker).
+
+    Parameters
+    ----------
+    study_module : str
+        Dotted import path of the study module.
+    config_json : dict
+        The study's config as JSON data.
+    seed : int
+        Master seed.
+    indices : tuple of int
+        Trial indices; trial i draws from ``trial_rng(seed, i)``.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Each output of ``run_trial``, stacked over the trials (first axis).
+    """
     mod = importlib.import_module(study_module)
     config = mod.Config.model_validate(config_json)
     outs = [mod.run_trial(config, trial_rng(seed, i)) for i in indices]
@@ -82,7 +99,33 @@ def _chunks(indices: list[int], size: int) -> list[tuple[int, ...]]:
 
 
 def plan_run(study_mod, config, runs: int, seed: int, out_dir: Path, chunk_size: int | None = None) -> RunPlan:
-    """Work out the cache folder for (study, config, seed) and the chunks still to compute."""
+    """Work out the cache folder for (study, config, seed) and the chunks still to compute.
+
+    Parameters
+    ----------
+    study_mod : module
+        The study module (``STUDY_ID``, optional ``TRIAL_VERSION`` and ``CHUNK_SIZE``).
+    config : Config
+        The resolved config.
+    runs : int
+        Trials wanted, >= 1.
+    seed : int
+        Master seed.
+    out_dir : path-like
+        Output root; the cache is ``<out>/<study>/cache/<key>``.
+    chunk_size : int, optional
+        Trials per chunk (default the study's ``CHUNK_SIZE``, else 10).
+
+    Returns
+    -------
+    RunPlan
+        The cache folder and the chunks of consecutive trials not yet on disk.
+
+    Raises
+    ------
+    InputError
+        If ``runs`` < 1.
+    """
     require(runs >= 1, f"--runs must be at least 1 (got {runs})")
     cfg = config.model_dump(mode="json")
     key = store.config_key(study_mod.STUDY_ID, getattr(study_mod, "TRIAL_VERSION", 1), cfg, seed)
@@ -97,8 +140,28 @@ def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = 
             on_chunk: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
     """Compute the missing chunks of ``plan``, store each as it finishes, and return all trials.
 
-    ``workers`` local processes (1: in this process), or the Dask cluster at ``scheduler``.
-    ``on_chunk(n)`` is called with the number of trials each time a chunk is stored.
+    Parameters
+    ----------
+    plan : RunPlan
+        From :func:`plan_run`.
+    config : Config
+        The resolved config.
+    workers : int, default 1
+        Local processes (1: in this process).
+    scheduler : str, optional
+        Address of a Dask scheduler; used instead of local processes.
+    on_chunk : callable, optional
+        Called with the number of trials each time a chunk is stored.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Trials 0..runs-1 of every output, in trial order.
+
+    Raises
+    ------
+    InputError
+        If ``workers`` < 1 or the scheduler cannot be reached.
     """
     cfg = config.model_dump(mode="json")
     # closing(): on an interrupt the pool is stopped here and now, not whenever the generator is collected
@@ -111,7 +174,24 @@ def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = 
 
 
 def stored_trials(study_mod, config, seed: int, out_dir: Path) -> int:
-    """How many of trials ``0..config.runs-1`` of this (study, config, seed) are complete on disk."""
+    """How many of trials ``0..config.runs-1`` of this (study, config, seed) are complete on disk.
+
+    Parameters
+    ----------
+    study_mod : module
+        The study module.
+    config : Config
+        The resolved config.
+    seed : int
+        Master seed.
+    out_dir : path-like
+        Output root.
+
+    Returns
+    -------
+    int
+        Trials already stored.
+    """
     plan = plan_run(study_mod, config, config.runs, seed, out_dir)
     return plan.runs - plan.n_todo
 

@@ -28,7 +28,24 @@ _CHUNK_RE = re.compile(r"^trials-(\d+)-(\d+)\.parquet$")
 
 
 def config_key(study_id: str, trial_version: int, config_dict: dict, seed: int) -> str:
-    """A short, stable hash of everything that determines a trial's numbers (not ``runs``)."""
+    """A short, stable hash of everything that determines a trial's numbers (not ``runs``).
+
+    Parameters
+    ----------
+    study_id : str
+        Study identifier.
+    trial_version : int
+        The study's ``TRIAL_VERSION`` (bumped when a trial's numbers change).
+    config_dict : dict
+        The config as JSON data (``runs`` is ignored).
+    seed : int
+        Master seed.
+
+    Returns
+    -------
+    str
+        First 16 hex digits of the SHA-256 of the canonical JSON.
+    """
     payload = {k: v for k, v in config_dict.items() if k != "runs"}
     text = json.dumps({"study": study_id, "version": trial_version, "config": payload, "seed": int(seed)},
                       sort_keys=True, separators=(",", ":"))
@@ -58,7 +75,22 @@ def _table_from_trials(indices, trials: dict[str, np.ndarray]):
 
 
 def write_chunk(folder: Path, indices, trials: dict[str, np.ndarray]) -> Path:
-    """Write trials ``indices`` (contiguous) atomically; return the final path."""
+    """Write trials ``indices`` (contiguous) to one Parquet chunk file, atomically.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        Cache folder (created if missing).
+    indices : sequence of int
+        Contiguous trial indices.
+    trials : dict of str to ndarray
+        Outputs, first axis the trials.
+
+    Returns
+    -------
+    pathlib.Path
+        The final file, ``trials-<first>-<stop>.parquet``.
+    """
     import pyarrow.parquet as pq
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -70,7 +102,20 @@ def write_chunk(folder: Path, indices, trials: dict[str, np.ndarray]) -> Path:
 
 
 def read_table(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Read one trials file: (trial indices, key -> array stacked over its trials)."""
+    """Read one trials file.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A chunk file or trials.parquet.
+
+    Returns
+    -------
+    indices : ndarray of int64
+        Trial indices.
+    trials : dict of str to ndarray
+        Each output stacked over its trials, with its stored per-trial shape and dtype.
+    """
     import pyarrow.parquet as pq
 
     table = pq.read_table(path)
@@ -88,7 +133,18 @@ def read_table(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 
 
 def done_indices(folder: Path) -> set[int]:
-    """Trial indices already stored in complete chunk files under ``folder``."""
+    """Trial indices already stored in complete chunk files under ``folder``.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        Cache folder (may not exist).
+
+    Returns
+    -------
+    set of int
+        Stored trial indices.
+    """
     done: set[int] = set()
     if folder.is_dir():
         for p in folder.iterdir():
@@ -99,7 +155,25 @@ def done_indices(folder: Path) -> set[int]:
 
 
 def load_trials(folder: Path, runs: int) -> dict[str, np.ndarray]:
-    """Gather trials 0..runs-1 from the chunk files, in trial order."""
+    """Gather trials 0..runs-1 from the chunk files, in trial order.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        Cache folder.
+    runs : int
+        Trials wanted.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Each output stacked over the runs.
+
+    Raises
+    ------
+    RuntimeError
+        If a trial is missing.
+    """
     parts: dict[int, dict[str, np.ndarray]] = {}
     for p in sorted(folder.iterdir()):
         m = _CHUNK_RE.match(p.name)
@@ -117,7 +191,15 @@ def load_trials(folder: Path, runs: int) -> dict[str, np.ndarray]:
 
 
 def write_trials_file(path: Path, trials: dict[str, np.ndarray]) -> None:
-    """Write all trials of a run to one Parquet file, atomically."""
+    """Write all trials of a run to one Parquet file, atomically.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        Output file (its folder is created).
+    trials : dict of str to ndarray
+        Outputs, first axis the trials.
+    """
     import pyarrow.parquet as pq
 
     n = len(next(iter(trials.values())))

@@ -23,7 +23,29 @@ from sonartrack.core.linalg import symmetrize
 
 
 def ekf_predict(x, P, F, Q, b=None):
-    """``x- = F x + b``, ``P- = F P F^T + Q`` (F, Q, b broadcast over the batch)."""
+    """EKF time update ``x- = F x + b``, ``P- = F P F^T + Q`` (Bar-Shalom et al. 2001, sec. 10.3.2).
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., n)
+        State estimate at k-1 (state units, e.g. [x, y, vx, vy] in m and m/s, x east, y north).
+    P : ndarray, shape (..., n, n)
+        Its covariance.
+    F : ndarray, shape (n, n) or (..., n, n)
+        State transition matrix (the Jacobian of a nonlinear motion model at x).
+    Q : ndarray, shape (n, n) or (..., n, n)
+        Process noise covariance over the step.
+    b : ndarray, shape (n,) or (..., n), optional
+        Known input term added to the prediction (e.g. minus the observer's displacement in a relative
+        state); None for none.
+
+    Returns
+    -------
+    x_pred : ndarray, shape (..., n)
+        Predicted state.
+    P_pred : ndarray, shape (..., n, n)
+        Predicted covariance, symmetrized.
+    """
     x_pred = np.einsum("...ij,...j->...i", F, x)
     if b is not None:
         x_pred = x_pred + b
@@ -32,7 +54,22 @@ def ekf_predict(x, P, F, Q, b=None):
 
 
 def innovation(z, hx, angle_rows=(0,)):
-    """``nu = z - h(x-)`` with the components in ``angle_rows`` wrapped to (-pi, pi]."""
+    """Innovation ``nu = z - h(x-)`` with the angular components wrapped to (-pi, pi].
+
+    Parameters
+    ----------
+    z : array_like, shape (..., m)
+        Measurement (angles in rad).
+    hx : array_like, shape (..., m)
+        Predicted measurement h(x-), same units.
+    angle_rows : sequence of int, default (0,)
+        Components that are angles (rad) and are wrapped; indices beyond m are ignored.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        The innovation (a new array).
+    """
     nu = np.array(np.asarray(z, float) - np.asarray(hx, float), copy=True)
     for i in angle_rows:
         if i < nu.shape[-1]:
@@ -41,7 +78,26 @@ def innovation(z, hx, angle_rows=(0,)):
 
 
 def ekf_gain(P_pred, H, R):
-    """Innovation covariance ``S = H P- H^T + R``, its inverse, and the gain ``K = P- H^T S^-1``."""
+    """Innovation covariance ``S = H P- H^T + R``, its inverse, and the gain ``K = P- H^T S^-1``.
+
+    Parameters
+    ----------
+    P_pred : ndarray, shape (..., n, n)
+        Predicted covariance.
+    H : ndarray, shape (..., m, n)
+        Measurement Jacobian dh/dx at x-.
+    R : ndarray, shape (..., m, m)
+        Measurement noise covariance (measurement units squared, e.g. rad^2 for a bearing).
+
+    Returns
+    -------
+    S : ndarray, shape (..., m, m)
+        Innovation covariance, symmetrized.
+    S_inv : ndarray, shape (..., m, m)
+        Its inverse.
+    K : ndarray, shape (..., n, m)
+        The gain.
+    """
     PHt = P_pred @ np.swapaxes(H, -1, -2)
     S = symmetrize(H @ PHt + R)
     S_inv = np.linalg.inv(S)
@@ -49,16 +105,65 @@ def ekf_gain(P_pred, H, R):
 
 
 def joseph_covariance(P_pred, K, G, R):
-    """``(I - K G) P- (I - K G)^T + K R K^T``: G = H for the EKF, the modified matrix for the MGEKF."""
+    """Joseph-form covariance update ``(I - K G) P- (I - K G)^T + K R K^T``.
+
+    G = H gives the EKF (Bar-Shalom, Li, Kirubarajan 2001, sec. 5.2.3); the MGEKF passes its modified matrix
+    (Song & Speyer 1985; filters/mgekf.py).
+
+    Parameters
+    ----------
+    P_pred : ndarray, shape (..., n, n)
+        Predicted covariance.
+    K : ndarray, shape (..., n, m)
+        Gain.
+    G : ndarray, shape (..., m, n)
+        Measurement Jacobian H, or the MGEKF's modified matrix.
+    R : ndarray, shape (..., m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        Updated covariance, symmetrized.
+    """
     n = P_pred.shape[-1]
     A = np.eye(n) - K @ G
     return symmetrize(A @ P_pred @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2))
 
 
 def ekf_update(x_pred, P_pred, z, hx, H, R, angle_rows=(0,)):
-    """EKF measurement update. Returns ``x+, P+, nu, S, S_inv``.
+    """EKF measurement update (Joseph form), equations in the module docstring.
 
-    Raises ``numpy.linalg.LinAlgError`` if S is singular.
+    Parameters
+    ----------
+    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
+        Predicted state and covariance.
+    z : ndarray, shape (..., m)
+        Measurement (angles in rad).
+    hx : ndarray, shape (..., m)
+        Predicted measurement h(x-).
+    H : ndarray, shape (..., m, n)
+        Jacobian dh/dx at x-.
+    R : ndarray, shape (..., m, m)
+        Measurement noise covariance.
+    angle_rows : sequence of int, default (0,)
+        Measurement components wrapped to (-pi, pi] in the innovation.
+
+    Returns
+    -------
+    x_upd : ndarray, shape (..., n)
+        Updated state.
+    P_upd : ndarray, shape (..., n, n)
+        Updated covariance.
+    nu : ndarray, shape (..., m)
+        Wrapped innovation.
+    S, S_inv : ndarray, shape (..., m, m)
+        Innovation covariance and its inverse (for the likelihood N(nu; 0, S)).
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If S is singular.
     """
     nu = innovation(z, hx, angle_rows)
     S, S_inv, K = ekf_gain(P_pred, H, R)
@@ -67,7 +172,24 @@ def ekf_update(x_pred, P_pred, z, hx, H, R, angle_rows=(0,)):
 
 
 def gaussian_loglik(nu, S, S_inv):
-    """log N(nu; 0, S) for innovations nu (..., m) (the IMM mode likelihood)."""
+    """Log-density ``log N(nu; 0, S)`` of innovations (the IMM mode likelihood).
+
+    ``-0.5 (m log 2 pi + log det S + nu^T S^-1 nu)``.
+
+    Parameters
+    ----------
+    nu : ndarray, shape (..., m)
+        Innovations.
+    S : ndarray, shape (..., m, m)
+        Innovation covariance.
+    S_inv : ndarray, shape (..., m, m)
+        Its inverse.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Log-likelihood (natural log; the density is per unit of each measurement component).
+    """
     m = nu.shape[-1]
     _, logdet = np.linalg.slogdet(S)
     d2 = np.einsum("...i,...ij,...j->...", nu, S_inv, nu)

@@ -45,7 +45,24 @@ def _moments(wt, x, P, out_x, out_P, A, B, dv):  # pragma: no cover - compiled
 
 @nb.njit(cache=True)
 def mix(x, P, w):  # pragma: no cover - compiled
-    """Mixed initial conditions x0 (n, r, d), P0 (n, r, d, d) from weights w[t, i, j] = mu_{i|j}."""
+    """Mixed initial conditions for a batch of tracks (compiled ``filters.imm.imm_mix``).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, r, d)
+        Mode-conditioned states of n tracks, r modes.
+    P : ndarray, shape (n, r, d, d)
+        Their covariances.
+    w : ndarray, shape (n, r, r)
+        Mixing weights w[t, i, j] = mu_{i|j}.
+
+    Returns
+    -------
+    x0 : ndarray, shape (n, r, d)
+        Mixed states.
+    P0 : ndarray, shape (n, r, d, d)
+        Mixed covariances, symmetrized.
+    """
     n, r, d = x.shape
     x0 = np.empty((n, r, d))
     P0 = np.empty((n, r, d, d))
@@ -58,7 +75,24 @@ def mix(x, P, w):  # pragma: no cover - compiled
 
 @nb.njit(cache=True)
 def combine(mu, x, P):  # pragma: no cover - compiled
-    """Combined estimates x (n, d), P (n, d, d) of the mode-conditioned ones with weights mu (n, r)."""
+    """Combined estimates for a batch of tracks (compiled ``filters.imm.imm_combine``).
+
+    Parameters
+    ----------
+    mu : ndarray, shape (n, r)
+        Mode probabilities.
+    x : ndarray, shape (n, r, d)
+        Mode-conditioned states.
+    P : ndarray, shape (n, r, d, d)
+        Their covariances.
+
+    Returns
+    -------
+    x : ndarray, shape (n, d)
+        Combined states.
+    P : ndarray, shape (n, d, d)
+        Combined covariances, symmetrized.
+    """
     n, r, d = x.shape
     xc = np.empty((n, d))
     Pc = np.empty((n, d, d))

@@ -17,11 +17,41 @@ from sonartrack.filters.kalman import joseph_update, kf_innovation
 
 
 def imm_kf_step(x, P, mu, z, F, Q, H, R, Pi):
-    """One IMM-KF cycle. Returns ``(x_r, P_r, mu, x_comb, P_comb)``.
+    """One IMM cycle with linear Kalman mode filters (mixing, KF predict/update per mode, mode update, combination).
 
-    x (r, n), P (r, n, n), mu (r,) -- mode-conditioned estimates and mode probabilities at k-1;
-    z (m,), F (r, n, n) or (n, n), Q (r, n, n), H (m, n), R (m, m), Pi (r, r) with
-    Pi[i, j] = P(mode j at k | mode i at k-1).
+    Parameters
+    ----------
+    x : ndarray, shape (r, n)
+        Mode-conditioned states at k-1 (e.g. [x, y, vx, vy] in m and m/s).
+    P : ndarray, shape (r, n, n)
+        Their covariances.
+    mu : ndarray, shape (r,)
+        Mode probabilities at k-1.
+    z : ndarray, shape (m,)
+        Measurement at k.
+    F : ndarray, shape (r, n, n) or (n, n)
+        Per-mode (or shared) transition matrix over the step.
+    Q : ndarray, shape (r, n, n)
+        Per-mode process noise covariance over the step.
+    H : ndarray, shape (m, n)
+        Measurement matrix.
+    R : ndarray, shape (m, m)
+        Measurement noise covariance.
+    Pi : ndarray, shape (r, r)
+        Pi[i, j] = P(mode j at k | mode i at k-1).
+
+    Returns
+    -------
+    x_r : ndarray, shape (r, n)
+        Updated mode-conditioned states.
+    P_r : ndarray, shape (r, n, n)
+        Their covariances.
+    mu : ndarray, shape (r,)
+        Updated mode probabilities.
+    x_comb : ndarray, shape (n,)
+        Combined state.
+    P_comb : ndarray, shape (n, n)
+        Combined covariance.
     """
     c, w = imm_mixing(mu, Pi)
     x0, P0 = imm_mix(x, P, w)

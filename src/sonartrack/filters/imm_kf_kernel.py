@@ -89,9 +89,17 @@ def _build():
 
 
 def imm_kf_step_fast(x, P, mu, z, F, Q, H, R, Pi):
-    """Compiled IMM-KF step; same arguments and results as ``filters.imm_kf.imm_kf_step``.
+    """Compiled (numba) IMM-KF step: same arguments and results as :func:`filters.imm_kf.imm_kf_step`.
 
-    ``F`` may be ``(n, n)`` (shared) or ``(r, n, n)``.
+    Parameters
+    ----------
+    x, P, mu, z, F, Q, H, R, Pi
+        As ``imm_kf_step``; ``F`` may be ``(n, n)`` (shared by the modes) or ``(r, n, n)``.
+
+    Returns
+    -------
+    x_r, P_r, mu, x_comb, P_comb
+        As ``imm_kf_step``.
     """
     global _KERNEL
     if _KERNEL is None:

@@ -26,7 +26,38 @@ from sonartrack.models.passive import modified_matrix
 
 
 def mgekf_update(x_pred, P_pred, z, hx, H, G, R, angle_rows=(0,)):
-    """MGEKF update with a given modified matrix G. Returns ``x+, P+, nu, S, S_inv``."""
+    """MGEKF measurement update with a given modified matrix G (Song & Speyer 1985; module docstring).
+
+    The state update and gain are the EKF's; the covariance uses G in place of H in the Joseph form.
+
+    Parameters
+    ----------
+    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
+        Predicted state and covariance.
+    z : ndarray, shape (..., m)
+        Measurement (bearing in rad, clockwise from north, in row 0).
+    hx : ndarray, shape (..., m)
+        Predicted measurement h(x-).
+    H : ndarray, shape (..., m, n)
+        Jacobian dh/dx at x- (used for S and K).
+    G : ndarray, shape (..., m, n)
+        Modified matrix (used for P+ only).
+    R : ndarray, shape (..., m, m)
+        Measurement noise covariance (rad^2, Hz^2).
+    angle_rows : sequence of int, default (0,)
+        Rows wrapped to (-pi, pi] in the innovation.
+
+    Returns
+    -------
+    x_upd : ndarray, shape (..., n)
+        Updated state.
+    P_upd : ndarray, shape (..., n, n)
+        Updated covariance.
+    nu : ndarray, shape (..., m)
+        Wrapped innovation.
+    S, S_inv : ndarray, shape (..., m, m)
+        Innovation covariance and its inverse.
+    """
     nu = innovation(z, hx, angle_rows)
     S, S_inv, K = ekf_gain(P_pred, H, R)
     x_upd = x_pred + np.einsum("...ij,...j->...i", K, nu)
@@ -34,6 +65,28 @@ def mgekf_update(x_pred, P_pred, z, hx, H, G, R, angle_rows=(0,)):
 
 
 def mgekf_update_bf(x_pred, P_pred, z, hx, H, R, exact: bool = False):
-    """MGEKF update for bearing (+ frequency) rows: G from :func:`models.passive.modified_matrix`."""
+    """MGEKF update for bearing (+ frequency) measurements, G from :func:`models.passive.modified_matrix`.
+
+    Parameters
+    ----------
+    x_pred, P_pred : ndarray, shapes (..., 5) and (..., 5, 5)
+        Predicted relative state and covariance (state order in models/passive.py).
+    z : ndarray, shape (..., m), m = 1 or 2
+        Measured bearing (rad, clockwise from north) and, if m = 2, frequency (Hz).
+    hx : ndarray, shape (..., m)
+        Predicted measurement.
+    H : ndarray, shape (..., m, 5)
+        Jacobian at x-.
+    R : ndarray, shape (..., m, m)
+        Measurement noise covariance (rad^2, Hz^2).
+    exact : bool, default False
+        Passed to ``modified_matrix``: scale the bearing row by d / tan d (d = wrapped z - b_hat) so that
+    g (X - X_hat) = z - b_hat exactly instead of tan(z - b_hat) (Song & Speyer's printed row).
+
+    Returns
+    -------
+    x_upd, P_upd, nu, S, S_inv
+        As :func:`mgekf_update`.
+    """
     G = modified_matrix(z, x_pred, H, exact=exact)
     return mgekf_update(x_pred, P_pred, z, hx, H, G, R)

@@ -14,7 +14,20 @@ from pathlib import Path
 
 @contextmanager
 def atomic_path(path) -> Iterator[Path]:
-    """Yield a temporary path next to ``path`` (same suffix); renamed over ``path`` if the block succeeds."""
+    """Context manager: a temporary path next to ``path`` (same suffix), renamed over ``path`` if the block succeeds.
+
+    On an error in the block the temporary is removed and ``path`` is left untouched.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The final file.
+
+    Yields
+    ------
+    pathlib.Path
+        The hidden temporary sibling to write to.
+    """
     p = Path(path)
     tmp = p.with_name(f".{p.stem}.{os.getpid()}.tmp{p.suffix}")
     try:
@@ -25,7 +38,22 @@ def atomic_path(path) -> Iterator[Path]:
 
 
 def save_figure(fig, path, **savefig_kwargs) -> Path:
-    """``fig.savefig`` atomically, then close the figure."""
+    """``fig.savefig`` atomically, then close the figure (also on an error).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or path-like
+        Output image file.
+    **savefig_kwargs
+        Passed to ``savefig`` (e.g. ``dpi``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     import matplotlib.pyplot as plt
 
     try:
@@ -37,7 +65,22 @@ def save_figure(fig, path, **savefig_kwargs) -> Path:
 
 
 def write_csv(frame, path, **to_csv_kwargs) -> Path:
-    """``DataFrame.to_csv`` atomically (no index by default)."""
+    """``DataFrame.to_csv`` atomically (no index by default).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table.
+    path : str or path-like
+        Output CSV file.
+    **to_csv_kwargs
+        Passed to ``to_csv``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     to_csv_kwargs.setdefault("index", False)
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, **to_csv_kwargs)
@@ -45,14 +88,42 @@ def write_csv(frame, path, **to_csv_kwargs) -> Path:
 
 
 def write_text(path, text: str, encoding: str = "utf-8") -> Path:
-    """Write ``text`` atomically."""
+    """Write ``text`` atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file.
+    text : str
+        Content.
+    encoding : str, default "utf-8"
+        Text encoding.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding=encoding)
     return Path(path)
 
 
 def write_bytes(path, data: bytes) -> Path:
-    """Write ``data`` atomically."""
+    """Write ``data`` atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file.
+    data : bytes
+        Content.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)

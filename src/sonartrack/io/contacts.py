@@ -66,7 +66,34 @@ def _position(df, col, what, path) -> np.ndarray:
 
 def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, bistatic_errors=None,
                   sound_speed_mps: float = 1500.0, max_range_m: float = DEFAULT_MAX_RANGE_M) -> Contacts:
-    """Read and validate a contacts file (and its navigation file for raw bistatic columns)."""
+    """Read and validate a contacts file (and its navigation file for raw bistatic columns); module docstring.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Contacts file (CSV or Parquet): Cartesian ``time_s, x_m, y_m[, var_x_m2, var_y_m2, cov_xy_m2]`` or
+        raw bistatic ``time_s, travel_time_s, bearing_deg[, sound_speed_mps]``.
+    nav_path : str or path-like, optional
+        Tx/Rx navigation file, needed for raw bistatic contacts.
+    default_sigma_m : float, optional
+        Position standard deviation per axis (m) for Cartesian contacts without covariance columns.
+    bistatic_errors : BistaticErrors, optional
+        Input errors of raw contacts (default: ``BistaticErrors()``, paper P4's).
+    sound_speed_mps : float, default 1500.0
+        Assumed sound speed (m/s) where the file has no ``sound_speed_mps`` column.
+    max_range_m : float, default 100000.0
+        Largest target range from Tx or Rx (m), for the travel-time check.
+
+    Returns
+    -------
+    Contacts
+        Times (k,) in s, points (k, 2) [x east, y north] in m, covariances (k, 2, 2) in m^2, sorted by time.
+
+    Raises
+    ------
+    InputError
+        On any failed check (one line naming the file, column, row and value).
+    """
     df = read_table(path, "contacts")
     raw = "travel_time_s" in df.columns or "bearing_deg" in df.columns or "travel_time_ms" in df.columns
     check_columns(df, RAW_COLUMNS if raw else ["time_s", "x_m", "y_m"], "contacts", path)

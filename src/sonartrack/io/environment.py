@@ -76,7 +76,25 @@ def _toml_profile(p: Path) -> dict:
 
 
 def read_profile(path: str | Path, water_depth_m: float | None = None) -> Environment:
-    """A user environment from a TOML or CSV profile file (module doc); ``water_depth_m`` overrides the file's."""
+    """A user environment from a TOML or CSV sound-speed profile file (module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.toml`` or ``.csv`` file.
+    water_depth_m : float, optional
+        Water depth (m), overriding the file's (default: the file's, else its deepest sample).
+
+    Returns
+    -------
+    Environment
+        The environment (values checked by ``environment_from_mapping``).
+
+    Raises
+    ------
+    InputError
+        If the file is missing, malformed, or holds an unknown key or a bad value.
+    """
     p = Path(path)
     require(not p.is_dir(), f"profile file {p} is a directory: give the .toml or .csv file inside it")
     require(p.is_file(), f"profile file not found: {p}")
@@ -94,14 +112,43 @@ def read_profile(path: str | Path, water_depth_m: float | None = None) -> Enviro
 
 
 def environment_from_name_or_file(name_or_path: str | Path, water_depth_m: float | None = None) -> Environment:
-    """A shipped environment by name (``yellow-summer``) or a profile file (a name ending .toml or .csv)."""
+    """A shipped environment by name (``yellow-summer``) or a profile file (a name ending .toml or .csv).
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        Environment name or profile file.
+    water_depth_m : float, optional
+        Water depth (m) for a profile file (ignored for a shipped environment).
+
+    Returns
+    -------
+    Environment
+        The environment.
+
+    Raises
+    ------
+    InputError
+        If the name is unknown or the file is bad.
+    """
     if Path(name_or_path).suffix.lower() in PROFILE_SUFFIXES:
         return read_profile(name_or_path, water_depth_m)
     return load_environment(str(name_or_path))
 
 
 def cache_dir(path: str | Path | None = None) -> Path:
-    """Folder of cached TL fields: ``path``, else $SONARTRACK_CACHE_DIR/tl, else .sonartrack-cache/tl."""
+    """Folder of cached TL fields: ``path``, else ``$SONARTRACK_CACHE_DIR/tl``, else ``.sonartrack-cache/tl``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path, optional
+        Explicit folder.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder (not created).
+    """
     if path is not None:
         return Path(path)
     return Path(os.environ.get("SONARTRACK_CACHE_DIR", ".sonartrack-cache")) / "tl"
@@ -114,9 +161,33 @@ class TLDiskCache:
         self.folder = cache_dir(folder)
 
     def path(self, key: str) -> Path:
+        """File of the field with key ``key``.
+
+        Parameters
+        ----------
+        key : str
+            Field key (``acoustics.transmission_loss.field_key``).
+
+        Returns
+        -------
+        pathlib.Path
+            ``<folder>/<key>.npz``.
+        """
         return self.folder / f"{key}.npz"
 
     def load(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """A cached field, or None if absent or damaged (then recomputed and replaced by the caller).
+
+        Parameters
+        ----------
+        key : str
+            Field key.
+
+        Returns
+        -------
+        tuple of ndarray or None
+            (ranges (m), depths (m), TL (dB) on that grid).
+        """
         path = self.path(key)
         if not path.is_file():
             return None
@@ -127,6 +198,19 @@ class TLDiskCache:
             return None  # a damaged cache file is recomputed and replaced
 
     def save(self, key: str, ranges_m: np.ndarray, depths_m: np.ndarray, tl_db: np.ndarray) -> None:
+        """Store a field atomically.
+
+        Parameters
+        ----------
+        key : str
+            Field key.
+        ranges_m : ndarray
+            Range grid (m).
+        depths_m : ndarray
+            Depth grid (m).
+        tl_db : ndarray
+            Transmission loss on the grid (dB).
+        """
         self.folder.mkdir(parents=True, exist_ok=True)
         with atomic_path(self.path(key)) as tmp:
             np.savez(tmp, ranges_m=ranges_m, depths_m=depths_m, tl_db=tl_db)
@@ -135,7 +219,31 @@ class TLDiskCache:
 def cached_tl_field(env: Environment, freq_hz: float, source_depth_m: float, rmax_m: float = 50_000.0,
                     dr_m: float | None = None, dz_m: float | None = None, ndz: int = DEPTH_DECIMATION,
                     cache: str | Path | None = None) -> TLField:
-    """:func:`~sonartrack.acoustics.transmission_loss.tl_field` through the disk cache in :func:`cache_dir`
-    (``cache``): what every study, command and benchmark that reuses fields calls."""
+    """:func:`~sonartrack.acoustics.transmission_loss.tl_field` through the disk cache (module docstring).
+
+    What every study, command and benchmark that reuses fields calls.
+
+    Parameters
+    ----------
+    env : Environment
+        The environment.
+    freq_hz : float
+        Frequency (Hz).
+    source_depth_m : float
+        Source depth (m).
+    rmax_m : float, default 50000.0
+        Largest range of the field (m).
+    dr_m, dz_m : float, optional
+        RAM range and depth steps (m); None for the defaults of ``tl_field``.
+    ndz : int, optional
+        Depth decimation of the stored field.
+    cache : str or pathlib.Path, optional
+        Cache folder (see :func:`cache_dir`).
+
+    Returns
+    -------
+    TLField
+        TL (dB) over range and depth.
+    """
     return tl_field(env, freq_hz, source_depth_m, rmax_m=rmax_m, dr_m=dr_m, dz_m=dz_m, ndz=ndz,
                     store=TLDiskCache(cache))

@@ -1,13 +1,11 @@
-"""Range-Doppler frames in and detections out.
+"""Range-Doppler frames in (the detect system writes its detections: systems/detect/files.py).
 
-In: a stack from a user's file, ``.npy`` (one K x Nr x Nd array) or ``.npz`` (the stack under the
+A stack from a user's file, ``.npy`` (one K x Nr x Nd array) or ``.npz`` (the stack under the
 key ``frames`` or as its only array). Values are square-law cell outputs (powers, >= 0). Checks
 (one-line :class:`InputError` each): a directory, unreadable or pickled files, the wrong rank, K < 1,
 NaN/inf, negative values (see ``detection.frames.validate_frames``), and cell values beyond any sonar's
 dynamic range (a cell more than :data:`MAX_DYNAMIC_RANGE_DB` above the median cell, or beyond
 :data:`MAX_CELL_VALUE`: 1e300 overflows the detector's statistic into nonsense).
-
-Out: the best track of a detection as CSV, a row per frame (:func:`write_detection_csv`).
 """
 
 from __future__ import annotations
@@ -25,7 +23,24 @@ MAX_DYNAMIC_RANGE_DB = 150.0
 
 
 def read_frames(path: str | Path) -> np.ndarray:
-    """Load and validate a K x Nr x Nd stack of square-law cell values."""
+    """Load and validate a stack of square-law cell values from a ``.npy`` or ``.npz`` file (module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file; a ``.npz`` holds the stack under ``frames`` or as its only array.
+
+    Returns
+    -------
+    ndarray of float64, shape (K, Nr, Nd)
+        Cell values (powers, >= 0), frame by frame, range index then Doppler index.
+
+    Raises
+    ------
+    InputError
+        For a missing, unreadable, pickled or non-numeric file, a wrong rank, NaN/inf, negative values or
+        values beyond any sonar's dynamic range.
+    """
     from sonartrack.detection.frames import validate_frames
 
     p = Path(path)
@@ -84,12 +99,3 @@ def _check_magic(p: Path, suffix: str) -> None:
                          f"{'.npy array' if suffix == '.npy' else '.npz archive'}: save the K x Nr x Nd stack with "
                          "np.save (or np.savez)")
 
-
-def write_detection_csv(path: str | Path, detection) -> Path:
-    """Write a :class:`~sonartrack.detection.detect.FrameDetection`'s best track (frame, cells,
-    centres, cell values) as CSV, atomically."""
-    import pandas as pd
-
-    from sonartrack.io.atomic import write_csv
-
-    return write_csv(pd.DataFrame(detection.best_track_table()), path, float_format="%.10g")

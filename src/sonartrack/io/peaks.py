@@ -30,7 +30,20 @@ MAX_AMPLITUDE = 1e6
 
 
 def write_peaks_csv(path, record: PeakRecord) -> Path:
-    """time_s, bearing_deg, amplitude (atomic write)."""
+    """Write a peaks file ``time_s, bearing_deg, amplitude`` (atomic write).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output CSV file.
+    record : PeakRecord
+        Peak times (s), cone angles (deg, 0..180 from the array axis) and amplitudes.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     import pandas as pd
 
     return write_csv(pd.DataFrame({"time_s": record.time_s, "bearing_deg": record.bearing_deg,
@@ -38,7 +51,23 @@ def write_peaks_csv(path, record: PeakRecord) -> Path:
 
 
 def read_peaks_csv(path) -> PeakRecord:
-    """A peaks file (time_s, bearing_deg, amplitude); one-line errors for missing, empty or bad files."""
+    """Read and check a peaks file (module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV or Parquet file with ``time_s, bearing_deg, amplitude``.
+
+    Returns
+    -------
+    PeakRecord
+        Times (s), cone angles (deg, 0..180 from the array axis), amplitudes (normalised correlation x 30000).
+
+    Raises
+    ------
+    InputError
+        For a missing, empty or bad file (one line naming the problem).
+    """
     what = "peaks"
     df = read_table(path, what)
     check_columns(df, PEAK_COLUMNS, what, path)

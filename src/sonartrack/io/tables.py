@@ -47,14 +47,43 @@ MAGIC = {b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image", b"%PDF": "a
 
 
 def sniff_file_type(path: str | Path) -> str | None:
-    """What a file is by its first bytes (:data:`MAGIC`), or None when it is none of those."""
+    """What a file is by its first bytes (:data:`MAGIC`), or None when it is none of those.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str or None
+        E.g. "a PNG image".
+    """
     with open(path, "rb") as f:
         head = f.read(8)
     return next((kind for magic, kind in MAGIC.items() if head.startswith(magic)), None)
 
 
 def check_file(path: str | Path, what: str) -> Path:
-    """The path exists and is a regular file (a directory is named as such)."""
+    """Require the path to exist and be a regular file (a directory is named as such).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The path.
+    what : str
+        What the file is, for the message ("contacts").
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    InputError
+        If it is a directory or does not exist.
+    """
     p = Path(path)
     if p.is_dir():
         raise InputError(f"{what} file {p} is a directory: give the file inside it")
@@ -64,7 +93,25 @@ def check_file(path: str | Path, what: str) -> Path:
 
 
 def read_table(path: str | Path, what: str):
-    """Read a CSV or Parquet file into a pandas DataFrame (one-line errors)."""
+    """Read a CSV (``#`` comments allowed) or Parquet file into a pandas DataFrame, with one-line errors.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file; ``.parquet``/``.pq`` is read as Parquet, anything else as CSV.
+    what : str
+        What the file is, for the messages.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The table, column names stripped of spaces.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, empty, a known binary type, unreadable, or has no rows.
+    """
     import pandas as pd
 
     p = check_file(path, what)
@@ -88,7 +135,24 @@ def read_table(path: str | Path, what: str):
 
 
 def check_columns(df, required: list[str], what: str, path) -> None:
-    """Fail on wrong-unit columns (naming the fix), then on missing required columns."""
+    """Fail on columns in a unit we do not take (naming the fix), then on missing required columns.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    required : list of str
+        Required column names.
+    what : str
+        What the file is.
+    path : str or path-like
+        The file, for the message.
+
+    Raises
+    ------
+    InputError
+        On the first problem.
+    """
     for col in df.columns:
         if col in WRONG_UNITS and WRONG_UNITS[col][0] not in df.columns:
             want, unit = WRONG_UNITS[col]
@@ -101,14 +165,52 @@ def check_columns(df, required: list[str], what: str, path) -> None:
 
 
 def cell_text(value) -> str:
-    """A table cell as a message shows it: text quoted, numbers plain (nan, not np.float64(nan))."""
+    """A table cell as a message shows it: text quoted, numbers plain (nan, not np.float64(nan)).
+
+    Parameters
+    ----------
+    value : object
+        The cell.
+
+    Returns
+    -------
+    str
+        Its text.
+    """
     return repr(value) if isinstance(value, str) else str(value)
 
 
 def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: float = ABSURD,
                    lo_open: bool = False, fix: str = "") -> np.ndarray:
-    """A column as float64, refusing text, NaN, infinities and values outside [lo, hi] (``lo_open``: (lo, hi]),
-    with the first offending data row and value."""
+    """A column as float64, refusing text, NaN, infinities and values outside [lo, hi].
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    col : str
+        Column name.
+    what : str
+        What the file is.
+    path : str or path-like
+        The file, for the message.
+    lo, hi : float, default -1e15, 1e15
+        Allowed range, in the column's unit.
+    lo_open : bool, default False
+        Exclude ``lo`` itself: (lo, hi].
+    fix : str, default ""
+        Hint added to an out-of-range message (e.g. "seconds").
+
+    Returns
+    -------
+    ndarray of float64
+        The values.
+
+    Raises
+    ------
+    InputError
+        Naming the first offending data row and value.
+    """
     import pandas as pd
 
     raw = df[col]
@@ -125,7 +227,30 @@ def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: fl
 
 def check_range(values: np.ndarray, col: str, what: str, path, *, lo: float = -ABSURD, hi: float = ABSURD,
                 lo_open: bool = False, fix: str = "") -> None:
-    """Every value within [lo, hi] (``lo_open``: lo excluded), else one line with the first offender."""
+    """Require every value within [lo, hi] (``lo_open``: lo excluded), else one line with the first offender.
+
+    Parameters
+    ----------
+    values : ndarray
+        The values.
+    col : str
+        Column name.
+    what : str
+        What the file is.
+    path : str or path-like
+        The file.
+    lo, hi : float, default -1e15, 1e15
+        Allowed range.
+    lo_open : bool, default False
+        Exclude ``lo``.
+    fix : str, default ""
+        Hint added to the message.
+
+    Raises
+    ------
+    InputError
+        On the first value outside the range.
+    """
     v = np.asarray(values, dtype=float)
     bad = ~((v > lo) if lo_open else (v >= lo)) | (v > hi)
     if bad.any():
@@ -137,8 +262,30 @@ def check_range(values: np.ndarray, col: str, what: str, path, *, lo: float = -A
 
 def check_not_radians(values: np.ndarray, col: str, what: str, path, *, min_rows: int = 5,
                       switch: str = "") -> None:
-    """A degrees column whose values all lie within +-2 pi, with some spread, holds radians (needs ``min_rows``:
-    a few bearings within 6 deg are plausible). ``switch`` says how to turn the check off, if it can be."""
+    """Refuse a degrees column whose values all lie within +-2 pi, with some spread: it holds radians.
+
+    Needs ``min_rows`` values (a few bearings within 6 deg are plausible).
+
+    Parameters
+    ----------
+    values : ndarray
+        The column (deg).
+    col : str
+        Column name.
+    what : str
+        What the file is.
+    path : str or path-like
+        The file.
+    min_rows : int, default 5
+        Fewest values for the check to apply.
+    switch : str, default ""
+        How to turn the check off, if it can be (added to the message).
+
+    Raises
+    ------
+    InputError
+        If the values look like radians.
+    """
     v = np.asarray(values, dtype=float)
     if len(v) >= min_rows and np.ptp(v) > 0 and np.all(np.abs(v) <= 2.0 * np.pi):
         raise InputError(f"{what} file {path}: every {col} lies within ±6.29 (from {v.min():.3g} to {v.max():.3g}), "
@@ -146,7 +293,26 @@ def check_not_radians(values: np.ndarray, col: str, what: str, path, *, min_rows
 
 
 def check_sorted(times: np.ndarray, what: str, path, strict: bool = False, col: str = "time_s") -> None:
-    """Times in order (refused otherwise, never re-sorted); ``strict``: no time repeated."""
+    """Require times in order (refused otherwise, never re-sorted).
+
+    Parameters
+    ----------
+    times : ndarray
+        Times (s).
+    what : str
+        What the file is.
+    path : str or path-like
+        The file.
+    strict : bool, default False
+        Also refuse a repeated time.
+    col : str, default "time_s"
+        Column name for the message.
+
+    Raises
+    ------
+    InputError
+        At the first time out of order.
+    """
     d = np.diff(times)
     bad = (d <= 0) if strict else (d < 0)
     if bad.any():
@@ -157,7 +323,22 @@ def check_sorted(times: np.ndarray, what: str, path, strict: bool = False, col: 
 
 
 def check_no_duplicate_rows(columns: dict[str, np.ndarray], what: str, path) -> None:
-    """No two rows with the same values in every column given (a contact listed twice is not two contacts)."""
+    """Refuse two rows with the same values in every column given (a contact listed twice is not two contacts).
+
+    Parameters
+    ----------
+    columns : dict of str to ndarray
+        The columns compared.
+    what : str
+        What the file is.
+    path : str or path-like
+        The file.
+
+    Raises
+    ------
+    InputError
+        Naming the first pair of repeated rows.
+    """
     import pandas as pd
 
     df = pd.DataFrame(columns)
@@ -174,7 +355,28 @@ MAX_PLATFORM_SPEED_MPS = 40.0
 
 
 def check_platform_speed(t, x, y, what: str, path, platform: str = "ownship") -> None:
-    """Positions that imply a speed above MAX_PLATFORM_SPEED_MPS between two rows are in the wrong units."""
+    """Refuse positions that imply a speed above ``MAX_PLATFORM_SPEED_MPS`` (40 m/s) between two rows.
+
+    Such a speed means kilometres or minutes written as metres or seconds.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Times (s), strictly increasing.
+    x, y : ndarray, shape (n,)
+        Positions east and north (m).
+    what : str
+        What the file is.
+    path : str or path-like
+        The file.
+    platform : str, default "ownship"
+        Name of the platform in the message.
+
+    Raises
+    ------
+    InputError
+        At the first too-fast step.
+    """
     speed = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
     if np.any(speed > MAX_PLATFORM_SPEED_MPS):
         row = int(np.argmax(speed > MAX_PLATFORM_SPEED_MPS)) + 1

@@ -73,7 +73,26 @@ def _optional_column(df, col: str, what: str, path) -> np.ndarray:
 
 
 def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
-    """Read and validate a bearings file into a :class:`BearingRecord` (SI units)."""
+    """Read and validate a bearings file (module docstring) into SI units.
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV or Parquet file: ``time_s, bearing_deg[, frequency_hz][, snr_db]``.
+    check_radians : bool, default True
+        Refuse a bearing column that looks like radians (switch off for a target within 6 deg of north).
+
+    Returns
+    -------
+    BearingRecord
+        Times (s), bearings (rad, clockwise from north, wrapped to (-pi, pi]), frequencies (Hz, NaN where
+        empty; None if no column or no value) and SNRs (dB, or None).
+
+    Raises
+    ------
+    InputError
+        On any failed check.
+    """
     what = "bearings"
     df = read_table(path, what)
     check_columns(df, BEARING_COLUMNS, what, path)
@@ -98,7 +117,23 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
 
 
 def read_ownship(path) -> OwnshipTrack:
-    """Read and validate an ownship navigation file into an :class:`OwnshipTrack`."""
+    """Read and validate an ownship navigation file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV or Parquet file: ``time_s, x_m, y_m``.
+
+    Returns
+    -------
+    OwnshipTrack
+        Times (s) and positions [x east, y north] (m), at least two samples.
+
+    Raises
+    ------
+    InputError
+        On any failed check.
+    """
     what = "ownship"
     df = read_table(path, what)
     check_columns(df, OWNSHIP_COLUMNS, what, path)
@@ -113,7 +148,22 @@ def read_ownship(path) -> OwnshipTrack:
 
 
 def write_solution_csv(path, solution: TmaSolution, ownship: OwnshipTrack) -> Path:
-    """Write the solution table (tma/solution_table.py) atomically (io/atomic.py)."""
+    """Write the solution table (tma/solution_table.py) atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output CSV file (its folder is created).
+    solution : TmaSolution
+        The target solution.
+    ownship : OwnshipTrack
+        The sensor track (range and bearing columns are relative to it).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     import pandas as pd
 
     p = Path(path)

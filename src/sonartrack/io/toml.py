@@ -15,12 +15,39 @@ from sonartrack.core.settings import render_toml
 
 
 def dumps(data: dict) -> str:
-    """Serialise a nested dict to TOML text (core/settings.py ``render_toml``: the one TOML writer)."""
+    """Serialise a nested dict to TOML text (core/settings.py ``render_toml``: the one TOML writer).
+
+    Parameters
+    ----------
+    data : dict
+        Scalars, lists and nested tables.
+
+    Returns
+    -------
+    str
+        TOML text.
+    """
     return render_toml(data)
 
 
 def load(path: str | Path) -> dict:
-    """Read a TOML file; a missing or malformed file raises a one-line :class:`InputError`."""
+    """Read a TOML file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    dict
+        Its tables and values.
+
+    Raises
+    ------
+    InputError
+        If the path is missing or a directory, the file is not UTF-8, or it is not valid TOML.
+    """
     p = Path(path)
     if p.is_dir():
         raise InputError(f"config path {p} is a directory: give the TOML file inside it")
@@ -40,7 +67,29 @@ def validate(model_cls, data: dict, source: str = "config", given: frozenset[str
 
     A value outside a declared bound (``gt``/``ge``/``lt``/``le`` of ``core/settings.py`` ``setting``) names the
     key, the value, the whole declared range with its unit, and says to check the unit (a km/s sound speed, a
-    1e300). ``given``: dotted keys set by command-line options; an error there is said to be the option's."""
+    1e300).
+
+    Parameters
+    ----------
+    model_cls : type of pydantic.BaseModel
+        The settings class.
+    data : dict
+        Values, nested as the class's groups.
+    source : str, default "config"
+        What the values came from, named in the message.
+    given : frozenset of str, optional
+        Dotted keys set by command-line options; an error there is said to be the option's.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated instance of ``model_cls``.
+
+    Raises
+    ------
+    InputError
+        On the first validation error.
+    """
     from pydantic import ValidationError
 
     try:
@@ -80,7 +129,22 @@ def _field_at(model_cls, loc: tuple):
 
 
 def range_message(model_cls, loc: tuple, err: dict) -> str:
-    """'key' = value is outside its range lo <= key <= hi (unit): check its unit -- the bounds as declared."""
+    """One-line message for a value outside its declared range: the bounds as declared, and the fix.
+
+    Parameters
+    ----------
+    model_cls : type of pydantic.BaseModel
+        The settings class.
+    loc : tuple
+        The error's location (nested keys; list indices are skipped).
+    err : dict
+        The pydantic error (``input``, ``msg``).
+
+    Returns
+    -------
+    str
+        "'key' = value is outside its range lo <= key <= hi (unit): check its unit ...".
+    """
     name = ".".join(str(x) for x in loc)
     value = err["input"] if isinstance(err["input"], int) else f"{err['input']:g}"
     info = _field_at(model_cls, loc)

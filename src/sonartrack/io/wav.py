@@ -19,7 +19,26 @@ MAX_SAMPLE = 1e15
 
 
 def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
-    """(signals (2, n) float64, sample rate Hz)."""
+    """Read a two-channel WAV recording for the bearing estimator (accepted formats in the module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The WAV file.
+
+    Returns
+    -------
+    signals : ndarray of float64, shape (2, n)
+        The two channels; integer samples scaled to [-1, 1) (full scale), float samples as stored.
+    fs : float
+        Sample rate (Hz).
+
+    Raises
+    ------
+    InputError
+        If the file is missing, empty, unreadable, not two channels, of an unsupported sample format, or
+        holds NaN/inf or implausibly large samples.
+    """
     import warnings
 
     from scipy.io import wavfile

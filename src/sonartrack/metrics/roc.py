@@ -44,12 +44,43 @@ class RocCurve:
 
 
 def min_pfa(n_h0: int, exceedances: int = MIN_EXCEEDANCES) -> float:
-    """Lowest Pfa a set of ``n_h0`` target-absent trials supports: exceedances / n_h0."""
+    """Lowest Pfa a set of ``n_h0`` target-absent trials supports: ``exceedances / n_h0``.
+
+    Parameters
+    ----------
+    n_h0 : int
+        Number of target-absent trials.
+    exceedances : int, default 10
+        H0 exceedances wanted at that Pfa (threshold quantile error ~ 1/sqrt(exceedances)).
+
+    Returns
+    -------
+    float
+        The lowest trustworthy false-alarm probability.
+    """
     return exceedances / max(int(n_h0), 1)
 
 
 def thresholds(h0_stat, pfa) -> np.ndarray:
-    """Thresholds t with #{S_0 > t} <= Pfa n0: the order statistic S_(n0 - floor(Pfa n0)) of the H0 sample."""
+    """Thresholds t with ``#{S_0 > t} <= Pfa n0``: the order statistic S_(n0 - floor(Pfa n0)) of the H0 sample.
+
+    Parameters
+    ----------
+    h0_stat : array_like, shape (n0,)
+        Detector statistics of the target-absent trials (finite).
+    pfa : float or array_like, shape (p,)
+        Wanted false-alarm probabilities, in (0, 1).
+
+    Returns
+    -------
+    ndarray, shape (p,)
+        Thresholds, in the unit of the statistic.
+
+    Raises
+    ------
+    InputError
+        If the H0 sample is empty or not finite, or a Pfa is outside (0, 1).
+    """
     s = np.sort(np.asarray(h0_stat, dtype=float))
     require(s.size > 0 and np.all(np.isfinite(s)), "the target-absent statistics must be finite and non-empty")
     pfa = np.atleast_1d(np.asarray(pfa, dtype=float))
@@ -59,7 +90,22 @@ def thresholds(h0_stat, pfa) -> np.ndarray:
 
 
 def binomial_interval(successes, trials, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Clopper-Pearson interval of a binomial proportion (exact: never narrower than the truth)."""
+    """Clopper-Pearson interval of a binomial proportion (exact: never narrower than the truth).
+
+    Parameters
+    ----------
+    successes : int or array_like
+        k, the number of successes.
+    trials : int or array_like
+        n, the number of trials (broadcast with ``successes``).
+    level : float, default 0.95
+        Confidence level.
+
+    Returns
+    -------
+    low, high : ndarray
+        Bounds of the proportion (0 for k = 0 and 1 for k = n).
+    """
     from scipy.stats import beta
 
     k = np.asarray(successes, dtype=float)
@@ -71,7 +117,30 @@ def binomial_interval(successes, trials, level: float = 0.95) -> tuple[np.ndarra
 
 
 def roc_curve(h0_stat, h1_stat, pfa) -> RocCurve:
-    """System ROC from target-absent and target-present statistics at the wanted ``pfa`` values."""
+    """System ROC by Monte Carlo (paper P1, sec. V): Pd at the wanted Pfa values, with binomial intervals.
+
+    Non-finite statistics are dropped from both samples. Pd is the share of H1 statistics above the
+    threshold of :func:`thresholds`; the achieved Pfa the share of H0 statistics above it.
+
+    Parameters
+    ----------
+    h0_stat : array_like
+        Statistics of the target-absent trials.
+    h1_stat : array_like
+        Statistics of the target-present trials.
+    pfa : float or array_like, shape (p,)
+        Wanted false-alarm probabilities, in (0, 1).
+
+    Returns
+    -------
+    RocCurve
+        Pd, its 95 % interval, achieved Pfa and its interval, the thresholds and the sample sizes.
+
+    Raises
+    ------
+    InputError
+        If no H1 statistic is finite (or as :func:`thresholds`).
+    """
     h0 = np.asarray(h0_stat, dtype=float).ravel()
     h1 = np.asarray(h1_stat, dtype=float).ravel()
     h0, h1 = h0[np.isfinite(h0)], h1[np.isfinite(h1)]
@@ -86,13 +155,26 @@ def roc_curve(h0_stat, h1_stat, pfa) -> RocCurve:
 
 
 def rise_is_significant(p_before: float, p_after: float, n: int, z: float = 1.96) -> bool:
-    """Whether a detection probability rose from ``p_before`` to ``p_after`` by more than ``z`` standard
-    errors of the difference of two independent binomial proportions of ``n`` trials each:
+    """Whether a detection probability rose by more than ``z`` standard errors.
 
-        p_after - p_before > z sqrt(p_before (1 - p_before) / n + p_after (1 - p_after) / n),
+    Tests ``p_after - p_before > z sqrt(p_before (1 - p_before) / n + p_after (1 - p_after) / n)`` for two
+    independent binomial proportions of ``n`` trials each, each variance floored at 1e-12 / n so that a
+    step between two proportions of 0 (or 1) is not significant by a zero SE. (Curves sharing random
+    numbers are positively correlated, so this SE is conservative for them.)
 
-    each variance floored at 1e-12 / n so that a step between two proportions of 0 (or 1) is not
-    significant by a zero SE. (Curves sharing random numbers are positively correlated, so this SE is
-    conservative for them.)"""
+    Parameters
+    ----------
+    p_before, p_after : float
+        The two proportions.
+    n : int
+        Trials behind each.
+    z : float, default 1.96
+        Number of standard errors.
+
+    Returns
+    -------
+    bool
+        True if the rise is significant.
+    """
     se = np.sqrt(max(p_before * (1 - p_before), 1e-12) / n + max(p_after * (1 - p_after), 1e-12) / n)
     return bool(p_after - p_before > z * se)

@@ -12,7 +12,20 @@ import numpy as np
 
 
 def rmse_over_runs(errors, axis: int = 0) -> np.ndarray:
-    """sqrt(mean over runs of e^2), runs on ``axis`` (default 0), NaN entries skipped; NaN where no run has a value."""
+    """Root mean square over runs, ``sqrt(mean over runs of e^2)``, NaN entries skipped (module NaN rule).
+
+    Parameters
+    ----------
+    errors : array_like
+        Errors, runs on ``axis`` (any unit; the RMSE has the same unit).
+    axis : int, default 0
+        Axis of the runs.
+
+    Returns
+    -------
+    ndarray
+        RMSE with ``axis`` removed; NaN where no run has a value.
+    """
     e = np.asarray(errors, dtype=float)
     with np.errstate(invalid="ignore"):
         n = np.sum(np.isfinite(e), axis=axis)
@@ -21,7 +34,20 @@ def rmse_over_runs(errors, axis: int = 0) -> np.ndarray:
 
 
 def mean_and_standard_error(values) -> tuple[float, float]:
-    """Mean and standard error (sample sd / sqrt(n)) of the finite ``values``."""
+    """Mean and standard error (sample sd / sqrt(n)) of the finite ``values``.
+
+    Parameters
+    ----------
+    values : array_like
+        Per-run values; NaN and inf are skipped.
+
+    Returns
+    -------
+    mean : float
+        NaN if no value is finite.
+    se : float
+        inf with fewer than two finite values.
+    """
     v = np.asarray(values, dtype=float).ravel()
     v = v[np.isfinite(v)]
     if len(v) == 0:
@@ -32,6 +58,17 @@ def mean_and_standard_error(values) -> tuple[float, float]:
 
 
 def paired_difference(a, b) -> tuple[float, float]:
-    """Mean and standard error of the per-run difference ``a - b``; runs where either is NaN are dropped."""
+    """Mean and standard error of the per-run difference ``a - b``; runs where either is NaN are dropped.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (n_runs,)
+        Paired per-run values (same unit).
+
+    Returns
+    -------
+    mean, se : float
+        As :func:`mean_and_standard_error` of ``a - b``.
+    """
     d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
     return mean_and_standard_error(d)

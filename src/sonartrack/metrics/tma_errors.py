@@ -29,10 +29,22 @@ from sonartrack.core.angles import wrap_angle
 
 
 def tma_errors(est, truth) -> dict[str, np.ndarray]:
-    """Errors of estimates ``est (..., >= 4)`` against ``truth (..., >= 4)`` (state order [x, y, vx, vy]).
+    """Position, velocity, course and speed errors of TMA estimates against the truth (module docstring).
 
     Both must be in the same frame and hold *absolute* velocities for the course and speed errors.
-    Returns arrays of shape ``(...)``: position_m, velocity_mps, course_rad, speed_mps.
+
+    Parameters
+    ----------
+    est : array_like, shape (..., >= 4)
+        Estimates [x, y, vx, vy, ...] (m, m/s; x east, y north).
+    truth : array_like, shape (..., >= 4)
+        True states, same frame and order.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (...)
+        ``position_m`` |p_hat - p| (m), ``velocity_mps`` |v_hat - v| (m/s), ``course_rad``
+        wrap(course_hat - course) (rad, course clockwise from north), ``speed_mps`` |v_hat| - |v| (m/s).
     """
     e = np.asarray(est, dtype=float)
     x = np.asarray(truth, dtype=float)
@@ -49,8 +61,24 @@ def tma_errors(est, truth) -> dict[str, np.ndarray]:
 
 
 def time_averaged_rmse(errors, start: int = 0, stop: int | None = None) -> float:
-    """RMSE over runs (axis 0) *and* the time window [start, stop) (axis 1): sqrt(mean of e^2). NaN entries
-    are skipped, and a window with no value gives NaN (the NaN rule of metrics/statistics.py)."""
+    """RMSE over runs (axis 0) *and* the time window [start, stop) (axis 1): ``sqrt(mean of e^2)``.
+
+    NaN entries are skipped, and a window with no value gives NaN (the NaN rule of metrics/statistics.py).
+
+    Parameters
+    ----------
+    errors : array_like, shape (n_runs, n_times)
+        Errors (any unit).
+    start : int, default 0
+        First time index of the window.
+    stop : int, optional
+        One past the last time index; None for the end.
+
+    Returns
+    -------
+    float
+        The RMSE, in the unit of ``errors``.
+    """
     e = np.asarray(errors, dtype=float)[:, start:stop]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # "mean of empty slice": NaN is the answer
@@ -58,7 +86,22 @@ def time_averaged_rmse(errors, start: int = 0, stop: int | None = None) -> float
 
 
 def diverged(position_error_m, true_range_m, rel_threshold: float = 0.25) -> np.ndarray:
-    """True where the position error exceeds ``rel_threshold`` x the true range, or is NaN."""
+    """True where the position error exceeds ``rel_threshold`` x the true range, or is NaN (module docstring).
+
+    Parameters
+    ----------
+    position_error_m : array_like
+        Position errors (m).
+    true_range_m : array_like
+        True observer-target ranges (m), broadcast with the errors.
+    rel_threshold : float, default 0.25
+        Error, as a fraction of the range, beyond which a run has diverged.
+
+    Returns
+    -------
+    ndarray of bool
+        Diverged flags.
+    """
     e = np.asarray(position_error_m, dtype=float)
     r = np.asarray(true_range_m, dtype=float)
     return ~(e <= rel_threshold * r)

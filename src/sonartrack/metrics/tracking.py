@@ -20,14 +20,58 @@ CTT_CHI2_4DOF_99 = 13.2767
 
 
 def ctt_test(x_true, x_hat, P_init, threshold: float = CTT_CHI2_4DOF_99) -> np.ndarray:
-    """Eq. 23 for each track: ``(x - x_hat)^T P_init^-1 (x - x_hat) < threshold`` (bool (n,))."""
+    """Confirmed-true-track test, Park, Song, Lee 2017, eq. 23: ``(x - x_hat)^T P_init^-1 (x - x_hat) < threshold``.
+
+    Parameters
+    ----------
+    x_true : array_like, shape (d,)
+        True target state ([x, y, vx, vy] in m and m/s).
+    x_hat : array_like, shape (n, d)
+        Tracks' combined estimates.
+    P_init : array_like, shape (n, d, d)
+        Tracks' covariances at initiation.
+    threshold : float, default 13.2767
+        Chi-square(4) 0.99 quantile.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        True for each track that passes.
+    """
     d = np.asarray(x_true, float)[None, :] - np.asarray(x_hat, float)
     sol = np.linalg.solve(np.asarray(P_init, float), d[..., None])[..., 0]
     return np.einsum("ni,ni->n", d, sol) < threshold
 
 
 def scan_ctt_measures(x_true, x_hat, P_init, confirmed, existence, threshold: float = CTT_CHI2_4DOF_99):
-    """CTT measures of one scan: (has_ctt, n_false_confirmed, position_error_m, index of the CTT or -1)."""
+    """CTT measures of one scan for one target (module docstring).
+
+    Parameters
+    ----------
+    x_true : array_like, shape (d,)
+        True target state (m, m/s).
+    x_hat : array_like, shape (n, d)
+        Tracks' combined estimates.
+    P_init : array_like, shape (n, d, d)
+        Tracks' covariances at initiation.
+    confirmed : array_like of bool, shape (n,)
+        Which tracks are confirmed.
+    existence : array_like, shape (n,)
+        Tracks' existence probabilities (picks the best CTT).
+    threshold : float, default 13.2767
+        Threshold of :func:`ctt_test`.
+
+    Returns
+    -------
+    has_ctt : bool
+        Whether some confirmed track is a CTT.
+    n_false_confirmed : int
+        Confirmed tracks that fail the test.
+    position_error_m : float
+        Position error of the CTT with the highest existence (m); NaN without a CTT.
+    index : int
+        That track's index, or -1.
+    """
     conf = np.asarray(confirmed, bool)
     if not conf.any():
         return False, 0, np.nan, -1

@@ -51,7 +51,17 @@ class BistaticErrors:
     def variances(self, sigma_bearing_rad=None) -> np.ndarray:
         """Diagonal of Sigma in input order ``[t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y]``.
 
-        ``sigma_bearing_rad`` may be an array (per measurement), giving shape (..., 8).
+        Units: s^2, rad^2, rad^2, m^2/s^2, then m^2 for the four coordinates.
+
+        Parameters
+        ----------
+        sigma_bearing_rad : float or array_like, optional
+            Bearing standard deviation (rad) to use instead of the field, e.g. one per measurement.
+
+        Returns
+        -------
+        ndarray, shape (..., 8)
+            Variances; leading shape that of ``sigma_bearing_rad``.
         """
         sb = self.sigma_bearing_rad if sigma_bearing_rad is None else np.asarray(sigma_bearing_rad, float)
         sb2 = np.asarray(sb, float) ** 2
@@ -63,7 +73,30 @@ class BistaticErrors:
 
 
 def bistatic_position(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy):
-    """Target position (..., 2) from bistatic inputs (eq. 2). Returns also r_R (...,)."""
+    """Target position from bistatic inputs, Park, Song, Lee 2017, eq. 2.
+
+    ``r_R = (r_B^2 - |L|^2) / (2 (r_B - u . L))``, target = Rx + r_R u (module docstring).
+
+    Parameters
+    ----------
+    t_s : float or array_like, shape (...)
+        Total travel time Tx -> target -> Rx (s).
+    theta_rad : float or array_like
+        Echo bearing relative to the receiving array's heading (rad, clockwise).
+    phi_rad : float or array_like
+        Array heading (rad, clockwise from north).
+    c_mps : float or array_like
+        Mean sound speed (m/s).
+    tx_xy, rx_xy : array_like, shape (..., 2)
+        Transmitter and receiver positions [x east, y north] (m).
+
+    Returns
+    -------
+    position : ndarray, shape (..., 2)
+        Target position [x, y] (m).
+    r_R : ndarray, shape (...)
+        Receiver-to-target range (m).
+    """
     rb = np.asarray(c_mps, float) * np.asarray(t_s, float)
     beta = np.asarray(phi_rad, float) + np.asarray(theta_rad, float)
     u = np.stack([np.sin(beta), np.cos(beta)], axis=-1)
@@ -74,7 +107,18 @@ def bistatic_position(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy):
 
 
 def bistatic_jacobian(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy):
-    """J = d(target)/d[t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y], shape (..., 2, 8)."""
+    """Jacobian J of the target position with respect to the 8 inputs (eqs. 3-6; derivatives in the module docstring).
+
+    Parameters
+    ----------
+    t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy
+        As :func:`bistatic_position` (s, rad, rad, m/s, m, m).
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 8)
+        d[x, y] / d[t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y] (m/s, m/rad, m/rad, s, 1, 1, 1, 1).
+    """
     t = np.asarray(t_s, float)
     c = np.asarray(c_mps, float)
     rb = c * t
@@ -102,13 +146,45 @@ def bistatic_jacobian(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy):
 
 
 def bistatic_covariance(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy, variances):
-    """``J Sigma J^T`` (..., 2, 2) with Sigma = diag(variances (..., 8)) (eqs. 3-6)."""
+    """Covariance ``J Sigma J^T`` of the bistatic point, Sigma = diag(variances) (eqs. 3-6).
+
+    Parameters
+    ----------
+    t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy
+        As :func:`bistatic_position`, at the measured values.
+    variances : array_like, shape (..., 8)
+        Input variances in the order of :meth:`BistaticErrors.variances`.
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 2)
+        Position covariance (m^2).
+    """
     J = bistatic_jacobian(t_s, theta_rad, phi_rad, c_mps, tx_xy, rx_xy)
     return np.einsum("...ik,...k,...jk->...ij", J, np.asarray(variances, float), J)
 
 
 def bistatic_inputs(target_xy, tx_xy, rx_xy, phi_rad, c_mps):
-    """Noise-free travel time (s) and relative bearing (rad) of a target: the inverse of eq. 2."""
+    """Noise-free travel time and relative bearing of a target: the inverse of eq. 2.
+
+    Parameters
+    ----------
+    target_xy : array_like, shape (..., 2)
+        Target position [x east, y north] (m).
+    tx_xy, rx_xy : array_like, shape (..., 2)
+        Transmitter and receiver positions (m).
+    phi_rad : float or array_like
+        Receiving array heading (rad, clockwise from north).
+    c_mps : float or array_like
+        Mean sound speed (m/s).
+
+    Returns
+    -------
+    t : ndarray
+        Travel time Tx -> target -> Rx (s).
+    theta : ndarray
+        Bearing at Rx relative to the array heading (rad, clockwise, in (-pi, pi]).
+    """
     target = np.asarray(target_xy, float)
     d_tx = np.linalg.norm(target - np.asarray(tx_xy, float), axis=-1)
     rel = target - np.asarray(rx_xy, float)

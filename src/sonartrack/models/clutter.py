@@ -29,16 +29,44 @@ class Region:
 
     @property
     def area_m2(self) -> float:
+        """Area of the rectangle (m^2)."""
         return (self.x_max_m - self.x_min_m) * (self.y_max_m - self.y_min_m)
 
     def contains(self, xy) -> np.ndarray:
+        """True where a point lies in the rectangle (edges included).
+
+        Parameters
+        ----------
+        xy : array_like, shape (..., 2)
+            Points [x, y] (m, x east, y north).
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+            Inside or on the boundary.
+        """
         xy = np.asarray(xy, float)
         return ((xy[..., 0] >= self.x_min_m) & (xy[..., 0] <= self.x_max_m)
                 & (xy[..., 1] >= self.y_min_m) & (xy[..., 1] <= self.y_max_m))
 
 
 def poisson_clutter(rng: np.random.Generator, density_per_m2: float, region: Region) -> np.ndarray:
-    """Clutter positions (n, 2): n ~ Poisson(density * area), uniform over ``region``."""
+    """Clutter positions: n ~ Poisson(density * area) points, uniform over ``region``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    density_per_m2 : float
+        Mean number of false measurements per m^2 per scan.
+    region : Region
+        Surveillance region.
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        Positions [x, y] (m).
+    """
     n = rng.poisson(density_per_m2 * region.area_m2)
     x = rng.uniform(region.x_min_m, region.x_max_m, n)
     y = rng.uniform(region.y_min_m, region.y_max_m, n)

@@ -67,7 +67,20 @@ MIN_COS_DELTA = 0.1
 
 
 def bf_measurement(X, c: float = SOUND_SPEED_MPS):
-    """h(X) = [atan2(x, y), f0 (1 - rdot / c)] for states X (..., 5); returns (..., 2)."""
+    """Bearing + frequency measurement ``h(X) = [atan2(x, y), f0 (1 - rdot / c)]`` (paper P2, eq. 3).
+
+    Parameters
+    ----------
+    X : array_like, shape (..., 5)
+        Relative states [x, y, vx, vy, f0] (m, m/s, Hz; x east, y north, target minus observer).
+    c : float, default 1500.0
+        Sound speed (m/s).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Bearing (rad, clockwise from north, in (-pi, pi]) and received frequency (Hz).
+    """
     X = np.asarray(X, dtype=float)
     x, y, vx, vy, f0 = (X[..., i] for i in range(5))
     r = np.hypot(x, y)
@@ -76,13 +89,37 @@ def bf_measurement(X, c: float = SOUND_SPEED_MPS):
 
 
 def bearing_measurement(X):
-    """h_b(X) = atan2(x, y) for states X (..., >= 2)."""
+    """Bearing ``h_b(X) = atan2(x, y)`` of relative states.
+
+    Parameters
+    ----------
+    X : array_like, shape (..., >= 2)
+        Relative states, first two entries x east and y north (m).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Bearing (rad, clockwise from north, in (-pi, pi]).
+    """
     X = np.asarray(X, dtype=float)
     return np.arctan2(X[..., 0], X[..., 1])
 
 
 def bf_jacobian(X, c: float = SOUND_SPEED_MPS):
-    """Jacobian dh/dX (..., 2, 5) of :func:`bf_measurement` (rows: bearing, frequency)."""
+    """Jacobian dh/dX of :func:`bf_measurement` (rows in the module docstring).
+
+    Parameters
+    ----------
+    X : array_like, shape (..., 5)
+        Relative states [x, y, vx, vy, f0] (m, m/s, Hz).
+    c : float, default 1500.0
+        Sound speed (m/s).
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 5)
+        Rows: bearing (rad per state unit), frequency (Hz per state unit).
+    """
     X = np.asarray(X, dtype=float)
     x, y, vx, vy, f0 = (X[..., i] for i in range(5))
     r2 = x * x + y * y
@@ -103,12 +140,26 @@ def bf_jacobian(X, c: float = SOUND_SPEED_MPS):
 
 
 def bearing_modified_row(z_b, X_hat, exact: bool = False):
-    """Song & Speyer's modified row g(z, X_hat) (..., 5) for the bearing measurement.
+    """Song & Speyer's modified row g(z, X_hat) for the bearing measurement (Song & Speyer 1985; DIGEST P2).
 
     ``g = [cos z, -sin z, 0, 0, 0] / (x_hat sin z + y_hat cos z)`` (see the module docstring):
     g (X - X_hat) = tan(z - b_hat) for every X on the bearing line z. With ``exact=True`` the row is
     scaled by d / tan d, d = wrap(z - b_hat), so that g (X - X_hat) = z - b_hat exactly. Where the
     denominator is below ``MIN_COS_DELTA * r_hat`` the Jacobian row is returned.
+
+    Parameters
+    ----------
+    z_b : float or array_like, shape (...)
+        Measured bearing (rad, clockwise from north).
+    X_hat : array_like, shape (..., n), n >= 2
+        Estimated relative state (x, y first, m).
+    exact : bool, default False
+        Scale the row so the relation holds in the residual rather than its tangent.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        g (rad per state unit); zero beyond the position entries.
     """
     X_hat = np.asarray(X_hat, dtype=float)
     z = np.asarray(z_b, dtype=float)
@@ -131,8 +182,26 @@ def bearing_modified_row(z_b, X_hat, exact: bool = False):
 
 
 def modified_matrix(z, X_hat, H, exact: bool = False):
-    """The MGEKF's modified matrix G (..., m, 5): H with its bearing row (row 0) replaced by
-    g(z_b, X_hat); the frequency row (if any) keeps its Jacobian, since it is not modifiable."""
+    """The MGEKF's modified matrix G: H with its bearing row (row 0) replaced by g(z_b, X_hat).
+
+    The frequency row (if any) keeps its Jacobian, since it is not modifiable (module docstring).
+
+    Parameters
+    ----------
+    z : array_like, shape (..., m)
+        Measurement, bearing (rad, clockwise from north) in entry 0.
+    X_hat : array_like, shape (..., 5)
+        Predicted relative state.
+    H : array_like, shape (..., m, 5)
+        Jacobian at X_hat.
+    exact : bool, default False
+        Passed to :func:`bearing_modified_row`.
+
+    Returns
+    -------
+    ndarray, shape (..., m, 5)
+        G (a new array).
+    """
     z = np.asarray(z, dtype=float)
     G = np.array(H, dtype=float, copy=True)
     G[..., 0, :] = bearing_modified_row(z[..., 0], X_hat, exact=exact)
@@ -140,7 +209,20 @@ def modified_matrix(z, X_hat, H, exact: bool = False):
 
 
 def bf_residual(z, hx):
-    """Measurement residual z - h with the bearing component (index 0) wrapped to (-pi, pi]."""
+    """Measurement residual ``z - h`` with the bearing component (index 0) wrapped to (-pi, pi].
+
+    Parameters
+    ----------
+    z : array_like, shape (..., m)
+        Measurement (bearing in rad, then frequency in Hz).
+    hx : array_like, shape (..., m)
+        Predicted measurement.
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        Residual (a new array).
+    """
     nu = np.asarray(z, dtype=float) - np.asarray(hx, dtype=float)
     nu = np.array(nu, copy=True)
     nu[..., 0] = wrap_angle(nu[..., 0])

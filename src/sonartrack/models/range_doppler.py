@@ -43,7 +43,29 @@ DOPPLER_CELL_FACTOR = 0.88
 
 
 def cw_cell_sizes(pulse_s: float, carrier_hz: float, sound_speed_mps: float) -> tuple[float, float, float]:
-    """(range cell m, Doppler cell Hz, range-rate cell m/s) of a CW pulse (paper sec. V)."""
+    """Cell sizes of a CW pulse (paper P1, sec. V, after Nielsen 1991).
+
+    ``dr = 0.58 tau c / 2``, ``df = 0.88 / tau``, ``dv = df c / (2 f_c)``.
+
+    Parameters
+    ----------
+    pulse_s : float
+        Pulse length tau (s).
+    carrier_hz : float
+        Carrier frequency f_c (Hz).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    tuple of float
+        (range cell dr in m, Doppler cell df in Hz, range-rate cell dv in m/s).
+
+    Raises
+    ------
+    InputError
+        If any input is not positive.
+    """
     require(pulse_s > 0 and carrier_hz > 0 and sound_speed_mps > 0,
             "pulse length, carrier frequency and sound speed must be positive")
     dr = RANGE_CELL_FACTOR * pulse_s * sound_speed_mps / 2.0
@@ -53,36 +75,117 @@ def cw_cell_sizes(pulse_s: float, carrier_hz: float, sound_speed_mps: float) -> 
 
 
 def quantisation_covariance(range_cell_m: float, range_rate_cell_mps: float) -> np.ndarray:
-    """R = diag(dr^2/12, dv^2/12): covariance of a uniform error inside one cell (eq. 25, corrected)."""
+    """``R = diag(dr^2/12, dv^2/12)``: covariance of a uniform error inside one cell (paper P1, eq. 25, corrected).
+
+    Parameters
+    ----------
+    range_cell_m : float
+        Range cell size dr (m).
+    range_rate_cell_mps : float
+        Range-rate cell size dv (m/s).
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        R for the state [range, range-rate] (m^2, m^2/s^2).
+    """
     return np.diag([range_cell_m**2 / 12.0, range_rate_cell_mps**2 / 12.0])
 
 
 def printed_quantisation_covariance(pulse_s: float, carrier_hz: float, sound_speed_mps: float) -> np.ndarray:
-    """eq. 25 exactly as printed, with the (2 c / f_c) typo: for documentation and tests only."""
+    """Paper P1's eq. 25 exactly as printed, with the (2 c / f_c) typo: for documentation and tests only.
+
+    Parameters
+    ----------
+    pulse_s : float
+        Pulse length tau (s).
+    carrier_hz : float
+        Carrier frequency f_c (Hz).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        The printed R (m^2, m^2/s^2); its range-rate variance is 16 times the correct one.
+    """
     c = sound_speed_mps
     return np.diag([(0.58 * pulse_s) ** 2 * (c / 2.0) ** 2 / 12.0,
                     (0.88 / pulse_s) ** 2 * (2.0 * c / carrier_hz) ** 2 / 12.0])
 
 
 def ar_transition(period_s: float) -> np.ndarray:
-    """Phi = [[1, T], [0, 1]] (eq. 23)."""
+    """``Phi = [[1, T], [0, 1]]`` for the state [range, range-rate] (paper P1, eq. 23).
+
+    Parameters
+    ----------
+    period_s : float
+        Frame period T (s).
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        Phi.
+    """
     return np.array([[1.0, float(period_s)], [0.0, 1.0]])
 
 
 def ar_input_gain(period_s: float) -> np.ndarray:
-    """g = [T^2/2, T]: how an acceleration held over one period enters [range, range-rate] (eq. 23)."""
+    """``g = [T^2/2, T]``: how an acceleration held over one period enters [range, range-rate] (paper P1, eq. 23).
+
+    Parameters
+    ----------
+    period_s : float
+        Frame period T (s).
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        g (s^2, s).
+    """
     T = float(period_s)
     return np.array([T * T / 2.0, T])
 
 
 def ar_process_noise(period_s: float, sigma_a_mps2: float) -> np.ndarray:
-    """Q = [[T^4/4, T^3/2], [T^3/2, T^2]] sigma_a^2 (eq. 24)."""
+    """``Q = [[T^4/4, T^3/2], [T^3/2, T^2]] sigma_a^2`` (paper P1, eq. 24).
+
+    Parameters
+    ----------
+    period_s : float
+        Frame period T (s).
+    sigma_a_mps2 : float
+        Standard deviation of the target's (range) acceleration (m/s^2).
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        Q (m^2, m^2/s, m^2/s^2).
+    """
     g = ar_input_gain(period_s)
     return np.outer(g, g) * float(sigma_a_mps2) ** 2
 
 
 def own_accel_array(own_accel_mps2, n_frames: int) -> np.ndarray:
-    """The K - 1 known inputs u_k (eq. 23) as an array: None -> zeros, a scalar -> constant, a list -> itself."""
+    """The K - 1 known own-sensor inputs u_k (paper P1, eq. 23) as an array.
+
+    Parameters
+    ----------
+    own_accel_mps2 : None, float or sequence of float
+        None: zeros; a scalar: constant; a sequence: one value per frame transition (m/s^2).
+    n_frames : int
+        K, the number of frames.
+
+    Returns
+    -------
+    ndarray, shape (K - 1,)
+        u_k (m/s^2).
+
+    Raises
+    ------
+    InputError
+        If a sequence has the wrong length or a non-finite value.
+    """
     if own_accel_mps2 is None:
         return np.zeros(max(n_frames - 1, 0))
     u = np.atleast_1d(np.asarray(own_accel_mps2, dtype=float))
@@ -112,13 +215,35 @@ class RangeDopplerGrid:
     @classmethod
     def cw(cls, n_range: int, n_doppler: int, pulse_s: float, carrier_hz: float, sound_speed_mps: float,
            range_min_m: float = 0.0, range_rate_min_mps: float | None = None) -> RangeDopplerGrid:
-        """The plane of a CW pulse; by default the Doppler axis is centred on zero range-rate."""
+        """The plane of a CW pulse; by default the Doppler axis is centred on zero range-rate.
+
+        Parameters
+        ----------
+        n_range, n_doppler : int
+            Number of range and Doppler cells.
+        pulse_s : float
+            Pulse length (s).
+        carrier_hz : float
+            Carrier frequency (Hz).
+        sound_speed_mps : float
+            Sound speed (m/s).
+        range_min_m : float, default 0.0
+            Lower range edge of the first range cell (m).
+        range_rate_min_mps : float, optional
+            Lower range-rate edge of the first Doppler cell (m/s); None centres the axis on 0.
+
+        Returns
+        -------
+        RangeDopplerGrid
+            The plane, cell sizes from :func:`cw_cell_sizes`.
+        """
         dr, _, dv = cw_cell_sizes(pulse_s, carrier_hz, sound_speed_mps)
         v0 = -0.5 * n_doppler * dv if range_rate_min_mps is None else float(range_rate_min_mps)
         return cls(int(n_range), int(n_doppler), dr, dv, float(range_min_m), v0)
 
     @property
     def n_cells(self) -> int:
+        """Number of cells M = n_range * n_doppler."""
         return self.n_range * self.n_doppler
 
     @property
@@ -128,26 +253,68 @@ class RangeDopplerGrid:
 
     @property
     def R(self) -> np.ndarray:
+        """Quantisation covariance of one cell, diag(dr^2/12, dv^2/12) (m^2, m^2/s^2)."""
         return quantisation_covariance(self.range_cell_m, self.range_rate_cell_mps)
 
     def range_centres_m(self) -> np.ndarray:
+        """Centres of the range cells.
+
+        Returns
+        -------
+        ndarray, shape (n_range,)
+            Range (m).
+        """
         return self.range_min_m + (np.arange(self.n_range) + 0.5) * self.range_cell_m
 
     def range_rate_centres_mps(self) -> np.ndarray:
+        """Centres of the Doppler cells, as range-rate.
+
+        Returns
+        -------
+        ndarray, shape (n_doppler,)
+            Range-rate (m/s).
+        """
         return self.range_rate_min_mps + (np.arange(self.n_doppler) + 0.5) * self.range_rate_cell_mps
 
     def centres(self) -> np.ndarray:
-        """Cell centres v_m (M, 2), row-major (m = i * n_doppler + j)."""
+        """Cell centres v_m, row-major (m = i * n_doppler + j).
+
+        Returns
+        -------
+        ndarray, shape (M, 2)
+            [range (m), range-rate (m/s)] of each cell's centre.
+        """
         r, v = np.meshgrid(self.range_centres_m(), self.range_rate_centres_mps(), indexing="ij")
         return np.stack([r.ravel(), v.ravel()], axis=-1)
 
     def extent(self) -> tuple[float, float, float, float]:
-        """(range min, range max, range-rate min, range-rate max) of the plane."""
+        """Edges of the plane.
+
+        Returns
+        -------
+        tuple of float
+            (range min, range max, range-rate min, range-rate max) in m and m/s.
+        """
         return (self.range_min_m, self.range_min_m + self.n_range * self.range_cell_m,
                 self.range_rate_min_mps, self.range_rate_min_mps + self.n_doppler * self.range_rate_cell_mps)
 
     def cell_index(self, w) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(range index, Doppler index, inside) of states w (..., 2); indices are clipped where outside."""
+        """Cells that contain the states w.
+
+        Parameters
+        ----------
+        w : array_like, shape (..., 2)
+            States [range (m), range-rate (m/s)].
+
+        Returns
+        -------
+        i : ndarray of int64, shape (...)
+            Range index, clipped to the plane.
+        j : ndarray of int64, shape (...)
+            Doppler index, clipped to the plane.
+        inside : ndarray of bool, shape (...)
+            True where the state lies on the plane.
+        """
         w = np.asarray(w, dtype=float)
         i = np.floor((w[..., 0] - self.range_min_m) / self.range_cell_m).astype(np.int64)
         j = np.floor((w[..., 1] - self.range_rate_min_mps) / self.range_rate_cell_mps).astype(np.int64)
@@ -169,6 +336,17 @@ class CwPlaneSettings(Settings):
         unit="m/s")
 
     def grid(self, n_range: int, n_doppler: int) -> RangeDopplerGrid:
-        """The n_range x n_doppler plane of these cells (:meth:`RangeDopplerGrid.cw`)."""
+        """The n_range x n_doppler plane of these cells (:meth:`RangeDopplerGrid.cw`).
+
+        Parameters
+        ----------
+        n_range, n_doppler : int
+            Number of range and Doppler cells.
+
+        Returns
+        -------
+        RangeDopplerGrid
+            The plane.
+        """
         return RangeDopplerGrid.cw(n_range, n_doppler, self.pulse_s, self.carrier_hz, self.sound_speed_mps,
                                    self.range_min_m, self.range_rate_min_mps)

@@ -60,21 +60,67 @@ class BlockPlan:
 
     @property
     def n_blocks(self) -> int:
+        """Number of blocks B."""
         return int(self.start.size)
 
 
 def element_offsets_m(n_elements: int, spacing_m: float) -> np.ndarray:
-    """Positions of the elements along the array axis from the centre, front (element 1) positive (m)."""
+    """Positions of the elements along the array axis from the centre, front (element 1) positive.
+
+    ``s_n = ((N - 1) / 2 - n) d``, n = 0 .. N - 1.
+
+    Parameters
+    ----------
+    n_elements : int
+        N.
+    spacing_m : float
+        Element spacing d (m).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Offsets (m).
+    """
     return ((n_elements - 1) / 2.0 - np.arange(n_elements)) * spacing_m
 
 
 def plane_wave_delays_s(cone_rad, offsets_m: np.ndarray, sound_speed_mps: float) -> np.ndarray:
-    """tau_n = -s_n cos(theta) / c for cone angles (...,): shape (..., N) (module doc)."""
+    """Plane-wave delays ``tau_n = -s_n cos(theta) / c`` relative to the array centre (module docstring).
+
+    Parameters
+    ----------
+    cone_rad : float or array_like, shape (...)
+        Cone angle theta (rad, 0..pi from the array axis, 0 ahead).
+    offsets_m : ndarray, shape (N,)
+        Element offsets s_n (m, :func:`element_offsets_m`).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    ndarray, shape (..., N)
+        Delays (s); a source ahead reaches the front element first.
+    """
     return -np.cos(np.asarray(cone_rad, dtype=float))[..., None] * offsets_m / sound_speed_mps
 
 
 def block_bounds(scene: PassiveSceneSettings) -> tuple[np.ndarray, np.ndarray, float]:
-    """(start sample, length) of every block and the sample rate; the last block may be shorter."""
+    """Start sample and length of every synthesis block; the last block may be shorter.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (duration, block length, sample rate).
+
+    Returns
+    -------
+    start : ndarray of int, shape (B,)
+        First sample of each block.
+    length : ndarray of int, shape (B,)
+        Samples in each block.
+    fs : float
+        Sample rate (Hz).
+    """
     fs = scene.sample_rate_hz
     n_total = int(round(scene.duration_s * fs))
     nb = int(round(scene.block_s * fs))
@@ -83,7 +129,21 @@ def block_bounds(scene: PassiveSceneSettings) -> tuple[np.ndarray, np.ndarray, f
 
 
 def plan_blocks(scene: PassiveSceneSettings, store=None) -> BlockPlan:
-    """Delays and levels of every block (geometry at block centres, tonal values at block edges)."""
+    """Delays and levels of every block, computed up front (geometry at block centres, tonal values at block edges).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    store : optional
+        Cache of RAM fields (sim/passive_scene.py).
+
+    Returns
+    -------
+    BlockPlan
+        Block bounds (samples), delays (s), broadband PSD (Pa^2/Hz), tonal amplitudes (Pa) and
+        frequencies (Hz).
+    """
     start, length, fs = block_bounds(scene)
     centres = (start + length / 2.0) / fs
     edges = np.append(start, start[-1] + length[-1]) / fs
@@ -151,7 +211,24 @@ def _tonal_block(plan: BlockPlan, k: int, phase0: np.ndarray, fs: float) -> tupl
 
 def array_blocks(scene: PassiveSceneSettings, rng: np.random.Generator, store=None,
                  plan: BlockPlan | None = None) -> Iterator[np.ndarray]:
-    """The recording, block by block: arrays (N, m) of pressure in Pa (module doc). ``store`` keeps RAM fields."""
+    """The recording, block by block, synthesised in the frequency domain (module docstring).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    rng : numpy.random.Generator
+        Random stream (noise and tonal phases).
+    store : optional
+        Cache of RAM fields.
+    plan : BlockPlan, optional
+        A precomputed plan (:func:`plan_blocks`).
+
+    Yields
+    ------
+    ndarray, shape (N, m)
+        Pressure (Pa) of each element over the block's m samples.
+    """
     plan = plan_blocks(scene, store) if plan is None else plan
     fs = scene.sample_rate_hz
     nb = int(round(scene.block_s * fs))
@@ -173,5 +250,20 @@ def array_blocks(scene: PassiveSceneSettings, rng: np.random.Generator, store=No
 
 
 def simulate_recording(scene: PassiveSceneSettings, rng: np.random.Generator, store=None) -> np.ndarray:
-    """The whole recording in memory, (N, n samples) in Pa (short scenes and tests; files use :func:`array_blocks`)."""
+    """The whole recording in memory (short scenes and tests; files use :func:`array_blocks`).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    rng : numpy.random.Generator
+        Random stream.
+    store : optional
+        Cache of RAM fields.
+
+    Returns
+    -------
+    ndarray, shape (N, n_samples)
+        Pressure (Pa).
+    """
     return np.concatenate(list(array_blocks(scene, rng, store)), axis=1)

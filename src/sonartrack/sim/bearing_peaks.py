@@ -64,7 +64,24 @@ class Scan:
 
 def generate_scans(rng: np.random.Generator, model: PeakModel, true_bearing_deg: np.ndarray,
                    targets: list[TrackPeaks]) -> list[Scan]:
-    """Scans for targets at ``true_bearing_deg`` (K, n_targets), thresholded (module doc)."""
+    """Synthetic thresholded cross-correlation peaks, scan by scan, from paper P0's model (module docstring).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    model : PeakModel
+        Background false peaks, detection and the amplitude threshold.
+    true_bearing_deg : array_like, shape (K, n_targets)
+        True bearing of each target at each scan (deg).
+    targets : list of TrackPeaks
+        Peak statistics of each target (amplitude mean and spread, position spread in deg).
+
+    Returns
+    -------
+    list of Scan
+        K scans: peak bearings (deg), amplitudes (correlator output unit) and origin (target index, -1 false).
+    """
     tb = np.atleast_2d(np.asarray(true_bearing_deg, dtype=float))
     K, n = tb.shape
     lo, hi = model.sector_deg

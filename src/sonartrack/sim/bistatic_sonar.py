@@ -30,6 +30,15 @@ from sonartrack.sim.platforms import ManeuveringTrack
 
 @dataclass(frozen=True, slots=True)
 class BistaticSonar:
+    """A bistatic towed-array active sonar (Park, Song, Lee 2017, sec. IV; module docstring).
+
+    ``region`` is the clutter's surveillance region; ``tx_cable_m`` / ``rx_cable_m`` the tow lengths of the
+    transmitter and the receiving array behind the ship (m); ``pd`` the probability that the target echo
+    is present; ``clutter_density_per_m2`` the Poisson clutter density (1/m^2 per ping); ``sound_speed_mps``
+    the true mean sound speed (m/s); ``errors`` the input errors while the ship runs straight;
+    ``sigma_bearing_turn_rad`` the bearing error while it turns (rad); ``reported_errors`` the errors the
+    reported covariances assume (None: ``errors``).
+    """
     region: Region
     tx_cable_m: float = 300.0
     rx_cable_m: float = 450.0
@@ -54,12 +63,44 @@ class Scan:
 
 
 def is_turning(ship: ManeuveringTrack, t_s: float) -> bool:
+    """Whether the ship is in one of its turns at ``t_s``.
+
+    Parameters
+    ----------
+    ship : ManeuveringTrack
+        The ship.
+    t_s : float
+        Time (s).
+
+    Returns
+    -------
+    bool
+        True if some turn has start <= t_s < end.
+    """
     return any(a <= t_s < b for a, b, _ in ship.turns)
 
 
 def simulate_scan(rng: np.random.Generator, sonar: BistaticSonar, ship: ManeuveringTrack, t_s: float,
                   target_xy) -> Scan:
-    """Simulate one ping: the target echo (with probability pd) and clutter, as points + covariances."""
+    """Simulate one ping: the target echo (with probability pd) and clutter, as points and covariances.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    sonar, ship : BistaticSonar, ManeuveringTrack
+        The sonar and the ship towing it.
+    t_s : float
+        Ping time (s).
+    target_xy : array_like, shape (2,)
+        True target position [x east, y north] (m).
+
+    Returns
+    -------
+    Scan
+        Points z (m, 2) in m, covariances R (m, 2, 2) in m^2 (J Sigma J^T at the measured inputs), target
+        flags, and the measured Tx and Rx positions (m).
+    """
     e = sonar.errors
     tx_true, _ = ship.towed(t_s, sonar.tx_cable_m)
     rx_true, phi = ship.towed(t_s, sonar.rx_cable_m)

@@ -73,7 +73,18 @@ class ReceivedLevels:
 
 
 def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
-    """The ownship's track: its turn (if any) starts at ``scene.turn_start_s``."""
+    """The ownship's track: a straight leg, its turn (if any) starting at ``scene.turn_start_s``, a straight leg.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (ownship start in m, speed in kn, course and turn in deg, clockwise from north).
+
+    Returns
+    -------
+    ManeuveringTrack
+        The track in SI units (m, m/s, rad).
+    """
     o = scene.ownship
     turns = ()
     if o.turn_deg != 0:
@@ -84,7 +95,22 @@ def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
 
 
 def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Positions (T, 2) and velocities (T, 2) of a constant-velocity ship at times ``t_s``."""
+    """Positions and velocities of a constant-velocity ship at times ``t_s``.
+
+    Parameters
+    ----------
+    ship : ShipSettings
+        The ship (position at t = 0 in m, course in deg clockwise from north, speed in kn).
+    t_s : array_like, shape (T,)
+        Times (s).
+
+    Returns
+    -------
+    position : ndarray, shape (T, 2)
+        [x east, y north] (m).
+    velocity : ndarray, shape (T, 2)
+        [vx, vy] (m/s).
+    """
     course = np.deg2rad(ship.course_deg)
     v = ship.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
     t = np.asarray(t_s, dtype=float)
@@ -92,7 +118,24 @@ def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def scene_geometry(scene: PassiveSceneSettings, t_s) -> SceneGeometry:
-    """Every platform at times ``t_s`` and each ship's range, bearing, cone angle and range rate (module doc)."""
+    """Every platform at times ``t_s`` and each ship's range, bearing, cone angle and range rate from the array centre.
+
+    Equations in the module docstring.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    t_s : float or array_like, shape (T,)
+        Times (s).
+
+    Returns
+    -------
+    SceneGeometry
+        Ownship and array-centre positions (m) and headings (rad, clockwise from north); per ship (S, T):
+        positions, velocities, range (m), true bearing (rad, clockwise from north, in (-pi, pi]), cone angle
+        (rad, 0..pi from the array axis, 0 ahead) and range rate (m/s).
+    """
     t = np.atleast_1d(np.asarray(t_s, dtype=float))
     track = ownship_track(scene)
     own_xy, _, own_h = track.state(t)
@@ -111,14 +154,47 @@ def scene_geometry(scene: PassiveSceneSettings, t_s) -> SceneGeometry:
 
 
 def broadband_tl_frequency_hz(scene: PassiveSceneSettings) -> float:
-    """The frequency at which the broadband noise's TL is taken: the band's geometric centre."""
+    """Frequency at which the broadband noise's TL is taken: the band's geometric centre ``sqrt(max(lo, 1) hi)``.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (``band_hz``).
+
+    Returns
+    -------
+    float
+        Frequency (Hz).
+    """
     lo, hi = scene.band_hz
     return float(np.sqrt(max(lo, 1.0) * hi))
 
 
 def transmission_loss_db(scene: PassiveSceneSettings, ranges_m, freq_hz: float, source_depth_m: float,
                          store=None) -> np.ndarray:
-    """TL (dB) at ``ranges_m`` by the scene's propagation model (module doc)."""
+    """Transmission loss by the scene's propagation model (module docstring).
+
+    ``spherical``: 20 log10 r + Thorp absorption; ``ram``: RAM in the scene's environment, averaged over
+    ``tl_average_m``.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (propagation model, environment, array depth).
+    ranges_m : array_like
+        Source-receiver ranges (m).
+    freq_hz : float
+        Frequency (Hz).
+    source_depth_m : float
+        Source depth (m).
+    store : optional
+        Cache of RAM fields (e.g. io/environment.py's ``TLDiskCache``); None computes them.
+
+    Returns
+    -------
+    ndarray
+        TL (dB), shape of ``ranges_m``.
+    """
     from sonartrack.acoustics.transmission_loss import thorp_absorption_db_per_km, transmission_loss
 
     r = np.asarray(ranges_m, dtype=float)
@@ -132,7 +208,23 @@ def transmission_loss_db(scene: PassiveSceneSettings, ranges_m, freq_hz: float, 
 
 
 def received_levels(scene: PassiveSceneSettings, geometry: SceneGeometry, store=None) -> ReceivedLevels:
-    """Broadband and tonal received levels and the Doppler-shifted tonal frequency of every ship (module doc)."""
+    """Received levels at an element and the Doppler-shifted tonal frequency of every ship (module docstring).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    geometry : SceneGeometry
+        Its geometry (:func:`scene_geometry`).
+    store : optional
+        Cache of RAM fields (see :func:`transmission_loss_db`).
+
+    Returns
+    -------
+    ReceivedLevels
+        Per ship and time (S, T): broadband spectral level (dB re 1 uPa^2/Hz), tonal power (dB re 1 uPa^2)
+        and received tonal frequency (Hz); NaN for a ship without a tonal.
+    """
     f_bb = broadband_tl_frequency_hz(scene)
     shape = geometry.range_m.shape
     bb, tonal, f_r = np.empty(shape), np.full(shape, np.nan), np.full(shape, np.nan)
@@ -146,7 +238,19 @@ def received_levels(scene: PassiveSceneSettings, geometry: SceneGeometry, store=
 
 
 def nav_columns(geometry: SceneGeometry) -> dict[str, np.ndarray]:
-    """The navigation table: ownship position and heading, array centre position and axis heading (deg 0..360)."""
+    """The navigation table: ownship position and heading, array centre position and axis heading.
+
+    Parameters
+    ----------
+    geometry : SceneGeometry
+        Scene geometry.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (T,)
+        ``time_s``, ``x_m``, ``y_m``, ``heading_deg``, ``array_x_m``, ``array_y_m``, ``array_heading_deg``
+        (headings in deg 0..360, clockwise from north).
+    """
     g = geometry
     return {"time_s": g.time_s, "x_m": g.own_xy[:, 0], "y_m": g.own_xy[:, 1],
             "heading_deg": np.rad2deg(g.own_heading_rad) % 360.0,
@@ -155,7 +259,25 @@ def nav_columns(geometry: SceneGeometry) -> dict[str, np.ndarray]:
 
 
 def truth_columns(scene: PassiveSceneSettings, geometry: SceneGeometry, levels: ReceivedLevels) -> dict:
-    """The truth table, a row per time and ship (time-major): kinematics, bearing, cone angle, side, SNRs."""
+    """The truth table, a row per time and ship (time-major): kinematics, bearing, cone angle, side, SNRs.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (ship names, noise level).
+    geometry : SceneGeometry
+        Scene geometry.
+    levels : ReceivedLevels
+        Received levels.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (T S,)
+        ``time_s``, ``ship``, ``x_m``, ``y_m``, ``vx_mps``, ``vy_mps``, ``bearing_deg`` (0..360, clockwise
+        from north), ``cone_deg`` (0..180 from the array axis), ``side`` ("port"/"starboard"), ``range_m``,
+        ``range_rate_mps``, ``snr_db`` (broadband, per element: RL_bb - NL), ``tonal_hz``, ``tonal_snr_db``
+        (RL_t - NL, in 1 Hz).
+    """
     g = geometry
     n_s, n_t = g.range_m.shape
     names = np.array([s.name for s in scene.ships], dtype=object)

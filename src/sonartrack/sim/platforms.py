@@ -56,9 +56,21 @@ class ManeuveringTrack:
         return seg
 
     def state(self, t_s):
-        """Position (x, y) in m, velocity (vx, vy) in m/s and heading in rad at times ``t_s``.
+        """Position, velocity and heading at any times, in closed form (module docstring).
 
-        Returns arrays ``pos (..., 2)``, ``vel (..., 2)``, ``heading (...)``.
+        Parameters
+        ----------
+        t_s : float or array_like, shape (...)
+            Times (s); before ``t0_s`` the first segment is extrapolated backwards.
+
+        Returns
+        -------
+        pos : ndarray, shape (..., 2)
+            Position [x east, y north] (m).
+        vel : ndarray, shape (..., 2)
+            Velocity [vx, vy] (m/s).
+        heading : ndarray, shape (...)
+            Heading (rad, clockwise from north; not wrapped).
         """
         t = np.asarray(t_s, dtype=float)
         seg = self._segments()
@@ -90,14 +102,53 @@ class ManeuveringTrack:
         return np.stack([dx, dy], axis=-1)
 
     def towed(self, t_s, cable_m: float):
-        """Position and axis heading of a body towed ``cable_m`` behind along the ship's own track."""
+        """Position and axis heading of a body towed ``cable_m`` behind along the ship's own track.
+
+        The body sits where the ship was ``cable_m / speed`` seconds earlier, heading as the ship did then.
+
+        Parameters
+        ----------
+        t_s : float or array_like, shape (...)
+            Times (s).
+        cable_m : float
+            Distance behind the ship along its track (m).
+
+        Returns
+        -------
+        pos : ndarray, shape (..., 2)
+            Position [x east, y north] (m).
+        heading : ndarray, shape (...)
+            Axis heading (rad, clockwise from north).
+
+        Raises
+        ------
+        InputError
+            If the ship does not move (speed 0).
+        """
         require(self.speed_mps > 0, "a towed body needs a moving ship (speed > 0)")
         pos, _, heading = self.state(np.asarray(t_s, float) - cable_m / self.speed_mps)
         return pos, heading
 
 
 def constant_velocity_track(t_s, x0_m, y0_m, vx_mps, vy_mps, t0_s: float = 0.0):
-    """States ``[x, y, vx, vy]`` (..., 4) of a constant-velocity target at times ``t_s``."""
+    """States of a constant-velocity target at times ``t_s``.
+
+    Parameters
+    ----------
+    t_s : float or array_like, shape (...)
+        Times (s).
+    x0_m, y0_m : float
+        Position east and north at ``t0_s`` (m).
+    vx_mps, vy_mps : float
+        Velocity east and north (m/s).
+    t0_s : float, default 0.0
+        Reference time (s).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        [x, y, vx, vy] (m, m/s).
+    """
     t = np.asarray(t_s, dtype=float) - t0_s
     return np.stack([x0_m + vx_mps * t, y0_m + vy_mps * t,
                      np.full_like(t, vx_mps), np.full_like(t, vy_mps)], axis=-1)

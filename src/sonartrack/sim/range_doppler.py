@@ -36,7 +36,35 @@ class TargetTrack:
 
 def simulate_target(rng: np.random.Generator, grid: RangeDopplerGrid, period_s: float, sigma_a_mps2: float,
                     n_frames: int, own_accel_mps2=None, max_tries: int = 100_000) -> TargetTrack:
-    """Draw a target track that stays in the plane for ``n_frames`` frames (rejection, see module doc)."""
+    """Draw a target track that stays in the plane for ``n_frames`` frames (paper P1's AR model, eq. 23; rejection).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    grid : RangeDopplerGrid
+        The plane; the first state is uniform over it.
+    period_s : float
+        Frame period T (s).
+    sigma_a_mps2 : float
+        Standard deviation of the range acceleration (m/s^2).
+    n_frames : int
+        K.
+    own_accel_mps2 : float or sequence of float, optional
+        Known inputs u_k (m/s^2).
+    max_tries : int, default 100000
+        Candidate tracks drawn before giving up.
+
+    Returns
+    -------
+    TargetTrack
+        True states (K, 2) [range (m), range-rate (m/s)] and their cells (K, 2) [i, j].
+
+    Raises
+    ------
+    RuntimeError
+        If no candidate stayed in the plane.
+    """
     require(n_frames >= 1, f"K (frames) must be at least 1, got {n_frames}")
     u = own_accel_array(own_accel_mps2, n_frames)
     Phi, g = ar_transition(period_s), ar_input_gain(period_s)
@@ -60,7 +88,26 @@ def simulate_target(rng: np.random.Generator, grid: RangeDopplerGrid, period_s: 
 
 def simulate_frames(rng: np.random.Generator, grid: RangeDopplerGrid, n_frames: int, snr: float = 0.0,
                     cells=None) -> np.ndarray:
-    """K x n_range x n_doppler square-law frames; ``cells`` (K, 2) puts a target of SNR ``snr`` there."""
+    """Square-law range-Doppler frames: noise of mean 2, optionally a Swerling-1 target (paper P1, eqs. 7, 8).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random stream.
+    grid : RangeDopplerGrid
+        The plane.
+    n_frames : int
+        K.
+    snr : float, default 0.0
+        Target SNR rho (linear power ratio).
+    cells : array_like of int, shape (K, 2), optional
+        [range index, Doppler index] of the target per frame; None: noise only.
+
+    Returns
+    -------
+    ndarray, shape (K, n_range, n_doppler)
+        Cell values.
+    """
     y = sample_cells(rng, (n_frames, grid.n_range, grid.n_doppler))
     if cells is not None:
         cells = np.asarray(cells, dtype=np.int64)

@@ -1,5 +1,5 @@
-"""Sample inputs for the other commands, made from the passive scene (columns as arrays; io/scene_files.py
-writes them).
+"""Sample inputs for the other commands, made from the passive scene (columns as arrays;
+systems/simulate/files.py writes them).
 
 * **Active bistatic contacts** (``sonartrack track --contacts``; paper P4's sonar): the ownship tows a
   transmitter ``tx_tow_length_m`` astern and the scene's array is the receiver. Every ``ping_interval_s``
@@ -42,7 +42,20 @@ CLUTTER_MARGIN_M = 2_000.0
 
 
 def sample_times(duration_s: float, interval_s: float) -> np.ndarray:
-    """0, interval, 2 interval, ... up to the duration."""
+    """Regular sample times ``0, interval, 2 interval, ...`` up to the duration (inclusive).
+
+    Parameters
+    ----------
+    duration_s : float
+        Last time (s).
+    interval_s : float
+        Step (s).
+
+    Returns
+    -------
+    ndarray
+        Times (s).
+    """
     return np.arange(0.0, duration_s + 1e-9, interval_s)
 
 
@@ -75,7 +88,23 @@ def _ping(rng, scene: PassiveSceneSettings, t: float, errors: BistaticErrors, re
 
 
 def bistatic_contacts(scene: PassiveSceneSettings, rng: np.random.Generator) -> dict[str, dict[str, np.ndarray]]:
-    """{"raw": ..., "nav": ..., "cartesian": ...} column tables of the active sonar's contacts (module doc)."""
+    """Column tables of the active bistatic sonar's contacts over the scene (module docstring; paper P4's sonar).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (ships, ownship, array tow, ``samples`` settings).
+    rng : numpy.random.Generator
+        Random stream.
+
+    Returns
+    -------
+    dict
+        ``"raw"``: time_s, travel_time_s (s), bearing_deg (relative to the array axis, clockwise);
+        ``"nav"``: per ping time_s, tx_x_m, tx_y_m, rx_x_m, rx_y_m, array_heading_deg (0..360 clockwise
+        from north); ``"cartesian"``: time_s, x_m, y_m, var_x_m2, var_y_m2, cov_xy_m2 (contacts whose
+        receiver range is positive).
+    """
     errors = BistaticErrors()
     t_ping = sample_times(scene.duration_s, scene.samples.ping_interval_s)
     region = _clutter_region(scene, t_ping)
@@ -101,7 +130,22 @@ def bistatic_contacts(scene: PassiveSceneSettings, rng: np.random.Generator) -> 
 
 
 def range_doppler_frames(scene: PassiveSceneSettings, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """(K x Nr x Nd square-law frames, the target's cells (K, 2)) on the default CW plane of `detect`."""
+    """Square-law frames with one Swerling-1 target on the default CW plane of ``sonartrack detect`` (paper P1).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (``samples``: frames, plane size, target SNR in dB).
+    rng : numpy.random.Generator
+        Random stream.
+
+    Returns
+    -------
+    frames : ndarray, shape (K, Nr, Nd)
+        Cell values (noise mean 2).
+    cells : ndarray of int, shape (K, 2)
+        The target's [range index, Doppler index] per frame.
+    """
     s = scene.samples
     grid = CwPlaneSettings().grid(s.frame_range_cells, s.frame_doppler_cells)
     target = simulate_target(rng, grid, FRAME_PERIOD_S, FRAME_SIGMA_A_MPS2, s.frames)
@@ -109,7 +153,25 @@ def range_doppler_frames(scene: PassiveSceneSettings, rng: np.random.Generator) 
 
 
 def tma_record(scene: PassiveSceneSettings, rng: np.random.Generator, store=None) -> tuple[dict, dict]:
-    """(bearings table, ownship table) of the TMA ship (module doc); empty tables for a scene without ships."""
+    """Bearings (+ frequency, SNR) of the TMA ship and the receiver's track (module docstring).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene.
+    rng : numpy.random.Generator
+        Random stream.
+    store : optional
+        Cache of RAM fields (sim/passive_scene.py).
+
+    Returns
+    -------
+    bearings : dict of str to ndarray
+        time_s, bearing_deg (0..360, clockwise from north, from the array centre), frequency_hz (if the ship
+        has a tonal) and snr_db; empty columns for a scene without ships.
+    ownship : dict of str to ndarray
+        time_s, x_m, y_m of the array centre.
+    """
     name = scene.tma_ship_name()
     t = sample_times(scene.duration_s, scene.samples.tma_interval_s)
     if name is None:
@@ -131,7 +193,18 @@ def tma_record(scene: PassiveSceneSettings, rng: np.random.Generator, store=None
 
 
 def ctd_profile(scene: PassiveSceneSettings) -> dict[str, np.ndarray]:
-    """The scene environment's sound-speed profile (depth_m, sound_speed_mps) down to the water depth."""
+    """The scene environment's sound-speed profile as a CTD cast, down to the water depth.
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (``environment``).
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``depth_m`` (m) and ``sound_speed_mps`` (m/s).
+    """
     from sonartrack.acoustics.environment import load_environment
 
     env = load_environment(scene.environment)

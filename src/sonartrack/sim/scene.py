@@ -11,10 +11,17 @@ array 200 m astern (half-wavelength spacing at 300 Hz: 2.5 m), and turns 45 deg 
 half-way through. A merchant and a trawler on the starboard side cross in bearing (and in cone angle)
 at t = 360 s (the P0 situation); a quiet submarine to port is the weak target; a tanker far to port
 is a loud distant contact. Ambient noise 73 dB re 1 uPa^2/Hz (heavy shipping), band 50-1000 Hz.
+
+Every field is bounded to what a sea and a recorder can be (positions within 1000 km, levels within -100..220 dB,
+at most 1024 elements and 1 MHz); across fields, the scene must give a WAV header's whole sample rate, an array
+whose delays stay within a tenth of the synthesis block (the circular delay of sim/array_signals.py), a RAM field
+of at most 200 km, and working arrays within :data:`MEMORY_LIMIT_BYTES` (:meth:`PassiveSceneSettings.memory_needs`):
+each refused in one line naming the figure and the setting.
 """
 
 from __future__ import annotations
 
+import math
 import tomllib
 from functools import cache
 from pathlib import Path
@@ -25,45 +32,73 @@ from pydantic import model_validator
 from sonartrack.acoustics.environment import list_environments
 from sonartrack.core.settings import Settings, setting
 
+#: bounds of the scene's declarations: a position beyond 1000 km, a level beyond these, more elements or a higher
+#: sample rate is a unit slip or a typo, not a scene (and 1024 elements x 1 MHz x 4 bytes still fit the WAV header's
+#: 32-bit byte rate)
+MAX_POSITION_M = 1e6
+MAX_DEPTH_M = 12_000.0
+MAX_DURATION_S = 86_400.0
+MAX_ELEMENTS = 1024
+MAX_SAMPLE_RATE_HZ = 1e6
+MAX_SHIPS = 64
+#: levels in dB: -100 is a silent source (tests switch a source off with it); a ship's spectral source level above
+#: 220 dB re 1 uPa^2/Hz, or an ambient spectral level above 140 dB, is no sea
+MIN_LEVEL_DB = -100.0
+MAX_SOURCE_LEVEL_DB = 220.0
+MAX_NOISE_LEVEL_DB = 140.0
+#: the synthesis delays each element by a circular phase ramp within its block (sim/array_signals.py): the wave's
+#: first |tau| of a block comes from the block's end, so the largest |tau| must stay a small part of the block
+MAX_WRAP_FRACTION = 0.1
+#: the RAM field is computed out to the farthest ship: beyond this range it would take hours
+MAX_RAM_RANGE_M = 200_000.0
+#: working memory the simulator may plan for (bytes): a scene asking for more is refused with the figure
+MEMORY_LIMIT_BYTES = 2 * 1024**3
+
 
 class OwnshipSettings(Settings):
     """The ownship: a straight leg, one course change, a straight leg (sim/platforms.py ManeuveringTrack)."""
 
-    x_m: float = setting(0.0, "start position east", unit="m")
-    y_m: float = setting(0.0, "start position north", unit="m")
+    x_m: float = setting(0.0, "start position east", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    y_m: float = setting(0.0, "start position north", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
     speed_kn: float = setting(6.0, "speed through the water", unit="kn", gt=0, le=40)
-    course_deg: float = setting(0.0, "initial course, clockwise from north", unit="deg")
+    course_deg: float = setting(0.0, "initial course, clockwise from north", unit="deg", ge=-360, le=360)
     turn_deg: float = setting(-45.0, "course change (negative: to port); 0 for none; it makes range and the "
                                      "left/right side observable", unit="deg", ge=-180, le=180)
-    turn_rate_deg_s: float = setting(0.5, "rate of turn", unit="deg/s", gt=0)
+    turn_rate_deg_s: float = setting(0.5, "rate of turn", unit="deg/s", gt=0, le=10)
     turn_start_s: float | None = setting(None, "time the turn starts (not set: the turn is centred on the middle "
-                                               "of the recording)", unit="s", ge=0)
+                                               "of the recording)", unit="s", ge=0, le=MAX_DURATION_S)
 
 
 class ArraySettings(Settings):
     """The towed uniform line array; element 1 is the front (nearest the ship), element N the tail."""
 
-    elements: int = setting(16, "number of hydrophones N", unit="1", ge=2)
-    design_hz: float = setting(300.0, "design frequency: the spacing is half a wavelength there", unit="Hz", gt=0)
-    spacing_m: float | None = setting(None, "element spacing d (not set: c / (2 design_hz))", unit="m", gt=0)
+    elements: int = setting(16, "number of hydrophones N", unit="1", ge=2, le=MAX_ELEMENTS)
+    design_hz: float = setting(300.0, "design frequency: the spacing is half a wavelength there", unit="Hz", gt=0,
+                             le=MAX_SAMPLE_RATE_HZ / 2)
+    spacing_m: float | None = setting(None, "element spacing d (not set: c / (2 design_hz))", unit="m", gt=0,
+                                       le=1000)
     tow_length_m: float = setting(200.0, "distance of the array centre behind the ship along its track (the "
-                                         "array heading lags the ship's by tow_length / speed)", unit="m", ge=0)
-    depth_m: float = setting(50.0, "array depth (receiver depth of the transmission loss)", unit="m", gt=0)
+                                         "array heading lags the ship's by tow_length / speed)", unit="m", ge=0,
+                                  le=10_000)
+    depth_m: float = setting(50.0, "array depth (receiver depth of the transmission loss)", unit="m", gt=0,
+                                 le=MAX_DEPTH_M)
 
 
 class ShipSettings(Settings):
     """A ship at constant velocity radiating broadband noise (flat over the scene's band) and one tonal line."""
 
     name: str = setting(..., "name (the ship column of truth.csv)", unit="")
-    x_m: float = setting(..., "position east at t = 0", unit="m")
-    y_m: float = setting(..., "position north at t = 0", unit="m")
-    course_deg: float = setting(..., "course, clockwise from north", unit="deg")
+    x_m: float = setting(..., "position east at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    y_m: float = setting(..., "position north at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    course_deg: float = setting(..., "course, clockwise from north", unit="deg", ge=-360, le=360)
     speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
-    depth_m: float = setting(5.0, "source depth (of the transmission loss)", unit="m", gt=0)
+    depth_m: float = setting(5.0, "source depth (of the transmission loss)", unit="m", gt=0, le=MAX_DEPTH_M)
     source_level_db: float = setting(..., "broadband spectral source level at 1 m, flat over the band",
-                                     unit="dB re 1 uPa^2/Hz")
-    tonal_hz: float | None = setting(None, "emitted frequency of the tonal line (not set: no tonal)", unit="Hz", gt=0)
-    tonal_level_db: float = setting(0.0, "source level of the tonal line at 1 m", unit="dB re 1 uPa^2")
+                                     unit="dB re 1 uPa^2/Hz", ge=MIN_LEVEL_DB, le=MAX_SOURCE_LEVEL_DB)
+    tonal_hz: float | None = setting(None, "emitted frequency of the tonal line (not set: no tonal)", unit="Hz", gt=0,
+                                     le=MAX_SAMPLE_RATE_HZ / 2)
+    tonal_level_db: float = setting(0.0, "source level of the tonal line at 1 m", unit="dB re 1 uPa^2",
+                                   ge=MIN_LEVEL_DB, le=MAX_SOURCE_LEVEL_DB)
 
 
 class SampleSettings(Settings):
@@ -71,22 +106,25 @@ class SampleSettings(Settings):
 
     pair_elements: list[int] = setting(default_factory=lambda: [1, 9], doc="the two elements written to pair.wav "
                                        "for `sonartrack bearings` (1 = front)", unit="1", min_length=2, max_length=2)
-    ping_interval_s: float = setting(20.0, "active sonar: time between pings (contacts.csv, raw.csv)", unit="s", gt=0)
+    ping_interval_s: float = setting(20.0, "active sonar: time between pings (contacts.csv, raw.csv)", unit="s", gt=0,
+                                     le=3600)
     tx_tow_length_m: float = setting(100.0, "active sonar: transmitter towed this far behind the ship; the "
-                                            "receiver is the array", unit="m", ge=0)
+                                            "receiver is the array", unit="m", ge=0, le=10_000)
     pd: float = setting(0.8, "active sonar: probability of detecting each ship per ping", unit="1", ge=0, le=1)
     clutter_per_scan: float = setting(40.0, "active sonar: mean number of false contacts per ping (over the "
-                                            "square that holds every ship)", unit="1", ge=0)
+                                            "square that holds every ship)", unit="1", ge=0, le=10_000)
     tma_ship: str | None = setting(None, "the ship of brg.csv for `sonartrack tma` (not set: the weakest by "
                                          "broadband source level)", unit="")
-    tma_interval_s: float = setting(10.0, "time between bearings in brg.csv", unit="s", gt=0)
-    sigma_bearing_deg: float = setting(1.0, "bearing noise of brg.csv", unit="deg", ge=0)
-    sigma_freq_hz: float = setting(0.1, "frequency noise of brg.csv", unit="Hz", ge=0)
-    sigma_snr_db: float = setting(1.0, "SNR noise of brg.csv", unit="dB", ge=0)
-    frames: int = setting(6, "range-Doppler frames K in frames.npy (`sonartrack detect`)", unit="1", ge=1)
-    frame_range_cells: int = setting(16, "range cells of frames.npy", unit="1", ge=1)
-    frame_doppler_cells: int = setting(64, "Doppler cells of frames.npy", unit="1", ge=1)
-    frame_snr_db: float = setting(12.0, "SNR of the Swerling-1 target in frames.npy", unit="dB")
+    tma_interval_s: float = setting(10.0, "time between bearings in brg.csv", unit="s", gt=0, le=3600)
+    sigma_bearing_deg: float = setting(1.0, "bearing noise of brg.csv", unit="deg", ge=0, le=30)
+    sigma_freq_hz: float = setting(0.1, "frequency noise of brg.csv", unit="Hz", ge=0, le=10)
+    sigma_snr_db: float = setting(1.0, "SNR noise of brg.csv", unit="dB", ge=0, le=20)
+    frames: int = setting(6, "range-Doppler frames K in frames.npy (`sonartrack detect`)", unit="1", ge=1,
+                         le=1000)
+    frame_range_cells: int = setting(16, "range cells of frames.npy", unit="1", ge=1, le=4096)
+    frame_doppler_cells: int = setting(64, "Doppler cells of frames.npy", unit="1", ge=1, le=4096)
+    frame_snr_db: float = setting(12.0, "SNR of the Swerling-1 target in frames.npy", unit="dB", ge=-30,
+                                 le=60)
 
 
 def _default_ships() -> list[ShipSettings]:
@@ -100,7 +138,13 @@ def _shipped_scene(name: str) -> dict:
 
 
 def scenes_dir() -> Path:
-    """Folder of the shipped scene tables."""
+    """Folder of the scene tables shipped with the package.
+
+    Returns
+    -------
+    pathlib.Path
+        ``sonartrack/data/scenes``.
+    """
     from importlib.resources import files
 
     return Path(str(files("sonartrack") / "data" / "scenes"))
@@ -110,15 +154,16 @@ class PassiveSceneSettings(Settings):
     """A passive towed-array scene and its recording (``sonartrack simulate``; module doc for the default)."""
 
     # at most a day: a day of 16 channels at 4 kHz is already 22 GB
-    duration_s: float = setting(1200.0, "length of the recording", unit="s", gt=0, le=86_400)
-    sample_rate_hz: float = setting(4000.0, "sample rate of the recording", unit="Hz", gt=0)
+    duration_s: float = setting(1200.0, "length of the recording", unit="s", gt=0, le=MAX_DURATION_S)
+    sample_rate_hz: float = setting(4000.0, "sample rate of the recording", unit="Hz", ge=100,
+                                   le=MAX_SAMPLE_RATE_HZ)
     block_s: float = setting(1.0, "synthesis block: geometry is held for a block, noise is drawn per block",
-                             unit="s", gt=0)
+                             unit="s", gt=0, le=600)
     band_hz: list[float] = setting(default_factory=lambda: [50.0, 1000.0], doc="band of the broadband noise "
                                    "(ships and ambient); the recording holds nothing outside it", unit="Hz",
                                    min_length=2, max_length=2)
     noise_level_db: float = setting(73.0, "ambient noise spectral level NL, independent between elements",
-                                    unit="dB re 1 uPa^2/Hz")
+                                    unit="dB re 1 uPa^2/Hz", ge=MIN_LEVEL_DB, le=MAX_NOISE_LEVEL_DB)
     sound_speed_mps: float = setting(1500.0, "sound speed at the array (plane-wave delays, Doppler)", unit="m/s",
                                      gt=1300, lt=1700)
     propagation: Literal["spherical", "ram"] = setting(
@@ -127,13 +172,14 @@ class PassiveSceneSettings(Settings):
     environment: str = setting("south-summer", "shipped environment of the RAM transmission loss and of ctd.csv "
                                                "(see sonartrack tl --list)", unit="")
     tl_average_m: float = setting(1000.0, "range average of the RAM transmission loss (as em-map's)", unit="m",
-                                  ge=0)
+                                  ge=0, le=100_000)
     seed: int = setting(1, "master seed: the recording and each sample input draw from its own child stream",
-                        unit="1", ge=0)
+                        unit="1", ge=0, lt=2**63)
     ownship: OwnshipSettings = setting(default_factory=OwnshipSettings, doc="the ownship")
     array: ArraySettings = setting(default_factory=ArraySettings, doc="the towed line array")
     ships: list[ShipSettings] = setting(default_factory=_default_ships, doc="the ships ([[ships]] tables; empty "
-                                        "for a noise-only recording)", unit="")
+                                        "for a noise-only recording)", unit="",
+                                        max_length=MAX_SHIPS)
     samples: SampleSettings = setting(default_factory=SampleSettings, doc="the sample inputs of the other commands")
 
     @model_validator(mode="after")
@@ -157,7 +203,73 @@ class PassiveSceneSettings(Settings):
             raise ValueError(f"samples.pair_elements must be two different elements in 1..{n}")
         if self.samples.tma_ship is not None and self.samples.tma_ship not in names:
             raise ValueError(f"samples.tma_ship '{self.samples.tma_ship}' is not a ship of the scene ({names})")
+        self._check_recording()
+        self._check_reach()
+        for need, what, fix in self.memory_needs():
+            if need > MEMORY_LIMIT_BYTES:
+                raise ValueError(f"{what} would take {need / 1e9:.3g} GB of memory, more than the "
+                                 f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB the simulator plans for: {fix}")
         return self
+
+    def _check_recording(self) -> None:
+        """What the WAV file and the block synthesis need of the sample rate and the array's length."""
+        fs = self.sample_rate_hz
+        if not float(fs).is_integer():
+            raise ValueError(f"sample_rate_hz {fs:g} is not a whole number of samples per second, which is all a WAV "
+                             f"header holds: give {round(fs)}")
+        half_delay_s = 0.5 * (self.array.elements - 1) * self.spacing_m / self.sound_speed_mps
+        if half_delay_s > MAX_WRAP_FRACTION * self.block_s:
+            need_s = half_delay_s / MAX_WRAP_FRACTION
+            raise ValueError(f"the array ({self.array.elements} elements {self.spacing_m:g} m apart) delays a wave by "
+                             f"up to {half_delay_s:.3g} s from its centre, which wraps round "
+                             f"{100 * min(half_delay_s / self.block_s, 1):.0f} % of each {self.block_s:g} s "
+                             f"synthesis block (at most {100 * MAX_WRAP_FRACTION:.0f} %): set block_s >= "
+                             f"{need_s:.3g} s, or check array.spacing_m (metres)")
+
+    def _check_reach(self) -> None:
+        """The RAM field is computed out to the farthest ship: refuse a scene that would need hours of it."""
+        if self.propagation != "ram" or not self.ships:
+            return
+        from sonartrack.core.units import KNOT_MPS
+
+        o = self.ownship
+        reach = max(math.hypot(s.x_m - o.x_m, s.y_m - o.y_m) + (s.speed_kn + o.speed_kn) * KNOT_MPS * self.duration_s
+                    for s in self.ships) + self.array.tow_length_m
+        if reach > MAX_RAM_RANGE_M:
+            raise ValueError(f"propagation = ram would compute the field out to {reach / 1e3:.0f} km (the farthest "
+                             f"ship), more than {MAX_RAM_RANGE_M / 1e3:.0f} km: use propagation = spherical, or bring "
+                             "the ships nearer or shorten duration_s")
+
+    def memory_needs(self) -> list[tuple[float, str, str]]:
+        """The simulation's largest working arrays: bytes, what they hold and sizes them, and the fix.
+
+        One synthesis block (sim/array_signals.py: the ships' phase ramps S x N x n_band and the element spectra,
+        complex128), the block plan (delays B x S x N, float64), the truth table (a row per second and ship) and
+        frames.npy (K x Nr x Nd); a few temporaries of each are counted.
+
+        Returns
+        -------
+        list of (float, str, str)
+            Bytes (estimate), what needs them (with the settings that size it), and how to make it smaller.
+        """
+        fs = self.sample_rate_hz
+        nb = round(self.block_s * fs)
+        n_band = max(int((self.band_hz[1] - self.band_hz[0]) * self.block_s) + 1, 1)
+        n, s = self.array.elements, max(len(self.ships), 1)
+        n_blocks = math.ceil(self.duration_s / self.block_s)
+        sp = self.samples
+        return [
+            (16.0 * (2 * s * n * n_band + 3 * n * (nb // 2 + 1)) + 24.0 * n * nb,
+             f"one synthesis block ({s} ship(s) x {n} elements x {n_band} bins of band_hz over block_s)",
+             "shorten block_s, narrow band_hz or use fewer array.elements"),
+            (24.0 * n_blocks * s * n, f"the block plan ({n_blocks} blocks x {s} ship(s) x {n} elements)",
+             "lengthen block_s, shorten duration_s or use fewer array.elements"),
+            (16.0 * 20 * (math.floor(self.duration_s) + 2) * s, f"truth.csv ({math.floor(self.duration_s) + 2} "
+             f"seconds x {s} ship(s))", "shorten duration_s or give fewer ships"),
+            (24.0 * sp.frames * sp.frame_range_cells * sp.frame_doppler_cells, f"frames.npy ({sp.frames} frames x "
+             f"{sp.frame_range_cells} x {sp.frame_doppler_cells} cells)",
+             "lower samples.frames, frame_range_cells or frame_doppler_cells"),
+        ]
 
     @property
     def spacing_m(self) -> float:
@@ -174,7 +286,13 @@ class PassiveSceneSettings(Settings):
         return max(0.5 * self.duration_s - 0.5 * abs(o.turn_deg) / o.turn_rate_deg_s, 0.0)
 
     def tma_ship_name(self) -> str | None:
-        """The ship of the TMA sample: the named one, else the quietest (None without ships)."""
+        """The ship of the TMA sample (brg.csv): the named one, else the quietest by broadband source level.
+
+        Returns
+        -------
+        str or None
+            Its name; None without ships.
+        """
         if self.samples.tma_ship is not None:
             return self.samples.tma_ship
         if not self.ships:

@@ -15,7 +15,12 @@ into a Stone Soup tracker in place of Stone Soup's:
   :func:`imm_ipda_tracker` -- stonesoup/imm.py;
 * :class:`MGEKFUpdater` (modified-gain EKF, paper P2) and the bearing + frequency measurement model
   :class:`BearingFrequency` with :class:`RelativeConstantVelocity` -- stonesoup/mgekf.py, models.py;
-* converters between our arrays and files and Stone Soup's types -- stonesoup/convert.py.
+* converters between our arrays and files and Stone Soup's types -- stonesoup/convert.py;
+* Stone Soup's OSPA and GOSPA metric generators over our tables of time, id and position
+  (:mod:`sonartrack.stonesoup.metrics`, imported on its own; our own are metrics/ospa.py).
+
+The components' defaults are the declarations of sonartrack's tracker (tracking/settings.py), read by
+stonesoup/defaults.py, and the IMM-IPDA weights and mixture are association/pda.py's.
 
 The rest of sonartrack never imports this subpackage (nor Stone Soup).
 """

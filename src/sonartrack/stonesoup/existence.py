@@ -3,7 +3,8 @@
 IPDA starts a tentative track on every detection that no track explains, with an initial existence
 probability P0, and lets the data decide: the track is confirmed once P(E) exceeds a confirmation
 threshold and deleted once it falls below a termination threshold (the thresholds trade confirmed
-true tracks against false tracks; paper P4 uses the same rule, tracking/deleters.py).
+true tracks against false tracks; paper P4 uses the same rule, tracking/deleters.py). P0 and the two
+thresholds default to the declarations of sonartrack's tracker (tracking/settings.py, stonesoup/defaults.py).
 
 * :class:`ExistenceInitiator` wraps any Stone Soup initiator and gives its tracks P(E) = P0
   (they become :class:`~sonartrack.stonesoup.tracks.ExistenceTrack`).
@@ -18,6 +19,7 @@ from stonesoup.deleter.base import Deleter
 from stonesoup.initiator.base import Initiator
 from stonesoup.types.numeric import Probability
 
+from sonartrack.stonesoup.defaults import tracker_default
 from sonartrack.stonesoup.tracks import CONFIRMED, EXISTENCE, ExistenceTrack, existence_of
 
 
@@ -25,7 +27,8 @@ class ExistenceInitiator(Initiator):
     """Tracks of ``initiator`` with existence probability ``initial_existence`` (module doc)."""
 
     initiator: Initiator = Property(doc="Initiator that makes the tracks' states (e.g. SimpleMeasurementInitiator)")
-    initial_existence: Probability = Property(default=Probability(0.1), doc="P0, the new tracks' existence probability")
+    initial_existence: Probability = Property(default=Probability(tracker_default("initial_existence")),
+                                              doc="P0, the new tracks' existence probability")
 
     def initiate(self, detections, timestamp, **kwargs):
         """The wrapped initiator's tracks, as ExistenceTracks with P(E) = P0."""
@@ -37,9 +40,11 @@ class ExistenceInitiator(Initiator):
 class ExistenceDeleter(Deleter):
     """Delete tracks whose existence probability is below ``deletion_threshold``; confirm above the other."""
 
-    deletion_threshold: Probability = Property(default=Probability(0.01), doc="delete when P(E) < this")
-    confirmation_threshold: Probability = Property(default=None,
-                                                   doc="mark metadata['confirmed'] = True once P(E) > this")
+    deletion_threshold: Probability = Property(default=Probability(tracker_default("terminate_threshold")),
+                                               doc="delete when P(E) < this")
+    confirmation_threshold: Probability = Property(default=Probability(tracker_default("confirm_threshold")),
+                                                   doc="mark metadata['confirmed'] = True once P(E) > this (None: "
+                                                       "never)")
 
     def check_for_deletion(self, track, **kwargs):
         """True when P(E) < deletion_threshold; marks the track confirmed when P(E) > confirmation_threshold."""

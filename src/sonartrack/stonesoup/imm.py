@@ -32,6 +32,9 @@ in the track's metadata under :data:`EXISTENCE` (and on the update as ``existenc
     mode update    mu_r = c_r Lambda_r / Lambda,   Lambda = sum_r c_r Lambda_r   (= 1 - delta)
     existence      P(E) = Lambda P(E)- / (1 - P(E)- + Lambda P(E)-)
 
+The weights and the mode PDA are association/pda.py's (``pda_weights``, ``pda_mixture_update`` with each
+detection's own cross-covariance P-_r H_m^T): one implementation of P4's eqs. 13-20 in sonartrack.
+
 :class:`IMMIPDATracker` runs it with one-point initiation and existence-threshold confirmation and deletion,
 the same steps as sonartrack's ``tracking.configurations.position_tracker``; :func:`imm_ipda_tracker` builds it
 from that tracker's settings with Stone Soup's constant-velocity models and Kalman filters in the modes.
@@ -70,12 +73,13 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 
 from sonartrack.association.gating import gate_threshold
 from sonartrack.association.ipda import existence_predict, existence_update
-from sonartrack.association.likelihood import gaussian_log_ratio, mahalanobis2
+from sonartrack.association.likelihood import Likelihoods, gaussian_log_ratio, mahalanobis2
+from sonartrack.association.pda import pda_mixture_update, pda_weights
 from sonartrack.core.errors import InputError, require
 from sonartrack.core.gaussian import inv_and_logdet
-from sonartrack.core.linalg import symmetrize
 from sonartrack.filters.ekf import gaussian_loglik
 from sonartrack.filters.imm import imm_combine, imm_mix, imm_mixing, imm_mode_update, validate_transition_matrix
+from sonartrack.stonesoup.defaults import tracker_default
 from sonartrack.stonesoup.tracks import CONFIRMED, EXISTENCE, existence_of
 from sonartrack.tracking.settings import PositionTrackerSettings
 
@@ -352,17 +356,15 @@ def track_existence(track) -> float:
     return existence_of(track, getattr(current_state(track), "existence_probability", None))
 
 
-def ipda_mode_weights(log_ratio, pd: float, pg: float):
-    """Per-mode PDA weights of the gated detections (association/pda.py, P4 eqs. 13-18).
+def track_likelihoods(log_ratio, nu, S_inv, pd: float, pg: float) -> Likelihoods:
+    """One track's gated detections in association/likelihood.py's layout (n = 1 track, g gated pairs), the input
+    of association/pda.py's weights and mixture (P4 eqs. 13-20).
 
-    ``log_ratio (r, g)``: log N(nu_rm; 0, S_rm) - log rho. Returns ``weights (r, 1 + g)`` = [beta_r0, beta_rm]
-    and ``log Lambda_r (r,)`` with Lambda_r = 1 - P_D P_G + P_D sum_m exp(log_ratio_rm).
-    """
-    ratio = np.exp(np.minimum(log_ratio, 700.0))  # as association/pda.py: ratios near 1 matter
-    miss = 1.0 - pd * pg
-    lam = miss + pd * ratio.sum(axis=-1)
-    weights = np.concatenate([np.full((len(lam), 1), miss), pd * ratio], axis=1) / lam[:, None]
-    return weights, np.log(lam)
+    ``log_ratio (r, g)``: log N(nu_rm; 0, S_rm) - log rho; ``nu (r, g, k)``; ``S_inv (r, g, k, k)``."""
+    g = log_ratio.shape[1]
+    return Likelihoods(pair_log_ratio=log_ratio.T, gated=np.ones((1, g), bool), pd=float(pd), miss=1.0 - pd * pg,
+                       pair_track=np.zeros(g, dtype=np.intp), pair_meas=np.arange(g), nu=np.swapaxes(nu, 0, 1),
+                       S_inv=np.swapaxes(S_inv, 0, 1), dense_log_ratio=log_ratio[None])
 
 
 def detection_moments(imm_updater: IMMUpdater, state: IMMState, detections):
@@ -393,6 +395,8 @@ class IMMIPDAHypotheses(MultipleHypothesis):
     existence_prediction: float = Property(default=None, doc="P(E)k|k-1, the predicted existence probability")
     log_mode_likelihood_ratios: np.ndarray = Property(default=None, doc="log Lambda_r (r,)")
     mode_weights: np.ndarray = Property(default=None, doc="(r, 1 + g): beta_r0, then beta_rm per gated detection")
+    likelihoods: Likelihoods = Property(
+        default=None, doc="The gated detections' nu_rm, S_rm^-1 and log ratios (association/likelihood.py, one track)")
     innovations: np.ndarray = Property(default=None, doc="nu_rm (r, g, k)")
     innovation_covars: np.ndarray = Property(default=None, doc="S_rm (r, g, k, k)")
     cross_covars: np.ndarray = Property(default=None, doc="P-_r H_m^T (r, g, n, k)")
@@ -401,15 +405,19 @@ class IMMIPDAHypotheses(MultipleHypothesis):
 class IMMIPDAHypothesiser(Hypothesiser):
     """IMM-IPDA hypotheses of a track (module doc; P4 Fig. 3): IMM prediction, existence prediction, the union
     of the modes' chi-square gates, and the PDA weights of every mode. Detections are one scan at ``timestamp``.
-    Defaults are paper P4's tracker (tracking/settings.py: PositionTrackerSettings)."""
+    Defaults are the declarations of sonartrack's tracker (tracking/settings.py: PositionTrackerSettings, paper
+    P4's values; read by stonesoup/defaults.py). The weights and the mode updates are association/pda.py's."""
 
     predictor: IMMPredictor = Property(doc="IMM predictor")
     updater: IMMUpdater = Property(doc="IMM updater: its mode updater gives the measurement predictions")
     clutter_spatial_density: float = Property(doc="Clutter density rho (per unit measurement volume, e.g. 1/m^2)")
-    prob_detect: float = Property(default=0.8, doc="Probability of detection P_D")
-    prob_gate: float = Property(default=0.99, doc="Gate probability P_G (sets the chi-square gate gamma)")
-    prob_survive: float = Property(default=0.98, doc="Existence Markov chain p11: the target survives a scan")
-    prob_birth: float = Property(default=0.0, doc="Existence Markov chain p21: a non-existing target appears")
+    prob_detect: float = Property(default=tracker_default("pd"), doc="Probability of detection P_D")
+    prob_gate: float = Property(default=tracker_default("gate_probability"),
+                                doc="Gate probability P_G (sets the chi-square gate gamma)")
+    prob_survive: float = Property(default=tracker_default("p_survive"),
+                                   doc="Existence Markov chain p11: the target survives a scan")
+    prob_birth: float = Property(default=tracker_default("p_birth"),
+                                 doc="Existence Markov chain p21: a non-existing target appears")
 
     def hypothesise(self, track, detections, timestamp, **kwargs) -> IMMIPDAHypotheses:
         detections = list(detections)
@@ -423,34 +431,21 @@ class IMMIPDAHypothesiser(Hypothesiser):
             d2 = mahalanobis2(nu, S_inv)
             gated = np.nonzero((d2 < gate_threshold(self.prob_gate, k)).any(axis=0))[0]
             log_ratio = gaussian_log_ratio(logdet, d2, k, np.log(self.clutter_spatial_density))[:, gated]
-            nu, S, cross = nu[:, gated], S[:, gated], cross[:, gated]
+            nu, S, S_inv, cross = nu[:, gated], S[:, gated], S_inv[:, gated], cross[:, gated]
         else:
             gated, log_ratio = np.zeros(0, int), np.zeros((r, 0))
             nu, S, cross = np.zeros((r, 0, 0)), np.zeros((r, 0, 0, 0)), np.zeros((r, 0, n, 0))
-        weights, log_lam = ipda_mode_weights(log_ratio, self.prob_detect, self.prob_gate)
+            S_inv = S
+        lik = track_likelihoods(log_ratio, nu, S_inv, self.prob_detect, self.prob_gate)
+        w = pda_weights(lik)  # association/pda.py: beta0 (1, r), beta (1, r, g), log Lambda_r (1, r)
+        weights, log_lam = np.concatenate([w.beta0[0, :, None], w.beta[0]], axis=1), w.log_lambda[0]
         marginal = imm_mode_update(prediction.mode_probabilities, log_lam)[0] @ weights
         hyps = [SingleProbabilityHypothesis(prediction, MissedDetection(timestamp=timestamp), Probability(marginal[0]))]
         hyps += [SingleProbabilityHypothesis(prediction, detections[m], Probability(b))
                  for m, b in zip(gated, marginal[1:], strict=True)]
         return IMMIPDAHypotheses(hyps, existence_prediction=e_pred, log_mode_likelihood_ratios=log_lam,
-                                 mode_weights=weights, innovations=nu, innovation_covars=S, cross_covars=cross)
-
-
-def pda_mode_update(x_pred, P_pred, weights, nu, S, cross):
-    """PDA update of every mode by Gaussian-mixture reduction (association/pda.py, P4 eqs. 19-20).
-
-    K_rm = C_rm S_rm^-1, dx_rm = K_rm nu_rm, dx_r = sum_m beta_rm dx_rm;  x_r = x-_r + dx_r,
-    P_r = beta_r0 P-_r + sum_m beta_rm (P-_r - K_rm S_rm K_rm^T + dx_rm dx_rm^T) - dx_r dx_r^T.
-    """
-    if nu.shape[1] == 0:
-        return x_pred.copy(), weights[:, 0, None, None] * P_pred
-    K = cross @ np.linalg.inv(S)  # (r, g, n, k)
-    dx = np.einsum("rgnk,rgk->rgn", K, nu)
-    b = weights[:, 1:]
-    dx_mean = np.einsum("rg,rgn->rn", b, dx)
-    term = P_pred[:, None] - K @ S @ np.swapaxes(K, -1, -2) + dx[..., :, None] * dx[..., None, :]
-    P = weights[:, 0, None, None] * P_pred + np.einsum("rg,rgnm->rnm", b, term)
-    return x_pred + dx_mean, symmetrize(P - dx_mean[:, :, None] * dx_mean[:, None, :])
+                                 mode_weights=weights, likelihoods=lik, innovations=nu, innovation_covars=S,
+                                 cross_covars=cross)
 
 
 class IMMIPDAUpdater(IMMUpdater):
@@ -462,8 +457,10 @@ class IMMIPDAUpdater(IMMUpdater):
         if not isinstance(hypotheses, IMMIPDAHypotheses):
             return super().update(hypotheses, **kwargs)
         pred = hypotheses.single_hypotheses[0].prediction
-        x, P = pda_mode_update(pred.mode_means, pred.mode_covars, hypotheses.mode_weights, hypotheses.innovations,
-                               hypotheses.innovation_covars, hypotheses.cross_covars)
+        w = hypotheses.mode_weights  # association/pda.py's mixture of the mode's Kalman updates (P4 eqs. 19-20)
+        x, P = pda_mixture_update(pred.mode_means[None], pred.mode_covars[None], hypotheses.likelihoods, w[None, :, 0],
+                                  w[None, :, 1:], cross=np.swapaxes(hypotheses.cross_covars, 0, 1))
+        x, P = x[0], P[0]
         mu, log_total = imm_mode_update(pred.mode_probabilities, hypotheses.log_mode_likelihood_ratios)
         existence = float(existence_update(hypotheses.existence_prediction, np.exp(log_total)))
         return IMMStateUpdate.from_modes(x, P, mu, timestamp=pred.timestamp, hypothesis=hypotheses,
@@ -486,12 +483,17 @@ class IMMIPDATracker(Tracker):
     hypothesiser: IMMIPDAHypothesiser = Property(doc="IMM-IPDA hypothesiser")
     updater: IMMIPDAUpdater = Property(doc="IMM-IPDA updater")
     detector: DetectionReader = Property(default=None, doc="Detector to iterate over (or call update_tracker)")
-    velocity_std: float = Property(default=5.0, doc="One-point initiation: standard deviation of the zero-mean "
-                                                    "prior of the unmeasured state entries (m/s for CV)")
-    initial_existence: float = Property(default=0.05, doc="P(E) of a new one-point track")
-    confirm_threshold: float = Property(default=0.9, doc="Confirm a track when P(E) exceeds this")
-    terminate_threshold: float = Property(default=0.01, doc="Delete a track when P(E) falls below this")
-    max_tracks: int = Property(default=2000, doc="Most live tracks; detections beyond it start no track")
+    velocity_std: float = Property(default=tracker_default("init_velocity_std_mps"),
+                                   doc="One-point initiation: standard deviation of the zero-mean prior of the "
+                                       "unmeasured state entries (m/s for CV)")
+    initial_existence: float = Property(default=tracker_default("initial_existence"),
+                                        doc="P(E) of a new one-point track")
+    confirm_threshold: float = Property(default=tracker_default("confirm_threshold"),
+                                        doc="Confirm a track when P(E) exceeds this")
+    terminate_threshold: float = Property(default=tracker_default("terminate_threshold"),
+                                          doc="Delete a track when P(E) falls below this")
+    max_tracks: int = Property(default=tracker_default("max_tracks"),
+                               doc="Most live tracks; detections beyond it start no track")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)

@@ -39,6 +39,7 @@ from stonesoup.types.numeric import Probability
 
 from sonartrack.association.ipda import existence_predict, existence_update
 from sonartrack.core.errors import InputError
+from sonartrack.stonesoup.defaults import tracker_default
 from sonartrack.stonesoup.hypotheses import tabulate, weighted_hypotheses
 from sonartrack.stonesoup.jpda import exact_log_marginals
 from sonartrack.stonesoup.tracks import EXISTENCE, existence_of, stage
@@ -58,10 +59,10 @@ class IPDAHypothesiser(PDAHypothesiser):
     Its weights are left unnormalised by default: IPDA and JIPDA need their sum Lambda (they refuse a
     hypothesiser with ``normalise=True``). Otherwise its hypotheses are exactly a ``PDAHypothesiser``'s."""
 
-    prob_survive: Probability = Property(default=Probability(0.98), doc="p11: a target that exists still exists "
-                                         "at the next scan (per scan)")
-    prob_birth: Probability = Property(default=Probability(0.0), doc="p21: a target that does not exist appears "
-                                       "by the next scan (per scan)")
+    prob_survive: Probability = Property(default=Probability(tracker_default("p_survive")),
+                                         doc="p11: a target that exists still exists at the next scan (per scan)")
+    prob_birth: Probability = Property(default=Probability(tracker_default("p_birth")),
+                                       doc="p21: a target that does not exist appears by the next scan (per scan)")
     default_existence: Probability = Property(default=None, doc="P(E) of a track with none in its metadata; None: "
                                               "such a track is an error (1: IPDA acts as PDA, JIPDA as JPDA)")
     normalise: bool = Property(default=False, doc="Normalise the weights (IPDA and JIPDA need False)")

@@ -49,6 +49,8 @@ STUDIES: dict[str, str] = {
     "tma-sensitivity": "sonartrack.studies.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.studies.bistatic_imm_ipda",
     "passive-chain": "sonartrack.studies.passive_chain",
+    "quiet-target": "sonartrack.studies.quiet_target",
+    "active-chain": "sonartrack.studies.active_chain",
 }
 
 

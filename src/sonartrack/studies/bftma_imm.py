@@ -71,7 +71,7 @@ class Config(Settings):
     * Divergence: position error above 25 % of the true range (or a numerical failure), checked at
       the target's turn (end of the constant-velocity segment, where every filter's model is right)
       and at the end of the run (metrics/tma_errors.py). The paper defines no divergence test; study
-      bftma-sensitivity (issue 13) re-evaluates the end-of-run claim under other thresholds (10/25/50 %),
+      bftma-sensitivity re-evaluates the end-of-run claim under other thresholds (10/25/50 %),
       checkpoints (fixed times, any record after the turn, the whole last 5 min), a NEES consistency test,
       other q banks, initialisations and sigma_f. It holds only where a transient excursion after the turn
       that later recovers counts as divergence, or where divergence means an inconsistent covariance

@@ -1,4 +1,4 @@
-"""Sensitivity of study P2's claim ``mgekf-divergence-end`` to the choices the paper leaves open (issue 13).
+"""Sensitivity of study P2's claim ``mgekf-divergence-end`` to the choices the paper leaves open.
 
 Yoo & Song (paper P2) give the model only; the divergence definition, the process-noise values and the
 initialisation are our choices (studies/bftma_imm.py). This study re-runs bftma-imm's scenario under

@@ -16,6 +16,8 @@ report/figures/bistatic_imm_ipda.py.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from pydantic import model_validator
 
@@ -153,9 +155,28 @@ LABELS = {"ipda_small": "IPDA small q", "ipda_mid": "IPDA middle q", "ipda_large
 
 
 # ---- simulate -> estimate ----------------------------------------------------------------------
+class _TowingShip:
+    """The ownship with its towed bodies' true positions kept per (time, cable): every run of a study tows
+    along the same track, so they are computed once per process instead of once per run (same numbers)."""
+
+    def __init__(self, ship: ManeuveringTrack):
+        self.ship, self.turns, self._towed = ship, ship.turns, {}
+
+    def towed(self, t_s: float, cable_m: float):
+        key = (float(t_s), float(cable_m))
+        if key not in self._towed:
+            self._towed[key] = self.ship.towed(t_s, cable_m)
+        return self._towed[key]
+
+
+@functools.lru_cache(maxsize=4)
+def _towing(ship: ManeuveringTrack) -> _TowingShip:
+    return _TowingShip(ship)
+
+
 def simulate(config: Config, rng: np.random.Generator):
     """The scans of one run (sim/bistatic_sonar.py) and the target's true states (n_scans, 4)."""
-    ship, sonar = config.ownship(), config.sonar()
+    ship, sonar = _towing(config.ownship()), config.sonar()
     truth = config.target_states()
     return [simulate_scan(rng, sonar, ship, float(t), truth[k, :2]) for k, t in enumerate(config.times_s())], truth
 

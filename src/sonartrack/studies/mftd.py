@@ -80,7 +80,7 @@ class Config(Settings):
       second order), which sums to 1 within a few per cent; the printed form is run too
       (``centre`` curve) so the difference is measured, not assumed.
     * **Decision sum** over the N tracks kept after the last frame's pruning (``final = "kept"``), eq. 20
-      as printed (issue 13: adopted as the default, the literal reading). The paper, sec. IV: "제안하는
+      as printed (adopted as the default: the literal reading). The paper, sec. IV: "제안하는
       준 최적해는 (9)의 최적해와는 달리 M^K 개의 트랙 대신, 그림 3의 감축과정을 거치고 남은 N 개의 트랙
       정보들만으로 판정을 내린다" (unlike the optimum (9), the proposed suboptimal solution decides with only
       the N tracks left after the reduction loop of Fig. 3, instead of M^K tracks), and the loop "최종판정

@@ -1,9 +1,9 @@
-"""Sensitivity of study P1's failing claims to the choices the paper leaves open (issue 13, items 1 and 5).
+"""Sensitivity of study P1's failing claims to the choices the paper leaves open.
 
 Im & Kim 1996 (paper P1) leave open the plane size, how the prior density of eq. 19 meets a cell
 (printed: N(v; w_k, B_k) at the cell centre, "centre"; ours: N(v; w_k, B_k + R), "smoothed") and
 whether the statistic sums over the N tracks kept after the last frame (eq. 20, ``final="kept"``, the
-mftd study's default since issue 13) or over all N x M branches of that frame (``final="branches"``, its
+mftd study's default since the fidelity review) or over all N x M branches of that frame (``final="branches"``, its
 earlier default). This study re-runs the mftd study's claims
 
 * ``pd_falls_with_sigma_a``          Pd(sigma_a) falls step by step at N = 10 (Fig. 5),

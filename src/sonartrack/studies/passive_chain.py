@@ -2,10 +2,10 @@
 
 Each trial simulates the default passive scene of ``sonartrack simulate`` (sim/scene.py: 16-element array,
 ownship turning 45 deg to port mid-recording, four ships of which two cross in bearing and one is weak)
-with its own seed, and runs the chain of ``sonartrack passive`` on it (passive/chain.py: beamforming,
-JPDA_A bearing tracks, side decision, batch ML and IMM-MGEKF). The same peaks are also tracked with plain
-JPDA, and a noise-only recording of the same length (no ship) is run through the chain. Checks
-(the issue's list):
+with its own seed, and runs the chain of ``sonartrack passive`` on it (systems/passive/chain.py
+:func:`run_passive`: beamforming, JPDA_A bearing tracks, side decision, batch ML and IMM-MGEKF). The same peaks
+are also tracked with plain JPDA (the run's ``plain_jpda`` option), and a noise-only recording of the same length
+(no ship) is run through the chain. Checks (the requirements the chain was built to):
 
 * hold: each ship is held by a confirmed track (within ``match_deg`` of its true cone angle) for >= 80 %
   of the windows in which its SNR is above the detection threshold (the front end's level at its true
@@ -26,8 +26,8 @@ import numpy as np
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.experiment.claims import Claim
-from sonartrack.passive.settings import PassiveSettings
 from sonartrack.sim.scene import PassiveSceneSettings
+from sonartrack.systems.passive.settings import FrontEndSettings, PassiveSettings
 
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on simulated towed-array scenes (our own study)"
@@ -50,11 +50,10 @@ def study_chain() -> PassiveSettings:
     it merges the crossing ships and loses the tanker where it crosses the merchant in the turn. Broadband
     grating lobes move with frequency and smear over bearing, and on these scenes the wide band measures
     better (quick, seed 1: trawler held 0.99 vs 0.96 of its detectable time, crossing identities kept; no false
-    target in either). The safe band's full-size numbers are in the closing note of issue 11; rerun them with a
-    ``--config`` file holding ``[chain.front_end]``, ``band_hz = [150.0, 300.0]``, ``allow_grating_lobes = false``."""
-    from sonartrack.acoustics.beamforming import BeamformerSettings
-
-    return PassiveSettings(front_end=BeamformerSettings(band_hz=[50.0, 1000.0], allow_grating_lobes=True))
+    target in either). At full size the safe band holds 4 of the 5 checks (the tanker's ML fails its CRB check:
+    its track breaks where it crosses the merchant in the turn); rerun it with a ``--config`` file holding
+    ``[chain.front_end]``, ``band_hz = [150.0, 300.0]``, ``allow_grating_lobes = false``."""
+    return PassiveSettings(front_end=FrontEndSettings(band_hz=[50.0, 1000.0], allow_grating_lobes=True))
 
 
 class Config(Settings):
@@ -76,7 +75,9 @@ class Config(Settings):
 
     @classmethod
     def quick(cls) -> Config:
-        return cls(runs=2)
+        """Demo preset: one run (a ship scene and a noise-only scene, ~20 s of computing); every check is
+        computed on it."""
+        return cls(runs=1)
 
 
 def ship_names(config: Config) -> list[str]:
@@ -99,18 +100,21 @@ def navigation(geometry):
                       g.array_xy[:, 1], np.unwrap(g.array_heading_rad))
 
 
-def run_chain(config: Config, scene: PassiveSceneSettings, *, amplitude_aided: bool = True):
-    """The chain on ``scene``'s recording (synthesised block by block, twice: one pass per stage that reads it)."""
-    from sonartrack.passive.chain import run_passive
+def run_chain(config: Config, scene: PassiveSceneSettings, *, plain_jpda: bool = False):
+    """The chain on ``scene``'s recording (synthesised block by block, twice: one pass per stage that reads it);
+    ``plain_jpda``: also track the peaks with plain JPDA (:func:`~sonartrack.systems.passive.chain.run_passive`).
+    Returns (the chain's result, the navigation)."""
     from sonartrack.sim.array_signals import array_blocks, plan_blocks
     from sonartrack.sim.passive_scene import scene_geometry
+    from sonartrack.systems.passive.chain import run_passive
 
     settings = chain_settings(config)
+    stages = settings.stages(scene.sample_rate_hz)
     plan = plan_blocks(scene)
-    n_windows = int(scene.duration_s // settings.front_end.window_s)
+    n_windows = int(scene.duration_s // settings.window_s)
     nav = navigation(scene_geometry(scene, np.arange(0.0, np.floor(scene.duration_s) + 1.0)))
     blocks = lambda: array_blocks(scene, np.random.default_rng(scene.seed), plan=plan)  # noqa: E731
-    return run_passive(blocks, scene.sample_rate_hz, n_windows, nav, settings, amplitude_aided=amplitude_aided), nav
+    return run_passive(blocks, n_windows, nav, stages, plain_jpda=plain_jpda), nav
 
 
 def running_median(x, width: int) -> np.ndarray:
@@ -131,7 +135,7 @@ def window_truth(scene: PassiveSceneSettings, result):
     Its SNR as the detector sees it is the front end's normalised level at its true cone angle (linear between
     beams), as a running median over ``SNR_MEDIAN_WINDOWS`` windows (the ship's level, not a noise peak that
     happens to fall on its cone angle); it counts when that level reaches the threshold and no other ship lies
-    within one beamwidth (``PassiveSettings.min_separation_for``), where the level would be the other ship's.
+    within one beamwidth (``PassiveStages.min_separation_deg``), where the level would be the other ship's.
     A noise-limited formula (z = N SNR sqrt(bins)) would overrate a weak ship next to loud ones: their
     sidelobes, not the noise, set the background spread of the normaliser (measured: the submarine's formula z
     is 5 on the wide band, its level at its own cone angle rarely reaches 4)."""
@@ -147,15 +151,16 @@ def window_truth(scene: PassiveSceneSettings, result):
     at_ship = running_median(at_ship, SNR_MEDIAN_WINDOWS)
     sep = np.abs(cone[:, None, :] - cone[None, :, :])
     sep[np.arange(len(cone)), np.arange(len(cone))] = np.inf
-    alone = sep.min(axis=1) >= result.settings.min_separation_for(scene.sample_rate_hz) if len(cone) else at_ship
-    return g, cone, (at_ship >= result.settings.front_end.threshold) & alone
+    alone = sep.min(axis=1) >= result.stages.min_separation_deg if len(cone) else at_ship
+    return g, cone, (at_ship >= result.settings.threshold) & alone
 
 
 def held_by_track(tracks, tw, cone_true_deg, match_deg: float) -> np.ndarray:
-    """(S, T) True where a confirmed track lies within ``match_deg`` of the ship's cone angle at window t."""
-    conf = tracks[tracks["confirmed"].astype(bool)]
-    k = np.searchsorted(tw, conf["time_s"].to_numpy(float))
-    cone = conf["bearing_deg"].to_numpy(float)
+    """(S, T) True where a confirmed track (of ``tracks``, a :class:`~sonartrack.tracking.run.BearingTracks`) lies
+    within ``match_deg`` of the ship's cone angle at window t."""
+    conf = np.asarray(tracks.confirmed).astype(bool)
+    k = np.searchsorted(tw, np.asarray(tracks.time_s, float)[conf])
+    cone = np.asarray(tracks.bearing_deg, float)[conf]
     held = np.zeros(cone_true_deg.shape, bool)
     for s in range(cone_true_deg.shape[0]):
         near = np.abs(cone - cone_true_deg[s, np.clip(k, 0, len(tw) - 1)]) < match_deg
@@ -223,14 +228,15 @@ def identity_kept(tracks, tw, cone_true_deg, pair: tuple[int, int], window_s: fl
     their crossing (and the two tracks differ), 0 if not, NaN if a ship is not held before the crossing."""
     a, b = pair
     k_cross = int(np.argmin(np.abs(cone_true_deg[a] - cone_true_deg[b])))
-    conf = tracks[tracks["confirmed"].astype(bool)]
+    conf = np.asarray(tracks.confirmed).astype(bool)
+    t, cone, tid = (np.asarray(x)[conf] for x in (tracks.time_s, tracks.bearing_deg, tracks.track_id))
 
     def follower(ship: int, k: int):
         if not 0 <= k < len(tw):
             return None
-        rows = conf[conf["time_s"] == tw[k]]
-        off = np.abs(rows["bearing_deg"].to_numpy(float) - cone_true_deg[ship, k])
-        return int(rows["track_id"].to_numpy()[np.argmin(off)]) if len(off) and off.min() < match_deg else None
+        rows = t == tw[k]
+        off = np.abs(cone[rows].astype(float) - cone_true_deg[ship, k])
+        return int(tid[rows][np.argmin(off)]) if len(off) and off.min() < match_deg else None
 
     dk = int(round(window_s / (tw[1] - tw[0]))) if len(tw) > 1 else 0
     before = [follower(s, k_cross - dk) for s in pair]
@@ -241,14 +247,12 @@ def identity_kept(tracks, tw, cone_true_deg, pair: tuple[int, int], window_s: fl
 
 
 def _ship_scene_trial(config: Config, scene: PassiveSceneSettings) -> dict[str, np.ndarray]:
-    from sonartrack.tracking.run import track_peaks
-
-    result, nav = run_chain(config, scene)
+    result, nav = run_chain(config, scene, plain_jpda=True)
     g, cone_true, detect = window_truth(scene, result)
     tw = np.asarray(result.record.time_s, float)
     held = held_by_track(result.tracks, tw, cone_true, config.match_deg)
     n_s = len(scene.ships)
-    enough = detect.sum(axis=1) * result.settings.front_end.window_s >= config.min_detectable_s
+    enough = detect.sum(axis=1) * result.settings.window_s >= config.min_detectable_s
     hold = np.array([held[s, detect[s]].mean() if enough[s] else np.nan for s in range(n_s)])
     matches = match_targets(result, scene, config.match_deg)
     best = longest_per_ship(result, matches, n_s)
@@ -262,11 +266,9 @@ def _ship_scene_trial(config: Config, scene: PassiveSceneSettings) -> dict[str, 
             truth_side = "starboard" if np.sin(g.bearing_rad[s, -1] - g.array_heading_rad[-1]) >= 0 else "port"
             side_ok[s] = float(tg.side.side == truth_side)
         errs[s] = target_errors(tg, scene, s, nav)
-    pk = result.record.peaks
-    jpda = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, result.settings.tracker, amplitude_aided=False)
     pair = (0, 1)
     kept = [identity_kept(tr, tw, cone_true, pair, config.crossing_window_s, config.match_deg)
-            for tr in (result.tracks, jpda)] if n_s >= 2 else [np.nan, np.nan]
+            for tr in (result.tracks, result.plain_jpda_tracks)] if n_s >= 2 else [np.nan, np.nan]
     return {"hold": hold, "side_correct": side_ok, "pos_err_m": errs[:, 0], "crb_sd_m": errs[:, 1],
             "sigma_deg": errs[:, 2], "determined": errs[:, 3], "identity_kept": np.array(kept),
             "false_targets_ships": np.array([len(result.targets) - len(matches)], float)}

@@ -1,10 +1,10 @@
-"""Sensitivity of study P3's failing claims to the choices the paper leaves open (issue 13).
+"""Sensitivity of study P3's failing claims to the choices the paper leaves open.
 
 Seo 2019 (paper P3) leaves open the latent range interval of EM/MAP, the sensor depth, the TL range
 averaging and the South Sea winter profile (studies/tma_propagation.py, Config doc). This study re-runs
 tma-propagation's scenario under other readings of the first three, one factor at a time from the
 study's default, for the two claims that failed at full size under the earlier readings (latent range
-0.5-50 km, TL averaged over 1 km; issue 13 adopted 3-50 km and no averaging, and the alternatives below
+0.5-50 km, TL averaged over 1 km; the fidelity review adopted 3-50 km and no averaging, and the alternatives below
 include the earlier values):
 
 * ``em_map_under_10pct`` in **South winter** (the only environment over 10 % before): TL averaging window,

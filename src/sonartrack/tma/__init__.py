@@ -14,6 +14,7 @@ import importlib
 
 _EXPORTS = {
     "solve_tma": "sonartrack.tma.solve", "TmaResult": "sonartrack.tma.solve",
+    "correlation_inflation": "sonartrack.tma.solve",
     "BearingRecord": "sonartrack.tma.records", "OwnshipTrack": "sonartrack.tma.records",
     "TmaSolution": "sonartrack.tma.records", "check_coverage": "sonartrack.tma.records",
     "TmaSettings": "sonartrack.tma.settings", "ImmSettings": "sonartrack.tma.settings",

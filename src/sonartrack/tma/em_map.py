@@ -35,7 +35,7 @@ the bearings-only ML estimate when there is one, and the highest final L wins.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -54,6 +54,25 @@ GRID_STEP_OF_KAPPA = 0.5
 
 
 @dataclass(frozen=True, slots=True)
+class FrameTerms:
+    """Per-frame constants of the E and M steps, computed once per problem (they depend on the data only)."""
+
+    sin: np.ndarray  # sin theta_n
+    cos: np.ndarray  # cos theta_n
+    rows: np.ndarray  # (n, 1) frame index, for gathering a window of the grid per frame
+    sigma2: np.ndarray  # (n, 1) sigma_n^2
+    log_norm: np.ndarray  # (n, 1) -log(2 pi sigma_n kappa)
+    window: np.ndarray  # (1, 2 w + 1) offsets of the E-step window on the grid
+    r_grid: np.ndarray  # the range grid r_j, contiguous (gathered with ``take``)
+    r2_grid: np.ndarray  # r_j^2
+    log_snr_lik: np.ndarray  # log p(xi_n | r_j) flattened, gathered at row_start + j
+    row_start: np.ndarray  # (n, 1) offset of frame n's row in ``log_snr_lik``
+    unit: np.ndarray  # (n, 2) u_n = [sin theta_n, cos theta_n]
+    F: np.ndarray  # (n, 2, 4) F'_n
+    FtS: np.ndarray  # (n, 4, 2) F'_n^T Sigma_n^-1
+
+
+@dataclass(frozen=True, slots=True)
 class EmProblem:
     """The data and model of one EM/MAP solve, precomputed on the range grid."""
 
@@ -64,6 +83,37 @@ class EmProblem:
     log_snr_lik: np.ndarray  # (n, n_r): log p(xi_n | r_j); 0 where the SNR is missing
     sigma_rad: np.ndarray
     kappa: float
+    terms: FrameTerms = field(init=False, repr=False, compare=False)
+    #: [(key, result)] of the last :func:`_e_step`
+    memo: list = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "terms", _frame_terms(self))
+        object.__setattr__(self, "memo", [None])
+
+
+def _frame_terms(prob: EmProblem) -> FrameTerms:
+    """The per-frame constants of :func:`_log_psi` and :func:`em_step` (Sigma_n^-1 as in the module doc)."""
+    s, c = np.sin(prob.theta_rad), np.cos(prob.theta_rad)
+    nr = len(prob.r_grid)
+    step = np.log(prob.r_grid[1] / prob.r_grid[0]) if nr > 1 else 1.0
+    w = min(int(np.ceil(WINDOW_KAPPAS * prob.kappa / step)), (nr - 1) // 2)
+    # Sigma_n^-1 = U diag(1/sigma^2, 1/kappa^2) U^T with U's columns across [c, -s] and along [s, c]
+    a, b = 1.0 / prob.sigma_rad**2, 1.0 / prob.kappa**2
+    Si = np.empty((len(s), 2, 2))
+    Si[:, 0, 0] = a * c * c + b * s * s
+    Si[:, 1, 1] = a * s * s + b * c * c
+    Si[:, 0, 1] = Si[:, 1, 0] = -a * c * s + b * s * c
+    Fp = np.zeros((len(s), 2, 4))
+    Fp[:, 0, 0] = Fp[:, 1, 1] = 1.0
+    Fp[:, 0, 2] = Fp[:, 1, 3] = prob.tau_s
+    return FrameTerms(sin=s, cos=c, rows=np.arange(len(s))[:, None], sigma2=prob.sigma_rad[:, None] ** 2,
+                      log_norm=-np.log(2 * np.pi * prob.sigma_rad[:, None] * prob.kappa),
+                      window=np.arange(2 * w + 1)[None, :], r_grid=np.ascontiguousarray(prob.r_grid),
+                      r2_grid=np.ascontiguousarray(prob.r_grid) ** 2,
+                      log_snr_lik=np.ascontiguousarray(prob.log_snr_lik).ravel(),
+                      row_start=np.arange(len(s))[:, None] * nr, unit=np.column_stack([s, c]), F=Fp,
+                      FtS=np.swapaxes(Fp, 1, 2) @ Si)
 
 
 def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, snr_of_range: Callable,
@@ -105,13 +155,19 @@ def _log_psi(prob: EmProblem, x0, full: bool = False) -> tuple[np.ndarray, np.nd
 
     Only a window of the grid around the peak of each frame's position factor is evaluated (the
     rest weighs < e^-70 relative); ``full=True`` evaluates the whole grid (the reference)."""
-    P = np.column_stack([x0[0] + x0[2] * prob.tau_s, x0[1] + x0[3] * prob.tau_s])
-    d = P - prob.own_xy  # P_n - o_n; mu_n(r) - o_n = r u_n
-    s, c = np.sin(prob.theta_rad), np.cos(prob.theta_rad)
-    cross = d[:, 0] * c - d[:, 1] * s  # component across the bearing line (mu has none)
-    along = d[:, 0] * s + d[:, 1] * c
+    lp, r, _ = _log_psi_eval(prob, x0, full)
+    return lp, r
+
+
+def _log_psi_eval(prob: EmProblem, x0, full: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_log_psi` and r_j^2."""
+    T = prob.terms
+    dx = x0[0] + x0[2] * prob.tau_s - prob.own_xy[:, 0]  # P_n - o_n; mu_n(r) - o_n = r u_n
+    dy = x0[1] + x0[3] * prob.tau_s - prob.own_xy[:, 1]
+    cross = dx * T.cos - dy * T.sin  # component across the bearing line (mu has none)
+    along = dx * T.sin + dy * T.cos
     n, nr = prob.log_snr_lik.shape
-    if not full and np.any(along <= prob.r_grid[0]):
+    if not full and (along <= prob.r_grid[0]).any():
         full = True  # a track behind or at the ownship (far-off iterate): the mass is not near one range
     if full:
         J = np.broadcast_to(np.arange(nr), (n, nr))
@@ -119,19 +175,37 @@ def _log_psi(prob: EmProblem, x0, full: bool = False) -> tuple[np.ndarray, np.nd
         # the position factor peaks at r* = a + (c kappa / sigma)^2 / a (minimise
         # (c^2 / sigma^2 + (a - r)^2 / kappa^2) / r^2 over r) and is narrower than kappa in log r
         centre = along + (cross * prob.kappa / prob.sigma_rad) ** 2 / along
-        step = np.log(prob.r_grid[1] / prob.r_grid[0])
-        w = min(int(np.ceil(WINDOW_KAPPAS * prob.kappa / step)), (nr - 1) // 2)
-        j = np.searchsorted(prob.r_grid, np.maximum(centre, prob.r_grid[0]))
-        start = np.clip(j - w, 0, nr - (2 * w + 1))
-        J = start[:, None] + np.arange(2 * w + 1)[None, :]
-    r = prob.r_grid[J]
-    m = (cross[:, None] ** 2 / prob.sigma_rad[:, None] ** 2 + (along[:, None] - r) ** 2 / prob.kappa**2) / r**2
-    log_norm = -np.log(2 * np.pi * prob.sigma_rad[:, None] * prob.kappa)  # the 1/r^2 cancels the r^2 measure
-    return np.take_along_axis(prob.log_snr_lik, J, axis=1) + log_norm - 0.5 * m, r
+        j = prob.r_grid.searchsorted(np.maximum(centre, prob.r_grid[0]))
+        width = T.window.shape[1]
+        J = np.minimum(np.maximum(j - width // 2, 0), nr - width)[:, None] + T.window
+    r, r2 = T.r_grid.take(J), T.r2_grid.take(J)
+    m = (cross[:, None] ** 2 / T.sigma2 + (along[:, None] - r) ** 2 / prob.kappa**2) / r2
+    # log_norm: the 1/r^2 cancels the r^2 measure
+    return T.log_snr_lik.take(T.row_start + J) + T.log_norm - 0.5 * m, r, r2
+
+
+def _e_step(prob: EmProblem, x0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """The windowed E-step at ``x0``: (r_j, r_j^2, unnormalised posterior weights w_nj, their row sums, L(x0)).
+
+    The last result is kept on the problem and returned again for the same ``x0`` (read-only arrays):
+    EM evaluates each accepted iterate twice, its objective and then the next E-step."""
+    key = np.asarray(x0, dtype=float).tobytes()
+    last = prob.memo[0]  # read once: (key, result), replaced whole, so threads sharing a problem stay consistent
+    if last is not None and last[0] == key:
+        return last[1]
+    lp, r, r2 = _log_psi_eval(prob, x0, False)
+    mx = lp.max(axis=1, keepdims=True)
+    w = np.exp(lp - mx)
+    tot = w.sum(axis=1)
+    out = r, r2, w, tot, float(np.sum(mx[:, 0] + np.log(tot)))
+    prob.memo[0] = (key, out)
+    return out
 
 
 def objective(prob: EmProblem, x0, full: bool = False) -> float:
     """L(X0) = sum_n log sum_j psi_n(r_j) r_j^2 (dlog r dropped: a constant)."""
+    if not full:
+        return _e_step(prob, np.asarray(x0, dtype=float))[4]
     lp, _ = _log_psi(prob, np.asarray(x0, dtype=float), full)
     mx = lp.max(axis=1, keepdims=True)
     return float(np.sum(mx[:, 0] + np.log(np.exp(lp - mx).sum(axis=1))))
@@ -139,45 +213,49 @@ def objective(prob: EmProblem, x0, full: bool = False) -> float:
 
 def em_step(prob: EmProblem, x0) -> tuple[np.ndarray, float]:
     """One E and M step from ``x0``: (X0_new, L(x0))."""
-    lp, r = _log_psi(prob, x0)
-    mx = lp.max(axis=1, keepdims=True)
-    w = np.exp(lp - mx)
-    tot = w.sum(axis=1)
-    L = float(np.sum(mx[:, 0] + np.log(tot)))
+    r, r2, w, tot, L = _e_step(prob, x0)
     q = w / tot[:, None]  # posterior mass of r_j
-    e_inv_r2 = np.sum(q / r**2, axis=1)  # E[1/r^2] = integral p_n dr / r
-    e_inv_r = np.sum(q / r, axis=1)  # mu_n(r) / r^2 = o_n / r^2 + u_n / r
-    s, c = np.sin(prob.theta_rad), np.cos(prob.theta_rad)
-    # Sigma_n^-1 = U diag(1/sigma^2, 1/kappa^2) U^T with U's columns across [c, -s] and along [s, c]
-    a, b = 1.0 / prob.sigma_rad**2, 1.0 / prob.kappa**2
-    Si = np.empty((len(s), 2, 2))
-    Si[:, 0, 0] = a * c * c + b * s * s
-    Si[:, 1, 1] = a * s * s + b * c * c
-    Si[:, 0, 1] = Si[:, 1, 0] = -a * c * s + b * s * c
-    m_mean = prob.own_xy * e_inv_r2[:, None] + np.column_stack([s, c]) * e_inv_r[:, None]  # E[mu / r^2]
-    Fp = np.zeros((len(s), 2, 4))
-    Fp[:, 0, 0] = Fp[:, 1, 1] = 1.0
-    Fp[:, 0, 2] = Fp[:, 1, 3] = prob.tau_s
-    FtS = np.swapaxes(Fp, 1, 2) @ Si  # (n, 4, 2)
-    A = np.einsum("nij,njk,n->ik", FtS, Fp, e_inv_r2)
-    bb = np.einsum("nij,nj->i", FtS, m_mean)
+    e_inv_r2 = (q / r2).sum(axis=1)  # E[1/r^2] = integral p_n dr / r
+    e_inv_r = (q / r).sum(axis=1)  # mu_n(r) / r^2 = o_n / r^2 + u_n / r
+    T = prob.terms
+    m_mean = prob.own_xy * e_inv_r2[:, None] + T.unit * e_inv_r[:, None]  # E[mu / r^2]
+    A = np.einsum("nij,njk,n->ik", T.FtS, T.F, e_inv_r2)
+    bb = np.einsum("nij,nj->i", T.FtS, m_mean)
     return np.linalg.solve(A, bb), L
 
 
 def direct_log_likelihood(prob: EmProblem, x0s, snr_of_range_on_grid=None) -> np.ndarray:
     """log p(bearings, SNRs | X0) for many X0 (m, 4): the initial grid search's score."""
     x0s = np.atleast_2d(x0s)
+    bearing_term, j, outside = _candidate_geometry(prob, x0s)
+    ll_snr = prob.log_snr_lik[prob.terms.rows[:, 0], j]  # log p(xi_n | r_j) at each candidate's range
+    out = bearing_term + ll_snr.sum(axis=1)
+    return np.where(outside, -np.inf, out)
+
+
+#: [(key, geometry)] of the last :func:`_candidate_geometry`. The geometry of the grid search depends on
+#: the bearings, times, ownship and range grid only, not on the SNR model, so solves of the same data
+#: under several SNR models (a source-level sweep) share it.
+_GEOMETRY_MEMO: list = [None]
+
+
+def _candidate_geometry(prob: EmProblem, x0s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For candidates X0 (m, 4): the bearing log-likelihood term (m,), each frame's grid index of the
+    candidate's range (m, n), and whether any frame's range falls off the grid (m,)."""
+    key = b"|".join(np.ascontiguousarray(a).tobytes() + str(np.asarray(a).dtype).encode() + str(np.shape(a)).encode()
+                    for a in (x0s, prob.tau_s, prob.own_xy, prob.theta_rad, prob.sigma_rad, prob.r_grid))
+    last = _GEOMETRY_MEMO[0]  # read once (see _e_step)
+    if last is not None and last[0] == key:
+        return last[1]
     dx = x0s[:, None, 0] + x0s[:, None, 2] * prob.tau_s - prob.own_xy[:, 0]
     dy = x0s[:, None, 1] + x0s[:, None, 3] * prob.tau_s - prob.own_xy[:, 1]
     rng = np.hypot(dx, dy)
     e_b = wrap_angle(prob.theta_rad - np.arctan2(dx, dy)) / prob.sigma_rad
     lr = np.log(prob.r_grid)
     j = np.clip(np.searchsorted(lr, np.log(np.maximum(rng, 1e-9))), 0, len(lr) - 1)
-    ll_snr = np.take_along_axis(np.broadcast_to(prob.log_snr_lik, (len(x0s), *prob.log_snr_lik.shape)),
-                                j[..., None], axis=2)[..., 0]
-    out = -0.5 * np.sum(e_b**2, axis=1) + ll_snr.sum(axis=1)
-    outside = (rng < prob.r_grid[0]) | (rng > prob.r_grid[-1])
-    return np.where(outside.any(axis=1), -np.inf, out)
+    out = (-0.5 * np.sum(e_b**2, axis=1), j, ((rng < prob.r_grid[0]) | (rng > prob.r_grid[-1])).any(axis=1))
+    _GEOMETRY_MEMO[0] = (key, out)
+    return out
 
 
 def grid_initialisation(prob: EmProblem, n: int = 64, n_starts: int = 4) -> np.ndarray:

@@ -64,6 +64,10 @@ class BatchSettings(Settings):
                                      unit="s", gt=0)
     ekf_q_m2_s3: float = setting(1e-4, "process-noise intensity of the EKF that follows the batch window",
                                  unit="m^2/s^3", ge=0)
+    correlation_inflation: bool = setting(
+        False, "ml over the whole record: scale the covariance by (1 + rho) / (1 - rho), rho the lag-1 "
+               "autocorrelation of the fit's residuals, for bearing errors correlated from one bearing to the next "
+               "(AR(1) effective sample size, Bretherton et al. 1999)", unit="")
 
 
 class EmMapSettings(Settings):

@@ -1,5 +1,5 @@
 """Left/right (port/starboard) ambiguity of a line array: cone angle -> the two mirror true bearings, and the
-side decided by which of them a constant-velocity target explains (issue 11, the passive chain).
+side decided by which of them a constant-velocity target explains (the passive chain's side decision).
 
 A line array measures only the cone angle theta in [0, pi] between its forward axis and the arrival
 direction; the true bearing (clockwise from north) is one of the two mirror images about the axis

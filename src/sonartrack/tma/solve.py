@@ -11,16 +11,26 @@ Methods (``settings.method``): the sequential filters of tma/sequential_bf.py (`
 ``imm-ekf``, ``imm-mgekf``; paper P2), on bearings or, with ``settings.frequency``, bearings + frequency;
 the batch estimators of tma/batch.py (``ml``, ``em-map``; paper P3), over the whole record or over a first
 window (``settings.batch.window_s``) with a sequential EKF after it.
+
+A system that runs ``ml`` on its own measurements can hand in what it knows (the passive chain does):
+``ml_fit``, an ML estimate of the same record found by a wider search (the multi-start fits of the side
+decision, tma/sides.py), taken as the solution instead of the single-start Gauss-Newton fit;
+``settings.batch.correlation_inflation``, the covariance scaled for residuals correlated from one bearing to
+the next (:func:`correlation_inflation`); and ``unobservable="flag"``, a record whose ownship did not maneuver
+returned with every row flagged ``range_determined = False`` and the reason as a warning, instead of an error
+(the bearing is still a measurement; only the range is unknown).
 """
 
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from contextlib import nullcontext
+from dataclasses import dataclass, replace
+from typing import Literal
 
 import numpy as np
 
-from sonartrack.core.errors import require
+from sonartrack.core.errors import InputError, require
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution, check_coverage
 from sonartrack.tma.settings import BATCH_METHODS, SEQUENTIAL_METHODS, TmaSettings
 
@@ -122,6 +132,83 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
     return replace(solution, range_determined=solution.range_flags() & ok)
 
 
+def correlation_inflation(residuals_rad) -> float:
+    """Variance factor (1 + rho) / (1 - rho) >= 1 for residuals with lag-1 autocorrelation rho > 0.
+
+    Measured bearing errors need not be white: in the passive chain a neighbouring ship's sidelobes and the
+    background normaliser move slowly from window to window, so consecutive bearings err alike. The white-noise
+    ML covariance (inverse Fisher information) then claims n independent bearings where there are fewer, about
+    n_eff = n (1 - rho) / (1 + rho) for an AR(1) error (its effective sample size; Bretherton et al. 1999,
+    J. Climate 12, 1990-2009); the covariance is inflated by n / n_eff so that the reported uncertainty covers
+    the error. rho is the sample lag-1 autocorrelation of the de-meaned residuals, clipped to 0..0.95.
+
+    Parameters
+    ----------
+    residuals_rad : array_like (n,)
+        The fit's bearing residuals in time order (rad).
+
+    Returns
+    -------
+    float
+        The factor (1 + rho) / (1 - rho) (1 for fewer than 3 residuals or zero spread).
+    """
+    r = np.asarray(residuals_rad, float)
+    r = r - r.mean()
+    den = float(np.dot(r, r))
+    if len(r) < 3 or den <= 0:
+        return 1.0
+    rho = float(np.clip(np.dot(r[:-1], r[1:]) / den, 0.0, 0.95))
+    return (1.0 + rho) / (1.0 - rho)
+
+
+def _inflated(est, record: BearingRecord, own_xy):
+    """``est`` with its covariance scaled by :func:`correlation_inflation` of its own residuals on ``record``."""
+    from sonartrack.core.angles import wrap_angle
+    from sonartrack.tma.batch_ml import bearing_model
+
+    t = np.asarray(record.time_s, float)
+    h, _, _ = bearing_model(est.x0, t - est.t0_s, own_xy)
+    factor = correlation_inflation(wrap_angle(np.asarray(record.bearing_rad) - h))
+    return replace(est, covariance=np.asarray(est.covariance) * factor)
+
+
+def _ml_estimate(record: BearingRecord, t, own, sigma_rad: float, ml_fit, unobservable: str):
+    """The ML estimate: ``ml_fit`` when given (checked to be of this record), else Gauss-Newton from the
+    pseudo-linear start; an unobservable record raises unless ``unobservable`` is "flag"."""
+    from sonartrack.tma.batch_ml import check_observability, ml_bearings_only
+
+    if ml_fit is None:
+        return ml_bearings_only(record.bearing_rad, t, own, sigma_rad, check=unobservable == "raise")
+    require(ml_fit.t0_s == t[0] and np.shape(ml_fit.x0) == (4,),
+            f"ml_fit must be an ML estimate of this record (reference time {t[0]:g} s), got one at {ml_fit.t0_s:g} s")
+    why = check_observability(t - t[0], own) if unobservable == "raise" else None
+    if why is not None:
+        raise InputError(why)
+    return ml_fit
+
+
+def _solve_ml(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, ml_fit, unobservable: str) -> dict:
+    """Bearings-only batch ML over the whole record (module docstring: ``ml_fit``, the inflation, ``unobservable``)."""
+    from sonartrack.tma.batch import UnobservableWarning, estimate_to_solution
+    from sonartrack.tma.batch_ml import check_observability
+
+    t = np.asarray(record.time_s, float)
+    own = ownship.position_at(t)
+    sigma = float(np.deg2rad(settings.sigma_bearing_deg))
+    why = check_observability(t - t[0], own) if unobservable == "flag" else None
+    # a record taken as it is may leave the covariance singular (range unknown): no warnings for its infinities
+    quiet = np.errstate(invalid="ignore", over="ignore") if unobservable == "flag" else nullcontext()
+    with quiet:
+        est = _ml_estimate(record, t, own, sigma, ml_fit, unobservable)
+        if settings.batch.correlation_inflation:
+            est = _inflated(est, record, own)
+        solution = estimate_to_solution(est, t)
+    if why is not None:
+        warnings.warn(why, UnobservableWarning, stacklevel=2)
+        return {"solution": replace(solution, range_determined=np.zeros(len(t), bool))}
+    return {"solution": flag_unresolved_range(solution, record, ownship, sigma)}
+
+
 def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) -> dict:
     from sonartrack.tma.batch import solve_batch, solve_batch_then_ekf
 
@@ -137,21 +224,52 @@ def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) 
 
 
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,
-              environment=None, tl_store=None) -> TmaResult:
+              environment=None, tl_store=None, ml_fit=None,
+              unobservable: Literal["raise", "flag"] = "raise") -> TmaResult:
     """Solve a bearings (+ frequency, SNR) record for the target's track (module docstring).
 
-    ``ownship`` must cover the record (no extrapolation, gaps up to ``settings.inputs.max_nav_gap_s``).
-    For em-map, ``environment`` (an :class:`~sonartrack.acoustics.environment.Environment`) overrides
-    ``settings.batch.env`` (a shipped environment's name), and ``tl_store`` caches the TL fields. Solver
-    warnings are collected in ``result.warnings``. Mistakes raise :class:`~sonartrack.core.errors.InputError`.
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad, clockwise from north) at increasing times (s), with frequencies (Hz) or SNRs (dB) when
+        the method uses them.
+    ownship : OwnshipTrack
+        The sensor's track; it must cover the record (no extrapolation, gaps up to
+        ``settings.inputs.max_nav_gap_s``).
+    settings : TmaSettings, optional
+        Method and noise; default ``TmaSettings()``.
+    environment : Environment, optional
+        em-map: the propagation environment, overriding ``settings.batch.env`` (a shipped environment's name).
+    tl_store : FieldStore, optional
+        em-map: a cache of transmission-loss fields.
+    ml_fit : BatchEstimate, optional
+        ml over the whole record only: an ML estimate of this same record found by a wider search (e.g. the
+        multi-start fits of tma/sides.py :func:`~sonartrack.tma.sides.resolve_side`), taken as the solution
+        instead of the single-start fit (which can settle in a far local minimum).
+    unobservable : {"raise", "flag"}
+        ml over the whole record only: with an ownship that did not maneuver, "raise" refuses the record
+        (:class:`~sonartrack.core.errors.InputError`); "flag" returns the solution with every row's
+        ``range_determined`` False and the reason in ``warnings``.
+
+    Returns
+    -------
+    TmaResult
+        The solution at the record's times; solver warnings in ``result.warnings``. Mistakes raise
+        :class:`~sonartrack.core.errors.InputError`.
     """
     settings = TmaSettings() if settings is None else settings
     check_settings(settings)
     check_coverage(record, ownship, settings.inputs.max_nav_gap_s)
+    whole_ml = settings.method == "ml" and settings.batch.window_s is None
+    require(unobservable in ("raise", "flag"), f"unobservable must be 'raise' or 'flag', got {unobservable!r}")
+    require(whole_ml or (ml_fit is None and unobservable == "raise"),
+            "ml_fit and unobservable='flag' apply to method ml over the whole record (no batch.window_s)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if settings.is_sequential:
             parts = _solve_sequential(record, ownship, settings)
+        elif whole_ml:
+            parts = _solve_ml(record, ownship, settings, ml_fit, unobservable)
         else:
             parts = _solve_batch(record, ownship, settings, environment, tl_store)
     return TmaResult(record=record, ownship=ownship, settings=settings,

@@ -27,6 +27,18 @@ class PDA:
     supports_existence = True
 
     def weights(self, lik: Likelihoods) -> AssociationWeights:
+        """PDA weights of every track and mode, each on its own (association/pda.py; module docstring).
+
+        Parameters
+        ----------
+        lik : Likelihoods
+            Gated pairs and their log likelihood ratios (association/likelihood.py).
+
+        Returns
+        -------
+        AssociationWeights
+            beta_r0, beta at the gated pairs only (``beta_pair``), and log Lambda_r.
+        """
         return pda_pair_weights(lik)  # pda_weights' numbers at the gated pairs only
 
     def __repr__(self) -> str:
@@ -40,6 +52,18 @@ class JPDA:
     supports_existence = False
 
     def weights(self, lik: Likelihoods) -> AssociationWeights:
+        """Exact JPDA marginals (association/jpda.py, paper P0) of single-mode tracks.
+
+        Parameters
+        ----------
+        lik : Likelihoods
+            Likelihoods with one mode (r = 1).
+
+        Returns
+        -------
+        AssociationWeights
+            beta0 (n, 1), beta (n, 1, m), and no log Lambda (None).
+        """
         n, r, _ = lik.shape
         log_pd = np.broadcast_to(np.log(lik.pd), (n,))
         ll = np.where(lik.gated, log_pd[:, None] + lik.log_ratio[:, 0], -np.inf)

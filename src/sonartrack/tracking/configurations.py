@@ -29,9 +29,27 @@ from sonartrack.tracking.tracks import TrackArrays
 
 
 def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None) -> MultiTargetTracker:
-    """IPDA (one q) / IMM-IPDA (several q) position tracker with one-point initiation and existence-based
-    confirmation and deletion (paper P4). ``associator`` replaces PDA (e.g. ``JPDA()`` needs one mode and
-    no existence, so it is refused here)."""
+    """IPDA (one q) / IMM-IPDA (several q) position tracker of paper P4 (Park, Song, Lee 2017).
+
+    One-point initiation and existence-based confirmation and deletion (module table).
+
+    Parameters
+    ----------
+    settings : PositionTrackerSettings, optional
+        Tracker settings; None for the defaults (P4's tracker).
+    associator : optional
+        Replaces PDA (``JPDA()`` needs one mode and no existence, so it is refused here).
+
+    Returns
+    -------
+    MultiTargetTracker
+        The tracker; its state is [x, y, vx, vy] (m, m/s; x east, y north).
+
+    Raises
+    ------
+    InputError
+        If the associator cannot drive these parts.
+    """
     s = settings or PositionTrackerSettings()
     return MultiTargetTracker(
         ImmConstantVelocity(tuple(s.q), dims=2, transition=s.transition_matrix()),
@@ -45,12 +63,32 @@ def position_tracker(settings: PositionTrackerSettings | None = None, *, associa
 def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude_aided: bool = True,
                     adaptive_strength: bool = True, initial: TrackArrays | None = None,
                     time_s: float | None = None, associator=None) -> MultiTargetTracker:
-    """JPDA (``amplitude_aided=False``) / JPDA_A bearing tracker (paper P0).
+    """JPDA (``amplitude_aided=False``) / JPDA_A bearing tracker of paper P0 (Park, Ryu, Lee 1994).
 
     With ``initial`` tracks (:func:`bearing_tracks`, starting at ``time_s``) it follows exactly those, as the
     paper's runs do; without, it starts tracks on strong peaks and confirms them M-of-N (user data).
-    ``adaptive_strength``: track strengths by eq. 9 (real data) instead of known ones (the paper's synthetic
-    runs). ``associator`` replaces JPDA (e.g. ``PDA()``, each track on its own)."""
+
+    Parameters
+    ----------
+    settings : BearingTrackerSettings, optional
+        Tracker settings; None for the defaults (P0's tracker).
+    amplitude_aided : bool, default True
+        JPDA_A: weigh the peak amplitudes.
+    adaptive_strength : bool, default True
+        Track strengths by eq. 9 (real data) instead of known ones (the paper's synthetic runs).
+    initial : TrackArrays, optional
+        Known tracks to follow (no initiation or deletion then).
+    time_s : float, optional
+        Time of ``initial`` (s).
+    associator : optional
+        Replaces JPDA (e.g. ``PDA()``, each track on its own).
+
+    Returns
+    -------
+    MultiTargetTracker
+        The tracker; its state is [bearing (deg), bearing rate (deg/s)], the bearing being the 1-D angle
+        the peaks measure (a cone angle from the array axis for a line array).
+    """
     s = settings or BearingTrackerSettings()
     auto = initial is None
     return MultiTargetTracker(
@@ -66,9 +104,32 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
 
 def bearing_tracks(bearing_deg, rate_deg_s, sigma_p_deg, strength, sigma_a, *, adaptive_strength: bool = False,
                    time_s: float = 0.0) -> TrackArrays:
-    """Known (confirmed) bearing tracks to start :func:`bearing_tracker` with: bearings, rates, peak spread
-    sigma_p (deg), amplitude strength and spread; P(0) = [[s^2, s^2], [s^2, 2 s^2]] with s = sigma_p (P0).
-    With ``adaptive_strength`` the strengths start at eq. 9's 15000 instead."""
+    """Known (confirmed) bearing tracks to start :func:`bearing_tracker` with (paper P0's runs).
+
+    ``P(0) = [[s^2, s^2], [s^2, 2 s^2]]`` with s = sigma_p (P0).
+
+    Parameters
+    ----------
+    bearing_deg : float or array_like, shape (n,)
+        Initial bearings (deg).
+    rate_deg_s : float or array_like
+        Initial bearing rates (deg/s), broadcast to (n,).
+    sigma_p_deg : float or array_like
+        Peak spread sigma_p of each track (deg).
+    strength : float or array_like
+        Amplitude strength z_hat of each track (correlator output unit).
+    sigma_a : float or array_like
+        Amplitude spread of each track (same unit).
+    adaptive_strength : bool, default False
+        Start the strengths at eq. 9's 15000 instead of ``strength``.
+    time_s : float, default 0.0
+        Time of initiation (s).
+
+    Returns
+    -------
+    TrackArrays
+        n confirmed single-mode tracks, identifiers 1..n.
+    """
     b = np.atleast_1d(np.asarray(bearing_deg, float))
     n = len(b)
     col = lambda v: np.broadcast_to(np.asarray(v, float), (n,)).copy()  # noqa: E731

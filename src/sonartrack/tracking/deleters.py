@@ -25,9 +25,35 @@ class ExistenceDeleter:
     terminate_threshold: float
 
     def new_track_attrs(self, k: int) -> dict:
+        """Per-track counters this deleter keeps: none.
+
+        Parameters
+        ----------
+        k : int
+            Number of new tracks.
+
+        Returns
+        -------
+        dict
+            Empty.
+        """
         return {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        """Confirm tracks whose existence exceeds ``confirm_threshold``; drop those below ``terminate_threshold``.
+
+        Parameters
+        ----------
+        T : TrackArrays
+            Tracks after the update.
+        hit : ndarray of bool, shape (n,)
+            Whether each track's gate held a measurement (unused here).
+
+        Returns
+        -------
+        TrackArrays
+            The kept tracks, with their confirmation flags.
+        """
         T = replace(T, confirmed=T.confirmed | (T.existence > self.confirm_threshold))
         return T.select(T.existence >= self.terminate_threshold)
 
@@ -41,9 +67,35 @@ class MOfNDeleter:
     delete_after: int
 
     def new_track_attrs(self, k: int) -> dict:
+        """Initial M-of-N counters of ``k`` new tracks (the initiating scan counts as a hit).
+
+        Parameters
+        ----------
+        k : int
+            Number of new tracks.
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (k,)
+            ``hits`` = 1, ``age`` = 1, ``misses`` = 0.
+        """
         return {"hits": np.ones(k, dtype=int), "age": np.ones(k, dtype=int), "misses": np.zeros(k, dtype=int)}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        """M-of-N confirmation, and deletion after ``delete_after`` consecutive empty gates (module docstring).
+
+        Parameters
+        ----------
+        T : TrackArrays
+            Tracks after the update, with ``hits``, ``age`` and ``misses`` in ``attrs``.
+        hit : ndarray of bool, shape (n,)
+            Whether each track's gate held a measurement this scan.
+
+        Returns
+        -------
+        TrackArrays
+            The kept tracks, counters and confirmation flags updated.
+        """
         a = T.attrs
         hits, age = a["hits"] + hit, a["age"] + 1
         misses = np.where(hit, 0, a["misses"] + 1)

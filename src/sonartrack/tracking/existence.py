@@ -24,8 +24,33 @@ class IpdaExistence:
     p_birth: float
 
     def predict(self, existence):
+        """Existence prediction ``P(E)- = p11 P(E) + p21 (1 - P(E))`` (Musicki et al. 1994, eq. 11).
+
+        Parameters
+        ----------
+        existence : ndarray, shape (n,)
+            Existence probabilities at the previous scan.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Predicted existence probabilities.
+        """
         return existence_predict(existence, self.p_survive, self.p_birth)
 
     def update(self, existence_pred, log_lambda_total):
-        """Posterior existence from the prediction and log Lambda (log sum_r c_r Lambda_r, per track)."""
+        """Posterior existence from the prediction and ``log Lambda`` (Musicki et al. 1994, eq. 29; module docstring).
+
+        Parameters
+        ----------
+        existence_pred : ndarray, shape (n,)
+            Predicted existence probabilities.
+        log_lambda_total : ndarray, shape (n,)
+            ``log sum_r c_r Lambda_r`` per track (from the mode update).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Posterior existence probabilities.
+        """
         return existence_update(existence_pred, np.exp(log_lambda_total))

@@ -29,7 +29,18 @@ def _new_tracks(x, P, n_modes: int, first_id: int, time_s: float, existence: flo
 
 
 def bearing_covariance(sigma_p_deg) -> np.ndarray:
-    """P0's initial covariance of [bearing, rate]: [[s^2, s^2], [s^2, 2 s^2]] per track (deg, deg/s)."""
+    """Paper P0's initial covariance of [bearing, bearing rate]: ``[[s^2, s^2], [s^2, 2 s^2]]`` per track.
+
+    Parameters
+    ----------
+    sigma_p_deg : float or array_like, shape (k,)
+        Peak spread s (deg).
+
+    Returns
+    -------
+    ndarray, shape (k, 2, 2)
+        Covariances (deg^2, deg^2/s, deg^2/s^2), the paper's P(0) as used by the module's initiator.
+    """
     s2 = np.asarray(sigma_p_deg, dtype=float) ** 2
     return np.stack([np.stack([s2, s2], -1), np.stack([s2, 2 * s2], -1)], -2)
 
@@ -43,6 +54,28 @@ class OnePointInitiator:
     max_tracks: int
 
     def initiate(self, scan: Scan, used, n_live: int, n_modes: int, first_id: int) -> TrackArrays:
+        """Tentative position tracks at ``[z, 0]`` with covariance ``diag(R_z, s_v^2 I)`` from unvalidated measurements.
+
+        At most ``max_tracks - n_live`` tracks are started, in measurement order.
+
+        Parameters
+        ----------
+        scan : Scan
+            The scan (positions z (m, k) in m, covariances R (m, k, k) in m^2).
+        used : ndarray of bool, shape (m,)
+            Measurements some existing track validated.
+        n_live : int
+            Live tracks after deletion.
+        n_modes : int
+            IMM modes of each new track (equal mode probabilities).
+        first_id : int
+            Identifier of the first new track.
+
+        Returns
+        -------
+        TrackArrays
+            New tracks with existence ``initial_existence``, not confirmed.
+        """
         new = np.nonzero(~used)[0][: max(0, self.max_tracks - n_live)]
         z, R = scan.z[new], scan.R[new]
         k, dims = z.shape
@@ -65,6 +98,29 @@ class PeakInitiator:
     gate_deg: float
 
     def initiate(self, scan: Scan, used, n_live: int, n_modes: int, first_id: int) -> TrackArrays:
+        """Tentative bearing tracks from strong unvalidated peaks, one per cluster (module docstring).
+
+        Peaks of amplitude >= ``init_amplitude`` are taken strongest first; a peak closer than half a gate
+        (``gate_deg / 2``) to a chosen one is skipped.
+
+        Parameters
+        ----------
+        scan : Scan
+            The scan (bearings z (m, 1) in deg, amplitudes (m,)).
+        used : ndarray of bool, shape (m,)
+            Peaks some existing track validated.
+        n_live : int
+            Live tracks (unused: no cap).
+        n_modes : int
+            Modes of each new track.
+        first_id : int
+            Identifier of the first new track.
+
+        Returns
+        -------
+        TrackArrays
+            New tracks at [bearing, 0] with ``sigma_p``, ``strength`` and ``sigma_a`` in ``attrs``; existence NaN.
+        """
         z, a = scan.z[:, 0], scan.amplitude
         new = np.nonzero(~used & (a >= self.init_amplitude))[0]
         chosen: list[int] = []

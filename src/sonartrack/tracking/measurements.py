@@ -39,10 +39,44 @@ class PositionMeasurements:
         object.__setattr__(self, "_gamma", gate_threshold(self.gate_probability, 2))
 
     def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
+        """Likelihoods of position contacts against the predicted tracks (chi-square gate; association/likelihood.py).
+
+        Parameters
+        ----------
+        x_pred : ndarray, shape (n, r, d)
+            Predicted mode-conditioned states ([x, y, vx, vy] in m and m/s).
+        P_pred : ndarray, shape (n, r, d, d)
+            Their covariances.
+        scan : Scan
+            Contacts z (m, 2) in m with covariances R (m, 2, 2) in m^2.
+        attrs : dict
+            Per-track quantities (unused).
+
+        Returns
+        -------
+        Likelihoods
+            Gated pairs and log likelihood ratios against clutter (per m^2).
+        """
         return position_likelihoods(x_pred, P_pred, scan.z, scan.R, pd=self.pd, pg=self.gate_probability,
                                     gamma=self._gamma, clutter_density=self.clutter_density_per_m2)
 
     def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
+        """Per-track quantities after the update: unchanged for position contacts.
+
+        Parameters
+        ----------
+        attrs : dict
+            Per-track quantities.
+        lik : Likelihoods
+            This scan's likelihoods.
+        scan : Scan
+            The scan.
+
+        Returns
+        -------
+        dict
+            ``attrs`` itself.
+        """
         return attrs
 
 
@@ -62,6 +96,25 @@ class BearingMeasurements:
     scan_needs = ("amplitude",)
 
     def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
+        """Likelihoods of bearing peaks with a window gate and the amplitude threshold (paper P0; module docstring).
+
+        Parameters
+        ----------
+        x_pred : ndarray, shape (n, r, 2)
+            Predicted [bearing (deg), bearing rate (deg/s)]; for a line array the bearing is the cone angle
+            from its axis.
+        P_pred : ndarray, shape (n, r, 2, 2)
+            Their covariances.
+        scan : Scan
+            Peaks z (m, 1) in deg with amplitudes (m,).
+        attrs : dict
+            Per-track ``sigma_p`` (deg), ``strength`` and ``sigma_a`` (amplitude units), each (n,).
+
+        Returns
+        -------
+        Likelihoods
+            Gated pairs and log ratios (clutter per deg; with ``amplitude_aided`` the amplitude ratio included).
+        """
         strength, sigma_a = attrs["strength"], attrs["sigma_a"]
         pd_eff = np.clip(detection_probability_above(self.p_detect, strength, np.maximum(sigma_a, 1e-9),
                                                      self.amplitude_threshold), 1e-6, 1.0)
@@ -76,7 +129,24 @@ class BearingMeasurements:
                                   log_ratio_extra=extra)
 
     def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
-        """Eq. 9: z_hat = 0.7 z_hat + 0.3 (largest amplitude in the gate); tracks with an empty gate keep theirs."""
+        """Track strength update, paper P0 eq. 9: ``z_hat = 0.7 z_hat + 0.3`` (largest amplitude in the gate).
+
+        Only with ``amplitude_aided`` and ``adaptive_strength``; tracks with an empty gate keep theirs.
+
+        Parameters
+        ----------
+        attrs : dict
+            Per-track quantities, ``strength`` among them.
+        lik : Likelihoods
+            This scan's likelihoods (their gates).
+        scan : Scan
+            The scan (amplitudes).
+
+        Returns
+        -------
+        dict
+            ``attrs`` with ``strength`` updated (or unchanged).
+        """
         if not (self.amplitude_aided and self.adaptive_strength):
             return attrs
         amax = np.where(lik.gated, scan.amplitude[None, :], -np.inf).max(axis=1, initial=-np.inf)

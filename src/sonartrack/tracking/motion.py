@@ -43,14 +43,35 @@ class ImmConstantVelocity:
 
     @property
     def n_modes(self) -> int:
+        """Number of modes r."""
         return len(self.q)
 
     @property
     def state_dim(self) -> int:
+        """State dimension d = 2 dims (positions, then velocities)."""
         return 2 * self.dims
 
     def interact(self, mu, x, P):
-        """Predicted mode probabilities ``c (n, r)`` and mixed initial conditions ``x0, P0``."""
+        """IMM interaction: predicted mode probabilities and mixed initial conditions (filters/imm.py).
+
+        Parameters
+        ----------
+        mu : ndarray, shape (n, r)
+            Mode probabilities.
+        x : ndarray, shape (n, r, d)
+            Mode-conditioned states.
+        P : ndarray, shape (n, r, d, d)
+            Their covariances.
+
+        Returns
+        -------
+        c : ndarray, shape (n, r)
+            Predicted mode probabilities.
+        x0 : ndarray, shape (n, r, d)
+            Mixed states.
+        P0 : ndarray, shape (n, r, d, d)
+            Mixed covariances.
+        """
         if self.n_modes == 1:  # mixing one mode with itself: x0 = x, P0 = P (symmetrized, as imm_mix does)
             return mu, x, symmetrize(P)
         from sonartrack.filters.imm_kernel import mix  # numba: loaded on first use
@@ -60,7 +81,24 @@ class ImmConstantVelocity:
         return c, x0, P0
 
     def predict(self, x0, P0, dt_s: float):
-        """x- = F x0, P- = F P0 F^T + Q_r over ``dt_s`` seconds, every track and mode at once."""
+        """Mode-matched prediction ``x- = F x0``, ``P- = F P0 F^T + Q_r``, every track and mode at once.
+
+        Parameters
+        ----------
+        x0 : ndarray, shape (n, r, d)
+            Mixed states (position unit and position unit/s).
+        P0 : ndarray, shape (n, r, d, d)
+            Mixed covariances.
+        dt_s : float
+            Time since the last scan (s).
+
+        Returns
+        -------
+        x_pred : ndarray, shape (n, r, d)
+            Predicted states.
+        P_pred : ndarray, shape (n, r, d, d)
+            Predicted covariances.
+        """
         FQ = self._FQ.get(dt_s)
         if FQ is None:
             if len(self._FQ) > 64:
@@ -70,7 +108,22 @@ class ImmConstantVelocity:
         return x0 @ F.T, F @ P0 @ F.T + Q
 
     def mode_update(self, c, log_lambda):
-        """Posterior mode probabilities ``mu (n, r)`` and ``log sum_r c_r Lambda_r (n,)`` (filters/imm.py)."""
+        """Posterior mode probabilities and the total likelihood ``log sum_r c_r Lambda_r`` (filters/imm.py).
+
+        Parameters
+        ----------
+        c : ndarray, shape (n, r)
+            Predicted mode probabilities.
+        log_lambda : ndarray, shape (n, r) or None
+            Mode log-likelihood ratios log Lambda_r; None when the associator gives none (JPDA).
+
+        Returns
+        -------
+        mu : ndarray, shape (n, r)
+            Posterior mode probabilities (``c`` unchanged with one mode).
+        log_total : ndarray, shape (n,) or None
+            ``log sum_r c_r Lambda_r``; None if ``log_lambda`` is None.
+        """
         if self.n_modes == 1:
             return c, None if log_lambda is None else log_lambda[:, 0]
         return imm_mode_update(c, log_lambda)

@@ -65,8 +65,29 @@ class MultiTargetTracker:
         return self._tracks
 
     def step(self, time_s: float, z, R=None, amplitude=None) -> TrackSnapshot:
-        """Process one scan: ``z (m, k)`` (or (m,) for bearings), ``R (m, k, k)`` if the measurement
-        part takes per-measurement covariances, ``amplitude (m,)`` for peaks."""
+        """Process one scan (steps 1-5 of the module docstring).
+
+        Parameters
+        ----------
+        time_s : float
+            Scan time (s), later than the previous scan's.
+        z : array_like, shape (m, k) or (m,)
+            Measurements: positions [x, y] (m) for the position tracker, bearings (deg) for the bearing tracker.
+        R : array_like, shape (m, k, k) or (k, k), optional
+            Per-measurement covariances (m^2), if the measurement part takes them.
+        amplitude : array_like, shape (m,), optional
+            Peak amplitudes, if the measurement part takes them.
+
+        Returns
+        -------
+        TrackSnapshot
+            The live tracks after the scan, with combined (IMM output) estimates.
+
+        Raises
+        ------
+        InputError
+            If a required input is missing, a value is NaN/inf, shapes disagree, or the time does not increase.
+        """
         scan = self._scan(time_s, z, R, amplitude)
         T = self._tracks
         hit, used = np.zeros(len(T), bool), np.zeros(len(scan), bool)
@@ -84,7 +105,13 @@ class MultiTargetTracker:
         return TrackSnapshot.of(time_s, T)
 
     def snapshot(self) -> TrackSnapshot:
-        """The live tracks now (combined estimates)."""
+        """The live tracks now.
+
+        Returns
+        -------
+        TrackSnapshot
+            Combined estimates; time NaN before the first scan.
+        """
         return TrackSnapshot.of(np.nan if self._time is None else self._time, self._tracks)
 
     def _update(self, T: TrackArrays, scan: Scan, dt_s: float):

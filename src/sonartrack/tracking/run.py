@@ -1,14 +1,17 @@
-"""Run a tracker over a whole record and return its tracks as a table (what ``sonartrack track`` writes).
+"""Run a tracker over a whole record and return its tracks as typed records of arrays.
 
 * :func:`track_contacts` -- the position tracker (IPDA / IMM-IPDA, paper P4) over contacts: rows
-  sharing a time form one scan; one output row per live track per scan.
+  sharing a time form one scan; one output row per live track per scan (:class:`PositionTracks`).
 * :func:`track_peaks` -- the bearing tracker (JPDA / JPDA_A, paper P0) with automatic initiation over
-  cross-correlation peaks; one output row per live track per scan.
+  cross-correlation peaks; one output row per live track per scan (:class:`BearingTracks`).
 
-Inputs are arrays sorted by time (io/contacts.py and io/peaks.py read and check the files).
+Inputs are arrays sorted by time (io/contacts.py and io/peaks.py read and check the files). The records
+hold arrays only; ``to_frame()`` gives the table ``sonartrack track`` writes (pandas is imported there).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -22,8 +25,93 @@ PEAK_TRACK_COLUMNS = ["time_s", "track_id", "bearing_deg", "bearing_rate_deg_s",
                       "confirmed"]
 
 
+@dataclass(frozen=True, slots=True)
+class BearingTracks:
+    """Bearing tracks, one row per live track per scan (n rows), in scan order.
+
+    time_s (s), track_id, bearing_deg and bearing_rate_deg_s (the combined estimate, deg and deg/s),
+    bearing_std_deg (sqrt of P[0, 0], deg), strength (the track's amplitude strength, paper P0 eq. 9),
+    confirmed (bool, M-of-N): equal-length 1-D arrays.
+    """
+
+    time_s: np.ndarray
+    track_id: np.ndarray
+    bearing_deg: np.ndarray
+    bearing_rate_deg_s: np.ndarray
+    bearing_std_deg: np.ndarray
+    strength: np.ndarray
+    confirmed: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+    def to_frame(self):
+        """The tracks as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns PEAK_TRACK_COLUMNS (units in the names), one row per live track per scan.
+        """
+        import pandas as pd
+
+        return pd.DataFrame({c: getattr(self, c) for c in PEAK_TRACK_COLUMNS})
+
+
+@dataclass(frozen=True, slots=True)
+class PositionTracks:
+    """Position tracks, one row per live track per scan (n rows, r IMM modes), in scan order.
+
+    time_s (s), track_id, confirmed (bool), existence (IPDA probability), x (n, 4) combined state
+    [x, y, vx, vy] (m, m/s), sd_x_m and sd_y_m (square roots of P's position diagonal, m) and
+    mode_prob (n, r) the IMM mode probabilities.
+    """
+
+    time_s: np.ndarray
+    track_id: np.ndarray
+    confirmed: np.ndarray
+    existence: np.ndarray
+    x: np.ndarray
+    sd_x_m: np.ndarray
+    sd_y_m: np.ndarray
+    mode_prob: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+    def to_frame(self):
+        """The tracks as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns CONTACT_TRACK_COLUMNS (``status`` is "confirmed" or "tentative") and
+            ``mode_prob_<j>`` per IMM mode j, one row per live track per scan.
+        """
+        import pandas as pd
+
+        x = self.x
+        cols = {"time_s": self.time_s, "track_id": self.track_id,
+                "status": np.where(self.confirmed, "confirmed", "tentative"), "existence": self.existence,
+                "x_m": x[:, 0], "y_m": x[:, 1], "vx_mps": x[:, 2], "vy_mps": x[:, 3],
+                "sd_x_m": self.sd_x_m, "sd_y_m": self.sd_y_m}
+        cols.update({f"mode_prob_{j}": self.mode_prob[:, j] for j in range(self.mode_prob.shape[1])})
+        return pd.DataFrame(cols)
+
+
 def scan_slices(time_s) -> list[tuple[float, slice]]:
-    """(time, rows) of each scan: the runs of equal times of a time-sorted column."""
+    """The scans of a time-sorted column: the runs of equal times.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (k,)
+        Measurement times (s), not decreasing.
+
+    Returns
+    -------
+    list of (float, slice)
+        Each scan's time (s) and the rows holding it.
+    """
     t = np.asarray(time_s, float)
     require(bool(np.all(np.diff(t) >= 0)), "measurement times must not decrease (sort the rows by time)")
     times, starts = np.unique(t, return_index=True)
@@ -31,48 +119,84 @@ def scan_slices(time_s) -> list[tuple[float, slice]]:
     return [(float(tk), slice(bounds[i], bounds[i + 1])) for i, tk in enumerate(times)]
 
 
-def _table(parts: list[dict], columns: list[str]):
-    import pandas as pd
-
-    if not parts:
-        return pd.DataFrame(columns=columns)
-    return pd.DataFrame({c: np.concatenate([p[c] for p in parts]) for c in columns})
+def _stack(parts: list[np.ndarray], empty: np.ndarray) -> np.ndarray:
+    return np.concatenate(parts) if parts else empty
 
 
-def track_contacts(time_s, z, R, settings: PositionTrackerSettings | None = None, *, confirmed_only: bool = False):
-    """Tracks of position contacts ``z (k, 2)`` (m) with covariances ``R (k, 2, 2)`` at ``time_s (k,)``.
+def track_contacts(time_s, z, R, settings: PositionTrackerSettings | None = None, *,
+                   confirmed_only: bool = False) -> PositionTracks:
+    """The position tracker (IPDA / IMM-IPDA, paper P4) over a whole record of contacts.
 
-    Returns a DataFrame with CONTACT_TRACK_COLUMNS and ``mode_prob_<r>`` per IMM mode."""
+    Parameters
+    ----------
+    time_s : array_like, shape (k,)
+        Contact times (s), not decreasing; equal times form one scan.
+    z : array_like, shape (k, 2)
+        Contact positions x, y (m).
+    R : array_like, shape (k, 2, 2)
+        Contact covariances (m^2).
+    settings : PositionTrackerSettings, optional
+        Tracker settings (default: the paper's).
+    confirmed_only : bool
+        Keep confirmed tracks only.
+
+    Returns
+    -------
+    PositionTracks
+        One row per live (or confirmed) track per scan.
+    """
     s = settings or PositionTrackerSettings()
     trk = position_tracker(s)
     z, R = np.asarray(z, float), np.asarray(R, float)
-    modes = [f"mode_prob_{j}" for j in range(len(s.q))]
-    parts = []
+    cols: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
     for t, rows in scan_slices(time_s):
         snap = trk.step(t, z[rows], R[rows])
         keep = snap.confirmed if confirmed_only else np.ones(len(snap.track_id), bool)
-        x, P = snap.x[keep], snap.P[keep]
-        part = {"time_s": np.full(len(x), t), "track_id": snap.track_id[keep],
-                "status": np.where(snap.confirmed[keep], "confirmed", "tentative"), "existence": snap.existence[keep],
-                "x_m": x[:, 0], "y_m": x[:, 1], "vx_mps": x[:, 2], "vy_mps": x[:, 3],
-                "sd_x_m": np.sqrt(P[:, 0, 0]), "sd_y_m": np.sqrt(P[:, 1, 1])}
-        part.update({name: snap.mu[keep, j] for j, name in enumerate(modes)})
-        parts.append(part)
-    return _table(parts, CONTACT_TRACK_COLUMNS + modes)
+        for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
+                     ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
+            cols[k].append(v[keep])
+        cols["time_s"].append(np.full(int(keep.sum()), t))
+    r = len(s.q)
+    P = _stack(cols["P"], np.zeros((0, 4, 4)))
+    return PositionTracks(_stack(cols["time_s"], np.zeros(0)), _stack(cols["track_id"], np.zeros(0, np.int64)),
+                          _stack(cols["confirmed"], np.zeros(0, bool)), _stack(cols["existence"], np.zeros(0)),
+                          _stack(cols["x"], np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
+                          _stack(cols["mu"], np.zeros((0, r))))
 
 
 def track_peaks(time_s, bearing_deg, amplitude, settings: BearingTrackerSettings | None = None, *,
-                amplitude_aided: bool = True):
-    """Bearing tracks of peaks (cone angles, deg, with amplitudes) at ``time_s``: JPDA_A with eq. 9 strengths
-    (``amplitude_aided``) or JPDA; tracks start on strong peaks and are confirmed M-of-N.
+                amplitude_aided: bool = True) -> BearingTracks:
+    """The bearing tracker (JPDA_A or JPDA, paper P0) with automatic initiation over a record of peaks.
 
-    Returns a DataFrame with PEAK_TRACK_COLUMNS."""
+    Tracks start on strong peaks and are confirmed M-of-N; strengths follow paper P0 eq. 9.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (k,)
+        Peak times (s), not decreasing; equal times form one scan.
+    bearing_deg : array_like, shape (k,)
+        Peak bearings (cone angles, deg).
+    amplitude : array_like, shape (k,)
+        Peak amplitudes (the detection statistic's units).
+    settings : BearingTrackerSettings, optional
+        Tracker settings (default: the paper's).
+    amplitude_aided : bool
+        JPDA_A (amplitude ratio in the association) when true, plain JPDA when false.
+
+    Returns
+    -------
+    BearingTracks
+        One row per live track per scan.
+    """
     trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True)
     b, a = np.asarray(bearing_deg, float), np.asarray(amplitude, float)
-    parts = []
+    cols: dict[str, list] = {c: [] for c in PEAK_TRACK_COLUMNS}
     for t, rows in scan_slices(time_s):
         snap = trk.step(t, b[rows], amplitude=a[rows])
-        parts.append({"time_s": np.full(len(snap.x), t), "track_id": snap.track_id, "bearing_deg": snap.x[:, 0],
-                      "bearing_rate_deg_s": snap.x[:, 1], "bearing_std_deg": np.sqrt(snap.P[:, 0, 0]),
-                      "strength": snap.attrs.get("strength", np.zeros(0)), "confirmed": snap.confirmed})
-    return _table(parts, PEAK_TRACK_COLUMNS)
+        for c, v in (("time_s", np.full(len(snap.x), t)), ("track_id", snap.track_id),
+                     ("bearing_deg", snap.x[:, 0]), ("bearing_rate_deg_s", snap.x[:, 1]),
+                     ("bearing_std_deg", np.sqrt(snap.P[:, 0, 0])),
+                     ("strength", snap.attrs.get("strength", np.zeros(0))), ("confirmed", snap.confirmed)):
+            cols[c].append(v)
+    empty = {"track_id": np.zeros(0, np.int64), "confirmed": np.zeros(0, bool)}
+    return BearingTracks(*(_stack(cols[c], empty.get(c, np.zeros(0))) for c in PEAK_TRACK_COLUMNS))

@@ -56,7 +56,13 @@ class PositionTrackerSettings(Settings):
         return self
 
     def transition_matrix(self) -> np.ndarray:
-        """Pi (r, r): ``transition_diagonal`` on the diagonal, the rest of each row spread evenly."""
+        """Mode transition matrix Pi: ``transition_diagonal`` on the diagonal, the rest of each row spread evenly.
+
+        Returns
+        -------
+        ndarray, shape (r, r)
+            Pi[i, j] = P(mode j at k | mode i at k-1); [[1]] for one mode.
+        """
         r = len(self.q)
         if r == 1:
             return np.ones((1, 1))
@@ -65,7 +71,18 @@ class PositionTrackerSettings(Settings):
         return Pi
 
     def with_modes(self, q) -> PositionTrackerSettings:
-        """The same settings with the modes' q replaced (validated)."""
+        """The same settings with the modes' q replaced (validated).
+
+        Parameters
+        ----------
+        q : sequence of float
+            White-noise acceleration intensities, one per mode (m^2/s^3).
+
+        Returns
+        -------
+        PositionTrackerSettings
+            A new, validated instance.
+        """
         return type(self).model_validate({**self.model_dump(), "q": [float(v) for v in q]})
 
 

@@ -47,6 +47,20 @@ class TrackArrays:
 
     @classmethod
     def empty(cls, r: int, d: int) -> TrackArrays:
+        """No tracks, with r modes and state dimension d.
+
+        Parameters
+        ----------
+        r : int
+            Modes.
+        d : int
+            State dimension.
+
+        Returns
+        -------
+        TrackArrays
+            Zero-length arrays of the right trailing shapes.
+        """
         return cls(np.zeros((0, r, d)), np.zeros((0, r, d, d)), np.zeros((0, r)), np.zeros(0), np.zeros(0, bool),
                    np.zeros(0, np.int64), np.zeros(0), np.zeros((0, d, d)))
 
@@ -54,13 +68,35 @@ class TrackArrays:
         return len(self.track_id)
 
     def select(self, keep: np.ndarray) -> TrackArrays:
-        """The tracks where ``keep`` (bool (n,) or indices)."""
+        """The tracks where ``keep``.
+
+        Parameters
+        ----------
+        keep : ndarray of bool, shape (n,), or of int
+            Mask or indices.
+
+        Returns
+        -------
+        TrackArrays
+            Those tracks, ``attrs`` included.
+        """
         return TrackArrays(self.x[keep], self.P[keep], self.mu[keep], self.existence[keep], self.confirmed[keep],
                            self.track_id[keep], self.born_s[keep], self.P_init[keep],
                            {k: v[keep] for k, v in self.attrs.items()})
 
     def append(self, new: TrackArrays) -> TrackArrays:
-        """These tracks followed by ``new`` (both must carry the same ``attrs`` names)."""
+        """These tracks followed by ``new`` (both must carry the same ``attrs`` names).
+
+        Parameters
+        ----------
+        new : TrackArrays
+            Tracks to add.
+
+        Returns
+        -------
+        TrackArrays
+            The concatenation.
+        """
         if not len(new):
             return self
         if not len(self):
@@ -72,7 +108,18 @@ class TrackArrays:
                            cat([self.P_init, new.P_init]), {k: cat([v, new.attrs[k]]) for k, v in self.attrs.items()})
 
     def with_attrs(self, **updates) -> TrackArrays:
-        """The same tracks with some ``attrs`` entries replaced."""
+        """The same tracks with some ``attrs`` entries replaced.
+
+        Parameters
+        ----------
+        **updates : ndarray, shape (n, ...)
+            New per-track quantities by name.
+
+        Returns
+        -------
+        TrackArrays
+            A copy with the updated ``attrs``.
+        """
         return replace(self, attrs={**self.attrs, **updates})
 
 
@@ -93,7 +140,22 @@ class TrackSnapshot:
 
     @classmethod
     def of(cls, time_s: float, T: TrackArrays) -> TrackSnapshot:
-        """Snapshot of ``T``: x = sum_r mu_r x_r, P = sum_r mu_r (P_r + (x_r - x)(x_r - x)^T) (filters/imm.py)."""
+        """Snapshot of ``T`` with combined estimates (filters/imm.py).
+
+        ``x = sum_r mu_r x_r``, ``P = sum_r mu_r (P_r + (x_r - x)(x_r - x)^T)``.
+
+        Parameters
+        ----------
+        time_s : float
+            Scan time (s).
+        T : TrackArrays
+            Live tracks.
+
+        Returns
+        -------
+        TrackSnapshot
+            Copies of the track management arrays and the combined estimates.
+        """
         if T.mu.shape[1] == 1:  # one mode: the combination is the mode's estimate (symmetrized, as imm_combine)
             xc, Pc = T.x[:, 0].copy(), symmetrize(T.P[:, 0])
         elif len(T):

@@ -22,6 +22,8 @@ STUDY_FIGURES = {
     "tma-sensitivity": "sonartrack.report.figures.tma_sensitivity",
     "bistatic-imm-ipda": "sonartrack.report.figures.bistatic_imm_ipda",
     "passive-chain": "sonartrack.report.figures.passive_chain",
+    "quiet-target": "sonartrack.report.figures.quiet_target",
+    "active-chain": "sonartrack.report.figures.active",
 }
 
 

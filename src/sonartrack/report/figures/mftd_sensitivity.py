@@ -1,6 +1,6 @@
 """Figures of the P1 sensitivity study (mftd-sensitivity): the three failing mftd claims under every reading
 (plane x prior density x final decision) as a table, Pd against sigma_a per reading, and Pd against N per
-plane beside the share of trials whose true first cell survives the first pruning (issue 13, item 5)."""
+plane beside the share of trials whose true first cell survives the first pruning."""
 
 from __future__ import annotations
 

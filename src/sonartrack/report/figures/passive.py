@@ -12,7 +12,19 @@ from sonartrack.report.figures.tma import ellipses
 
 
 def bearing_time_picture(result):
-    """Normalised beam level over cone angle (x) and time (y, downwards), confirmed tracks on top (Figure)."""
+    """The bearing-time record with the tracks on it.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The passive chain's result (systems/passive/chain.py).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Normalised beam level over cone angle (x) and time (y, downwards), the targets' tracks on top, the other
+        tracks faint.
+    """
     import matplotlib.pyplot as plt
 
     rec = result.record
@@ -20,15 +32,18 @@ def bearing_time_picture(result):
     level = np.asarray(rec.level, float)
     t_end = float(rec.time_s[-1]) if len(rec.time_s) else 1.0
     # saturate at twice the detection threshold: a loud ship would otherwise wash out the weak ones
-    top = 2.0 * result.settings.front_end.threshold
+    top = 2.0 * result.settings.threshold
     ax.imshow(level, aspect="auto", cmap="Greys", origin="upper", vmin=0.0, vmax=top, interpolation="nearest",
               extent=(float(rec.cone_deg[0]), float(rec.cone_deg[-1]), t_end, 0.0))
     for tg in result.targets:
         m = tg.track
         ax.plot(m.track_cone_deg, m.track_time_s, lw=1.6, label=f"target {tg.target_id} ({tg.side.side})")
-    others = result.tracks[~result.tracks["track_id"].isin([tg.track.track_id for tg in result.targets])]
-    for _, g in others.groupby("track_id"):
-        ax.plot(g["bearing_deg"], g["time_s"], color="tab:orange", lw=0.6, alpha=0.5)
+    trk = result.tracks
+    tid = np.asarray(trk.track_id)
+    for other in np.setdiff1d(tid, [tg.track.track_id for tg in result.targets]):
+        rows = tid == other
+        ax.plot(np.asarray(trk.bearing_deg)[rows], np.asarray(trk.time_s)[rows], color="tab:orange", lw=0.6,
+                alpha=0.5)
     ax.set(xlabel="cone angle from the array's forward axis (deg)", ylabel="time (s)",
            title=f"bearing-time record ({result.settings.front_end.method}) and bearing tracks")
     if result.targets:
@@ -45,10 +60,22 @@ def _plausible(tma_result, min_range_m: float = 500.0) -> bool:
     return bool(tma_result.solution.range_flags().all() and np.min(cols["range_m"]) >= min_range_m)
 
 
-def tactical_picture(result, nav):
-    """Ownship and array tracks, each target's ML track with 95 % ellipses, its mirror faint (Figure)."""
+def tactical_picture(result):
+    """The tactical picture.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The passive chain's result (its navigation and targets).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Ownship and array tracks, each target's ML track with 95 % ellipses, its rejected mirror faint.
+    """
     import matplotlib.pyplot as plt
 
+    nav = result.nav
     fig, ax = plt.subplots(figsize=(8, 8))
     ax.plot(nav.x_m / 1e3, nav.y_m / 1e3, "b-", lw=1.5, label="ownship")
     ax.plot(nav.array_x_m / 1e3, nav.array_y_m / 1e3, "c--", lw=1.0, label="array centre")
@@ -73,8 +100,21 @@ def tactical_picture(result, nav):
     return fig
 
 
-def write_passive_figures(result, nav, out) -> list[Path]:
-    """bearing_time.png and tactical.png in ``out``, saved atomically."""
+def write_passive_figures(result, out) -> list[Path]:
+    """Draw and save the chain's pictures.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The passive chain's result.
+    out : path
+        The output folder.
+
+    Returns
+    -------
+    list of Path
+        bearing_time.png and tactical.png in ``out``, saved atomically.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -82,8 +122,7 @@ def write_passive_figures(result, nav, out) -> list[Path]:
 
     out = Path(out)
     paths = []
-    for name, fig in (("bearing_time.png", bearing_time_picture(result)), ("tactical.png", tactical_picture(result,
-                                                                                                          nav))):
+    for name, fig in (("bearing_time.png", bearing_time_picture(result)), ("tactical.png", tactical_picture(result))):
         paths.append(save_figure(fig, out / name, dpi=110, bbox_inches="tight"))
         plt.close(fig)
     return paths

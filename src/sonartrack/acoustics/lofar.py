@@ -1,0 +1,326 @@
+"""Narrowband (LOFAR) processing per beam: beam spectra, long integration, a background normaliser along
+frequency, and tonal line detection at a stated false-alarm probability.
+
+Beams (as acoustics/tonal.py, element n = 0 at the front, cone angle theta from ahead): per window of M samples,
+
+    X_n(f) = rfft(hann * x_n),   B(theta, f) = (1/N) sum_n exp(+2 pi i f tau_n(theta)) X_n(f),
+    P(theta, f) = 2 |B|^2 / (fs sum w^2)          (one-sided PSD, input units^2/Hz; Hann bins 1/(window) apart)
+
+Long integration (the LOFAR gram; Urick, Principles of Underwater Sound, sec. 12.6; Waite, Sonar for Practising
+Engineers, ch. 6): the mean of L consecutive windows' spectra, Pbar = (1/L) sum_l P_l. A tonal keeps its power
+while the spread of the noise estimate falls as 1/sqrt(L): after normalisation a noise bin is Gamma(L, 1/L)
+(mean 1), so a line of bin SNR s stands 1 + s over a background whose spread is 1/sqrt(L).
+
+Background normaliser along frequency (split-window, as a CFAR along the frequency axis; Struzinski & Lowe
+1984, "A performance comparison of four noise background normalization schemes proposed for signal detection
+systems", JASA 76(6)): for bin k, the reference bins are ``reference_bins`` on each side beyond a gap of
+``gap_bins`` (the line's own Hann main lobe stays out of its background), and
+
+    mean:       mu_k = mean of the reference bins (split-window mean);
+    two-pass:   the same, then the mean again over the reference bins below ``censor`` mu_k (a neighbouring
+                line does not raise the background);
+    median:     mu_k = median of the reference bins / m_L, m_L the median of Gamma(L, 1/L) (unbiased in noise).
+
+Statistic z_k = Pbar_k / mu_k. The band (not set) is the two octaves below the array's aliasing frequency: above
+it a loud ship's grating lobe meets each beam at one frequency and draws a false line.
+
+Threshold for a false-alarm probability ``pfa`` per bin and integration period:
+with the mean normaliser over R independent reference bins, z is the ratio of a Gamma(L) to the mean of R
+Gamma(L) variables, i.e. F-distributed with (2L, 2LR) degrees of freedom, so t = F^-1(1 - pfa; 2L, 2LR) (exact
+for independent bins; Hann bins two apart are nearly independent, and the gap keeps the bin's own neighbours
+out); the two-pass and median normalisers use the same threshold (their reference is a little noisier: the
+false-alarm rate is measured by the tests). Lines are the cells at or above t that are local maxima along
+frequency and across beams; SNR = 10 log10(z - 1) (the line's power over the background).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from sonartrack.acoustics.line_array import LineArray
+from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, setting
+
+
+class LofarSettings(Settings):
+    """Narrowband processing per beam (module doc)."""
+
+    band_hz: list[float] | None = setting(None, "frequencies searched for tonal lines [low, high) (not set: two "
+                                                "octaves below the array's aliasing frequency f_a, [f_a / 4, f_a]: "
+                                                "above f_a a loud ship's grating lobe sweeps through the beams one "
+                                                "frequency at a time and looks like a line)", unit="Hz", min_length=2,
+                                          max_length=2)
+    beams: int = setting(61, "cone-angle grid of the narrowband beams, uniform in 0..180 deg (61 = 3 deg steps; the "
+                             "16 x 2.5 m array's beam is ~9.5 deg wide at 200 Hz)", unit="1", ge=3)
+    integration: int = setting(16, "windows L averaged into one LOFAR line (long integration)", unit="1", ge=1)
+    normaliser: Literal["mean", "two-pass", "median"] = setting("two-pass", "background along frequency: split-"
+                                                                "window mean, the same censored, or median", unit="")
+    gap_bins: int = setting(2, "bins left out on each side of the bin tested (its Hann main lobe)", unit="1", ge=0)
+    reference_bins: int = setting(16, "reference bins on each side beyond the gap", unit="1", ge=2)
+    censor: float = setting(3.0, "two-pass: reference bins above this times the first-pass mean are left out",
+                            unit="1", gt=1)
+    pfa: float = setting(1e-4, "false-alarm probability per bin, beam and integration period of the line "
+                               "threshold", unit="1", gt=0, lt=0.5)
+    sidelobe_guard_db: float = setting(12.0, "a line whose power over the background is this far below the strongest "
+                                             "beam's at the same bin and period is that line's sidelobe, not a source "
+                                             "(uniform weighting: first sidelobe -13.3 dB)", unit="dB", ge=0)
+
+    @property
+    def cone_deg(self) -> np.ndarray:
+        """The narrowband beams' cone angles (deg)."""
+        return np.linspace(0.0, 180.0, self.beams)
+
+
+@dataclass(frozen=True)
+class LofarGram:
+    """Integrated, normalised beam spectra: period centres ``time_s`` (T,), ``cone_deg`` (B,), ``freqs_hz`` (F,),
+    ``power`` (T, B, F) the integrated PSD (input units^2/Hz) and ``statistic`` (T, B, F) z = power / background."""
+
+    time_s: np.ndarray
+    cone_deg: np.ndarray
+    freqs_hz: np.ndarray
+    power: np.ndarray
+    statistic: np.ndarray
+
+
+def lofar_band(array: LineArray, fs_hz: float, settings: LofarSettings) -> tuple[float, float]:
+    """The narrowband band: ``band_hz``, or [f_a / 4, f_a] with f_a = min(c / (2 d), fs / 2).
+
+    Parameters
+    ----------
+    array : LineArray
+        The array (its aliasing frequency).
+    fs_hz : float
+        Sample rate (Hz).
+    settings : LofarSettings
+        ``band_hz``.
+
+    Returns
+    -------
+    tuple of float
+        (low, high) in Hz.
+    """
+    if settings.band_hz is not None:
+        lo, hi = settings.band_hz
+    else:
+        hi = array.aliasing_hz(fs_hz)
+        lo = hi / 4.0
+    require(0 < lo < hi <= fs_hz / 2, f"LOFAR band {[lo, hi]} Hz must satisfy 0 < low < high <= fs / 2")
+    return float(lo), float(hi)
+
+
+@dataclass(frozen=True, slots=True)
+class LineDetections:
+    """Tonal line detections, one row each: period centre (s), cone angle (deg), frequency (Hz), statistic z,
+    SNR (dB), beam index."""
+
+    time_s: np.ndarray
+    cone_deg: np.ndarray
+    frequency_hz: np.ndarray
+    statistic: np.ndarray
+    snr_db: np.ndarray
+    beam: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+
+def beam_power_spectra(blocks: np.ndarray, fs_hz: float, array: LineArray, cone_deg: np.ndarray,
+                       band_hz) -> tuple[np.ndarray, np.ndarray]:
+    """Conventional beams' one-sided PSDs of K windows (module doc).
+
+    Parameters
+    ----------
+    blocks : ndarray (K, N, M)
+        K windows of M samples of N elements (element 0 = front).
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        Spacing and sound speed of the steering delays.
+    cone_deg : ndarray (B,)
+        Beam cone angles (deg).
+    band_hz : sequence of 2 floats
+        [low, high) (Hz).
+
+    Returns
+    -------
+    freqs_hz : ndarray (F,)
+        The band's bins (Hz).
+    power : ndarray (K, B, F)
+        PSD per window, beam and bin (input units^2/Hz).
+    """
+    x = np.asarray(blocks, dtype=float)
+    k, n, m = x.shape
+    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(m) / m)
+    f = np.fft.rfftfreq(m, 1.0 / fs_hz)
+    idx = np.nonzero((f >= band_hz[0]) & (f < band_hz[1]))[0]
+    require(idx.size >= 3, f"the LOFAR band {list(band_hz)} Hz holds fewer than 3 bins of {fs_hz / m:g} Hz")
+    spec = np.fft.rfft(x * w, axis=2)[:, :, idx[0]: idx[-1] + 1]  # (K, N, F)
+    kappa = array.spacing_m * np.cos(np.deg2rad(np.asarray(cone_deg, float))) / array.sound_speed_mps
+    tau = (np.arange(n) - 0.5 * (n - 1))[None, :] * kappa[:, None]  # (B, N)
+    steer = np.exp(2j * np.pi * f[idx][:, None, None] * tau[None])  # (F, B, N)
+    beams = np.matmul(steer, spec.transpose(2, 1, 0)).transpose(2, 1, 0) / n  # (F, B, N) @ (F, N, K)
+    return f[idx], (2.0 / (fs_hz * np.sum(w**2))) * (beams.real**2 + beams.imag**2)
+
+
+def _window_sums(p: np.ndarray, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sum and count of p[..., k + j] for j in [lo, hi) (one side of the reference window), zero-padded at the
+    band's edges (the edge bins use the reference bins there are)."""
+    f = p.shape[-1]
+    c = np.concatenate([np.zeros(p.shape[:-1] + (1,)), np.cumsum(p, axis=-1)], axis=-1)
+    k = np.arange(f)
+    a, b = np.clip(k + lo, 0, f), np.clip(k + hi, 0, f)
+    return c[..., b] - c[..., a], (b - a).astype(float)
+
+
+def _split_window_mean(p: np.ndarray, gap: int, ref: int) -> tuple[np.ndarray, np.ndarray]:
+    s1, n1 = _window_sums(p, -gap - ref, -gap)
+    s2, n2 = _window_sums(p, gap + 1, gap + 1 + ref)
+    return s1 + s2, n1 + n2
+
+
+def background(power: np.ndarray, settings: LofarSettings) -> np.ndarray:
+    """The background mu_k along the last axis (frequency) of ``power`` (module doc).
+
+    Parameters
+    ----------
+    power : ndarray (..., F)
+        Integrated spectra.
+    settings : LofarSettings
+        Normaliser, gap, reference bins, censoring, integration (median bias).
+
+    Returns
+    -------
+    ndarray (..., F)
+        The background level (units of ``power``).
+    """
+    s = settings
+    p = np.asarray(power, dtype=float)
+    if s.normaliser == "median":
+        from scipy.ndimage import median_filter
+        from scipy.stats import gamma
+
+        half = s.gap_bins + s.reference_bins
+        foot = np.ones(2 * half + 1, dtype=bool)
+        foot[s.reference_bins: s.reference_bins + 2 * s.gap_bins + 1] = False
+        shape = (1,) * (p.ndim - 1) + foot.shape
+        med = median_filter(p, footprint=foot.reshape(shape), mode="mirror")
+        return med / gamma.median(s.integration, scale=1.0 / s.integration)
+    total, count = _split_window_mean(p, s.gap_bins, s.reference_bins)
+    mu = total / np.maximum(count, 1.0)
+    if s.normaliser == "two-pass":
+        kept = np.where(p <= s.censor * mu, p, 0.0)  # censored bins leave both the sum and the count
+        total, _ = _split_window_mean(kept, s.gap_bins, s.reference_bins)
+        count, _ = _split_window_mean((p <= s.censor * mu).astype(float), s.gap_bins, s.reference_bins)
+        mu = np.where(count > 0, total / np.maximum(count, 1.0), mu)
+    return mu
+
+
+def line_threshold(settings: LofarSettings) -> float:
+    """Threshold t on z with P(z >= t | noise) = pfa: F(2L, 2LR) quantile, R = 2 ``reference_bins`` (module doc).
+
+    Parameters
+    ----------
+    settings : LofarSettings
+        pfa, integration L and reference bins.
+
+    Returns
+    -------
+    float
+        t (ratio to the background).
+    """
+    from scipy.stats import f as f_dist
+
+    dof = 2 * settings.integration
+    return float(f_dist.isf(settings.pfa, dof, dof * 2 * settings.reference_bins))
+
+
+def integrate(power: np.ndarray, n: int) -> np.ndarray:
+    """Mean of consecutive groups of ``n`` windows along axis 0 (a last incomplete group is dropped).
+
+    Parameters
+    ----------
+    power : ndarray (K, ...)
+        Per-window spectra.
+    n : int
+        Windows per group L.
+
+    Returns
+    -------
+    ndarray (K // n, ...)
+        The integrated spectra.
+    """
+    p = np.asarray(power)
+    t = p.shape[0] // n
+    return p[: t * n].reshape((t, n) + p.shape[1:]).mean(axis=1)
+
+
+def lofar_gram(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, settings: LofarSettings,
+               window_s: float) -> LofarGram:
+    """Beam spectra of every window, integrated over L windows and normalised along frequency (module doc).
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray (N, window_s fs)
+        The recording's windows in order.
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array.
+    settings : LofarSettings
+        Band, beams, integration and normaliser.
+    window_s : float
+        Window length (s): period k is centred at (k + 0.5) L window_s.
+
+    Returns
+    -------
+    LofarGram
+        The integrated gram (float32 power and statistic).
+    """
+    s, cone = settings, settings.cone_deg
+    band = lofar_band(array, fs_hz, s)
+    lines, group, freqs = [], [], None
+    for block in blocks:
+        group.append(np.asarray(block, float))
+        if len(group) == s.integration:  # one batched transform and product per integration period
+            freqs, p = beam_power_spectra(np.stack(group), fs_hz, array, cone, band)
+            lines.append(p.mean(axis=0))
+            group = []
+    require(bool(lines), f"the recording holds fewer windows than one LOFAR integration ({s.integration})")
+    power = np.stack(lines)
+    stat = power / np.maximum(background(power, s), np.finfo(float).tiny)
+    t = (np.arange(len(lines)) + 0.5) * s.integration * window_s
+    return LofarGram(t, cone, freqs, power.astype(np.float32), stat.astype(np.float32))
+
+
+def detect_lines(gram: LofarGram, settings: LofarSettings) -> LineDetections:
+    """Cells of the gram at or above :func:`line_threshold` that are local maxima along frequency and across beams,
+    less the sidelobes: a cell whose line power over the background, P - mu = mu (z - 1), is more than
+    ``sidelobe_guard_db`` below the largest over the beams at that bin and period.
+
+    Parameters
+    ----------
+    gram : LofarGram
+        Integrated, normalised spectra.
+    settings : LofarSettings
+        The threshold's pfa, integration and reference bins.
+
+    Returns
+    -------
+    LineDetections
+        One row per line and period, SNR = 10 log10(z - 1) dB.
+    """
+    z = np.asarray(gram.statistic, dtype=float)
+    pad_f = np.pad(z, ((0, 0), (0, 0), (1, 1)), constant_values=-np.inf)
+    pad_b = np.pad(z, ((0, 0), (1, 1), (0, 0)), constant_values=-np.inf)
+    peak = (z > pad_f[..., :-2]) & (z >= pad_f[..., 2:]) & (z > pad_b[:, :-2]) & (z >= pad_b[:, 2:])
+    excess = np.asarray(gram.power, float) * (1.0 - 1.0 / np.maximum(z, 1e-12))  # P - mu, mu = P / z
+    main = excess >= np.max(excess, axis=1, keepdims=True) * 10.0 ** (-settings.sidelobe_guard_db / 10.0)
+    t, b, k = np.nonzero(peak & main & (z >= line_threshold(settings)))
+    zz = z[t, b, k]
+    return LineDetections(gram.time_s[t], gram.cone_deg[b], gram.freqs_hz[k], zz,
+                          10.0 * np.log10(np.maximum(zz - 1.0, 1e-6)), b.astype(np.int64))

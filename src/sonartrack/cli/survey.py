@@ -1,0 +1,63 @@
+"""``sonartrack survey``: many recordings through the passive chain, locally or on a Dask cluster.
+
+Parses the options and calls the survey system (systems/survey/): the manifest (one line per recording:
+recording, navigation, spacing_m[, name, calibration, settings, tow_length_m, name_pattern, time_source]),
+one task per recording, each finished recording stored atomically in ``OUT/recordings/NAME/`` with its
+tables, page and pictures (report/passive_page.py, report/figures/passive.py) and skipped on a rerun; then
+``OUT/survey.csv``, ``OUT/survey_targets.csv`` and the survey page ``OUT/index.html`` (report/survey_page.py).
+The exit status is the number of failed recordings (at most 100; 0: all ran), each failure's one-line reason
+on stderr and in the page.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    app.command("survey")(survey_cmd)
+
+
+def _recording_page(result, folder: Path) -> None:
+    from sonartrack.report.figures.passive import write_passive_figures
+    from sonartrack.report.passive_page import write_passive_page
+    from sonartrack.systems.passive.tables import summary_lines
+
+    figures = write_passive_figures(result, folder)
+    write_passive_page(folder / "index.html", result, summary_lines(result), figures, {"folder": folder.name})
+
+
+def survey_cmd(
+    manifest: Annotated[list[Path], typer.Option(help="Survey manifest CSV: recording, navigation, spacing_m[, name, "
+                                                      "calibration, settings, tow_length_m, name_pattern, "
+                                                      "time_source]; repeat it to run several manifests as one "
+                                                      "survey.")],
+    out: Annotated[Path, typer.Option(help="Output folder (a rerun skips the recordings already done).")]
+    = Path("survey-results"),
+    workers: Annotated[int, typer.Option(help="1: run here, one recording after another; N > 1: a local Dask "
+                                              "cluster of N processes.")] = 1,
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, e.g. tcp://host:8786 (the workers "
+                                                       "must see the manifest's paths).")] = None,
+) -> None:
+    """Survey: every recording of a manifest through the passive chain; a page of recordings and targets."""
+    from sonartrack.cli._progress import TrialProgress, make_progress
+    from sonartrack.report.survey_page import write_survey_page
+    from sonartrack.systems.survey.manifest import read_manifests
+    from sonartrack.systems.survey.run import run_survey
+
+    entries = read_manifests(manifest)
+    out.mkdir(parents=True, exist_ok=True)
+    with make_progress() as bar:
+        summary = run_survey(entries, out, workers=workers, scheduler=scheduler, progress=TrialProgress(bar),
+                             extra=_recording_page)
+    page = write_survey_page(out, summary.rows)
+    for r in summary.rows:
+        if r["status"] == "failed":
+            typer.echo(f"failed: {r['name']}: {r['reason']}", err=True)
+    n_targets = sum(r["targets"] for r in summary.rows)
+    typer.echo(f"survey: {summary.ok} ran, {summary.skipped} already done, {summary.failed_total} failed; "
+               f"{n_targets} targets; open {page}")
+    raise typer.Exit(min(summary.failed_total, 100))

@@ -1,0 +1,283 @@
+"""An active ping's cells and single-ping detections: beams -> matched filter -> CFAR -> threshold.
+
+One ping on a towed line array (complex baseband, channels x samples) becomes a cube of cells
+(beams x delays x Dopplers) holding the CFAR-normalised square-law statistic s = |z|^2 / mu
+(acoustics/active_beams.py, acoustics/matched_filter.py, detection/cfar.py):
+
+* beams: true-time-delay CBF on a cone grid (0 = ahead along the array axis);
+* delays: the travel time of the echo's leading edge from transmission to the array centre; an LFM's
+  cells are the samples (1 / f_s apart), a CW's are every ``cw_hop`` pulse lengths;
+* Dopplers: one cell (0 Hz) for an LFM (Doppler tolerant: an echo at Doppler f_d compresses at the delay
+  travel time - f_d tau / B, acoustics/matched_filter.py), the Doppler filter bank for a CW, spanning
+  |bistatic range rate| <= ``max_range_rate_mps`` (f_d = -f_c rdot_B / c);
+* delays below ``blank_s`` are dropped (the direct blast of the source and the pulse's own length);
+* the CFAR runs along delay with its reference cells one resolution cell apart (:func:`cfar_stride`: 2 cells
+  for the default LFM sampled at 2 B, 4 for a CW's quarter-pulse delays), so that they are about independent,
+  as the closed-form thresholds assume (with every cell as a reference the noise-only false-alarm rate was
+  measured 2-6 times the stated Pfa); the window then spans stride x (guard + reference) cells a side.
+
+In homogeneous noise s is exponential with mean 1 (paper P1's square-law cell statistic, eq. 8, has mean 2:
+multiply by 2 before P1's detector). A single-ping detection is a cell with s >= threshold that is the
+largest in its neighbourhood (+-1 beam, +-guard_cells delays, +-1 Doppler: one detection per echo, not one
+per cell of its main lobe); its cone angle, delay and Doppler are refined by a parabola through the log
+statistic of the neighbours on each axis (offset within +-half a cell). The threshold for a stated Pfa per
+cell is the CFAR's closed form (:func:`detection_threshold`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.acoustics.active_beams import LineArray, beamform_spectra, cone_grid_deg
+from sonartrack.acoustics.matched_filter import (
+    Waveform,
+    cw_doppler_bank,
+    doppler_to_range_rate,
+    fft_length,
+    pulse_compress,
+)
+from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, setting
+from sonartrack.detection.cfar import CfarSettings, cfar_normalise, cfar_threshold
+
+
+class FrontEndSettings(Settings):
+    """The active front end of one ping (module doc)."""
+
+    beams: int = setting(61, "cone-angle grid: this many beams uniform in 0..180 deg (61 = 3 deg steps; the "
+                             "default 16-element array's beams are ~6 deg wide at broadside)", unit="1", ge=2)
+    sound_speed_mps: float = setting(1500.0, "sound speed c at the array (steering, Doppler to range rate)",
+                                     unit="m/s", gt=1300, lt=1700)
+    max_range_rate_mps: float = setting(15.0, "CW Doppler bank: |bistatic range rate| spanned (rate of the total "
+                                              "path Tx -> target -> Rx)", unit="m/s", gt=0)
+    cw_hop: float = setting(0.25, "CW delay cells: step in pulse lengths (0.25: an echo is within 1.2 dB of a "
+                                  "cell's peak)", unit="1", gt=0, le=1)
+    doppler_pad: int = setting(2, "CW Doppler filters 1 / (doppler_pad tau) apart (the resolution is ~0.88 / tau)",
+                               unit="1", ge=1, le=8)
+    blank_s: float = setting(1.5, "delays below this are not searched: the direct blast (baseline / c) and the "
+                                  "pulse length", unit="s", ge=0)
+    pfa: float = setting(1e-5, "false-alarm probability per cell of the single-ping threshold", unit="1",
+                         gt=0, lt=1)
+    cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
+
+
+@dataclass(frozen=True, slots=True)
+class PingCells:
+    """The normalised cells of one ping.
+
+    ``statistic`` (B, D, J) float32: s = |z|^2 / mu (mean 1 in noise) per beam, delay and Doppler cell;
+    ``cone_deg`` (B,) beam cone angles (deg, 0 = ahead along the array axis); ``delay_s`` (D,) travel times
+    from transmission to the array centre (s); ``doppler_hz`` (J,) Doppler cells (Hz; [0.] for an LFM) and
+    ``range_rate_mps`` (J,) the bistatic range rates they stand for (m/s; NaN for an LFM, which measures none);
+    ``time_s`` the transmit time (s); ``ping`` the ping's number."""
+
+    ping: int
+    time_s: float
+    cone_deg: np.ndarray
+    delay_s: np.ndarray
+    doppler_hz: np.ndarray
+    range_rate_mps: np.ndarray
+    statistic: np.ndarray
+    doppler_measured: bool
+
+
+@dataclass(frozen=True, slots=True)
+class Detections:
+    """Single-ping detections, arrays (n,): ``ping`` number, transmit ``time_s`` (s), ``cone_deg`` (deg),
+    ``travel_time_s`` (s, to the array centre; an LFM's is biased by -f_d tau / B), ``doppler_hz`` (Hz) and
+    ``range_rate_mps`` (bistatic, m/s; both NaN for an LFM), ``statistic`` (normalised s at the peak cell),
+    ``beam``, ``delay_cell``, ``doppler_cell`` (indices into the ping's cells)."""
+
+    ping: np.ndarray
+    time_s: np.ndarray
+    cone_deg: np.ndarray
+    travel_time_s: np.ndarray
+    doppler_hz: np.ndarray
+    range_rate_mps: np.ndarray
+    statistic: np.ndarray
+    beam: np.ndarray
+    delay_cell: np.ndarray
+    doppler_cell: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.time_s.size)
+
+
+def detection_threshold(settings: FrontEndSettings) -> float:
+    """Threshold on s for the stated per-cell Pfa (the CFAR's closed form, detection/cfar.py).
+
+    Parameters
+    ----------
+    settings : FrontEndSettings
+        Its ``pfa`` and ``cfar``.
+
+    Returns
+    -------
+    float
+        Threshold on the normalised statistic s.
+    """
+    return cfar_threshold(settings.pfa, settings.cfar)
+
+
+def matched_cells(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: LineArray,
+                  settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Beams, then the matched filter (module doc): the raw square-law cells before the CFAR.
+
+    Parameters
+    ----------
+    samples : ndarray (N, M)
+        Complex baseband samples, sample 0 at the transmit time.
+    fs_hz : float
+        Sample rate (Hz).
+    waveform : Waveform
+        The transmitted pulse.
+    array : LineArray
+        Element count and spacing.
+    settings : FrontEndSettings
+        Beams, sound speed, CW bank.
+
+    Returns
+    -------
+    power : ndarray (B, D, J), float32
+        |z|^2 per beam, delay and Doppler cell (Pa^2 s^2 scale: unnormalised).
+    delay_s : ndarray (D,)
+        Delays (s).
+    doppler_hz : ndarray (J,)
+        Doppler cells (Hz; [0.] for an LFM).
+    """
+    x = np.asarray(samples)
+    require(x.ndim == 2, f"a ping must be channels x samples, got shape {x.shape}")
+    n, m = x.shape
+    n_pulse = waveform.n_samples(fs_hz)
+    require(m > n_pulse, f"the ping ({m} samples) is not longer than the pulse ({n_pulse} samples at {fs_hz:g} Hz)")
+    n_fft = fft_length(m + n_pulse)
+    spectra = np.fft.fft(x.astype(np.complex64, copy=False), n_fft, axis=1)
+    beams = beamform_spectra(spectra, fs_hz, waveform.carrier_hz, array, cone_grid_deg(settings.beams),
+                             settings.sound_speed_mps)
+    if waveform.kind == "lfm":
+        z = pulse_compress(beams, waveform.replica(fs_hz), m - n_pulse + 1)[..., None]
+        delay, doppler = np.arange(m - n_pulse + 1) / fs_hz, np.zeros(1)
+    else:
+        series = np.fft.ifft(beams, axis=1)[:, :m]
+        f_max = settings.max_range_rate_mps * waveform.carrier_hz / settings.sound_speed_mps
+        hop = max(int(round(settings.cw_hop * n_pulse)), 1)
+        z, delay, doppler = cw_doppler_bank(series, fs_hz, waveform, f_max, hop, settings.doppler_pad)
+    return (z.real**2 + z.imag**2).astype(np.float32), delay, doppler
+
+
+def cfar_stride(waveform: Waveform, fs_hz: float, delay_s: np.ndarray) -> int:
+    """Delay cells per resolution cell (1 / B for an LFM, tau for a CW): the CFAR's reference stride, so that
+    its references are about independent (detection/cfar.py).
+
+    Parameters
+    ----------
+    waveform : Waveform
+        The pulse.
+    fs_hz : float
+        Sample rate (Hz).
+    delay_s : ndarray (D,)
+        The delay cells (s).
+
+    Returns
+    -------
+    int
+        Stride >= 1 (cells).
+    """
+    step = float(delay_s[1] - delay_s[0]) if delay_s.size > 1 else 1.0 / fs_hz
+    resolution = 1.0 / waveform.bandwidth_hz if waveform.kind == "lfm" else waveform.duration_s
+    return max(int(round(resolution / step)), 1)
+
+
+def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: LineArray,
+                   settings: FrontEndSettings, *, time_s: float = 0.0, ping: int = 0) -> PingCells:
+    """One ping's normalised cells (module doc).
+
+    Parameters
+    ----------
+    samples : ndarray (N, M)
+        Complex baseband samples of the N elements (element 0 = the front) over the listening window, sample 0
+        at the transmit time.
+    fs_hz : float
+        Sample rate (Hz).
+    waveform : Waveform
+        The transmitted pulse (its carrier is the baseband's).
+    array : LineArray
+        Element count (= N) and spacing (m).
+    settings : FrontEndSettings
+        Beams, CW bank, blanking, CFAR.
+    time_s : float
+        Transmit time (s), copied to the cells.
+    ping : int
+        The ping's number, copied to the cells.
+
+    Returns
+    -------
+    PingCells
+        Normalised statistic (B, D, J) with its axes.
+    """
+    power, delay, doppler = matched_cells(samples, fs_hz, waveform, array, settings)
+    stride = cfar_stride(waveform, fs_hz, delay)
+    stat = cfar_normalise(np.moveaxis(power, 1, -1), settings.cfar, stride)
+    stat = np.ascontiguousarray(np.moveaxis(stat, -1, 1))
+    keep = delay >= settings.blank_s
+    require(bool(keep.any()), f"blank_s {settings.blank_s:g} s leaves no delay of the {delay[-1]:.3g} s window: "
+                              "lower it")
+    rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
+            if waveform.measures_doppler else np.full(doppler.shape, np.nan))
+    return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate,
+                     stat[:, keep], waveform.measures_doppler)
+
+
+def _refine(log_s: np.ndarray, idx: tuple[np.ndarray, ...], axis: int) -> np.ndarray:
+    """Offset (cells, in [-0.5, 0.5]) of a parabola's peak through the log statistic at idx -1, 0, +1 on ``axis``."""
+    size = log_s.shape[axis]
+    i = idx[axis]
+    if size < 3:
+        return np.zeros(i.shape)
+    lo = list(idx)
+    hi = list(idx)
+    lo[axis] = np.clip(i - 1, 0, size - 1)
+    hi[axis] = np.clip(i + 1, 0, size - 1)
+    y0, y1, y2 = log_s[tuple(lo)], log_s[idx], log_s[tuple(hi)]
+    den = y0 - 2.0 * y1 + y2
+    ok = (den < 0) & (i > 0) & (i < size - 1)
+    delta = np.where(ok, 0.5 * (y0 - y2) / np.where(ok, den, -1.0), 0.0)
+    return np.clip(delta, -0.5, 0.5)
+
+
+def _axis_value(grid: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """Values of an axis at fractional cell positions (linear between cells)."""
+    return np.interp(position, np.arange(grid.size), grid)
+
+
+def detect_ping(cells: PingCells, threshold: float, guard_cells: int = 4) -> Detections:
+    """The single-ping detections of ``cells``: local maxima with s >= ``threshold`` (module doc).
+
+    Parameters
+    ----------
+    cells : PingCells
+        One ping's normalised cells.
+    threshold : float
+        Threshold on the normalised statistic s (:func:`detection_threshold` for a stated Pfa).
+    guard_cells : int
+        Half-width of the neighbourhood along delay (the CFAR's guard cells).
+
+    Returns
+    -------
+    Detections
+        One row per detection, in beam, delay, Doppler order.
+    """
+    from scipy.ndimage import maximum_filter
+
+    s = cells.statistic
+    peak = (s >= threshold) & (s == maximum_filter(s, size=(3, 2 * guard_cells + 1, 3), mode="nearest"))
+    idx = np.nonzero(peak)
+    log_s = np.log(np.maximum(s, 1e-30))
+    b, d, j = (i.astype(float) + _refine(log_s, idx, ax) for ax, i in enumerate(idx))
+    doppler = _axis_value(cells.doppler_hz, j) if cells.doppler_measured else np.full(b.shape, np.nan)
+    rate = _axis_value(cells.range_rate_mps, j) if cells.doppler_measured else np.full(b.shape, np.nan)
+    n = b.size
+    return Detections(np.full(n, cells.ping), np.full(n, cells.time_s), _axis_value(cells.cone_deg, b),
+                      _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])

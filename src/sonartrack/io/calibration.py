@@ -1,0 +1,184 @@
+"""Hydrophone calibration: recorded samples (volts) to pressure (Pa), and levels in dB re 1 uPa.
+
+A hydrophone of receiving sensitivity S (dB re 1 V/uPa) behind a preamplifier of gain G (dB) gives
+10^((S + G) / 20) volts per micropascal, so a recorded voltage v is the pressure
+
+    p = v / 10^((S + G) / 20)  uPa  =  v 1e-6 / 10^((S + G) / 20)  Pa
+
+(the definition of a receiving sensitivity in volts per unit pressure, with levels re 1 uPa as ISO 18405:2017
+"Underwater acoustics - Terminology" states them; a gain in dB multiplies the voltage by 10^(G / 20)). A
+recorder stores v / V_fs, V_fs being the voltage of its full-scale sample (``full_scale_v``; default 1 V, i.e.
+the samples are volts). Levels are
+L = 20 log10(p_rms / 1 uPa) dB re 1 uPa. Without a calibration the samples are taken to be pascals already,
+as ``sonartrack simulate`` writes them.
+
+File: TOML with ``sensitivity_db``, ``gain_db`` and optional ``full_scale_v``, each one number (every
+channel) or a list (one per channel)::
+
+    sensitivity_db = -165.0        # dB re 1 V/uPa
+    gain_db = [20.0, 20.0, 26.0]   # dB
+    full_scale_v = 2.5             # V at sample value 1.0
+
+or CSV with one row per channel: ``channel, sensitivity_db, gain_db[, full_scale_v]`` (channels 0..N-1, each
+once, any order).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from sonartrack.core.errors import InputError, require
+
+#: reference pressure of underwater levels (Pa)
+P_REF_PA = 1e-6
+#: plausible hydrophone sensitivities (dB re 1 V/uPa); a value above is likely dB re 1 V/Pa (120 dB higher)
+SENSITIVITY_RANGE_DB = (-250.0, -100.0)
+GAIN_RANGE_DB = (-60.0, 100.0)
+_KEYS = ("sensitivity_db", "gain_db", "full_scale_v")
+
+
+@dataclass(frozen=True, slots=True)
+class Calibration:
+    """Per-channel sensitivity (dB re 1 V/uPa), gain (dB) and full-scale voltage (V); arrays of one entry apply
+    to every channel. :meth:`identity` is the default: the samples are pascals."""
+
+    sensitivity_db: np.ndarray
+    gain_db: np.ndarray
+    full_scale_v: np.ndarray
+    is_identity: bool = False
+
+    @classmethod
+    def identity(cls) -> Calibration:
+        """Samples already in pascals (p = x)."""
+        return cls(np.array([-120.0]), np.array([0.0]), np.array([1.0]), True)
+
+    @property
+    def channels(self) -> int | None:
+        """Channels the file describes; None when one value applies to every channel."""
+        n = max(a.size for a in (self.sensitivity_db, self.gain_db, self.full_scale_v))
+        return None if n == 1 else n
+
+    def pa_per_unit(self, channels: int) -> np.ndarray:
+        """Pascals per sample unit, (channels,): V_fs 1e-6 / 10^((S + G) / 20) (module doc).
+
+        Parameters
+        ----------
+        channels : int
+            Channels of the recording.
+
+        Returns
+        -------
+        ndarray
+            One factor per channel (Pa).
+        """
+        require(self.channels in (None, channels), f"the calibration gives {self.channels} channels but the "
+                                                   f"recording has {channels}: give one value per channel, or one "
+                                                   "for all")
+        if self.is_identity:
+            return np.ones(channels)
+        gain = 10.0 ** ((self.sensitivity_db + self.gain_db) / 20.0)
+        return np.broadcast_to(self.full_scale_v * P_REF_PA / gain, (channels,)).copy()
+
+    def to_pascals(self, block: np.ndarray) -> np.ndarray:
+        """A (channels, m) block of samples as pressure (Pa), a new array."""
+        x = np.asarray(block, dtype=np.float64)
+        return x * self.pa_per_unit(x.shape[0])[:, None]
+
+
+def level_db_re_1upa(pressure_pa) -> np.ndarray:
+    """20 log10(|p| / 1 uPa): the level (dB re 1 uPa) of a pressure amplitude or rms (Pa); -inf at 0."""
+    with np.errstate(divide="ignore"):
+        return 20.0 * np.log10(np.abs(np.asarray(pressure_pa, dtype=float)) / P_REF_PA)
+
+
+def rms_level_db(block_pa: np.ndarray) -> np.ndarray:
+    """Per-channel rms level (dB re 1 uPa) of a (channels, m) block of pressure (Pa)."""
+    x = np.asarray(block_pa, dtype=float)
+    return level_db_re_1upa(np.sqrt(np.mean(x * x, axis=-1)))
+
+
+def _values(raw, key: str, path) -> np.ndarray:
+    v = np.atleast_1d(np.asarray(raw, dtype=object))
+    require(v.ndim == 1 and v.size >= 1 and all(isinstance(a, int | float) and not isinstance(a, bool) for a in v),
+            f"calibration {path}: {key} must be a number or a list of numbers, got {raw!r}")
+    out = v.astype(float)
+    require(np.isfinite(out).all(), f"calibration {path}: {key} holds NaN/inf: give finite numbers")
+    return out
+
+
+def _checked(s: np.ndarray, g: np.ndarray, v: np.ndarray, path) -> Calibration:
+    lo, hi = SENSITIVITY_RANGE_DB
+    bad = s[(s < lo) | (s > hi)]
+    require(bad.size == 0, f"calibration {path}: sensitivity {bad[:1].sum():g} dB lies outside {lo:g}..{hi:g} dB re "
+                           "1 V/uPa (a value near -50 is dB re 1 V/Pa: subtract 120)")
+    glo, ghi = GAIN_RANGE_DB
+    bad = g[(g < glo) | (g > ghi)]
+    require(bad.size == 0, f"calibration {path}: gain {bad[:1].sum():g} dB lies outside {glo:g}..{ghi:g} dB: give "
+                           "the preamplifier gain in dB")
+    require((v > 0).all(), f"calibration {path}: full_scale_v must be > 0 V, got {v.min():g}")
+    sizes = {a.size for a in (s, g, v)} - {1}
+    require(len(sizes) <= 1, f"calibration {path}: lists of different lengths {sorted(sizes)}: give one value per "
+                             "channel, or one number for all")
+    return Calibration(s, g, v)
+
+
+def _read_toml(p: Path) -> Calibration:
+    from sonartrack.io.toml import load
+
+    data = load(p)
+    unknown = sorted(set(data) - set(_KEYS))
+    require(not unknown, f"calibration {p}: unknown key(s) {unknown}: use {', '.join(_KEYS)}")
+    require("sensitivity_db" in data, f"calibration {p} has no sensitivity_db (dB re 1 V/uPa): add it")
+    return _checked(_values(data["sensitivity_db"], "sensitivity_db", p), _values(data.get("gain_db", 0.0),
+                    "gain_db", p), _values(data.get("full_scale_v", 1.0), "full_scale_v", p), p)
+
+
+def _read_csv(p: Path) -> Calibration:
+    with open(p, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    require(rows and {"channel", "sensitivity_db"} <= set(rows[0]),
+            f"calibration {p} needs the columns channel, sensitivity_db[, gain_db, full_scale_v] and a row per channel")
+    try:
+        table = {int(r["channel"]): [float(r["sensitivity_db"]), float(r.get("gain_db") or 0.0),
+                                     float(r.get("full_scale_v") or 1.0)] for r in rows}
+    except (TypeError, ValueError) as e:
+        raise InputError(f"calibration {p}: a cell is not a number ({e}): give numbers in every row") from None
+    require(sorted(table) == list(range(len(rows))), f"calibration {p}: channels {sorted(table)} must be 0..N-1, "
+                                                     "each once")
+    cols = np.array([table[k] for k in range(len(rows))]).T
+    require(np.isfinite(cols).all(), f"calibration {p} holds NaN/inf: give finite numbers")
+    return _checked(cols[0], cols[1], cols[2], p)
+
+
+def read_calibration(path) -> Calibration:
+    """Read a calibration file (module doc): .toml or .csv.
+
+    Parameters
+    ----------
+    path : str or Path or None
+        The file; None gives :meth:`Calibration.identity` (samples are pascals).
+
+    Returns
+    -------
+    Calibration
+        Sensitivities, gains and full-scale voltages, checked.
+    """
+    if path is None:
+        return Calibration.identity()
+    p = Path(path)
+    require(p.is_file(), f"calibration file not found: {p}: give a .toml or .csv file (module sonartrack.io."
+                         "calibration describes both)")
+    suffix = p.suffix.lower()
+    require(suffix in (".toml", ".csv"), f"calibration {p}: give a .toml or .csv file, not {suffix or 'no suffix'}")
+    return _read_toml(p) if suffix == ".toml" else _read_csv(p)
+
+
+def sensitivity_db_re_v_per_upa(v_per_pa: float) -> float:
+    """Sensitivity in dB re 1 V/uPa of a hydrophone giving ``v_per_pa`` volts per pascal (20 log10(v / 1e6))."""
+    require(v_per_pa > 0, f"a sensitivity must be > 0 V/Pa, got {v_per_pa:g}")
+    return 20.0 * math.log10(v_per_pa * P_REF_PA)

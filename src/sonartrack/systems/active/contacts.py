@@ -1,0 +1,332 @@
+"""Contacts of the active chain: each detection to two mirror bistatic positions, with covariance and Doppler.
+
+Paper P4 (Park, Song, Lee 2017, Fig. 1 and eqs. 2-6; DIGEST P4), geometry in ``models/bistatic.py``. For a
+detection at travel time t and cone angle theta_c (0..pi from the receiving line array's forward axis, whose
+heading is phi), a line array cannot tell starboard from port, so the absolute bearing at the receiver is
+
+    beta_+ = phi + theta_c   (starboard)      beta_- = phi - theta_c   (port)
+
+and each detection gives TWO contacts (the mirror pair, ``side`` +1 / -1), each by eq. 2 with r_B = c t,
+L = Tx - Rx, u = [sin beta, cos beta]:
+
+    r_R = (r_B^2 - |L|^2) / (2 (r_B - u . L)),      position = Rx + r_R u
+
+and covariance J Sigma J^T (eqs. 3-6; J from ``models.bistatic.bistatic_jacobian`` at the measured inputs,
+Sigma = diag of the input variances: travel time, bearing, heading, sound speed, Tx and Rx positions). Both
+stay in the scan until the tracker resolves the side: after an ownship turn the mirror of a real target no
+longer moves like a target, its track starves and dies (P4's towed-array sonar; the passive chain settles the
+same ambiguity by a likelihood ratio instead).
+
+Times: source, receiver and array axis are taken at the ping's transmit time t0 (P4's stop-and-hop measurement
+model, which the active scene simulator shares: platforms and target move < 100 m while the echoes return);
+the contact is reported at the ping time (one scan per ping).
+
+Doppler: the detection's bistatic range rate d r_B / dt (m/s, positive opening) is carried on both mirror
+contacts. :func:`predicted_range_rate` gives the same quantity for a track state,
+
+    d r_B / dt = u_T . (v - v_T) + u_R . (v - v_R),   u_T, u_R unit vectors from Tx and Rx to the target,
+
+which the range-rate gate of the active chain (``systems/active/run.py``) compares with the measurement.
+
+Contacts with c t not longer than the baseline |L| (inside the direct blast: no ellipse passes through a target)
+or whose r_R is not positive and finite (a bearing along the baseline) are dropped and counted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.association.gating import gate_threshold
+from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, setting
+from sonartrack.models.bistatic import bistatic_covariance, bistatic_position
+
+
+class ContactSettings(Settings):
+    """Input errors of the bistatic contacts (Sigma of J Sigma J^T): paper P4's values unless said otherwise."""
+
+    sigma_time_s: float = setting(0.01, "travel-time error (P4)", unit="s", gt=0, le=10)
+    sigma_cone_deg: float | None = setting(
+        None, "cone-angle error of a detection (not set: the beam step / sqrt(12) of a beam-centre estimate, and at "
+              "least P4's 0.5 deg)", unit="deg", gt=0, le=90)
+    sigma_heading_deg: float = setting(0.0, "error of the array heading from the navigation (P4: known)", unit="deg",
+                                       ge=0, le=90)
+    sigma_sound_speed_mps: float = setting(7.5, "error of the assumed mean sound speed (P4)", unit="m/s", ge=0,
+                                           le=100)
+    sigma_position_m: float = setting(30.0, "error of the source and receiver positions, per axis (P4)", unit="m",
+                                      ge=0, le=10_000)
+
+    def variances(self, sigma_cone_rad: float) -> np.ndarray:
+        """diag(Sigma) in the input order of models/bistatic.py: [t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y]."""
+        return np.array([self.sigma_time_s**2, sigma_cone_rad**2, np.deg2rad(self.sigma_heading_deg)**2,
+                         self.sigma_sound_speed_mps**2] + [self.sigma_position_m**2] * 4)
+
+    def cone_sigma_rad(self, beam_step_deg: float | None) -> float:
+        """The cone-angle error used: the setting, or max(beam step / sqrt(12), 0.5 deg)."""
+        if self.sigma_cone_deg is not None:
+            return float(np.deg2rad(self.sigma_cone_deg))
+        step = 0.0 if beam_step_deg is None else float(beam_step_deg) / np.sqrt(12.0)
+        return float(np.deg2rad(max(step, 0.5)))
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveGeometry:
+    """Source and receiver against time (from the navigation): positions (n, 2) m and array axis heading (n,) rad,
+    unwrapped; interpolated linearly between rows."""
+
+    time_s: np.ndarray
+    tx_xy: np.ndarray
+    rx_xy: np.ndarray
+    array_heading_rad: np.ndarray
+
+    def __post_init__(self):
+        t = np.asarray(self.time_s, float)
+        require(t.ndim == 1 and len(t) >= 2 and bool(np.all(np.diff(t) > 0)),
+                "the navigation needs at least two rows with increasing times")
+
+    def _interp(self, t, values) -> np.ndarray:
+        t = np.asarray(t, float)
+        v = np.asarray(values, float)
+        if v.ndim == 1:
+            return np.interp(t, self.time_s, v)
+        return np.stack([np.interp(t, self.time_s, v[:, k]) for k in range(v.shape[1])], axis=-1)
+
+    def tx_at(self, t) -> np.ndarray:
+        return self._interp(t, self.tx_xy)
+
+    def rx_at(self, t) -> np.ndarray:
+        return self._interp(t, self.rx_xy)
+
+    def heading_at(self, t) -> np.ndarray:
+        return self._interp(t, self.array_heading_rad)
+
+    def velocity(self, t, which: str, dt_s: float = 1.0) -> np.ndarray:
+        """Central-difference velocity (m/s) of the source (``which="tx"``) or receiver ("rx") at times ``t``."""
+        at = self.tx_at if which == "tx" else self.rx_at
+        t = np.asarray(t, float)
+        return (at(t + dt_s) - at(t - dt_s)) / (2.0 * dt_s)
+
+    def covers(self, t0: float, t1: float) -> bool:
+        return bool(self.time_s[0] <= t0 and t1 <= self.time_s[-1])
+
+
+@dataclass(frozen=True, slots=True)
+class Contacts:
+    """Mirror-pair contacts, two per usable detection (m rows; one scan per ping, rows sorted by ping).
+
+    ``detection`` is the row of the detection each came from, ``side`` +1 (starboard, beta = phi + cone) or -1
+    (port); ``xy (m, 2)`` m and ``R (m, 2, 2)`` m^2 (J Sigma J^T); ``range_rate_mps`` the detection's bistatic
+    range rate (NaN where the waveform measures none); ``rx_range_m`` r_R; ``statistic`` the detection's."""
+
+    ping: np.ndarray
+    time_s: np.ndarray
+    detection: np.ndarray
+    side: np.ndarray
+    xy: np.ndarray
+    R: np.ndarray
+    range_rate_mps: np.ndarray
+    rx_range_m: np.ndarray
+    statistic: np.ndarray
+    dropped: int = 0
+
+    def __len__(self) -> int:
+        return len(self.ping)
+
+    def rows(self, keep) -> Contacts:
+        """The contacts where ``keep`` (bool mask or indices)."""
+        return Contacts(self.ping[keep], self.time_s[keep], self.detection[keep], self.side[keep], self.xy[keep],
+                        self.R[keep], self.range_rate_mps[keep], self.rx_range_m[keep], self.statistic[keep],
+                        self.dropped)
+
+    @classmethod
+    def concat(cls, parts: list[Contacts]) -> Contacts:
+        """The rows of ``parts`` one after the other (dropped counts added)."""
+        if not parts:
+            return cls.empty()
+        names = [n for n in cls.__slots__ if n != "dropped"]
+        return cls(*[np.concatenate([getattr(p, n) for p in parts]) for n in names],
+                   dropped=sum(p.dropped for p in parts))
+
+    @classmethod
+    def empty(cls) -> Contacts:
+        z = np.zeros(0)
+        return cls(np.zeros(0, np.int64), z, np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros((0, 2)),
+                   np.zeros((0, 2, 2)), z, z, z)
+
+
+def mirror_positions(travel_time_s, cone_rad, heading_rad, c_mps, tx_xy, rx_xy):
+    """Positions (n, 2, 2) [side +1, side -1] and r_R (n, 2) of the mirror pair (eq. 2 with beta = phi +- cone)."""
+    theta = np.stack([np.asarray(cone_rad, float), -np.asarray(cone_rad, float)], axis=-1)  # (n, 2)
+    t = np.asarray(travel_time_s, float)[..., None]
+    phi = np.asarray(heading_rad, float)[..., None]
+    return bistatic_position(t, theta, phi, c_mps, np.asarray(tx_xy, float)[..., None, :],
+                             np.asarray(rx_xy, float)[..., None, :])
+
+
+def form_contacts(detections, ping_time_s, geometry: ActiveGeometry, sound_speed_mps: float,
+                  settings: ContactSettings | None = None, beam_step_deg: float | None = None,
+                  ping_numbers=None) -> Contacts:
+    """The mirror-pair contacts of ``detections`` (module doc).
+
+    Parameters
+    ----------
+    detections
+        A detections record with arrays ``ping`` (a number of ``ping_numbers``), ``cone_deg`` (0..180 from the
+        array's forward axis), ``travel_time_s`` (s, from transmission), ``range_rate_mps`` (bistatic, m/s;
+        NaN if not measured) and ``statistic``.
+    ping_time_s : array
+        Transmit time of each ping (s).
+    geometry : ActiveGeometry
+        Source, receiver and array heading against time.
+    sound_speed_mps : float
+        The assumed mean sound speed c (m/s).
+    settings : ContactSettings
+        The input errors (Sigma).
+    beam_step_deg : float, optional
+        Spacing of the beams' cone angles (deg): sets the default cone-angle error.
+    ping_numbers : array, optional
+        The number of each ping of ``ping_time_s``, increasing (default 0, 1, 2, ...).
+
+    Returns
+    -------
+    Contacts
+        Two rows per detection whose r_R is positive (side +1 then -1), sorted by ping.
+    """
+    s = settings or ContactSettings()
+    ping = np.asarray(detections.ping, np.int64)
+    if not len(ping):
+        return Contacts.empty()
+    numbers = np.arange(len(ping_time_s)) if ping_numbers is None else np.asarray(ping_numbers, np.int64)
+    at = np.searchsorted(numbers, ping)
+    require(bool(np.all((at < len(numbers)) & (numbers[np.minimum(at, len(numbers) - 1)] == ping))),
+            "a detection's ping is not in the ping table: give the detections of these pings")
+    t0 = np.asarray(ping_time_s, float)[at]
+    tt = np.asarray(detections.travel_time_s, float)
+    cone = np.deg2rad(np.asarray(detections.cone_deg, float))
+    tx, rx, phi = geometry.tx_at(t0), geometry.rx_at(t0), geometry.heading_at(t0)
+    pos, rr = mirror_positions(tt, cone, phi, sound_speed_mps, tx, rx)
+    theta = np.stack([cone, -cone], axis=-1)
+    var = s.variances(s.cone_sigma_rad(beam_step_deg))
+    R = bistatic_covariance(tt[:, None], theta, phi[:, None], sound_speed_mps, tx[:, None], rx[:, None], var)
+    # a path no longer than the baseline has no ellipse: eq. 2 would return a point for it all the same
+    longer = (sound_speed_mps * tt > np.linalg.norm(tx - rx, axis=-1))[:, None]
+    ok = longer & np.isfinite(rr) & (rr > 0) & np.isfinite(pos).all(axis=-1)
+    order = np.argsort(np.repeat(ping, 2), kind="stable")
+    flat_ok = ok.reshape(-1)[order]
+    idx = np.repeat(np.arange(len(ping)), 2)[order][flat_ok]
+    side = np.tile(np.array([1, -1], np.int8), len(ping))[order][flat_ok]
+    rrate = np.asarray(detections.range_rate_mps, float)
+    return Contacts(ping[idx], t0[idx], idx, side, pos.reshape(-1, 2)[order][flat_ok],
+                    R.reshape(-1, 2, 2)[order][flat_ok], rrate[idx], rr.reshape(-1)[order][flat_ok],
+                    np.asarray(detections.statistic, float)[idx], int((~ok).sum()))
+
+
+def predicted_range_rate(xy, v, tx_xy, tx_v, rx_xy, rx_v) -> tuple[np.ndarray, np.ndarray]:
+    """Bistatic range rate (n,) m/s of targets at ``xy`` (n, 2) moving with ``v`` (n, 2), and its gradient (n, 2)
+    with respect to the target velocity (u_T + u_R): d r_B/dt = u_T . (v - v_T) + u_R . (v - v_R)."""
+    dt = np.asarray(xy, float) - np.asarray(tx_xy, float)
+    dr = np.asarray(xy, float) - np.asarray(rx_xy, float)
+    ut = dt / np.linalg.norm(dt, axis=-1, keepdims=True)
+    ur = dr / np.linalg.norm(dr, axis=-1, keepdims=True)
+    v = np.asarray(v, float)
+    rate = np.einsum("...i,...i->...", ut, v - tx_v) + np.einsum("...i,...i->...", ur, v - rx_v)
+    return rate, ut + ur
+
+
+def range_rate_gate(contacts: Contacts, rate_sd_mps, track_x, track_P, tx, rx, *, gate_probability: float = 0.99,
+                    n_sigma: float = 3.0) -> np.ndarray:
+    """Which contacts pass the range-rate gate of the confirmed tracks (bool (m,)).
+
+    For each predicted track n (state [x, y, vx, vy], covariance P) and contact m with a measured range rate:
+    the contact is in the track's position gate when nu^T (P_xy + R_m)^-1 nu < chi2_2(gate_probability), and
+    Doppler-consistent with it when
+
+        |rdot_m - rdot_hat_n| <= n_sigma sqrt(g^T P_v g + sd_m^2),   g = u_T + u_R,
+
+    rdot_hat_n from :func:`predicted_range_rate` at the track's position and velocity. A contact that lies in
+    some track's position gate but is consistent with none of those tracks is refused (False): reverberation
+    with the wrong Doppler is kept from the tracks it would pull away. Contacts in no gate, and contacts
+    without a measured range rate (NaN), pass. Simplification: a new target that appears inside a confirmed
+    track's gate with a different Doppler waits until it leaves that gate.
+
+    Parameters
+    ----------
+    contacts : Contacts
+        One ping's contacts.
+    rate_sd_mps : float or array (m,)
+        Standard deviation of each contact's measured range rate (m/s).
+    track_x, track_P : arrays (n, 4), (n, 4, 4)
+        Predicted states and covariances of the tracks to gate against (m, m/s).
+    tx, rx : tuple of arrays
+        ``(position (2,), velocity (2,))`` of the source and of the receiver at the ping (m, m/s).
+    gate_probability : float
+        Probability of the chi-square(2) position gate.
+    n_sigma : float
+        Width of the range-rate gate in standard deviations.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool, True where the contact is kept.
+    """
+    m = len(contacts)
+    keep = np.ones(m, bool)
+    x, P = np.asarray(track_x, float).reshape(-1, 4), np.asarray(track_P, float).reshape(-1, 4, 4)
+    measured = np.isfinite(contacts.range_rate_mps)
+    if not len(x) or not measured.any():
+        return keep
+    in_gate = _in_position_gate(contacts, x, P, gate_probability) & measured[None]
+    if not in_gate.any():
+        return keep
+    rate, g = predicted_range_rate(x[:, :2], x[:, 2:], tx[0], tx[1], rx[0], rx[1])
+    var = np.einsum("ni,nij,nj->n", g, P[:, 2:, 2:], g)[:, None] + np.broadcast_to(rate_sd_mps, (m,))[None] ** 2
+    consistent = np.abs(np.nan_to_num(contacts.range_rate_mps)[None] - rate[:, None]) <= n_sigma * np.sqrt(var)
+    keep[in_gate.any(axis=0) & ~(in_gate & consistent).any(axis=0)] = False
+    return keep
+
+
+def _in_position_gate(contacts: Contacts, track_x, track_P, gate_probability: float) -> np.ndarray:
+    """(n tracks, m contacts) bool: nu^T (P_xy + R_m)^-1 nu < chi2_2(gate_probability)."""
+    x, P = np.asarray(track_x, float).reshape(-1, 4), np.asarray(track_P, float).reshape(-1, 4, 4)
+    if not len(x) or not len(contacts):
+        return np.zeros((len(x), len(contacts)), bool)
+    nu = contacts.xy[None, :, :] - x[:, None, :2]
+    S = P[:, None, :2, :2] + contacts.R[None]
+    d2 = np.einsum("nmi,nmi->nm", nu, np.linalg.solve(S, nu[..., None])[..., 0])
+    return d2 < gate_threshold(gate_probability, 2)
+
+
+def resolve_mirrors(contacts: Contacts, track_x, track_P, gate_probability: float = 0.99) -> np.ndarray:
+    """Which contacts to keep (bool (m,)) once some tracks have their side resolved.
+
+    A track that has lived through an ownship turn is on the true side of its target (its mirror's contacts
+    jumped during the turn and the mirror track died). For each detection whose two mirror contacts are both in
+    the scan, if one lies in the position gate of such a resolved track and the other in none, the other is
+    dropped: the detection's side is known, so its mirror cannot start a new ghost track after the turn (the
+    mirror of a straight-running target about a straight array moves like a target again).
+
+    Parameters
+    ----------
+    contacts : Contacts
+        One ping's contacts.
+    track_x, track_P : arrays (n, 4), (n, 4, 4)
+        Predicted states and covariances of the resolved tracks.
+    gate_probability : float
+        Probability of the chi-square(2) position gate.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool, True where the contact is kept.
+    """
+    keep = np.ones(len(contacts), bool)
+    gated = _in_position_gate(contacts, track_x, track_P, gate_probability).any(axis=0)
+    if not gated.any():
+        return keep
+    for d in np.unique(contacts.detection[gated]):
+        pair = np.nonzero(contacts.detection == d)[0]
+        if len(pair) == 2 and gated[pair].sum() == 1:
+            keep[pair[~gated[pair]]] = False
+    return keep

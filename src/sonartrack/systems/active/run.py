@@ -1,0 +1,396 @@
+"""The active sonar chain: pings on a towed line array and the navigation in, confirmed target tracks out.
+
+Stages, ping by ping (each a library function; this module only joins them, and memory does not grow with
+the number of pings beyond the per-ping tables and a small B-scan):
+
+1. front end (detection/cells.py): beams, matched filter (LFM pulse compression or CW Doppler bank), CFAR ->
+   the normalised square-law statistic per beam x travel-time x Doppler cell (:class:`PingCells`);
+2. detection at the root's false-alarm rate ``pfa``: single-ping (detection/cells.py: local maxima above the
+   CFAR's threshold) and paper P1's MFTD across the last K pings per beam (detection/ping_mftd.py); the tracker
+   gets the detector named by ``settings.detector``, and both detectors' detections are kept;
+3. contacts (systems/active/contacts.py): each detection to two mirror bistatic positions by paper P4's
+   eq. 2 with covariance J Sigma J^T, Doppler carried;
+4. gates in front of the tracker (contacts.py): the range-rate gate (:func:`range_rate_gate`: a contact in a
+   confirmed track's position gate with a range rate the track cannot have is kept from the tracker) and the
+   resolved sides (:func:`resolve_mirrors`: once a confirmed track has lived through a turn of the array, the
+   mirror contact of each detection it gates is dropped);
+5. tracking: P4's IMM-IPDA with one-point initiation and existence-based confirmation (tracking/), one scan
+   per ping; the mirror tracks starve after the ownship turns and die.
+
+:func:`track_detections` runs stages 3-5 alone on stored detections (the study tracks one set of detections
+with several trackers).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from sonartrack.core.errors import require
+from sonartrack.detection.cells import Detections, PingCells
+from sonartrack.systems.active.contacts import (
+    ActiveGeometry,
+    Contacts,
+    form_contacts,
+    range_rate_gate,
+    resolve_mirrors,
+)
+from sonartrack.systems.active.settings import ActiveSettings
+from sonartrack.tracking.run import PositionTracks
+from sonartrack.tracking.settings import PositionTrackerSettings
+
+#: the stages timed in :attr:`ActiveResult.stage_seconds`
+STAGES = ("front end", "single-ping detection", "mftd", "contacts", "tracking", "b-scan")
+
+
+@dataclass(frozen=True, slots=True)
+class BScan:
+    """Range-bearing picture per ping: ``level (pings, beams, bins)`` float32, the largest normalised statistic of
+    the travel-time cells of each bin (and of its Doppler cells); ``travel_time_s (bins,)`` bin centres (s),
+    ``cone_deg (beams,)``, ``time_s (pings,)``."""
+
+    time_s: np.ndarray
+    cone_deg: np.ndarray
+    travel_time_s: np.ndarray
+    level: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveTracks:
+    """The tracker's output, one row per live track per ping: ``tracks`` (tracking/run.py :class:`PositionTracks`)
+    and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds)."""
+
+    tracks: PositionTracks
+    P: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.tracks)
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveResult:
+    """Everything the chain produced (the faces write and draw it).
+
+    ``detections``: the tracked detector's (``settings.detector``); ``single`` and ``mftd``: each detector's
+    (``mftd`` empty when the MFTD did not run); ``contacts`` the mirror pairs of ``detections`` with the gate's
+    verdict (``gated_out``: refused by the range-rate gate); ``tracks``; ``bscan``; ``geometry`` the source and
+    receiver; ``ping_time_s``; ``stage_seconds`` wall time per stage (s)."""
+
+    detections: Detections
+    single: Detections
+    mftd: Detections
+    contacts: Contacts
+    gated_out: np.ndarray
+    tracks: ActiveTracks
+    bscan: BScan
+    geometry: ActiveGeometry
+    ping_time_s: np.ndarray
+    settings: ActiveSettings
+    stage_seconds: dict = field(default_factory=dict)
+
+    @property
+    def duration_s(self) -> float:
+        t = self.ping_time_s
+        return float(t[-1] - t[0] + (t[1] - t[0] if len(t) > 1 else 0.0)) if len(t) else 0.0
+
+
+class _Timer:
+    def __init__(self):
+        self.seconds = dict.fromkeys(STAGES, 0.0)
+
+    def run(self, stage: str, fn, *args, **kwargs):
+        t0 = time.perf_counter()
+        out = fn(*args, **kwargs)
+        self.seconds[stage] += time.perf_counter() - t0
+        return out
+
+
+class ContactTracker:
+    """P4's IMM-IPDA over the pings' contacts, with the range-rate gate in front (stages 4-5 of the module doc).
+
+    Parameters
+    ----------
+    settings : PositionTrackerSettings
+        The tracker.
+    geometry : ActiveGeometry
+        Source and receiver (their velocities enter the predicted range rate).
+    gate_sigma : float or None
+        Width of the range-rate gate in standard deviations (None: no gate).
+    rate_sd_mps : float
+        Standard deviation of a measured range rate (m/s): a Doppler cell / sqrt(12).
+    side_turn_deg : float or None
+        A confirmed track that has lived through this much change of the array's heading has its side resolved:
+        the mirror contacts of the detections it gates are dropped (contacts.py :func:`resolve_mirrors`); None:
+        both mirror contacts always go to the tracker.
+    """
+
+    def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
+                 rate_sd_mps: float, side_turn_deg: float | None = None):
+        from sonartrack.tracking.configurations import position_tracker
+
+        self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
+        self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
+        self.tracker = position_tracker(settings)
+        self._last_t: float | None = None
+        self._confirmed_heading: dict[int, float] = {}
+        self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
+
+    def _predicted_confirmed(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Confirmed tracks' combined states and covariances predicted to ``t_s`` (CV with the largest q), and
+        their ids."""
+        from sonartrack.tracking.tracks import TrackSnapshot
+
+        T = self.tracker.tracks
+        if not len(T) or not T.confirmed.any() or self._last_t is None:
+            return np.zeros((0, 4)), np.zeros((0, 4, 4)), np.zeros(0, np.int64)
+        snap = TrackSnapshot.of(self._last_t, T.select(T.confirmed))
+        dt, q = t_s - self._last_t, max(self.settings.q)
+        F = np.eye(4)
+        F[0, 2] = F[1, 3] = dt
+        Q = q * np.kron(np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]]), np.eye(2))
+        return snap.x @ F.T, F @ snap.P @ F.T + Q, snap.track_id
+
+    def _gates(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The range-rate gate and the resolved sides' mirror drop (True: the contact goes to the tracker)."""
+        keep = np.ones(len(contacts), bool)
+        if not len(contacts) or (self.gate_sigma is None and self.side_turn is None):
+            return keep
+        x, P, ids = self._predicted_confirmed(t_s)
+        g, pg = self.geometry, self.settings.gate_probability
+        if self.gate_sigma is not None:
+            tx = (g.tx_at(t_s), g.velocity(t_s, "tx"))
+            rx = (g.rx_at(t_s), g.velocity(t_s, "rx"))
+            keep &= range_rate_gate(contacts, self.rate_sd, x, P, tx, rx, n_sigma=self.gate_sigma, gate_probability=pg)
+        if self.side_turn is not None and len(ids):
+            h = float(g.heading_at(t_s))
+            turned = np.array([abs(h - self._confirmed_heading.get(int(i), h)) >= self.side_turn for i in ids])
+            keep &= resolve_mirrors(contacts, x[turned], P[turned], pg)
+        return keep
+
+    def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
+        range-rate gate or the mirror of a resolved side)."""
+        keep = self._gates(t_s, contacts)
+        snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
+        self._last_t = float(t_s)
+        h = float(self.geometry.heading_at(t_s))
+        for i in snap.track_id[snap.confirmed]:
+            self._confirmed_heading.setdefault(int(i), h)
+        r = self._rows
+        for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
+                     ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
+            r[k].append(v)
+        r["time_s"].append(np.full(len(snap.track_id), float(t_s)))
+        return keep
+
+    def result(self) -> ActiveTracks:
+        """Every ping's live tracks (:class:`ActiveTracks`)."""
+        r, n_modes = self._rows, len(self.settings.q)
+
+        def cat(k, empty):
+            return np.concatenate(r[k]) if r[k] else empty
+
+        P = cat("P", np.zeros((0, 4, 4)))
+        tracks = PositionTracks(cat("time_s", np.zeros(0)), cat("track_id", np.zeros(0, np.int64)),
+                                cat("confirmed", np.zeros(0, bool)), cat("existence", np.zeros(0)),
+                                cat("x", np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
+                                cat("mu", np.zeros((0, n_modes))))
+        return ActiveTracks(tracks, P)
+
+
+def rate_sd_of(cells_range_rate_mps) -> float:
+    """Standard deviation of a measured range rate: one Doppler cell / sqrt(12) (uniform within the cell); 1 m/s
+    when the pulse measures none (the gate then skips those contacts anyway)."""
+    v = np.asarray(cells_range_rate_mps, float)
+    if len(v) < 2 or not np.all(np.isfinite(v)):
+        return 1.0
+    return float(abs(v[1] - v[0]) / np.sqrt(12.0))
+
+
+def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeometry, settings: ActiveSettings, *,
+                     tracker: PositionTrackerSettings | None = None, rate_sd_mps: float = 1.0,
+                     beam_step_deg: float | None = None, ping_numbers=None) -> tuple[Contacts, np.ndarray,
+                                                                                      ActiveTracks]:
+    """Stages 3-5 on stored detections: mirror contacts, range-rate gate, IMM-IPDA (module doc).
+
+    Parameters
+    ----------
+    detections : Detections
+        Detections of the pings, sorted by ping.
+    ping_time_s : array
+        Transmit time of each ping (s); every ping is a scan, with or without contacts.
+    geometry : ActiveGeometry
+        Source, receiver and array heading.
+    settings : ActiveSettings
+        The chain (sound speed, contact errors, gate, tracker).
+    tracker : PositionTrackerSettings, optional
+        Another tracker than ``settings``'s (e.g. one IPDA mode).
+    rate_sd_mps : float
+        Standard deviation of a measured range rate (m/s).
+    beam_step_deg : float, optional
+        The beams' cone-angle step (deg): the default cone-angle error of a contact.
+    ping_numbers : array, optional
+        The number of each ping (default 0, 1, 2, ...), as the detections' ``ping``.
+
+    Returns
+    -------
+    tuple
+        (contacts, gate verdict per contact, tracks).
+    """
+    t = np.asarray(ping_time_s, float)
+    numbers = np.arange(len(t)) if ping_numbers is None else np.asarray(ping_numbers, np.int64)
+    contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
+                             numbers)
+    trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
+                         rate_sd_mps, settings.side_turn_deg)
+    bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
+    keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
+                           for k in range(len(t))]) if len(t) else np.zeros(0, bool)
+    return contacts, keep, trk.result()
+
+
+def geometry_of(nav) -> ActiveGeometry:
+    """The source and receiver of an :class:`~sonartrack.systems.active.records.ActiveNav` (array centre = Rx)."""
+    return ActiveGeometry(np.asarray(nav.time_s, float), np.asarray(nav.source_xy, float),
+                          np.asarray(nav.array_xy, float), np.asarray(nav.array_heading_rad, float))
+
+
+def _bscan_row(stat: np.ndarray, bins: int) -> np.ndarray:
+    """(beams, bins) float32: the max over Doppler and over each bin's run of travel-time cells."""
+    level = stat.max(axis=2)
+    n = level.shape[1]
+    edges = np.linspace(0, n, min(bins, n) + 1).astype(np.int64)
+    return np.maximum.reduceat(level, edges[:-1], axis=1).astype(np.float32)
+
+
+def _bscan_axis(delay_s: np.ndarray, bins: int) -> np.ndarray:
+    n = len(delay_s)
+    edges = np.linspace(0, n, min(bins, n) + 1).astype(np.int64)
+    return 0.5 * (delay_s[edges[:-1]] + delay_s[np.maximum(edges[1:] - 1, 0)])
+
+
+def ping_interval(ping_table, settings: ActiveSettings) -> float:
+    """The ping interval T: the setting, or the ping table's median interval (one-line error for one ping)."""
+    if settings.ping_interval_s is not None:
+        return float(settings.ping_interval_s)
+    t = np.asarray(ping_table.transmit_time_s, float)
+    require(len(t) >= 2, "a single ping has no ping interval: give --ping-interval (s) or more pings")
+    return float(np.median(np.diff(t)))
+
+
+class _Chain:
+    """The per-ping state of :func:`run_active` (front end, both detectors, tracker, B-scan)."""
+
+    def __init__(self, ping_table, geometry: ActiveGeometry, settings: ActiveSettings):
+        from sonartrack.acoustics.active_beams import LineArray
+        from sonartrack.detection.cells import detection_threshold
+
+        s = self.settings = settings.checked(int(ping_table.channels[0]))
+        self.table, self.geometry = ping_table, geometry
+        self.array = LineArray(int(s.elements), float(s.spacing_m))
+        self.front_end = s.front_end_settings()
+        self.threshold = detection_threshold(self.front_end)
+        self.period = ping_interval(ping_table, s)
+        self.timer, self.mftd, self.tracker = _Timer(), None, None
+        self.single: list[Detections] = []
+        self.multi: list[Detections] = []
+        self.bscan: list[np.ndarray] = []
+        self.gate: list[np.ndarray] = []
+        self.contacts: list[Contacts] = []
+        self.axes = None
+        self.n_detections = 0
+
+    def _start(self, cells: PingCells) -> None:
+        from sonartrack.detection.ping_mftd import CellAxes, PingMftd
+
+        s = self.settings
+        self.axes = CellAxes.of(cells)
+        if s.detector == "mftd":
+            pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
+            self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
+                                 cfar=self.front_end.cfar)
+        self.rate_sd = rate_sd_of(cells.range_rate_mps)
+        self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
+        self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
+                                      s.side_turn_deg)
+
+    def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
+        from sonartrack.detection.cells import detect_ping, ping_front_end
+
+        s, tm = self.settings, self.timer
+        require(samples.shape[0] == s.elements, f"ping {number} has {samples.shape[0]} channels, the array "
+                                                f"{s.elements}: give the pings of one array")
+        cells = tm.run("front end", ping_front_end, samples, float(self.table.fs_hz[i]), self.table.waveform(i),
+                       self.array, self.front_end, time_s=time_s, ping=number)
+        if self.axes is None:
+            self._start(cells)
+        single = tm.run("single-ping detection", detect_ping, cells, self.threshold)
+        self.single.append(single)
+        det = single
+        if self.mftd is not None:
+            det = tm.run("mftd", self.mftd.push, cells)
+            self.multi.append(det)
+        self.bscan.append(tm.run("b-scan", _bscan_row, cells.statistic, s.bscan_bins))
+        c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
+                   self.beam_step, [number])
+        c = replace(c, detection=c.detection + self.n_detections)  # rows of the whole record's detections
+        self.n_detections += len(det)
+        self.contacts.append(c)
+        self.gate.append(tm.run("tracking", self.tracker.step, time_s, c))
+
+    def result(self) -> ActiveResult:
+        from sonartrack.detection.ping_mftd import concat_detections
+
+        single, multi = concat_detections(self.single), concat_detections(self.multi)
+        t = np.asarray(self.table.transmit_time_s, float)
+        a = self.axes
+        bins = _bscan_axis(np.asarray(a.travel_time_s), self.settings.bscan_bins) if a is not None else np.zeros(0)
+        level = np.stack(self.bscan) if self.bscan else np.zeros((0, 0, 0), np.float32)
+        bscan = BScan(t[:len(self.bscan)], np.asarray(a.cone_deg) if a is not None else np.zeros(0), bins, level)
+        tracks = self.tracker.result() if self.tracker is not None else ContactTracker(
+            self.settings.tracker_settings(), self.geometry, None, 1.0).result()
+        return ActiveResult(multi if self.mftd is not None else single, single, multi, Contacts.concat(self.contacts),
+                            np.concatenate(self.gate) if self.gate else np.zeros(0, bool), tracks, bscan,
+                            self.geometry, t[:len(self.bscan)], self.settings, dict(self.timer.seconds))
+
+
+def run_active(pings: Iterable[tuple[int, float, np.ndarray]], ping_table, nav, settings: ActiveSettings, *,
+               progress=None) -> ActiveResult:
+    """The active chain over a sequence of pings (module doc).
+
+    Parameters
+    ----------
+    pings : iterable of (int, float, ndarray)
+        (ping number, transmit time s, samples (channels, samples) complex baseband) per ping, in the order of
+        ``ping_table`` (systems/active/scene_files.py ``iter_pings``); one ping in memory at a time.
+    ping_table : PingTable
+        The pings' table (systems/active/records.py): times, waveform, sample rate, channels.
+    nav : ActiveNav or ActiveGeometry
+        Source, array centre and array heading against time, covering the pings.
+    settings : ActiveSettings
+        The chain's settings tree (``spacing_m`` required).
+    progress : optional
+        ``start(label, total, done)`` / ``advance(n)`` hooks (cli/_progress.py), advanced once per ping.
+
+    Returns
+    -------
+    ActiveResult
+        Detections of both detectors, contacts, tracks, the B-scan and the stage timings.
+    """
+    geometry = nav if isinstance(nav, ActiveGeometry) else geometry_of(nav)
+    t = np.asarray(ping_table.transmit_time_s, float)
+    require(len(t) >= 1, "the ping table holds no ping")
+    require(geometry.covers(t[0] - 1.0, t[-1] + 1.0) or geometry.covers(t[0], t[-1]),
+            f"the navigation ({geometry.time_s[0]:g}..{geometry.time_s[-1]:g} s) does not cover the pings "
+            f"({t[0]:g}..{t[-1]:g} s): give the navigation of the whole ping sequence")
+    chain = _Chain(ping_table, geometry, settings)
+    if progress is not None:
+        progress.start("active pings", len(t), 0)
+    for i, (number, time_s, samples) in enumerate(pings):
+        chain.ping(i, int(number), float(time_s), np.asarray(samples))
+        if progress is not None:
+            progress.advance(1)
+    return chain.result()

@@ -1,0 +1,127 @@
+"""Settings of the active system (``sonartrack active``): one tree, each shared quantity declared once.
+
+The root declares what several stages share: the array (``elements``, ``spacing_m``), the medium
+(``sound_speed_mps``: beam steering, Doppler to range rate, travel time to bistatic range in the MFTD's prior
+and in the contacts), the targets' largest bistatic range rate (``max_range_rate_mps``: the CW Doppler bank
+and the MFTD's tiles), the time base (``ping_interval_s``: the MFTD's motion step; not set: the ping table's)
+and the false-alarm rates per cell and ping: ``pfa`` sets the single-ping threshold (the CFAR's closed form),
+``mftd_pfa`` the MFTD's (calibrated on noise; lower by default, so that the two give comparable false-track
+rates: see its doc). The waveform is the ping table's (each ping's pulse is written there with the samples).
+Each stage's group keeps only its own fields (``core.settings.derived_settings``): ``[front_end]``
+(detection/cells.py: beams, CFAR), ``[mftd]`` (detection/ping_mftd.py), ``[contacts]``
+(systems/active/contacts.py: P4's input errors), ``[tracker]`` (tracking/settings.py, P4's IMM-IPDA, with the
+active chain's detection probability declared here), and the range-rate gate's width at the root.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from sonartrack.core.errors import require
+from sonartrack.core.settings import Settings, derived_settings, setting
+from sonartrack.detection.cells import FrontEndSettings
+from sonartrack.detection.ping_mftd import PingMftdSettings
+from sonartrack.systems.active.contacts import ContactSettings
+from sonartrack.tracking.settings import PositionTrackerSettings
+
+ActiveFrontEndSettings = derived_settings(
+    FrontEndSettings, "ActiveFrontEndSettings", "The active front end of each ping (detection/cells.py: beams, "
+    "matched filter, CFAR); the sound speed and the false-alarm rate are the root's.",
+    drop=("sound_speed_mps", "pfa", "max_range_rate_mps"))
+
+ActiveMftdSettings = derived_settings(
+    PingMftdSettings, "ActiveMftdSettings", "MFTD across pings (detection/ping_mftd.py, paper P1); the ping interval, "
+    "the sound speed, the false-alarm rate and the largest range rate are the root's.", drop=("max_range_rate_mps",))
+
+#: the active chain's tracker: P4's IMM-IPDA (its clutter density too: measured on the default scene, seed 1, one
+#: hour, 1e-6 confirms 3 false tracks from MFTD at mftd_pfa 1e-9 and 27 from single-ping detections at pfa 1e-5;
+#: 5e-7: 28 and 70; 2e-6: 2 and 0 but holds the targets half as long). field -> (value, doc of that value)
+ACTIVE_TRACKER_DEFAULTS = {
+    "pd": (0.7, "probability that a target gives a contact on a ping (between P4's 0.8 and the front end's measured "
+                "echo-level Pd of the default scene's targets, 0.5-0.7)"),
+}
+
+ActiveTrackerSettings = derived_settings(
+    PositionTrackerSettings, "ActiveTrackerSettings", "P4's IMM-IPDA on the mirror-pair contacts, with the active "
+    "chain's detection probability.", defaults=ACTIVE_TRACKER_DEFAULTS)
+
+for _cls in (ActiveFrontEndSettings, ActiveMftdSettings, ActiveTrackerSettings):
+    _cls.__module__ = __name__  # pickle (the study's worker processes) looks a class up by module and name
+
+
+class ActiveSettings(Settings):
+    """The active chain: pings + navigation -> detections -> mirror contacts -> IMM-IPDA tracks (module doc)."""
+
+    elements: int | None = setting(None, "hydrophones of the line array; every ping must have this many channels "
+                                         "(not set: the pings' channel count)", unit="1", ge=2)
+    spacing_m: float | None = setting(None, "element spacing d of the uniform line array (required)", unit="m", gt=0)
+    sound_speed_mps: float = setting(1500.0, "sound speed c: beam steering, Doppler to range rate, travel time to "
+                                             "bistatic range (MFTD prior, contacts)", unit="m/s", gt=1300, lt=1700)
+    ping_interval_s: float | None = setting(None, "ping interval T: the MFTD's motion step (not set: the median "
+                                                  "interval of the ping table)", unit="s", gt=0, le=600)
+    pfa: float = setting(1e-5, "false detections per cell and ping of the single-ping CFAR threshold (closed form)",
+                         unit="1", gt=0, lt=0.1)
+    max_range_rate_mps: float = setting(15.0, "largest bistatic range rate of a target (rate of the total path Tx -> "
+                                              "target -> Rx): the CW Doppler bank's span, the MFTD's tile margin and "
+                                              "its range-rate span when the pulse measures no Doppler", unit="m/s",
+                                        gt=0, le=200)
+    mftd_pfa: float | None = setting(
+        1e-9, "false detections per cell and ping of the MFTD (not set: pfa). Its false detections come in streaks "
+              "(a strong reverberation echo lifts the K windows that hold it, each ending near it), which a tracker "
+              "confirms more readily than single-ping false alarms: equal false-track rates need a lower rate here "
+              "(the default scene: 3 false tracks an hour at 1e-9 against single-ping's 27 at 1e-5, the targets "
+              "held longer)",
+        unit="1", gt=0, lt=0.1)
+    detector: Literal["mftd", "single"] = setting(
+        "mftd", "detections the tracker gets: mftd = paper P1 across pings, single = one ping's threshold", unit="")
+    range_rate_gate_sigma: float | None = setting(
+        3.0, "a contact in a confirmed track's position gate whose range rate is further than this many standard "
+             "deviations from the track's predicted bistatic range rate is kept from the tracker (not set: no gate)",
+        unit="1", gt=0)
+    side_turn_deg: float | None = setting(
+        20.0, "a confirmed track that has lived through this much change of the array heading has its side resolved: "
+              "the mirror contact of each detection in its gate is then dropped, so no ghost track restarts on the "
+              "other side after the turn (not set: both mirror contacts always go to the tracker)", unit="deg", gt=0,
+        le=180)
+    bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
+                                   "the Doppler cells)", unit="1", ge=10, le=100_000)
+    front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,
+                                                doc="beams, matched filter and CFAR of each ping")
+    mftd: ActiveMftdSettings = setting(default_factory=ActiveMftdSettings, doc="MFTD across pings (paper P1)")
+    contacts: ContactSettings = setting(default_factory=ContactSettings, doc="bistatic contact input errors (P4)")
+    tracker: ActiveTrackerSettings = setting(default_factory=ActiveTrackerSettings,
+                                             doc="IMM-IPDA position tracker (paper P4)")
+
+    def front_end_settings(self) -> FrontEndSettings:
+        """The front end's library settings with the root's sound speed and false-alarm rate."""
+        return self.front_end.build(sound_speed_mps=self.sound_speed_mps, pfa=self.pfa,
+                                    max_range_rate_mps=self.max_range_rate_mps)
+
+    def mftd_settings(self) -> PingMftdSettings:
+        """The MFTD's library settings with the root's largest range rate."""
+        return self.mftd.build(max_range_rate_mps=self.max_range_rate_mps)
+
+    def tracker_settings(self) -> PositionTrackerSettings:
+        """The tracker's library settings."""
+        return self.tracker.build()
+
+    def checked(self, channels: int) -> ActiveSettings:
+        """These settings for pings of ``channels`` channels (elements set to it; one-line errors).
+
+        Parameters
+        ----------
+        channels : int
+            The pings' channel count.
+
+        Returns
+        -------
+        ActiveSettings
+            A copy with ``elements`` = ``channels``.
+        """
+        require(self.spacing_m is not None, "the element spacing is not set: give --spacing (metres)")
+        if self.elements is not None:
+            require(channels == self.elements, f"the pings have {channels} channels but --elements is "
+                                               f"{self.elements}: give the pings of the whole array, or the right "
+                                               "--elements")
+        require(channels >= 2, f"the pings have {channels} channel(s): a line array needs at least two")
+        return self.model_copy(update={"elements": int(channels)})

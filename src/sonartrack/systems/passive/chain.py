@@ -1,0 +1,171 @@
+"""The passive sonar chain: an array recording and its navigation in, target tracks and solutions out.
+
+Stages (each a library function of its own; this module only joins them), with their settings built once
+from the system's one settings tree (:meth:`~sonartrack.systems.passive.settings.PassiveSettings.stages`):
+
+1. front end (acoustics/beamforming.py :func:`bearing_time_record`): per window, beam powers over cone angle,
+   normalised against the background across bearing, peaks above the threshold -> bearing-time record and
+   peaks;
+2. bearing tracking (tracking/run.py :func:`track_peaks`): JPDA_A on the peaks (paper P0), tracks started
+   on strong peaks and confirmed M-of-N, dropped after a run of empty gates -> :class:`BearingTracks`;
+3. each confirmed track's raw peaks (systems/passive/measurements.py; two tracks on the same peaks joined,
+   scans where two targets share a beam left out) and, in a second pass over the recording, its tonal line on
+   its own beam (systems/passive/tonal_pass.py);
+4. per track: the array side from the two mirror hypotheses, batch ML and IMM-MGEKF TMA
+   (systems/passive/targets.py).
+
+Options, off by default: ``[btr_mftd]`` runs paper P1's MFTD over the bearing-time record between 1 and 2 and adds
+its detections that no peak lies near to the tracker's peaks (detection/btr_mftd.py); ``[narrowband]`` makes one
+more pass for the LOFAR gram per beam, its tonal lines, their tracks in frequency and bearing and the sources
+they group into (acoustics/lofar.py, tracking/line_tracks.py), reported beside the bearing tracks.
+
+The recording arrives as blocks of ``window_s`` (``blocks()`` is called once per pass, and must give the
+same blocks each time), so memory does not grow with the recording's length.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.acoustics.beamforming import BearingTimeRecord, bearing_time_record
+from sonartrack.acoustics.xcorr_bearing import PeakRecord
+from sonartrack.detection.btr_mftd import BtrDetections
+from sonartrack.io.navigation import Navigation
+from sonartrack.systems.passive.measurements import drop_unresolved, merge_duplicates, track_measurements
+from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
+from sonartrack.systems.passive.targets import UNSUPPORTED_RANGE, Target, solve_target
+from sonartrack.systems.passive.tonal_pass import measure_tonals
+from sonartrack.tracking.line_tracks import LineSource, LineTrack
+from sonartrack.tracking.run import BearingTracks, track_peaks
+
+
+@dataclass(frozen=True, slots=True)
+class PassiveResult:
+    """Everything the chain produced (the faces write and draw it).
+
+    ``record``: the bearing-time record and its peaks; ``tracks``: the tracker's rows; ``targets``: one per
+    confirmed track long enough for TMA; ``short_tracks``: ids of the confirmed tracks too short for TMA;
+    ``duration_s``: the recording processed (s); ``stages``: the settings as run (``stages.settings`` the tree);
+    ``nav``: the navigation; ``plain_jpda_tracks``: the same peaks tracked with plain JPDA, when asked for;
+    ``warnings``: one line per warning about the inputs (the faces print them)."""
+
+    record: BearingTimeRecord
+    tracks: BearingTracks
+    targets: list[Target]
+    short_tracks: list[int]
+    duration_s: float
+    stages: PassiveStages
+    nav: Navigation
+    plain_jpda_tracks: BearingTracks | None = None
+    #: warning lines about the inputs (systems/passive/checks.py, io/navigation.py): the run went on, with care
+    warnings: tuple[str, ...] = ()
+    #: the bearing-time MFTD's detections (``[btr_mftd] enabled``), before they join the peaks
+    mftd_detections: BtrDetections | None = None
+    #: narrowband line tracks and the sources they group into (``[narrowband] enabled``)
+    line_tracks: tuple[LineTrack, ...] = ()
+    line_sources: tuple[LineSource, ...] = ()
+
+    @property
+    def settings(self) -> PassiveSettings:
+        """The settings tree as run."""
+        return self.stages.settings
+
+
+class _Stage:
+    """``progress`` hooks (start(label, total, done), advance(n)) around one pass, or nothing."""
+
+    def __init__(self, progress, label: str, total: int):
+        self.progress = progress
+        if progress is not None:
+            progress.start(label, total, 0)
+
+    def __call__(self, _k: int) -> None:
+        if self.progress is not None:
+            self.progress.advance(1)
+
+
+def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav: Navigation, stages: PassiveStages,
+                *, progress=None, plain_jpda: bool = False) -> PassiveResult:
+    """Run the chain over a recording (module docstring).
+
+    Parameters
+    ----------
+    blocks : callable
+        Returns an iterable of the recording's windows, (elements, window_s fs) each; called once per pass.
+    n_windows : int
+        Number of windows to process.
+    nav : Navigation
+        The ownship and array over the recording (io/navigation.py).
+    stages : PassiveStages
+        The chain's settings, built for this recording (:meth:`PassiveSettings.stages`).
+    progress : object, optional
+        ``start(label, total, done)`` and ``advance(n)`` hooks (the command line's progress bar).
+    plain_jpda : bool
+        Also track the same peaks with plain JPDA (no amplitude), for comparison with JPDA_A; the result's
+        ``plain_jpda_tracks``.
+
+    Returns
+    -------
+    PassiveResult
+        The record, the tracks and the targets.
+    """
+    s, settings = stages, stages.settings
+    btr = bearing_time_record(blocks(), s.fs_hz, s.array, s.front_end, band=s.band,
+                              progress=_Stage(progress, "beamforming", n_windows), mvdr=settings.mvdr)
+    pk, mftd = btr.peaks, None
+    if settings.btr_mftd.enabled:
+        pk, mftd = _with_mftd_peaks(btr, s)
+    tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker)
+    meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
+    meas = drop_unresolved(meas, s.min_separation_deg)
+    long_enough = [m for m in meas if m.duration_s >= settings.min_track_s and len(m.time_s) >= 10]
+    short = [m.track_id for m in meas if m not in long_enough]
+    tonals = [None] * len(long_enough)
+    if long_enough:
+        tonals = measure_tonals(blocks(), s.fs_hz, s.array, long_enough, s.tonal, n_windows,
+                                progress=_Stage(progress, "tonal lines", n_windows))
+    targets = [solve_target(i + 1, m, tonal, nav, s) for i, (m, tonal) in enumerate(zip(long_enough, tonals,
+                                                                                       strict=True))]
+    jpda = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, amplitude_aided=False) if plain_jpda \
+        else None
+    notes = tuple(f"warning: target {tg.target_id}: {w}" for tg in targets for w in tg.ml.warnings
+                  if w.startswith(UNSUPPORTED_RANGE))
+    lines, sources = _narrowband(blocks, s, n_windows, progress) if settings.narrowband.enabled else ((), ())
+    return PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes, mftd,
+                         lines, sources)
+
+
+def _with_mftd_peaks(btr: BearingTimeRecord, s: PassiveStages) -> tuple[PeakRecord, BtrDetections]:
+    """The peaks with the MFTD's detections that no peak of their window lies within half a gate of, as peaks of
+    z = the tracker's init_amplitude (settings doc of ``[btr_mftd]``), in time order."""
+    from sonartrack.detection.btr_mftd import btr_mftd
+
+    cfg = s.settings.btr_mftd
+    det = btr_mftd(btr.level, btr.cone_deg, s.settings.window_s, cfg.pfa, cfg)
+    pk = btr.peaks
+    near = np.array([np.any((pk.time_s == t) & (np.abs(pk.bearing_deg - c) <= 0.5 * s.tracker.gate_deg))
+                     for t, c in zip(det.time_s, det.cone_deg, strict=True)], bool)
+    t = np.concatenate([pk.time_s, det.time_s[~near]])
+    order = np.argsort(t, kind="stable")
+    b = np.concatenate([pk.bearing_deg, det.cone_deg[~near]])
+    a = np.concatenate([pk.amplitude, np.full(int(np.sum(~near)), float(s.tracker.init_amplitude))])
+    return PeakRecord(t[order], b[order], a[order]), det
+
+
+def _narrowband(blocks, s: PassiveStages, n_windows: int, progress) -> tuple[tuple, tuple]:
+    """The narrowband pass (acoustics/lofar.py) over the recording, its lines tracked and grouped into sources."""
+    from sonartrack.acoustics.lofar import detect_lines, lofar_gram
+    from sonartrack.tracking.line_tracks import group_sources, track_lines
+
+    cfg = s.settings.narrowband
+    if n_windows < cfg.integration:  # not one integration period: no lines
+        return (), ()
+    stage = _Stage(progress, "narrowband", n_windows)
+    counted = (stage(k) or b for k, b in enumerate(blocks()))  # stage() returns None: the block passes through
+    gram = lofar_gram(counted, s.fs_hz, s.array, cfg, s.settings.window_s)
+    d = detect_lines(gram, cfg)
+    lines = track_lines(d.time_s, d.frequency_hz, d.cone_deg, d.snr_db, cfg.line_tracker)
+    return tuple(lines), tuple(group_sources(lines, cfg.line_tracker))

@@ -1,0 +1,316 @@
+"""The chain on files: a recording and its navigation in; peaks.csv, bearing_tracks.csv, targets.csv and
+levels.csv out (systems/passive/tables.py, written atomically). ``sonartrack passive`` and every recording of
+``sonartrack survey`` run through :func:`run_passive_recording`, so the two read their inputs the same way.
+
+Recording: one file or a sequence of consecutive files -- a folder, or a glob pattern -- read as one recording
+on one time axis from its first sample (io/recording_sequence.py: start times from the file names or Broadcast
+WAV headers; gaps and overlaps found and reported; WAV, RF64, W64 or FLAC, 16/24/32-bit PCM or float,
+io/wav_blocks.py). A window that a gap touches is handed to the chain as zeros: its beam powers are zero, the
+normaliser finds no peak in it, so the gap is a blank stretch of the bearing-time record and the tracker sees
+empty scans (a track lives through a short gap and is dropped after a long one) -- never a silent join of the
+audio on either side. Files of different channel counts or sample rates are refused.
+
+Calibration (io/calibration.py): the samples times ``V_fs 1e-6 / 10^((S + G) / 20)`` are pascals; none: they
+are pascals already. The per-window broadband level of the recording, 10 log10(mean over elements and samples
+of p^2 / (1 uPa)^2) in dB re 1 uPa, is measured as the beamformer reads each window (no extra pass) and
+written to levels.csv (empty where a gap is).
+
+Navigation, told apart by the file's suffix and else by its first lines: a table in seconds from the
+recording's start (.csv, .parquet; io/navigation.py), an NMEA 0183 log (.nmea, .txt, .log or ``$`` sentences;
+io/nmea.py) or a GPX track (.gpx or ``<gpx``; io/gpx.py). The last two are in UTC: they are aligned with the
+recording's UTC start, projected to local x/y (azimuthal equidistant about the first fix) and the array placed
+``tow_length_m`` behind the ship along its track (the tow model of io/nmea.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from sonartrack.core.errors import InputError, require
+from sonartrack.io.atomic import write_csv
+from sonartrack.io.navigation import Navigation, check_array_fallback, check_navigation_covers, read_navigation
+from sonartrack.io.recording_sequence import RecordingSequence, iter_sequence_blocks, open_sequence
+from sonartrack.systems.passive.chain import PassiveResult, run_passive
+from sonartrack.systems.passive.checks import (
+    QUANTUM,
+    check_aperture,
+    check_memory,
+    check_recording,
+    excerpt_starts,
+    first_pass,
+)
+from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
+from sonartrack.systems.passive.tables import peaks_table, targets_table
+
+#: navigation suffixes read as a table in seconds from the recording's start (io/navigation.py)
+NAV_TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
+#: navigation suffixes read as NMEA 0183 (io/nmea.py)
+NMEA_SUFFIXES = (".nmea", ".txt", ".log")
+#: reference pressure of the levels (Pa)
+P_REF_PA = 1e-6
+
+
+@dataclass(frozen=True, slots=True)
+class PassiveRun:
+    """A run of the chain on files: its result, the recording as read (its UTC start, span, gaps and overlaps),
+    and the broadband level of each window (dB re 1 uPa; NaN where a gap is)."""
+
+    result: PassiveResult
+    recording: RecordingSequence
+    level_db: np.ndarray
+
+
+def navigation_kind(path) -> str:
+    """``table``, ``nmea`` or ``gpx``: by the suffix, else by the file's first lines (module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+        The navigation file.
+
+    Returns
+    -------
+    str
+        The kind; InputError (one line) when the file is missing or none of the three.
+    """
+    p = Path(path)
+    require(not p.is_dir(), f"navigation {p} is a directory, not a file: give the navigation CSV, NMEA 0183 log or "
+                            "GPX track inside it")
+    require(p.is_file(), f"navigation file not found: {p}: give a navigation CSV, an NMEA 0183 log or a GPX track")
+    suffix = p.suffix.lower()
+    if suffix in NAV_TABLE_SUFFIXES:
+        return "table"
+    if suffix == ".gpx":
+        return "gpx"
+    if suffix in NMEA_SUFFIXES:
+        return "nmea"
+    with open(p, "rb") as fh:
+        head = fh.read(4096).decode("ascii", "replace").lstrip("\ufeff \r\n\t")
+    if head.startswith("<") and "<gpx" in head:
+        return "gpx"
+    if any(line.lstrip()[:1] == "$" or "$GP" in line or "$GN" in line for line in head.splitlines()[:20]):
+        return "nmea"
+    if head.split("\n", 1)[0].replace(" ", "").startswith("time_s,"):
+        return "table"
+    raise InputError(f"navigation {p} is neither a CSV (time_s, x_m, ...), an NMEA 0183 log ($..RMC lines) nor a "
+                     "GPX track (<gpx>): give one of those (by suffix .csv, .nmea, .gpx)")
+
+
+def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m: float = 0.0
+                              ) -> tuple[Navigation, list[str]]:
+    """The navigation of a recording (module doc), with its warning lines.
+
+    Parameters
+    ----------
+    nav_path : str or Path
+        A navigation CSV/Parquet, an NMEA 0183 log or a GPX track.
+    seq : RecordingSequence
+        The recording (its UTC start aligns a UTC log).
+    tow_length_m : float
+        Array centre behind the ship along its track (m), for an NMEA/GPX log of the ship; 0: at the ship.
+
+    Returns
+    -------
+    (Navigation, list of str)
+        Times in seconds from the recording's first sample; warnings (skipped sentences, the array-at-the-ship
+        fallback).
+    """
+    p = Path(nav_path)
+    kind = navigation_kind(p)
+    if kind == "table":
+        nav = read_navigation(p)
+        fallback = check_array_fallback(nav, p)
+        return nav, [fallback] if fallback else []
+    from sonartrack.io.nmea import navigation_from_track
+
+    require(seq.start_utc is not None, f"{p.name} is in UTC but the recording has no start time (none in its file "
+                                       "names or headers): name the files by their start (rec_YYYYmmdd_HHMMSS.wav), "
+                                       "or give the navigation as a CSV in seconds from the recording's start")
+    warnings = []
+    if kind == "gpx":
+        from sonartrack.io.gpx import read_gpx
+
+        track = read_gpx(p)
+    else:
+        from sonartrack.io.nmea import read_nmea
+
+        log = read_nmea(p)
+        track = log.track
+        if log.counts.bad_checksum or log.counts.malformed:
+            warnings.append(f"warning: NMEA log {p.name}: {log.counts.describe()}")
+    nav, _ = navigation_from_track(track, seq.start_utc, tow_length_m=tow_length_m)
+    if tow_length_m <= 0:
+        warnings.append(f"warning: the array is taken at the ship of {p.name} (tow length 0): give the tow length "
+                        "for a towed array")
+    return nav, warnings
+
+
+def check_sequence(seq: RecordingSequence, stages: PassiveStages, n_windows: int, name: str) -> list[str]:
+    """The checks of systems/passive/checks.py on a recording of one or more files: the array, then a first pass
+    over a few excerpts (the windows a gap touches left out), on the samples as recorded.
+
+    Parameters
+    ----------
+    seq : RecordingSequence
+        The recording.
+    stages : PassiveStages
+        The chain's built settings.
+    n_windows : int
+        Windows the chain will read.
+    name : str
+        The recording's name in the messages.
+
+    Returns
+    -------
+    list of str
+        Warning lines; InputError for a recording that is no array recording (checks.py).
+    """
+    window_s = stages.settings.window_s
+    window = int(round(window_s * seq.sample_rate_hz))
+    check_aperture(stages.array, stages.band, window_s)
+    spans = excerpt_starts(n_windows, window, seq.sample_rate_hz)
+    fp = first_pass(((b for _, b in iter_sequence_blocks(seq, window, start_frame=a, stop_frame=e))
+                     for a, e in spans), seq.sample_rate_hz)
+    return check_recording(fp, name=name, array=stages.array, band=stages.band, window_s=window_s,
+                           quantum=QUANTUM.get(seq.files[0].info.sample_format))
+
+
+class SpanBlocks:
+    """The chain's blocks (``blocks()`` once per pass): every window 0..n_windows - 1 of the recording's span,
+    zeros where a gap touches it, scaled to pascals by ``pa_per_unit`` (channels,) unless None; the first pass
+    also measures each window's broadband level (:attr:`level_db`, module doc)."""
+
+    def __init__(self, seq: RecordingSequence, window: int, n_windows: int, pa_per_unit: np.ndarray | None):
+        self.seq, self.window, self.n_windows, self.scale = seq, int(window), int(n_windows), pa_per_unit
+        self.level_db = np.full(self.n_windows, np.nan)
+        self._passes = 0
+
+    def __call__(self):
+        measure = self._passes == 0
+        self._passes += 1
+        zeros = np.zeros((self.seq.channels, self.window))
+        present = iter_sequence_blocks(self.seq, self.window, stop_frame=self.n_windows * self.window)
+        nxt = next(present, None)
+        for k in range(self.n_windows):
+            if nxt is not None and int(round(nxt[0] * self.seq.sample_rate_hz)) == k * self.window:
+                block, nxt = nxt[1], next(present, None)
+                if self.scale is not None:
+                    block *= self.scale[:, None]
+                if measure:
+                    ms = float(np.mean(block * block))
+                    self.level_db[k] = 10.0 * np.log10(ms / P_REF_PA**2) if ms > 0 else -np.inf
+                yield block
+            else:
+                yield zeros
+
+
+def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, calibration=None,
+                          tow_length_m: float = 0.0, time_source: str = "auto", name_pattern=None,
+                          progress=None) -> PassiveRun:
+    """Read, check and run the chain on a recording of one or more files and its navigation (module doc).
+
+    Parameters
+    ----------
+    recording : path or str
+        A file, a folder of consecutive files, or a glob pattern (element 0 = front).
+    nav_path : path
+        Navigation CSV, NMEA 0183 log or GPX track.
+    settings : PassiveSettings
+        The chain's settings.
+    calibration : path, optional
+        Calibration TOML/CSV (io/calibration.py); None: the samples are pascals.
+    tow_length_m : float
+        Array behind the ship (m) for an NMEA/GPX log.
+    time_source, name_pattern : str
+        Where the files' start times come from (io/recording_sequence.py ``open_sequence``).
+    progress : object, optional
+        Progress hooks (:func:`~sonartrack.systems.passive.chain.run_passive`).
+
+    Returns
+    -------
+    PassiveRun
+        The result with the warning lines (gaps and overlaps among them), the recording, the window levels.
+        Raises InputError on bad input (module doc, :func:`check_sequence`).
+    """
+    from sonartrack.io.calibration import read_calibration
+
+    seq = open_sequence(recording, time_source=time_source, name_pattern=name_pattern)
+    cal = read_calibration(calibration)
+    scale = None if cal.is_identity else cal.pa_per_unit(seq.channels)
+    stages = settings.stages(seq.sample_rate_hz, channels=seq.channels)
+    window_s = stages.settings.window_s
+    window = int(round(window_s * seq.sample_rate_hz))
+    n_windows = seq.frames // window
+    name = Path(str(recording).rstrip("/")).name
+    require(n_windows >= 1, f"{name} lasts {seq.duration_s:.2f} s, less than one {window_s:g} s window")
+    check_memory(stages, n_windows)
+    nav, warnings = read_recording_navigation(nav_path, seq, tow_length_m=tow_length_m)
+    check_navigation_covers(nav, 0.0, n_windows * window_s, path=f"navigation file {nav_path}")
+    warnings += [f"warning: {name}: {d.describe()} (left blank in the bearing-time record)" for d in seq.gaps]
+    warnings += [f"warning: {name}: {d.describe()} (the later file's copy dropped)" for d in seq.overlaps]
+    warnings += check_sequence(seq, stages, n_windows, name)
+    blocks = SpanBlocks(seq, window, n_windows, scale)
+    result = run_passive(blocks, n_windows, nav, stages, progress=progress)
+    return PassiveRun(replace(result, warnings=tuple(warnings) + result.warnings), seq, blocks.level_db)
+
+
+def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress=None, **options) -> PassiveResult:
+    """:func:`run_passive_recording`'s result alone (the chain on files, for callers that need no levels).
+
+    Parameters
+    ----------
+    wav_path : path
+        A recording file, folder or glob pattern.
+    nav_path : path
+        Navigation CSV, NMEA log or GPX track.
+    settings : PassiveSettings
+        The chain's settings.
+    progress : object, optional
+        Progress hooks.
+    **options
+        calibration, tow_length_m, time_source, name_pattern (:func:`run_passive_recording`).
+
+    Returns
+    -------
+    PassiveResult
+        The chain's result with the checks' warning lines.
+    """
+    return run_passive_recording(wav_path, nav_path, settings, progress=progress, **options).result
+
+
+def levels_table(level_db: np.ndarray, window_s: float):
+    """levels.csv: time_s (window centre, s) and level_db_re_1upa (broadband, mean over elements; empty in a gap)."""
+    import pandas as pd
+
+    level = np.asarray(level_db, float)
+    return pd.DataFrame({"time_s": (np.arange(level.size) + 0.5) * window_s, "level_db_re_1upa": level})
+
+
+def write_passive_tables(result: PassiveResult, out: Path, level_db: np.ndarray | None = None) -> list[Path]:
+    """Write the chain's tables.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+    out : path
+        The output folder.
+    level_db : ndarray, optional
+        Window levels (dB re 1 uPa; :class:`PassiveRun`): levels.csv is written when given.
+
+    Returns
+    -------
+    list of Path
+        peaks.csv, bearing_tracks.csv (tracking/run.py PEAK_TRACK_COLUMNS), targets.csv[, levels.csv] in ``out``.
+    """
+    out = Path(out)
+    paths = [write_csv(peaks_table(result.record), out / "peaks.csv"),
+             write_csv(result.tracks.to_frame(), out / "bearing_tracks.csv"),
+             write_csv(targets_table(result), out / "targets.csv")]
+    if level_db is not None:
+        paths.append(write_csv(levels_table(level_db, result.settings.window_s), out / "levels.csv",
+                               float_format="%.2f"))
+    return paths

@@ -1,0 +1,95 @@
+"""Second pass over the recording: each confirmed track's tonal line, measured on its own beam.
+
+The tracks are known only after the whole recording has been tracked, so the tonal measurement reads the
+recording a second time (block by block, memory flat): at each window, a conventional beam is steered at
+every live track's cone angle (acoustics/tonal.py :func:`beam_spectra`) and its spectrum goes to that
+track's :class:`~sonartrack.acoustics.tonal.TonalAccumulator`, which keeps the mean spectrum (to find the
+line) and a few candidate frequencies per window (to follow it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+import numpy as np
+
+from sonartrack.acoustics.line_array import LineArray
+from sonartrack.acoustics.tonal import TonalAccumulator, TonalSettings, TonalTrack, beam_spectra
+from sonartrack.systems.passive.measurements import TrackMeasurements
+
+
+def live_cones(measurements: list[TrackMeasurements], window_s: float,
+               n_windows: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The tracks alive in each window.
+
+    Parameters
+    ----------
+    measurements : list of TrackMeasurements
+        The tracks (their filtered cone angle at every scan they lived).
+    window_s : float
+        The window (s): a track time t falls in window floor(t / window_s).
+    n_windows : int
+        Number of windows of the recording.
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        Per window: indices into ``measurements`` and the tracks' cone angles (deg) there.
+    """
+    ids = [[] for _ in range(n_windows)]
+    cones = [[] for _ in range(n_windows)]
+    for i, m in enumerate(measurements):
+        k = np.floor(np.asarray(m.track_time_s) / window_s).astype(np.int64)
+        ok = (k >= 0) & (k < n_windows)
+        for kk, c in zip(k[ok], np.asarray(m.track_cone_deg)[ok], strict=True):
+            ids[kk].append(i)
+            cones[kk].append(c)
+    return [(np.asarray(a, np.int64), np.asarray(c, float)) for a, c in zip(ids, cones, strict=True)]
+
+
+def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
+                   measurements: list[TrackMeasurements], settings: TonalSettings, n_windows: int,
+                   progress: Callable[[int], None] | None = None) -> list[TonalTrack | None]:
+    """The tonal line of each track, measured on its own beam in a second pass over the recording (module doc).
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray (N, window_s fs)
+        The recording's windows, the same as the front end's.
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The line array (the beams' steering).
+    measurements : list of TrackMeasurements
+        The tracks.
+    settings : TonalSettings
+        The tonal measurement; its ``window_s`` is the windows' length, and window k's spectrum is stamped at
+        its centre (k + 0.5) window_s.
+    n_windows : int
+        Number of windows to read.
+    progress : callable, optional
+        Called with k after window k.
+
+    Returns
+    -------
+    list of (TonalTrack or None)
+        Per track, its tonal line, or None where it carries none.
+    """
+    live = live_cones(measurements, settings.window_s, n_windows)
+    acc: list[TonalAccumulator | None] = [None] * len(measurements)
+    for k, block in enumerate(blocks):
+        if k >= n_windows:
+            break
+        idx, cones = live[k]
+        if len(idx):
+            freqs, power = beam_spectra(block, fs_hz, array, cones, settings)
+            for row, i in enumerate(idx):
+                if acc[i] is None:
+                    acc[i] = TonalAccumulator(settings, len(freqs))
+                acc[i].add((k + 0.5) * settings.window_s, power[row], freqs)
+        if progress is not None:
+            progress(k)
+    others = [a for a in acc if a is not None]
+    # a loud line leaks into every beam: a line counts for a track only if it stands highest on that track's
+    # own beam (acoustics/tonal.py TonalAccumulator.result)
+    return [a.result(others=[o for o in others if o is not a]) if a is not None else None for a in acc]

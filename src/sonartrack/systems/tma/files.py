@@ -1,0 +1,74 @@
+"""The tma system's files: the bearings and ownship files (and em-map's environment) in, the solution out.
+
+The readers and their checks are io/tma_files.py's (bearings ``time_s, bearing_deg[, frequency_hz, snr_db]``,
+ownship ``time_s, x_m, y_m``) and io/environment.py's; ``tma_solution.csv`` holds the columns of
+tma/solution_table.py, written atomically. The tactical picture is report/figures/tma.py's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from sonartrack.tma.records import BearingRecord, OwnshipTrack
+from sonartrack.tma.settings import TmaSettings
+
+if TYPE_CHECKING:
+    from sonartrack.acoustics.environment import Environment
+
+CSV_NAME = "tma_solution.csv"
+PNG_NAME = "tactical_picture.png"
+
+
+@dataclass(frozen=True, slots=True)
+class TmaInputs:
+    """What the tma system reads: the bearings record, the ownship track and em-map's environment (or None)."""
+
+    record: BearingRecord
+    ownship: OwnshipTrack
+    environment: Environment | None = None
+
+
+def read_tma_inputs(bearings, ownship, settings: TmaSettings) -> TmaInputs:
+    """Read and check the bearings and ownship files and, for em-map, the environment of ``settings.batch.env``.
+
+    Parameters
+    ----------
+    bearings : path-like
+        Bearings file (CSV/Parquet): time_s (s), bearing_deg (deg true)[, frequency_hz (Hz), snr_db (dB)].
+    ownship : path-like
+        Ownship navigation file (CSV/Parquet): time_s (s), x_m, y_m (m).
+    settings : TmaSettings
+        ``inputs.check_radians`` and, for em-map, ``batch.env``.
+
+    Returns
+    -------
+    TmaInputs
+        The record, the ownship track and the environment (None for sequential methods or without ``env``).
+    """
+    from sonartrack.io.tma_files import read_bearings, read_ownship
+    from sonartrack.systems.tma.run import tma_environment
+
+    record = read_bearings(bearings, check_radians=settings.inputs.check_radians)
+    return TmaInputs(record, read_ownship(ownship), tma_environment(settings))
+
+
+def write_tma_solution(result, out) -> Path:
+    """Write a solved record's target solution as ``tma_solution.csv`` in ``out``, atomically.
+
+    Parameters
+    ----------
+    result : TmaResult
+        What :func:`~sonartrack.systems.tma.run.run_tma` returned.
+    out : path-like
+        Output folder.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from sonartrack.io.tma_files import write_solution_csv
+
+    return write_solution_csv(Path(out) / CSV_NAME, result.solution, result.ownship)

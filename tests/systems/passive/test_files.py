@@ -1,0 +1,95 @@
+"""The passive chain on files (systems/passive/files.py), as `passive` and every `survey` recording read them: the
+same recording as one float WAV with nav.csv, and as a folder of 24-bit files with its calibration and an NMEA log
+of the ship, gives the same targets and the same levels in dB re 1 uPa; a gap is blank in the record and named in
+a warning; navigation kinds told apart by suffix or content."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sonartrack.cli import main
+from sonartrack.core.errors import InputError
+from sonartrack.systems.passive.files import navigation_kind, run_passive_recording
+from sonartrack.systems.passive.settings import PassiveSettings
+from sonartrack.systems.simulate.files import write_scene
+from sonartrack.systems.simulate.recording_layout import make_layout
+from sonartrack.systems.simulate.settings import PassiveSceneSettings
+
+SCENE = PassiveSceneSettings(duration_s=180.0, seed=2)
+SETTINGS = PassiveSettings(spacing_m=2.5)
+
+
+@pytest.fixture(scope="module")
+def scenes(tmp_path_factory):
+    d = tmp_path_factory.mktemp("passive-files")
+    write_scene(SCENE, d / "float", only="passive")
+    write_scene(SCENE, d / "parts", only="passive", layout=make_layout("wav24", split_s=60, nmea=True))
+    write_scene(SCENE, d / "gap", only="passive", layout=make_layout("wav24", split_s=60, gap_s=10))
+    return d
+
+
+def test_folder_of_24_bit_files_with_nmea_and_calibration_is_the_float_recording(scenes):
+    a = run_passive_recording(scenes / "float" / "recording.wav", scenes / "float" / "nav.csv", SETTINGS)
+    b = run_passive_recording(scenes / "parts" / "recording", scenes / "parts" / "nav.nmea", SETTINGS,
+                              calibration=scenes / "parts" / "calibration.toml",
+                              tow_length_m=SCENE.array.tow_length_m)
+    assert len(b.recording.files) == 3 and not b.recording.gaps
+    assert len(a.result.targets) == len(b.result.targets) >= 1
+    # the same peaks: integer samples 80 dB below the noise do not move a beam
+    pa, pb = a.result.record.peaks, b.result.record.peaks
+    np.testing.assert_allclose(pb.bearing_deg, pa.bearing_deg, atol=0.05)
+    # levels in dB re 1 uPa: 73 dB/Hz ambient over 950 Hz is 102.8 dB, the ships add a few
+    np.testing.assert_allclose(b.level_db, a.level_db, atol=0.01)
+    assert 102.0 < np.median(a.level_db) < 115.0
+
+
+def test_a_gap_is_blank_and_named(scenes):
+    run = run_passive_recording(scenes / "gap" / "recording", scenes / "float" / "nav.csv", SETTINGS,
+                                calibration=scenes / "gap" / "calibration.toml")
+    window_s = run.result.settings.window_s
+    centres = (np.arange(run.level_db.size) + 0.5) * window_s
+    in_gap = (centres > 60.0) & (centres < 70.0)
+    assert in_gap.any() and np.isnan(run.level_db[in_gap]).all() and np.isfinite(run.level_db[~in_gap]).all()
+    t = run.result.record.peaks.time_s
+    assert not ((t > 60.0) & (t < 70.0)).any() and (t > 70.0).any()
+    assert any("gap of 10.000 s at 60.000..70.000 s" in w for w in run.result.warnings)
+
+
+def test_the_command_reads_a_folder_an_nmea_log_and_a_calibration(scenes, capsys):
+    out = scenes / "cli"
+    code = main(["passive", "--wav", str(scenes / "parts" / "recording"), "--nav", str(scenes / "parts" / "nav.nmea"),
+                 "--calibration", str(scenes / "parts" / "calibration.toml"), "--spacing", "2.5", "--tow-length",
+                 str(SCENE.array.tow_length_m), "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    levels = pd.read_csv(out / "levels.csv")
+    assert list(levels.columns) == ["time_s", "level_db_re_1upa"] and levels["level_db_re_1upa"].between(90, 130).all()
+
+
+def test_navigation_kinds(tmp_path):
+    (tmp_path / "log.txt").write_text("12:00:01 $GPRMC,120000.00,A,5000.0,N,00400.0,W,6.0,0.0,170524,,,A*00\n")
+    (tmp_path / "nav").write_text("time_s,x_m,y_m,heading_deg\n0,0,0,0\n")
+    (tmp_path / "track").write_text('<?xml version="1.0"?>\n<gpx version="1.1"></gpx>\n')
+    (tmp_path / "notes.dat").write_text("hello\n")
+    assert [navigation_kind(tmp_path / n) for n in ("log.txt", "nav", "track")] == ["nmea", "table", "gpx"]
+    with pytest.raises(InputError, match="neither a CSV"):
+        navigation_kind(tmp_path / "notes.dat")
+    with pytest.raises(InputError, match="navigation file not found"):
+        navigation_kind(tmp_path / "none.nmea")
+
+
+def test_a_gpx_track_of_the_ship_runs_the_chain(scenes, tmp_path):
+    """The NMEA log's fixes as GPX (no heading: the direction of motion is the heading): the same recording gives
+    the same peaks (the front end does not use the navigation) and the ship's x/y as the NMEA log's."""
+    from sonartrack.io.gpx import write_gpx
+    from sonartrack.io.nmea import read_nmea
+
+    write_gpx(tmp_path / "ship.gpx", read_nmea(scenes / "parts" / "nav.nmea").track)
+    kw = {"calibration": scenes / "parts" / "calibration.toml", "tow_length_m": SCENE.array.tow_length_m}
+    g = run_passive_recording(scenes / "parts" / "recording", tmp_path / "ship.gpx", SETTINGS, **kw)
+    n = run_passive_recording(scenes / "parts" / "recording", scenes / "parts" / "nav.nmea", SETTINGS, **kw)
+    np.testing.assert_array_equal(g.result.record.peaks.bearing_deg, n.result.record.peaks.bearing_deg)
+    np.testing.assert_allclose(g.result.nav.x_m, n.result.nav.x_m, atol=0.01)
+    np.testing.assert_allclose(g.result.nav.y_m, n.result.nav.y_m, atol=0.01)
+    assert len(g.result.targets) >= 1
