@@ -12,8 +12,9 @@ command). RAM transmission-loss fields are shared with other runs through the us
 One test per command, so that the test workers share them. ``simulate`` runs once per worker (a
 session fixture); every other command runs in a folder of its own holding the simulated files and the
 outputs of the earlier README commands that write a file it names (``--print-config > tracker.toml``
-before ``--config tracker.toml``), run there first in README order: each command is checked as the
-README's reader would run it after the ones above it, and none depends on what another test did.
+before ``--config tracker.toml``), each of those run once per worker in its own folder (after its own
+such commands) and copied in: each command is checked as the README's reader would run it after the
+ones above it, and no test depends on which tests another worker ran.
 """
 
 from __future__ import annotations
@@ -128,6 +129,43 @@ def _seeded_folder(simulated_folder: Path, folder: Path) -> Path:
     return folder
 
 
+def _bring_outputs(commands: list[str], i: int, folder: Path, ran) -> str | None:
+    """Copy into ``folder`` what the prerequisites of command ``i`` wrote, each from the folder where it ran
+    (``ran(j) -> (folder, failure)``), in README order (a later writer of the same path wins); the first
+    failure of one of them, else None."""
+    for j in prerequisites(commands, i):
+        source, failure = ran(j)
+        if failure is not None:
+            return failure
+        for written in written_paths(commands[j]):
+            src, dst = source / written.rstrip("/"), folder / written.rstrip("/")
+            if dst.is_dir():
+                shutil.rmtree(dst)
+            elif dst.exists():
+                dst.unlink()
+            if src.is_dir():
+                shutil.copytree(src, dst)
+            elif src.exists():
+                shutil.copy2(src, dst)
+    return None
+
+
+@pytest.fixture(scope="session")
+def ran_once(simulated, tmp_path_factory):
+    """``ran_once(j) -> (folder, failure)``: README command ``j`` run in a folder of its own after its
+    prerequisites, once per test worker (commands that others need run once, not once per dependant)."""
+    commands, done = runnable_commands(), {}
+
+    def ran(j: int) -> tuple[Path, str | None]:
+        if j not in done:
+            folder = _seeded_folder(simulated[0], tmp_path_factory.mktemp(f"readme-{j:02d}"))
+            failure = _bring_outputs(commands, j, folder, ran)
+            done[j] = folder, failure if failure is not None else run_command(commands[j], folder)
+        return done[j]
+
+    return ran
+
+
 def test_readme_starts_with_simulate_and_skips_little():
     commands = readme_commands()
     runnable = runnable_commands()
@@ -147,9 +185,24 @@ def test_prerequisites_are_the_earlier_writers_of_named_files():
     assert prerequisites(commands, 6) == []  # an option's value that is no path
 
 
+def test_outputs_of_prerequisites_are_copied_in_order_and_their_failures_passed_on(tmp_path):
+    commands = ["sonartrack simulate --out .", "sonartrack b --out peaks/",
+                "sonartrack c --peaks peaks/p.csv --out peaks/", "sonartrack d --peaks peaks/p.csv"]
+    ran = {}
+    for j, text in ((1, "from b"), (2, "from c")):
+        (tmp_path / f"ran{j}" / "peaks").mkdir(parents=True)
+        (tmp_path / f"ran{j}" / "peaks" / "p.csv").write_text(text)
+        ran[j] = tmp_path / f"ran{j}"
+    work = tmp_path / "work"
+    work.mkdir()
+    assert _bring_outputs(commands, 3, work, lambda j: (ran[j], None)) is None
+    assert (work / "peaks" / "p.csv").read_text() == "from c"  # the latest writer's
+    assert _bring_outputs(commands, 3, work, lambda j: (ran[j], "b failed" if j == 1 else None)) == "b failed"
+
+
 @pytest.mark.parametrize("index", range(len(runnable_commands())),
                          ids=[f"{i:02d}-{c.split(' ', 1)[1][:60]}" for i, c in enumerate(runnable_commands())])
-def test_readme_command_runs_as_written(index, simulated, tmp_path):
+def test_readme_command_runs_as_written(index, simulated, ran_once, tmp_path):
     simulated_folder, simulate_failure = simulated
     commands = runnable_commands()
     if index == 0:
@@ -157,9 +210,11 @@ def test_readme_command_runs_as_written(index, simulated, tmp_path):
         return
     if simulate_failure is not None:
         pytest.fail(f"the README's first command, which writes this one's inputs, failed:\n\n{simulate_failure}")
-    folder = _seeded_folder(simulated_folder, tmp_path / "work")
-    for j in prerequisites(commands, index):
-        failure = run_command(commands[j], folder)
+    if any(index in prerequisites(commands, i) for i in range(index + 1, len(commands))):
+        failure = ran_once(index)[1]  # others need its outputs: run where they will find them
+    else:
+        folder = _seeded_folder(simulated_folder, tmp_path / "work")
+        failure = _bring_outputs(commands, index, folder, ran_once)
         assert failure is None, f"an earlier README command this one needs does not run as written:\n\n{failure}"
-    failure = run_command(commands[index], folder)
+        failure = run_command(commands[index], folder)
     assert failure is None, f"README command does not run as written:\n\n{failure}"

@@ -60,3 +60,37 @@ def test_studies_loads_only_its_own_command_module():
     others = [m for m in modules if m.startswith("sonartrack.cli.") and m not in ("sonartrack.cli.studies",)
               and not m.rpartition(".")[2].startswith("_")]
     assert others == []
+
+
+def test_studies_imports_no_study_module_and_no_numpy():
+    """``sonartrack studies`` reads its listing from the study modules' source (``studies.listing``): no study
+    module is imported, and so none of their numerical libraries or settings models; outside the command line
+    itself, only the package root, its error type and the studies package are loaded."""
+    modules = imported_by("studies")
+    ours = [m for m in modules if m.startswith("sonartrack") and not m.startswith("sonartrack.cli")]
+    assert "sonartrack.cli.studies" in modules  # the command ran
+    assert sorted(ours) == ["sonartrack", "sonartrack.core", "sonartrack.core.errors", "sonartrack.studies"]
+    assert "numpy" not in modules
+
+
+def help_text(driver: str) -> str:
+    run = subprocess.run([sys.executable, "-c", driver], capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "COLUMNS": "120"})
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+def test_help_lists_the_commands_without_importing_them():
+    """``--help`` reads the commands' names and help from their modules' source: no settings, no numpy."""
+    modules = imported_by("--help")
+    loaded = [m for m in modules if m.startswith("sonartrack.cli.") or m.startswith("sonartrack.systems")]
+    assert loaded == [] and "numpy" not in modules and "pydantic" not in modules
+
+
+def test_help_read_from_the_source_is_the_help_of_the_loaded_commands():
+    """The listing printed without importing the command modules is, character for character, the one the
+    app prints with every command module imported and registered."""
+    quick = help_text("import sonartrack.cli as cli; cli.main(['--help'])")
+    full = help_text("import sonartrack.cli as cli; cli.load_commands(); cli.main(['--help'])")
+    assert "reproduce" in quick and "studies" in quick
+    assert quick == full

@@ -209,3 +209,36 @@ def _signal_held_during_start_up():
         reached.append(True)
     assert reached == [True]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_shared_pool_keeps_its_workers_across_runs_and_changes_no_number(tmp_path):
+    """Two runs (two seeds, as two studies of one command) through one pool: the same worker processes
+    serve both, and each run's trials are those of a run in this process."""
+    mod, cfg = small_config(4)
+    plans = [runner.plan_run(mod, cfg, 4, seed=s, out_dir=tmp_path / f"s{s}", chunk_size=2) for s in (7, 8)]
+    with runner.WorkerPool(2) as pool:
+        shared = [runner.execute(plans[0], cfg, workers=2, pool=pool)]
+        first = set(pool.executor()._processes)
+        shared.append(runner.execute(plans[1], cfg, workers=2, pool=pool))
+        assert set(pool.executor()._processes) == first and len(first) >= 1
+    import multiprocessing as mp
+
+    assert mp.active_children() == []  # leaving the block ended the workers
+    for s, trials in zip((7, 8), shared, strict=True):
+        alone = runner.run_chunk(STUDY_MODULE, cfg.model_dump(mode="json"), s, (0, 1, 2, 3))
+        assert_same(trials, alone)
+
+
+def test_an_interrupt_in_a_shared_pool_kills_its_workers(tmp_path):
+    import multiprocessing as mp
+
+    mod, cfg = small_config(12)
+    plan = runner.plan_run(mod, cfg, 12, seed=7, out_dir=tmp_path, chunk_size=2)
+
+    def stop(n):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt), runner.WorkerPool(2) as pool:
+        runner.execute(plan, cfg, workers=2, on_chunk=stop, pool=pool)
+    assert mp.active_children() == []
+    assert runner.stored_trials(mod, cfg, 7, tmp_path) == 2

@@ -214,3 +214,25 @@ def test_scene_files_that_disagree_are_refused(written, tmp_path):
     nav[nav.time_s < 20].to_csv(case / "short_nav.csv", index=False)
     with pytest.raises(InputError, match="does not cover"):
         sf.check_nav_covers(table, sf.read_active_nav(case / "short_nav.csv"))
+
+
+def test_maneuvering_target_turns_as_stated():
+    from sonartrack.sim.active_scene import TargetSettings, target_motion
+
+    tgt = TargetSettings(name="m", x_m=1000.0, y_m=2000.0, course_deg=330.0, speed_kn=8.0, target_strength_db=10.0,
+                         turn_start_s=600.0, turn_deg=120.0, turn_rate_deg_s=0.5)
+    t = np.arange(0.0, 1500.0, 0.5)
+    xy, v = target_motion(tgt, t)
+    speed = 8.0 * 1852.0 / 3600.0
+    np.testing.assert_allclose(np.hypot(v[:, 0], v[:, 1]), speed, rtol=1e-9)
+    course = np.rad2deg(np.arctan2(v[:, 0], v[:, 1])) % 360.0
+    assert np.allclose(course[t < 600.0], 330.0) and np.allclose(course[t > 840.0], 90.0)
+    # the course changes at 0.5 deg/s in between, to starboard
+    mid = (t > 610.0) & (t < 830.0)
+    np.testing.assert_allclose((course[mid] - 330.0) % 360.0, 0.5 * (t[mid] - 600.0), atol=1e-6)
+    # positions are the integral of the velocities (trapezoid rule, independent of the closed form)
+    integral = xy[0] + np.concatenate([[[0.0, 0.0]], np.cumsum(0.5 * (v[1:] + v[:-1]) * 0.5, axis=0)])
+    np.testing.assert_allclose(xy, integral, atol=0.05)
+    # without a turn, the constant-velocity motion of before
+    cv = TargetSettings(name="c", x_m=1000.0, y_m=2000.0, course_deg=330.0, speed_kn=8.0, target_strength_db=10.0)
+    np.testing.assert_allclose(target_motion(cv, t)[0][t < 600.0], xy[t < 600.0], atol=1e-9)

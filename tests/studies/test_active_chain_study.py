@@ -71,3 +71,32 @@ def test_quick_trial_fills_the_contract(quick_trial):
     import json
 
     json.dumps(summary, default=float)  # the store writes it as JSON
+    # the threshold sweep, GOSPA and the side decisions are there too
+    n_l = len(ac.SINGLE_FACTORS)
+    assert trial["hit_mftd_lv"].shape == (n_l, n_t, len(config.scene.ping_times_s))
+    assert trial["reverb_false_lv"].shape == (2, n_l)
+    # raising a threshold keeps a subset of the detections: never more echo hits
+    assert np.all(np.diff(trial["hit_single_lv"].sum(axis=(1, 2))) <= 0)
+    assert np.all(np.diff(trial["hit_mftd_lv"].sum(axis=(1, 2))) <= 0)
+    assert summary["gospa_m"]["mftd_imm"][0] >= 0 and summary["ospa_m"]["mftd_imm"][0] <= config.match_m
+    assert set(summary["equal_false"]["level"]) == {"single", "mftd"}
+
+
+def test_equal_false_gain_takes_each_detector_at_its_most_sensitive_threshold_under_the_rate():
+    rng = np.random.default_rng(5)
+    runs, n_t, n_p = 6, 2, 200
+    snr = rng.uniform(0.0, 25.0, (runs, n_t, n_p))
+
+    def hits(s50):
+        return (rng.random(snr.shape) < 1.0 / (1.0 + np.exp(-(snr - s50) / 1.0))).astype(float)
+
+    # single: SNR50 12, 13, 14, 15 dB along its thresholds; MFTD 8, 9, 10, 11 dB; 1 h of reverberation per run.
+    # False tracks over the 6 h: single 30, 12, 3, 0 (5, 2, 0.5, 0 per hour: its third threshold is the first at
+    # <= 1 per hour); MFTD 6, 0, 0, 0 (its first threshold is at 1 per hour)
+    trials = {"snr_db": snr, "hit_single_lv": np.stack([hits(s) for s in (12, 13, 14, 15)], axis=1),
+              "hit_mftd_lv": np.stack([hits(s) for s in (8, 9, 10, 11)], axis=1),
+              "reverb_false_lv": np.tile(np.array([[5.0, 2.0, 0.5, 0.0], [1.0, 0.0, 0.0, 0.0]]), (runs, 1, 1))}
+    eq = ac._equal_false_gain(trials, hours=6.0)
+    assert eq["level"] == {"single": 2, "mftd": 0}
+    assert eq["gain_db"][0] == pytest.approx(14.0 - 8.0, abs=0.4)
+    assert eq["gain_db"][1] < eq["gain_db"][0] < eq["gain_db"][2]

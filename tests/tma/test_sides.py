@@ -172,3 +172,43 @@ def test_bad_input_raises_input_error(bad):
         cone[0] = 4.0
     with pytest.raises(InputError, match="resolve_side"):
         resolve_side(t, cone, h, xy)
+
+
+def _crossing_record(seed=5):
+    """Own array at 3 m/s north, turning 30 deg to starboard from 600 s; a CV target from (2000, -3000) m going west
+    at 5 m/s crosses astern (the array's axis, cone angle 180 deg) at 400 s (and the turn sweeps the axis past it
+    twice more). Returns (t, unfolded phi with noise,
+    heading, sensor, true bearing)."""
+    t = np.arange(0.0, 1201.0, 10.0)
+    own, _, heading = ManeuveringTrack(0.0, 0.0, 3.0, 0.0, ((600.0, 660.0, np.deg2rad(0.5)),)).state(t)
+    tgt = np.array([2000.0, -3000.0]) + t[:, None] * np.array([-5.0, 0.0])
+    b = bearing_rad(tgt[:, 0] - own[:, 0], tgt[:, 1] - own[:, 1])
+    phi = np.unwrap(wrap_angle(b - heading))  # starts on starboard (0 < phi < pi), passes pi at the crossing
+    assert 0 < phi[0] < np.pi and phi[-1] > np.pi
+    return t, phi + np.random.default_rng(seed).normal(0.0, SIGMA, len(t)), heading, own, b
+
+
+def test_axis_crossings_and_sides_per_segment_by_hand():
+    assert sides.axis_crossings([0.0, 1.0, 2.0, 3.0], np.deg2rad([170.0, 178.0, 182.0, 190.0])).tolist() == [1.5]
+    d = sides.SideDecision("starboard", 10.0, 0.01, None, None, crossings_s=(100.0, 300.0))
+    assert d.side_at([50.0, 150.0, 400.0]).tolist() == ["starboard", "port", "starboard"]
+    assert d.final_side == "starboard"
+    assert sides.SideDecision("port", -9.0, 0.01, None, None, crossings_s=(5.0,)).final_side == "starboard"
+
+
+@pytest.mark.parametrize("tracker_bounced", [False, True])
+def test_a_target_crossing_the_axis_keeps_a_continuous_true_bearing(tracker_bounced):
+    t, phi, heading, own, b_true = _crossing_record()
+    if tracker_bounced:  # the tracker reflected back at 180 deg: the crossing alternative must restore it
+        cross = float(t[np.argmax(phi > np.pi)])
+        phi = np.where(t >= cross, 2.0 * np.pi - phi, phi)
+    d = sides.resolve_side_through_crossings(t, phi, heading, own, min_log_lr=LN100)
+    # the true side changes at 400 s (the target passes astern), 625 s (the array's turn swings its axis back past
+    # the target) and 965 s: starboard, port, starboard, port
+    truth = np.where(np.sin(b_true - heading) >= 0, "starboard", "port")
+    assert d.side == "starboard" and d.final_side == "port", (d.side, d.crossings_s)
+    assert np.mean(d.side_at(t) == truth) > 0.95
+    assert len(d.crossings_s) == 3 and abs(d.crossings_s[0] - 400.0) < 30.0
+    b = heading + d.unfolded_rad  # the starboard hypothesis through the crossings
+    err = np.rad2deg(np.abs(wrap_angle(b - b_true)))
+    assert np.max(err[t > 420.0]) < 4.0 * np.rad2deg(SIGMA)  # within noise, not the mirror (tens of deg)

@@ -50,7 +50,18 @@ def element_offsets_m(array: LineArray) -> np.ndarray:
 
 
 def cone_grid_deg(n_beams: int) -> np.ndarray:
-    """``n_beams`` cone angles uniform in 0..180 deg."""
+    """``n_beams`` cone angles uniform in 0..180 deg.
+
+    Parameters
+    ----------
+    n_beams : int
+        Beams, at least 2.
+
+    Returns
+    -------
+    ndarray, shape (n_beams,)
+        Cone angles (deg from the array axis, 0 = ahead), endpoints included.
+    """
     require(n_beams >= 2, f"the cone grid needs at least 2 beams, got {n_beams}")
     return np.linspace(0.0, 180.0, int(n_beams))
 
@@ -148,7 +159,30 @@ def beamform_spectra(spectra: np.ndarray, fs_hz: float, carrier_hz: float, array
 
 def beam_pattern(cone_deg, source_cone_deg: float, n_elements: int, spacing_m: float, freq_hz: float,
                  sound_speed_mps: float) -> np.ndarray:
-    """Closed-form |sin(N x) / (N sin x)| of a uniform line steered to ``cone_deg`` (module doc)."""
+    """Closed-form |sin(N x) / (N sin x)| of a uniform line steered to ``cone_deg`` (module doc).
+
+    Here x = pi f d (cos theta - cos theta_s) / c.
+
+    Parameters
+    ----------
+    cone_deg : float or array_like
+        Steering cone angles theta (deg from the array axis).
+    source_cone_deg : float
+        The source's cone angle theta_s (deg).
+    n_elements : int
+        Elements N.
+    spacing_m : float
+        Element spacing d (m).
+    freq_hz : float
+        Frequency f (Hz).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    ndarray
+        Amplitude response in 0..1 (1 where sin x = 0), shape of ``cone_deg``.
+    """
     x = np.pi * freq_hz * spacing_m * (np.cos(np.deg2rad(cone_deg)) - np.cos(np.deg2rad(source_cone_deg))) \
         / sound_speed_mps
     s = np.sin(x)

@@ -42,7 +42,13 @@ class Band:
         return 0.5 * (self.low_hz + self.high_hz)
 
     def as_tuple(self) -> tuple[float, float]:
-        """(low, high) in Hz."""
+        """(low, high) in Hz.
+
+        Returns
+        -------
+        tuple of float
+            (low_hz, high_hz).
+        """
         return self.low_hz, self.high_hz
 
 
@@ -127,8 +133,10 @@ class LineArray:
             lo = max(float(auto_hz[0]), self.sound_speed_mps / (self.elements * self.spacing_m))
             hi = float(auto_hz[1]) if fs_hz is None else min(float(auto_hz[1]), fs_hz / 2)
             allow_grating_lobes = True
-            require(lo < hi, f"the automatic band {list(auto_hz)} Hz lies above half the sample rate "
-                             f"({fs_hz / 2 if fs_hz else 0:g} Hz): lower auto_band_hz or give band_hz")
+            aperture_m = self.elements * self.spacing_m
+            require(lo < hi, f"the array's aperture {aperture_m:g} m is shorter than a wavelength below {hi:g} Hz "
+                             f"(no automatic band in {list(auto_hz)} Hz): is the spacing in metres (--spacing)? "
+                             "Or give band_hz")
         else:
             f_a = self.aliasing_hz(fs_hz)
             lo, hi = 0.5 * f_a, f_a

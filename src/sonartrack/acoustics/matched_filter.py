@@ -67,11 +67,35 @@ class Waveform:
         return self.kind == "cw"
 
     def n_samples(self, fs_hz: float) -> int:
-        """Samples of the pulse at ``fs_hz``."""
+        """Samples of the pulse at ``fs_hz``.
+
+        Parameters
+        ----------
+        fs_hz : float
+            Sample rate (Hz).
+
+        Returns
+        -------
+        int
+            round(duration_s fs_hz), at least 1.
+        """
         return max(int(round(self.duration_s * fs_hz)), 1)
 
     def replica(self, fs_hz: float, doppler_hz: float = 0.0) -> np.ndarray:
-        """Baseband samples s(t) exp(2 pi i f_d t) of the pulse (module doc), complex128 (L,)."""
+        """Baseband samples s(t) exp(2 pi i f_d t) of the pulse (module doc), complex128 (L,).
+
+        Parameters
+        ----------
+        fs_hz : float
+            Sample rate (Hz).
+        doppler_hz : float
+            Doppler shift f_d (Hz).
+
+        Returns
+        -------
+        ndarray, complex128, shape (L,)
+            Unit-modulus samples (an LFM sweeps -B/2..+B/2 over the pulse).
+        """
         t = np.arange(self.n_samples(fs_hz)) / fs_hz
         phase = 2.0 * np.pi * doppler_hz * t
         if self.kind == "lfm":
@@ -136,7 +160,18 @@ def range_rate_to_doppler(range_rate_mps, carrier_hz: float, sound_speed_mps: fl
 
 
 def fft_length(n: int) -> int:
-    """A fast FFT length >= n (5-smooth)."""
+    """A fast FFT length >= n (5-smooth).
+
+    Parameters
+    ----------
+    n : int
+        Smallest length.
+
+    Returns
+    -------
+    int
+        scipy.fft.next_fast_len(n).
+    """
     from scipy.fft import next_fast_len
 
     return int(next_fast_len(int(n)))

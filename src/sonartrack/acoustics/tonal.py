@@ -342,6 +342,7 @@ class TonalAccumulator:
 
     @property
     def n_windows(self) -> int:
+        """Number of windows added so far."""
         return len(self._times)
 
     def state_nbytes(self) -> int:

@@ -49,7 +49,13 @@ class PeakRecord:
     amplitude: np.ndarray
 
     def by_scan(self) -> list[tuple[float, np.ndarray, np.ndarray]]:
-        """(time, bearings deg, amplitudes) per distinct time, in time order."""
+        """(time, bearings deg, amplitudes) per distinct time, in time order.
+
+        Returns
+        -------
+        list of (float, ndarray, ndarray)
+            Window time (s), cone angles (deg from the array axis) and amplitudes (0..30000) of its peaks.
+        """
         t = np.asarray(self.time_s)
         out = []
         for tk in np.unique(t):
@@ -59,7 +65,20 @@ class PeakRecord:
 
 
 def correlate_window(r1: np.ndarray, r2: np.ndarray, max_lag: int) -> np.ndarray:
-    """Normalised cross-correlation R12(tau) for tau = -max_lag..max_lag samples."""
+    """Normalised cross-correlation R12(tau) for tau = -max_lag..max_lag samples.
+
+    Parameters
+    ----------
+    r1, r2 : ndarray, shape (n,)
+        The two channels of one window (any pressure unit; the result is normalised).
+    max_lag : int
+        Largest lag (samples).
+
+    Returns
+    -------
+    ndarray, shape (2 max_lag + 1,)
+        R12 at lags -max_lag..max_lag (unnormalised when a channel has zero energy).
+    """
     n = len(r1)
     nfft = 1 << int(np.ceil(np.log2(2 * n)))
     X1 = np.fft.rfft(r1, nfft)
@@ -71,7 +90,22 @@ def correlate_window(r1: np.ndarray, r2: np.ndarray, max_lag: int) -> np.ndarray
 
 
 def pick_peaks(cc: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray]:
-    """Local maxima of ``cc`` at or above ``threshold``: (fractional index, height), parabolic refinement."""
+    """Local maxima of ``cc`` at or above ``threshold``: (fractional index, height), parabolic refinement.
+
+    Parameters
+    ----------
+    cc : ndarray, shape (L,)
+        A correlation function.
+    threshold : float
+        Smallest peak height (units of ``cc``).
+
+    Returns
+    -------
+    position : ndarray, shape (p,)
+        Fractional indices into ``cc`` (refinement clipped to +-0.5 sample).
+    height : ndarray, shape (p,)
+        Heights of the fitted parabolas at their vertices.
+    """
     if len(cc) < 3:
         return np.zeros(0), np.zeros(0)
     mid = cc[1:-1]
@@ -84,18 +118,67 @@ def pick_peaks(cc: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray
 
 
 def cone_angle_deg(lag_s, spacing_m: float, sound_speed_mps: float) -> np.ndarray:
-    """theta = arccos(c tau / d) in degrees (0..180 from the array axis; c tau / d clipped to [-1, 1])."""
+    """theta = arccos(c tau / d) in degrees (0..180 from the array axis; c tau / d clipped to [-1, 1]).
+
+    Parameters
+    ----------
+    lag_s : float or array_like
+        Time lag tau (s).
+    spacing_m : float
+        Sensor spacing d (m).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    ndarray
+        Cone angles (deg from the array axis, 0 = ahead), shape of ``lag_s``.
+    """
     return np.rad2deg(np.arccos(np.clip(sound_speed_mps * np.asarray(lag_s, dtype=float) / spacing_m, -1.0, 1.0)))
 
 
 def window_count(n_samples: int, fs_hz: float, window_s: float) -> int:
-    """Number of whole observation windows of ``window_s`` in ``n_samples`` samples (a partial last one is dropped)."""
+    """Number of whole observation windows of ``window_s`` in ``n_samples`` samples (a partial last one is dropped).
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples in the recording.
+    fs_hz : float
+        Sample rate (Hz).
+    window_s : float
+        Window length (s; rounded to whole samples).
+
+    Returns
+    -------
+    int
+        The number of whole windows.
+    """
     return int(n_samples // int(round(window_s * fs_hz)))
 
 
 def window_peaks(r1: np.ndarray, r2: np.ndarray, max_lag: int, threshold: float,
                  max_peaks: int) -> tuple[np.ndarray, np.ndarray]:
-    """(fractional lag index in 0..2 max_lag, normalised height) of the strongest ``max_peaks`` peaks of one window."""
+    """(fractional lag index in 0..2 max_lag, normalised height) of the strongest ``max_peaks`` peaks of one window.
+
+    Parameters
+    ----------
+    r1, r2 : ndarray, shape (n,)
+        The two channels of the window (means removed here).
+    max_lag : int
+        Largest lag (samples).
+    threshold : float
+        Smallest normalised correlation of a peak.
+    max_peaks : int
+        Most peaks kept (the highest).
+
+    Returns
+    -------
+    position : ndarray, shape (p,)
+        Fractional lag indices (lag = position - max_lag samples).
+    height : ndarray, shape (p,)
+        Normalised correlations.
+    """
     cc = correlate_window(r1 - r1.mean(), r2 - r2.mean(), max_lag)
     pos, h = pick_peaks(cc, threshold)
     if len(pos) > max_peaks:
@@ -115,7 +198,30 @@ def _check_recording(x: np.ndarray, fs_hz: float, spacing_m: float, sound_speed_
 
 def estimate_peaks(signals, fs_hz: float, spacing_m: float, sound_speed_mps: float = 1500.0, window_s: float = 1.0,
                    threshold: float | None = None, max_peaks: int = 20) -> PeakRecord:
-    """Peaks of every window of a (2, n) recording (module doc); ``threshold`` in amplitude units."""
+    """Peaks of every window of a (2, n) recording (module doc); ``threshold`` in amplitude units.
+
+    Parameters
+    ----------
+    signals : array_like, shape (2, n)
+        The two channels.
+    fs_hz : float
+        Sample rate (Hz).
+    spacing_m : float
+        Sensor spacing d (m).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+    window_s : float
+        Observation window (s).
+    threshold : float, optional
+        Peak threshold in amplitude units 0..30000 (default :data:`DEFAULT_THRESHOLD` = 5000).
+    max_peaks : int
+        Most peaks kept per window.
+
+    Returns
+    -------
+    PeakRecord
+        Peak times (s, window centres), cone angles (deg from the array axis) and amplitudes (0..30000).
+    """
     x = np.asarray(signals, dtype=float)
     _check_recording(x, fs_hz, spacing_m, sound_speed_mps, window_s)
     thr = (DEFAULT_THRESHOLD if threshold is None else float(threshold)) / AMPLITUDE_SCALE
@@ -136,13 +242,45 @@ def estimate_peaks(signals, fs_hz: float, spacing_m: float, sound_speed_mps: flo
 
 
 def bearings_from_recording(signals, fs_hz: float, settings: BearingSettings) -> PeakRecord:
-    """:func:`estimate_peaks` with the declared settings of ``sonartrack bearings``."""
+    """:func:`estimate_peaks` with the declared settings of ``sonartrack bearings``.
+
+    Parameters
+    ----------
+    signals : array_like, shape (2, n)
+        The two channels.
+    fs_hz : float
+        Sample rate (Hz).
+    settings : BearingSettings
+        Spacing (m), sound speed (m/s), window (s), threshold, most peaks per window.
+
+    Returns
+    -------
+    PeakRecord
+        As :func:`estimate_peaks`.
+    """
     s = settings
     return estimate_peaks(signals, fs_hz, s.spacing_m, s.sound_speed_mps, s.window_s, s.threshold, s.max_peaks)
 
 
 def peaks_summary(record: PeakRecord, n_samples: int, fs_hz: float, window_s: float) -> str:
-    """One line: windows, peaks, peaks a window and their median amplitude."""
+    """One line: windows, peaks, peaks a window and their median amplitude.
+
+    Parameters
+    ----------
+    record : PeakRecord
+        The peaks.
+    n_samples : int
+        Samples in the recording.
+    fs_hz : float
+        Sample rate (Hz).
+    window_s : float
+        Window length (s).
+
+    Returns
+    -------
+    str
+        The summary line.
+    """
     n_win = window_count(n_samples, fs_hz, window_s)
     n = len(record.time_s)
     median = float(np.median(record.amplitude)) if n else 0.0

@@ -77,7 +77,22 @@ def _buffers(size):
 
 @nb.njit(cache=True)
 def forward(ll, lmiss, gate_idx, gate_len, rel):
-    """f_{i+1}(M') = logsumexp over (M, j) -> M' of f_i(M) + log w_ij; layers of (masks, log f)."""
+    """Forward pass ``f_{i+1}(M') = logsumexp over (M, j) -> M' of f_i(M) + log w_ij`` (association/jpda.py).
+
+    Parameters
+    ----------
+    ll : ndarray, shape (k, m)
+        log w_tj of the cluster's tracks over its measurements (-inf outside the gate).
+    lmiss : ndarray, shape (k,)
+        log w_t0 = log(1 - P_D P_G).
+    gate_idx, gate_len, rel
+        Gate layout of the cluster (:func:`gate_layout`).
+
+    Returns
+    -------
+    f_masks, f_lw : numba typed lists of k + 1 arrays
+        Per layer i, the reachable bit-mask states M (sorted) and log f_i(M).
+    """
     k = ll.shape[0]
     f_masks = nb.typed.List()
     f_lw = nb.typed.List()
@@ -101,7 +116,22 @@ def forward(ll, lmiss, gate_idx, gate_len, rel):
 
 @nb.njit(cache=True)
 def backward(f_masks, ll, lmiss, gate_idx, gate_len, rel):
-    """g_i(M) = logsumexp over j of log w_ij + g_{i+1}(M'), g_n({}) = 0, over the forward-reachable states."""
+    """Backward pass ``g_i(M) = logsumexp over j of log w_ij + g_{i+1}(M')``, ``g_k({}) = 0`` (association/jpda.py).
+
+    Evaluated over the forward-reachable states only.
+
+    Parameters
+    ----------
+    f_masks : numba typed list of arrays
+        States of each layer (:func:`forward`).
+    ll, lmiss, gate_idx, gate_len, rel
+        As :func:`forward`.
+
+    Returns
+    -------
+    numba typed list of k + 1 arrays
+        log g_i(M) for each state of each layer.
+    """
     k = ll.shape[0]
     g = nb.typed.List()
     for i in range(k + 1):
@@ -121,7 +151,24 @@ def backward(f_masks, ll, lmiss, gate_idx, gate_len, rel):
 
 @nb.njit(cache=True)
 def marginals(f_masks, f_lw, g, ll, lmiss, gate_idx, gate_len, rel):
-    """log beta_ij = logsumexp over M of f_i(M) + log w_ij + g_{i+1}(M') - log Z, log Z = g_0({})."""
+    """``log beta_ij = logsumexp over M of f_i(M) + log w_ij + g_{i+1}(M') - log Z``, ``log Z = g_0({})``.
+
+    Parameters
+    ----------
+    f_masks, f_lw
+        Forward layers (:func:`forward`).
+    g
+        Backward layers (:func:`backward`).
+    ll, lmiss, gate_idx, gate_len, rel
+        As :func:`forward`.
+
+    Returns
+    -------
+    log_beta : ndarray, shape (k, m + 1)
+        Marginals, column 0 = no measurement.
+    log_z : float
+        Log normaliser over all joint events.
+    """
     k, m = ll.shape
     logz = g[0][0]
     out = np.full((k, m + 1), -np.inf)
@@ -138,9 +185,28 @@ def marginals(f_masks, f_lw, g, ll, lmiss, gate_idx, gate_len, rel):
 
 @nb.njit(cache=True)
 def cluster_marginals(ll, lmiss, gate_idx, gate_len, rel):
-    """ll (k, m) log weights over the cluster's m measurements (-inf outside the gate), lmiss (k,),
-    gate_idx (k, m) the gated measurement indices of each track (first gate_len[t] valid), rel (k+1,)
-    masks. Returns log beta (k, m+1), column 0 = no measurement, and log Z."""
+    """Exact JPDA marginals of one cluster: forward, backward, marginals.
+
+    Parameters
+    ----------
+    ll : ndarray, shape (k, m)
+        log weights over the cluster's m measurements (-inf outside the gate).
+    lmiss : ndarray, shape (k,)
+        log miss weights.
+    gate_idx : ndarray of int64, shape (k, m)
+        Gated measurement indices of each track (first ``gate_len[t]`` valid).
+    gate_len : ndarray of int64, shape (k,)
+        Gate sizes.
+    rel : ndarray of int64, shape (k + 1,)
+        Bit masks of the measurements tracks i..k-1 can take.
+
+    Returns
+    -------
+    log_beta : ndarray, shape (k, m + 1)
+        Marginals, column 0 = no measurement.
+    log_z : float
+        Log normaliser.
+    """
     f_masks, f_lw = forward(ll, lmiss, gate_idx, gate_len, rel)
     g = backward(f_masks, ll, lmiss, gate_idx, gate_len, rel)
     return marginals(f_masks, f_lw, g, ll, lmiss, gate_idx, gate_len, rel)
@@ -156,8 +222,18 @@ def _root(parent, a):
 
 @nb.njit(cache=True)
 def cluster_labels(gated):
-    """Label (n,) of each track's cluster: tracks that share a gated measurement, transitively (union-find);
-    the label is the cluster's smallest track index."""
+    """Cluster label of each track: tracks that share a gated measurement, transitively (union-find).
+
+    Parameters
+    ----------
+    gated : ndarray of bool, shape (n, m)
+        Gates.
+
+    Returns
+    -------
+    ndarray of int64, shape (n,)
+        The cluster's smallest track index, per track.
+    """
     n, m = gated.shape
     parent = np.arange(n)
     for j in range(m):
@@ -177,8 +253,22 @@ def cluster_labels(gated):
 
 @nb.njit(cache=True)
 def gate_layout(gated):
-    """Per track of a cluster: its gated measurement indices (``gate_idx``, first ``gate_len`` valid) and
-    ``rel[i]``, the bit mask of the measurements tracks i..k-1 can take (rel[k] = 0)."""
+    """Gate layout of a cluster for the bit-mask recursion.
+
+    Parameters
+    ----------
+    gated : ndarray of bool, shape (k, m)
+        Gates of the cluster's tracks over its measurements (m <= 62).
+
+    Returns
+    -------
+    gate_idx : ndarray of int64, shape (k, m)
+        Gated measurement indices of each track (first ``gate_len[t]`` valid).
+    gate_len : ndarray of int64, shape (k,)
+        Gate sizes.
+    rel : ndarray of int64, shape (k + 1,)
+        ``rel[i]``: bit mask of the measurements tracks i..k-1 can take (``rel[k] = 0``).
+    """
     k, m = gated.shape
     gate_idx = np.zeros((k, m), dtype=np.int64)
     gate_len = np.zeros(k, dtype=np.int64)
@@ -196,8 +286,26 @@ def gate_layout(gated):
 
 @nb.njit(cache=True)
 def all_marginals(ll, lmiss, labels, max_cols):
-    """log beta (n, m+1) of every cluster, each solved on its own over its own gated measurements (tracks and
-    measurements in increasing order). Clusters wider than ``max_cols`` are skipped; returns the widest."""
+    """log beta of every cluster, each solved on its own over its own gated measurements (in increasing order).
+
+    Parameters
+    ----------
+    ll : ndarray, shape (n, m)
+        log w_tj (-inf outside the gate).
+    lmiss : ndarray, shape (n,)
+        log miss weights.
+    labels : ndarray of int64, shape (n,)
+        Cluster labels (:func:`cluster_labels`).
+    max_cols : int
+        Widest cluster solved (measurements); wider ones are skipped (left at -inf).
+
+    Returns
+    -------
+    log_beta : ndarray, shape (n, m + 1)
+        Marginals, column 0 = no measurement.
+    widest : int
+        Measurements of the widest cluster.
+    """
     n, m = ll.shape
     out = np.full((n, m + 1), -np.inf)
     widest = 0

@@ -111,11 +111,30 @@ def _near(t, order, zy, lo, hi, y_low, y_high, near, bits):  # pragma: no cover 
 
 @nb.njit(cache=True)
 def candidate_pairs(x_pos, P_pos, z, R, bound):  # pragma: no cover - compiled
-    """(ci, cj): the pairs that pass the per-axis test in some mode, in row-major order (module doc, step 1).
+    """The pairs that pass the per-axis pre-gate ``nu_i^2 <= bound S_ii`` in some mode (module docstring, step 1).
 
-    Only the measurements inside each track's x and y intervals (:func:`_axis_windows`; a binary search
-    in the measurements sorted by x) are tested, in increasing index order; the others cannot pass, so
-    the pairs are exactly those of testing every (track, measurement)."""
+    Only the measurements inside each track's x and y windows (a binary search in the measurements sorted
+    by x) are tested, in increasing index order; the others cannot pass, so the pairs are exactly those of
+    testing every (track, measurement).
+
+    Parameters
+    ----------
+    x_pos : ndarray, shape (n, r, 2)
+        Predicted positions H x- (m).
+    P_pos : ndarray, shape (n, r, 2, 2)
+        Their covariances H P- H^T (m^2).
+    z : ndarray, shape (m, 2)
+        Measured positions (m).
+    R : ndarray, shape (m, 2, 2)
+        Measurement covariances (m^2).
+    bound : float
+        Gate size gamma with its round-off margin.
+
+    Returns
+    -------
+    ci, cj : ndarray of int64, shape (C,)
+        Track and measurement of each candidate pair, row-major.
+    """
     n, m = x_pos.shape[0], z.shape[0]
     if n == 0 or m == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
@@ -157,10 +176,41 @@ def _gate(x_pos, P_pos, z, R, t, j, gamma, slot, nu, S_inv, det, d2):  # pragma:
 
 @nb.njit(cache=True)
 def gated_pairs(x_pos, P_pos, z, R, bound, gamma):  # pragma: no cover - compiled
-    """The pairs that pass the pre-gate (:func:`candidate_pairs`) and then the chi-square gate d2 < gamma in some
-    mode, in row-major order: (ti, mi), nu (G, r, 2), S^-1 (G, r, 2, 2), det S (G, r), d2 (G, r), and whether
-    det S > 0 for every pre-gated pair (NumPy's inv_and_logdet raises otherwise). The outputs are views of
-    buffers sized for every pair in the x windows (np.empty: only the pages written are touched)."""
+    """The pairs that pass the pre-gate and then the chi-square gate d2 < gamma in some mode (module docstring).
+
+    Outputs are views of buffers sized for every pair in the x windows (np.empty: only the pages written
+    are touched).
+
+    Parameters
+    ----------
+    x_pos : ndarray, shape (n, r, 2)
+        Predicted positions H x- (m).
+    P_pos : ndarray, shape (n, r, 2, 2)
+        Their covariances H P- H^T (m^2).
+    z : ndarray, shape (m, 2)
+        Measured positions (m).
+    R : ndarray, shape (m, 2, 2)
+        Measurement covariances (m^2).
+    bound : float
+        Pre-gate size (gamma with its round-off margin).
+    gamma : float
+        Chi-square gate size.
+
+    Returns
+    -------
+    ti, mi : ndarray of int64, shape (G,)
+        The gated pairs, row-major.
+    nu : ndarray, shape (G, r, 2)
+        Innovations (m).
+    S_inv : ndarray, shape (G, r, 2, 2)
+        Inverse innovation covariances (1/m^2).
+    det : ndarray, shape (G, r)
+        det S (m^4).
+    d2 : ndarray, shape (G, r)
+        Squared Mahalanobis distances.
+    all_positive : bool
+        Whether det S > 0 for every pre-gated pair (NumPy's ``inv_and_logdet`` raises otherwise).
+    """
     n, r, m = x_pos.shape[0], x_pos.shape[1], z.shape[0]
     if n == 0 or m == 0:
         order, zy = np.zeros(0, np.int64), np.zeros(0)

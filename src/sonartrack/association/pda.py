@@ -41,7 +41,18 @@ class AssociationWeights:
     beta_pair: np.ndarray | None = None  # (G, r) the weights of the gated pairs (Likelihoods.pair_track/pair_meas)
 
     def of_pairs(self, lik: Likelihoods) -> np.ndarray:
-        """(G, r) the weights of the gated pairs of ``lik``."""
+        """The weights of the gated pairs of ``lik``.
+
+        Parameters
+        ----------
+        lik : Likelihoods
+            The likelihoods the weights were computed from (their pair order).
+
+        Returns
+        -------
+        ndarray, shape (G, r)
+            ``beta_pair``, or ``beta`` read at the gated pairs.
+        """
         return self.beta_pair if self.beta_pair is not None else self.beta[lik.pair_track, :, lik.pair_meas]
 
 
@@ -58,7 +69,21 @@ class PdaResult:
 
 
 def pda_weights(lik: Likelihoods) -> AssociationWeights:
-    """PDA weights beta_r0, beta_rm and Lambda_r of every track and mode, each track on its own (module doc)."""
+    """PDA weights beta_r0, beta_rm and Lambda_r of every track and mode, each track on its own (module docstring).
+
+    ``Lambda_r = 1 - P_D P_G + P_D sum_m p_rm / rho_m``, ``beta_r0 = (1 - P_D P_G) / Lambda_r``,
+    ``beta_rm = P_D (p_rm / rho_m) / Lambda_r`` (Bar-Shalom, Daum, Huang 2009, eqs. 36-41).
+
+    Parameters
+    ----------
+    lik : Likelihoods
+        Log likelihood ratios against clutter, gates, P_D and the miss weight 1 - P_D P_G.
+
+    Returns
+    -------
+    AssociationWeights
+        beta0 (n, r), dense beta (n, r, m) (zero outside the gate) and log Lambda_r (n, r).
+    """
     # p_rm / rho_m in log space, then linear: ratios near 1 are the interesting range
     ratio = np.where(lik.gated[:, None, :], np.exp(np.minimum(lik.log_ratio, 700.0)), 0.0)
     pd = lik.pd if np.isscalar(lik.pd) else lik.pd[:, None]  # one value, or (n, 1)
@@ -68,9 +93,21 @@ def pda_weights(lik: Likelihoods) -> AssociationWeights:
 
 
 def pda_pair_weights(lik: Likelihoods) -> AssociationWeights:
-    """:func:`pda_weights` from the gated pairs alone: ``beta`` None, ``beta_pair (G, r)`` instead; the same
-    numbers bit for bit (the sum over m is NumPy's dense row sum, association/pda_mixture_kernel.py), at a
-    cost in the gated pairs G, not in n x r x m."""
+    """:func:`pda_weights` from the gated pairs alone: ``beta`` None, ``beta_pair (G, r)`` instead.
+
+    The same numbers bit for bit (the sum over m is NumPy's dense row sum, association/pda_mixture_kernel.py),
+    at a cost in the gated pairs G, not in n x r x m.
+
+    Parameters
+    ----------
+    lik : Likelihoods
+        Likelihoods of the scan.
+
+    Returns
+    -------
+    AssociationWeights
+        beta0 (n, r), beta_pair (G, r) and log Lambda_r (n, r).
+    """
     from sonartrack.association.pda_mixture_kernel import dense_row_sums  # numba: loaded on first use
 
     n, r, m = lik.shape
@@ -135,11 +172,31 @@ def pda_mixture_update(x_pred, P_pred, lik: Likelihoods, beta0, beta, cross=None
 
 
 def pda_update_batch(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density) -> PdaResult:
-    """PDA/IPDA/IMM-IPDA measurement update of n tracks x r modes with m position measurements.
+    """PDA / IPDA / IMM-IPDA measurement update of n tracks x r modes with m position measurements.
 
-    ``x_pred (n, r, d)``, ``P_pred (n, r, d, d)`` with position in the first two state entries;
-    ``z (m, 2)``; ``R (m, 2, 2)`` or ``(2, 2)``; ``clutter_density`` scalar or ``(m,)`` (per m^2).
-    A measurement is validated for a track when it falls in the gate of any of its modes.
+    A measurement is validated for a track when it falls in the gate of any of its modes (module docstring).
+
+    Parameters
+    ----------
+    x_pred : array_like, shape (n, r, d)
+        Predicted mode-conditioned states, position [x, y] (m) in the first two entries.
+    P_pred : array_like, shape (n, r, d, d)
+        Their covariances.
+    z : array_like, shape (m, 2)
+        Measured positions (m).
+    R : array_like, shape (m, 2, 2) or (2, 2)
+        Measurement covariances (m^2).
+    pd, pg : float
+        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
+    gamma : float
+        Chi-square gate size.
+    clutter_density : float or array_like, shape (m,)
+        Clutter density (per m^2).
+
+    Returns
+    -------
+    PdaResult
+        Updated states and covariances, log Lambda_r, gates and association weights.
     """
     x_pred = np.asarray(x_pred, float)
     P_pred = np.asarray(P_pred, float)
@@ -150,10 +207,35 @@ def pda_update_batch(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float
 
 
 def pda_update(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density):
-    """Single-track, single-model PDA update: returns ``(x, P, beta0, beta)``.
+    """Single-track, single-model PDA update (module docstring).
 
-    ``x_pred (d,)``, ``P_pred (d, d)``, ``z (m, 2)``, ``R (2, 2)`` or ``(m, 2, 2)``.
-    ``beta`` has one entry per measurement (zero outside the gate).
+    Parameters
+    ----------
+    x_pred : array_like, shape (d,)
+        Predicted state, position [x, y] (m) first.
+    P_pred : array_like, shape (d, d)
+        Its covariance.
+    z : array_like, shape (m, 2)
+        Measured positions (m).
+    R : array_like, shape (2, 2) or (m, 2, 2)
+        Measurement covariances (m^2).
+    pd, pg : float
+        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
+    gamma : float
+        Chi-square gate size.
+    clutter_density : float or array_like, shape (m,)
+        Clutter density (per m^2).
+
+    Returns
+    -------
+    x : ndarray, shape (d,)
+        Updated state.
+    P : ndarray, shape (d, d)
+        Updated covariance.
+    beta0 : float
+        Weight of "no measurement is the target's".
+    beta : ndarray, shape (m,)
+        Weight of each measurement (zero outside the gate).
     """
     res = pda_update_batch(np.asarray(x_pred, float)[None, None], np.asarray(P_pred, float)[None, None], z, R,
                            pd=pd, pg=pg, gamma=gamma, clutter_density=clutter_density)

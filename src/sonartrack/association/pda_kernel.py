@@ -83,9 +83,34 @@ def _build():
 
 
 def pda_update_fast(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clutter_density):
-    """Single-track PDA update, compiled: same arguments and results as ``association.pda.pda_update``.
+    """Single-track PDA update, compiled: same arguments and results as :func:`association.pda.pda_update`.
 
-    ``R`` may be ``(2, 2)`` (shared) or ``(m, 2, 2)``; ``clutter_density`` scalar or ``(m,)``.
+    Parameters
+    ----------
+    x_pred : array_like, shape (d,)
+        Predicted state, position [x, y] (m) first.
+    P_pred : array_like, shape (d, d)
+        Its covariance.
+    z : array_like, shape (m, 2)
+        Measured positions (m).
+    R : array_like, shape (2, 2) (shared) or (m, 2, 2)
+        Measurement covariances (m^2).
+    pd, pg : float
+        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
+    gamma : float
+        Chi-square gate size.
+    clutter_density : float or array_like, shape (m,)
+        Clutter density (per m^2).
+
+    Returns
+    -------
+    x, P, beta0, beta
+        As ``pda_update``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the kernel finds a covariance that is not positive definite.
     """
     global _KERNEL
     if _KERNEL is None:

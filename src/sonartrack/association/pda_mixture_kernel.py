@@ -60,7 +60,24 @@ def _dot2(a0, a1, b0, b1):  # pragma: no cover - compiled
 
 @nb.njit(cache=True)
 def gains2(P_pred, ti, S_inv):  # pragma: no cover - compiled
-    """K_g = P-_t H^T S_g^-1 (G, r, d, 2) and K_g H P-_t (G, r, d, d) for 2-D measurements (H = [I 0])."""
+    """Gains ``K_g = P-_t H^T S_g^-1`` and products ``K_g H P-_t`` for 2-D measurements (H = [I 0]), as NumPy does.
+
+    Parameters
+    ----------
+    P_pred : ndarray, shape (n, r, d, d)
+        Predicted covariances.
+    ti : ndarray of int, shape (G,)
+        Track of each gated pair.
+    S_inv : ndarray, shape (G, r, 2, 2)
+        Inverse innovation covariances of the pairs.
+
+    Returns
+    -------
+    K : ndarray, shape (G, r, d, 2)
+        Gains.
+    KHP : ndarray, shape (G, r, d, d)
+        ``K H P-``.
+    """
     r, d = P_pred.shape[1], P_pred.shape[2]
     G = len(ti)
     K = np.empty((G, r, d, 2))
@@ -229,8 +246,24 @@ def _pairwise(col, val, a, b, m, frames, left, acc, ret):  # pragma: no cover - 
 
 @nb.njit(cache=True)
 def dense_row_sums(pair_track, pair_meas, val, n, m):  # pragma: no cover - compiled
-    """(n, r) sums over m of the dense (n, r, m) array that is ``val (G, r)`` at the pairs and 0 elsewhere,
-    bit for bit as ``dense.sum(axis=-1)`` (pairs in row-major order; module doc)."""
+    """Row sums of the dense (n, r, m) array that is ``val`` at the gated pairs and 0 elsewhere, bit for bit.
+
+    Equal to ``dense.sum(axis=-1)`` (NumPy's pairwise summation; module docstring) without forming it.
+
+    Parameters
+    ----------
+    pair_track, pair_meas : ndarray of int, shape (G,)
+        The gated pairs, in row-major (track, measurement) order.
+    val : ndarray, shape (G, r)
+        Values at the pairs (e.g. p_rm / rho_m).
+    n, m : int
+        Tracks and measurements.
+
+    Returns
+    -------
+    ndarray, shape (n, r)
+        Sums over the measurements.
+    """
     r = val.shape[1]
     out = np.zeros((n, r))
     frames = np.empty((64, 7), np.int64)  # depth <= log2(m / 64): 64 levels hold any row
@@ -249,7 +282,15 @@ def dense_row_sums(pair_track, pair_meas, val, n, m):  # pragma: no cover - comp
 
 @functools.cache
 def gains_match_numpy() -> bool:
-    """Whether :func:`gains2` gives NumPy's ``P H^T @ S^-1`` and ``K @ H P`` bit for bit here (module doc)."""
+    """Whether :func:`gains2` gives NumPy's ``P H^T @ S^-1`` and ``K @ H P`` bit for bit on this machine.
+
+    Checked once per process on random matrices (module docstring).
+
+    Returns
+    -------
+    bool
+        True if the compiled products can be used.
+    """
     rng = np.random.default_rng(0)
     A = rng.normal(size=(256, 2, 4, 4))
     P = A @ np.swapaxes(A, -1, -2)
@@ -262,14 +303,56 @@ def gains_match_numpy() -> bool:
 
 
 def pda_mixture_update_fast(x_pred, P_pred, lik: Likelihoods, beta0, beta):
-    """``pda_mixture_update`` (association/pda.py) with the sums compiled: same arguments, identical results."""
+    """``pda_mixture_update`` (association/pda.py) with the sums compiled: same arguments, identical results.
+
+    Parameters
+    ----------
+    x_pred : ndarray, shape (n, r, d)
+        Predicted mode-conditioned states.
+    P_pred : ndarray, shape (n, r, d, d)
+        Their covariances.
+    lik : Likelihoods
+        The gated pairs' innovations and inverse innovation covariances.
+    beta0 : ndarray, shape (n, r)
+        Weight of "no measurement is the target's".
+    beta : ndarray, shape (n, r, m)
+        Weight of each measurement (zero outside the gate).
+
+    Returns
+    -------
+    x : ndarray, shape (n, r, d)
+        Updated states.
+    P : ndarray, shape (n, r, d, d)
+        Updated covariances (symmetrised).
+    """
     if lik.gated.shape[1] == 0:
         return x_pred.copy(), P_pred.copy()
     return pda_mixture_update_pairs(x_pred, P_pred, lik, beta0, beta[lik.pair_track, :, lik.pair_meas])
 
 
 def pda_mixture_update_pairs(x_pred, P_pred, lik: Likelihoods, beta0, beta_pair):
-    """:func:`pda_mixture_update_fast` with the weights of the gated pairs only, ``beta_pair (G, r)``."""
+    """:func:`pda_mixture_update_fast` with the weights of the gated pairs only.
+
+    Parameters
+    ----------
+    x_pred : ndarray, shape (n, r, d)
+        Predicted mode-conditioned states.
+    P_pred : ndarray, shape (n, r, d, d)
+        Their covariances.
+    lik : Likelihoods
+        The gated pairs' innovations and inverse innovation covariances.
+    beta0 : ndarray, shape (n, r)
+        Weight of "no measurement is the target's".
+    beta_pair : ndarray, shape (G, r)
+        Weights of the gated pairs.
+
+    Returns
+    -------
+    x : ndarray, shape (n, r, d)
+        Updated states.
+    P : ndarray, shape (n, r, d, d)
+        Updated covariances (symmetrised).
+    """
     k = lik.nu.shape[-1]
     ti = lik.pair_track
     if lik.gated.shape[1] == 0:

@@ -25,22 +25,24 @@ import typer
 
 from sonartrack.core.errors import InputError
 
-app = typer.Typer(
+#: how the app is made (also the listing app of :func:`_listing_app`, which must print the same help)
+_APP_OPTIONS = dict(
     name="sonartrack",
     help="Underwater target detection, tracking and TMA: reproduce the papers, or run on your own data.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+app = typer.Typer(**_APP_OPTIONS)
 
 
-
-
-@app.callback()
 def _root() -> None:
     # a callback keeps the app a group of commands when one module registered one command: typer would
     # otherwise run that lone command directly and read its name as an argument
     pass
+
+
+app.callback()(_root)
 
 
 #: the app that :func:`load_commands` fills (tests may swap :data:`app` for a stand-in)
@@ -86,6 +88,53 @@ def _modules_for(args: list[str]) -> list[str] | None:
         return None
     load_commands([module])
     return [module] if command in {c.name for c in _APP.registered_commands} else None
+
+
+def _command_docs() -> list[tuple[str, str]] | None:
+    """(name, docstring) of every command, in module order, read from the command modules' source.
+
+    Reading instead of importing keeps the settings trees that a command module imports for its options out
+    of ``sonartrack --help``. Only the form every module uses is read: ``register`` made of statements
+    ``app.command("name")(function)`` with ``function`` defined in the same module; anything else (or a
+    module without its source) returns None, and the caller imports the modules instead.
+    """
+    import ast
+    from pathlib import Path
+
+    docs = []
+    for module in command_modules():
+        path = Path(__path__[0]) / f"{module}.py"
+        if not path.is_file():
+            return None
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        functions = {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
+        for stmt in getattr(functions.get("register"), "body", []):
+            call = stmt.value if isinstance(stmt, ast.Expr) else None
+            maker = call.func if isinstance(call, ast.Call) else None
+            if not (isinstance(maker, ast.Call) and isinstance(maker.func, ast.Attribute)
+                    and maker.func.attr == "command" and not maker.keywords and len(maker.args) == 1
+                    and isinstance(maker.args[0], ast.Constant) and isinstance(maker.args[0].value, str)
+                    and len(call.args) == 1 and not call.keywords and isinstance(call.args[0], ast.Name)
+                    and call.args[0].id in functions):
+                return None
+            docs.append((maker.args[0].value, ast.get_docstring(functions[call.args[0].id]) or ""))
+    return docs
+
+
+def _listing_app(args: list[str]) -> typer.Typer | None:
+    """For a command line naming no command (``--help``, or nothing): an app like :data:`app` whose commands
+    have their names and help but no options, enough to print the list; None otherwise, or when the help
+    cannot be read from the source (:func:`_command_docs`) or the commands are loaded already."""
+    if any(not a.startswith("-") for a in args) or set(command_modules()) <= _LOADED:
+        return None
+    docs = _command_docs()
+    if docs is None:
+        return None
+    listing = typer.Typer(**_APP_OPTIONS)
+    listing.callback()(_root)
+    for name, doc in docs:
+        listing.command(name, help=doc)(_root)
+    return listing
 
 
 #: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM)
@@ -174,10 +223,13 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in args
     args = [a for a in args if a != "--debug"]
     try:
+        run = app
         if app is _APP:
-            load_commands(_modules_for(args))
+            run = _listing_app(args) or app
+            if run is app:
+                load_commands(_modules_for(args))
         with _stop_signals_raise():
-            app(args=args, prog_name="sonartrack", standalone_mode=True)
+            run(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
         typer.echo(f"error: {exc}", err=True)
         return 2

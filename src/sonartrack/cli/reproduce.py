@@ -42,7 +42,7 @@ def reproduce_cmd(
     """Reproduce a paper's experiment: run (or resume) its Monte Carlo trials, check its claims, write the report."""
     from sonartrack import studies
     from sonartrack.cli._progress import TrialProgress, console, make_progress
-    from sonartrack.experiment import pipeline
+    from sonartrack.experiment import pipeline, runner
     from sonartrack.io import toml as toml_io
     from sonartrack.report.figures import study_figures
 
@@ -58,21 +58,24 @@ def reproduce_cmd(
     configs = [pipeline.resolve_config(m, quick=quick, runs=runs, overrides=overrides) for m in mods]
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    results = []
+    results, seconds = [], []
     try:
-        with make_progress() as prog:
+        # one pool of workers for all the studies: each worker imports its libraries once, not once per study
+        with make_progress() as prog, runner.WorkerPool(workers) as pool:
             bar = TrialProgress(prog)
             for mod, cfg in zip(mods, configs, strict=True):
-                results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers,
+                seconds.append(time.perf_counter())
+                results.append(pipeline.reproduce(mod, cfg, seed=seed, out=out, workers=workers, pool=pool,
                                                   scheduler=scheduler, progress=bar, figures=study_figures))
+                seconds[-1] = time.perf_counter() - seconds[-1]
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the workers are stopped by now; say what was kept
         raise _interrupted(exc, mods, configs, seed, out) from None
     from sonartrack.report.html import write_report
 
     report = write_report(out)
-    for r in results:
+    for r, took in zip(results, seconds, strict=True):
         console.print(f"{r.study_id}: {r.runs} runs ({r.computed} computed, {r.runs - r.computed} from disk), "
-                      f"claims holding {r.n_holding}/{r.n_claims}")
+                      f"claims holding {r.n_holding}/{r.n_claims}, {took:.1f} s")
     n_claims = sum(r.n_claims for r in results)
     n_hold = sum(r.n_holding for r in results)
     typer.echo(f"done in {time.perf_counter() - t0:.1f} s: {len(results)} studies, {n_hold}/{n_claims} claims hold; "

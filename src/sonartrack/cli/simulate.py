@@ -1,8 +1,11 @@
 """``sonartrack simulate``: a passive towed-array scene (recording, navigation, truth) and a sample input for
-every other command, written into ``--out`` (the simulate system; systems/simulate/files.py lists the files).
+every other command, written into ``--out`` (the simulate system; systems/simulate/files.py lists the files);
+with ``--kind active``, an active towed-array scene instead: pings, ping table, navigation and truth
+(systems/simulate/active_files.py; the input of ``sonartrack active``).
 
-The scene's settings are the system's tree, :class:`sonartrack.sim.scene.PassiveSceneSettings`: defaults, then the
-``--scene`` TOML file (or a shipped scene's name), then the options; ``--print-config`` prints them.
+The scene's settings are the system's tree, :class:`sonartrack.sim.scene.PassiveSceneSettings` (or, with
+``--kind active``, :class:`sonartrack.sim.active_scene.ActiveSceneSettings`): defaults, then the ``--scene`` TOML
+file (or a shipped scene's name), then the options; ``--print-config`` prints them.
 """
 
 from __future__ import annotations
@@ -30,9 +33,17 @@ def _help(name: str) -> str:
     return option_help(PassiveSceneSettings, name)
 
 
+#: the passive-only options and their defaults: given with --kind active, they are refused
+PASSIVE_ONLY = {"only": "all", "format": "wav", "split_s": None, "gap_s": None, "nmea": False, "start_utc": None,
+                "manifest": False}
+
+
 def simulate_cmd(
+    kind: Annotated[str, typer.Option(help="passive: a towed-array recording and sample inputs; active: pings of a "
+                                           "towed source on a towed line array (the input of sonartrack active).")]
+    = "passive",
     scene: Annotated[Path | None, typer.Option(help="Scene TOML file (see --print-config), or a shipped scene's "
-                                                    "name (passive).")] = None,
+                                                    "name (passive, active).")] = None,
     duration_s: Annotated[float | None, typer.Option(help=_help("duration_s"))] = None,
     seed: Annotated[int | None, typer.Option(help=_help("seed"))] = None,
     propagation: Annotated[str | None, typer.Option(help=_help("propagation"))] = None,
@@ -55,7 +66,16 @@ def simulate_cmd(
     manifest: Annotated[bool, typer.Option("--manifest", help="Also write manifest.csv: this recording's line of a "
                                                               "survey manifest (sonartrack survey).")] = False,
 ) -> None:
-    """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command."""
+    """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command
+    (--kind active: an active scene's pings, ping table, navigation and truth)."""
+    from sonartrack.core.errors import require
+
+    require(kind in ("passive", "active"), f"--kind {kind}: choose passive or active")
+    if kind == "active":
+        given = dict(only=only, format=format, split_s=split_s, gap_s=gap_s, nmea=nmea, start_utc=start_utc,
+                     manifest=manifest)
+        return _simulate_active(scene, duration_s, seed, propagation, print_config, out,
+                                [k for k, v in given.items() if v != PASSIVE_ONLY[k]])
     from sonartrack.io.run_outputs import check_out_path, discard_on_failure
     from sonartrack.systems.simulate.files import check_only, check_recording_fits, shipped_scene_path, write_scene
     from sonartrack.systems.simulate.recording_layout import describe_layout, make_layout
@@ -78,6 +98,33 @@ def simulate_cmd(
     typer.echo(f"simulate: {files.summary}; wrote {len(files.paths)} files in {folder}")
     if layout != make_layout() and only != "samples":
         typer.echo(describe_layout(layout, settings.duration_s, settings.sample_rate_hz))
+
+
+def _simulate_active(scene: Path | None, duration_s: float | None, seed: int | None, propagation: str | None,
+                     print_config: bool, out: str, passive_options: list[str]) -> None:
+    """``--kind active``: the active scene's settings, then its files (systems/simulate/active_files.py)."""
+    from sonartrack.core.errors import require
+    from sonartrack.sim.active_scene import ActiveSceneSettings
+    from sonartrack.systems.simulate.files import shipped_scene_path
+
+    require(not passive_options, f"--{passive_options[0].replace('_', '-') if passive_options else ''} is an option "
+                                 "of the passive scene: leave it out with --kind active")
+    path = shipped_scene_path(scene) if scene is not None else None
+    settings = resolve(ActiveSceneSettings, path, duration_s=duration_s, seed=seed, propagation=propagation)
+    if print_config:
+        print_config_and_exit(settings)
+    from sonartrack.cli._progress import TrialProgress, make_progress
+    from sonartrack.io.run_outputs import check_out_path
+    from sonartrack.systems.simulate.active_files import write_active
+
+    folder = check_out_path(out)
+    try:
+        with output_folder(folder), make_progress() as bar:
+            paths, summary = write_active(settings, folder, progress=TrialProgress(bar))
+    except KeyboardInterrupt as exc:
+        raise _interrupted(exc, folder) from None
+    typer.echo(f"simulate: {summary}; wrote {len(paths)} files in {folder} (sonartrack active --pings {folder} "
+               f"--nav {folder / 'nav.csv'} --spacing {settings.spacing_m:g})")
 
 
 def _interrupted(exc: KeyboardInterrupt, folder: Path) -> KeyboardInterrupt:

@@ -1,7 +1,8 @@
 """``sonartrack studies``: list the papers' experiments that ``sonartrack reproduce`` runs.
 
-A module of its own so that listing the studies imports the studies and nothing of the other commands
-(cli/__init__.py loads only the module named like the command).
+A module of its own so that listing the studies imports nothing of the other commands (cli/__init__.py
+loads only the module named like the command); the listing itself is read from the study modules' source
+(:func:`sonartrack.studies.listing`), so no study module and none of its libraries is imported either.
 """
 
 from __future__ import annotations
@@ -17,7 +18,5 @@ def studies_cmd() -> None:
     """List the studies (one per source paper) that `reproduce` can run."""
     from sonartrack import studies
 
-    for sid in studies.available():
-        mod = studies.load(sid)
-        typer.echo(f"{sid:20s} {mod.TITLE}  [{mod.PAPER}]  full: {mod.Config().runs} runs, "
-                   f"quick: {mod.Config.quick().runs}")
+    for sid, title, paper, runs, quick_runs in studies.listing():
+        typer.echo(f"{sid:20s} {title}  [{paper}]  full: {runs} runs, quick: {quick_runs}")

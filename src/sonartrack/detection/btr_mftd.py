@@ -164,7 +164,24 @@ def cell_scale(settings: BtrMftdSettings) -> float:
 
 
 def noise_cells(rng: np.random.Generator, shape: tuple[int, ...], statistic: str, pool: int) -> np.ndarray:
-    """Noise-only cells (K, ..., L) of the statistic (z ~ N(0, 1) or power ~ Exp(1)), each the max of ``pool``."""
+    """Noise-only cells (K, ..., L) of the statistic (z ~ N(0, 1) or power ~ Exp(1)), each the max of ``pool``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random numbers.
+    shape : tuple of int
+        Shape of the returned cells.
+    statistic : str
+        "gaussian" (z ~ N(0, 1)) or else exponential power (Exp(1)).
+    pool : int
+        Cells pooled into one by their maximum (beams pooled).
+
+    Returns
+    -------
+    ndarray, shape ``shape``
+        The pooled noise cells.
+    """
     draw = rng.standard_normal if statistic == "gaussian" else (lambda s: rng.exponential(1.0, s))
     return draw(tuple(shape) + (pool,)).max(axis=-1)
 
@@ -223,14 +240,37 @@ class BtrMftd:
         self.k = 0
 
     def threshold(self, frames: int) -> float:
-        """lambda for ``frames`` windows: P(S > lambda | noise) = pfa x the beams of a tile (module doc)."""
+        """lambda for ``frames`` windows: P(S > lambda | noise) = pfa x the beams of a tile (module doc).
+
+        Parameters
+        ----------
+        frames : int
+            Windows in the buffer (K once full; fewer at the start of a record, calibrated with a quarter of the
+            trials, at least 100).
+
+        Returns
+        -------
+        float
+            The threshold on the statistic S (log), calibrated by Monte Carlo on noise-only tiles.
+        """
         s = self.settings
         pfa_tile = min(self.pfa * self.length * self.pool, 0.5)
         trials = s.calibration_trials if frames == s.frames else max(s.calibration_trials // 4, 100)
         return _calibrated(self.detector, frames, self.length, s, pfa_tile, trials)
 
     def push(self, cells) -> BtrDetections:
-        """Add one window's cells (B,) (the statistic of the settings) and return the detections decided at it."""
+        """Add one window's cells (B,) (the statistic of the settings) and return the detections decided at it.
+
+        Parameters
+        ----------
+        cells : array_like, shape (B,)
+            One window of the bearing-time record, one cell per beam.
+
+        Returns
+        -------
+        BtrDetections
+            The detections whose best track ends in this window inside the tile that owns it (possibly none).
+        """
         y = np.asarray(cells, float)
         require(y.shape == self.cone.shape, f"window {self.k} has {y.shape} cells, the record has {self.cone.size} "
                                             "beams")

@@ -58,7 +58,20 @@ class CfarSettings(Settings):
 
 
 def os_mean_factor(n: int, k: int) -> float:
-    """c_k = E[x_(k)] of N unit-mean exponentials = sum_{i=N-k+1}^{N} 1/i."""
+    """c_k = E[x_(k)] of N unit-mean exponentials = sum_{i=N-k+1}^{N} 1/i.
+
+    Parameters
+    ----------
+    n : int
+        Reference cells N.
+    k : int
+        Rank k (1 = smallest).
+
+    Returns
+    -------
+    float
+        c_k.
+    """
     return float(np.sum(1.0 / np.arange(n - k + 1, n + 1)))
 
 
@@ -222,7 +235,20 @@ def noise_estimate(power: np.ndarray, settings: CfarSettings, stride: int = 1) -
 
 
 def os_statistic_reference(power: np.ndarray, settings: CfarSettings) -> np.ndarray:
-    """x_(k) of every cell's reference window by NumPy (np.partition): the compiled kernel's reference."""
+    """x_(k) of every cell's reference window by NumPy (np.partition): the compiled kernel's reference.
+
+    Parameters
+    ----------
+    power : ndarray
+        Cell powers (float32 here), range along the last axis.
+    settings : CfarSettings
+        Guard and reference cells (N = 2 reference_cells, reflected at the ends) and the rank k.
+
+    Returns
+    -------
+    ndarray
+        The k-th smallest power of each cell's reference window, shape of ``power``.
+    """
     y = np.asarray(power, dtype=np.float32)
     k = settings.rank
     return np.partition(_reference_windows(y, settings), k - 1, axis=-1)[..., k - 1]

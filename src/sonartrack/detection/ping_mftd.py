@@ -111,15 +111,18 @@ class CellAxes:
 
     @property
     def shape(self) -> tuple[int, int, int]:
+        """(beams, travel-time cells, Doppler cells) of every ping."""
         return len(self.cone_deg), len(self.travel_time_s), len(self.doppler_hz)
 
     @property
     def time_step_s(self) -> float:
+        """The travel-time cell step (s)."""
         t = np.asarray(self.travel_time_s, float)
         return float(t[1] - t[0]) if len(t) > 1 else 1.0
 
     @property
     def doppler_measured(self) -> bool:
+        """True when the cells carry range rates (a CW; an LFM measures none)."""
         return bool(np.all(np.isfinite(self.range_rate_mps)))
 
     @classmethod
@@ -296,10 +299,12 @@ class PingMftd:
                                 v0)
 
     def tile_shape(self, frames: int) -> tuple[int, int, int]:
+        """(frames, travel-time cells, Doppler cells) of one tile of ``frames`` pings."""
         lo, hi, _, _ = self.tiles[0]
         return frames, hi - lo, self.axes.shape[2]
 
     def detector(self, n_range: int) -> MftdDetector:
+        """P1's MFTD detector (detection/mftd.py) on a tile of ``n_range`` travel-time cells."""
         g = self.grid
         grid = RangeDopplerGrid(n_range, g.n_doppler, g.range_cell_m, g.range_rate_cell_mps, 0.0, g.range_rate_min_mps)
         return MftdDetector(grid, self.mftd_settings)

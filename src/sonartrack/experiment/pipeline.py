@@ -136,7 +136,7 @@ def finish(study_mod, config, trials: dict[str, np.ndarray], out: Path,
 
 
 def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, scheduler: str | None = None,
-              progress=None, figures: FigureMaker | None = None) -> StudyResult:
+              progress=None, figures: FigureMaker | None = None, pool: runner.WorkerPool | None = None) -> StudyResult:
     """Run or resume a study's trials and write its outputs (module docstring).
 
     Parameters
@@ -157,6 +157,8 @@ def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, sche
         Progress bar with ``start(study_id, total, done)`` and ``advance(n)``.
     figures : callable, optional
         Figure maker (e.g. :func:`sonartrack.report.figures.study_figures`) that draws the PNGs.
+    pool : runner.WorkerPool, optional
+        Local workers shared with the other studies of the same command (None: a pool for this study).
 
     Returns
     -------
@@ -170,7 +172,7 @@ def reproduce(study_mod, config, *, seed: int, out: Path, workers: int = 1, sche
         study_mod.prepare(config)
     if progress is not None:
         progress.start(plan.study_id, plan.runs, plan.runs - plan.n_todo)
-    trials = runner.execute(plan, config, workers=workers, scheduler=scheduler,
+    trials = runner.execute(plan, config, workers=workers, scheduler=scheduler, pool=pool,
                             on_chunk=(progress.advance if progress is not None else None))
     _, claims = finish(study_mod, config, trials, out, figures=figures)
     held = sum(1 for c in claims if c.get("holds"))

@@ -137,7 +137,7 @@ def plan_run(study_mod, config, runs: int, seed: int, out_dir: Path, chunk_size:
 
 
 def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = None,
-            on_chunk: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
+            on_chunk: Callable[[int], None] | None = None, pool: WorkerPool | None = None) -> dict[str, np.ndarray]:
     """Compute the missing chunks of ``plan``, store each as it finishes, and return all trials.
 
     Parameters
@@ -152,6 +152,9 @@ def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = 
         Address of a Dask scheduler; used instead of local processes.
     on_chunk : callable, optional
         Called with the number of trials each time a chunk is stored.
+    pool : WorkerPool, optional
+        Local workers shared with other runs (the studies of one command); None: a pool of ``workers``
+        processes for this run alone. Not used with ``scheduler``.
 
     Returns
     -------
@@ -165,7 +168,7 @@ def execute(plan: RunPlan, config, *, workers: int = 1, scheduler: str | None = 
     """
     cfg = config.model_dump(mode="json")
     # closing(): on an interrupt the pool is stopped here and now, not whenever the generator is collected
-    with contextlib.closing(_iter_results(plan, cfg, workers, scheduler)) as results:
+    with contextlib.closing(_iter_results(plan, cfg, workers, scheduler, pool)) as results:
         for indices, arrays in results:
             store.write_chunk(plan.cache_dir, indices, arrays)
             if on_chunk:
@@ -196,7 +199,8 @@ def stored_trials(study_mod, config, seed: int, out_dir: Path) -> int:
     return plan.runs - plan.n_todo
 
 
-def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None) -> Iterable:
+def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None,
+                  pool: WorkerPool | None = None) -> Iterable:
     if not plan.todo_chunks:
         return
     require(workers >= 1, f"--workers must be at least 1 (got {workers})")
@@ -206,7 +210,7 @@ def _iter_results(plan: RunPlan, cfg: dict, workers: int, scheduler: str | None)
         for idx in plan.todo_chunks:
             yield idx, run_chunk(plan.study_module, cfg, plan.seed, idx)
     else:
-        yield from _iter_processes(plan, cfg, workers)
+        yield from _iter_processes(plan, cfg, workers, pool)
 
 
 def _worker_init() -> None:
@@ -284,23 +288,76 @@ def _stop_pool(pool) -> None:
     pool.shutdown(wait=True)
 
 
-def _iter_processes(plan: RunPlan, cfg: dict, workers: int):
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+class WorkerPool:
+    """Local worker processes shared by the runs made inside one ``with`` block (the studies of one command).
 
-    # "spawn" would re-import everything per worker; "forkserver" is safe with threads in the parent.
-    ctx = mp.get_context("forkserver" if os.name == "posix" else "spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
-    try:
-        with _stop_signals_held():
-            futures = {pool.submit(run_chunk, plan.study_module, cfg, plan.seed, idx): idx
-                       for idx in plan.todo_chunks}
-        for fut in as_completed(futures):
-            yield futures[fut], fut.result()
-    except BaseException:  # KeyboardInterrupt, GeneratorExit (the consumer stopped), a failed trial
-        _stop_pool(pool)
-        raise
-    pool.shutdown(wait=True)
+    A fresh worker spends seconds importing numpy, the compiled kernels and a study's modules before its
+    first trial; a pool kept across the studies of ``reproduce all`` pays that once per worker instead of
+    once per study. Sharing changes no number: a trial is a function of (study, config, seed, index) only.
+    The processes start at the first chunk sent to them (none with a Dask scheduler or a single worker).
+    Leaving the block normally waits for the workers to end; leaving it on an exception (an interrupt, a
+    failed trial) kills them, as a run with a pool of its own does.
+    """
+
+    def __init__(self, workers: int):
+        require(workers >= 1, f"--workers must be at least 1 (got {workers})")
+        self.workers = int(workers)
+        self._pool = None
+
+    def executor(self):
+        """The process pool, started on first use (the forkserver start method on POSIX).
+
+        Returns
+        -------
+        concurrent.futures.ProcessPoolExecutor
+            ``workers`` processes (spawn start method off POSIX), each initialised by ``_worker_init``.
+        """
+        if self._pool is None:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            # "spawn" would re-import everything per worker; "forkserver" is safe with threads in the parent.
+            ctx = mp.get_context("forkserver" if os.name == "posix" else "spawn")
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_worker_init)
+        return self._pool
+
+    def stop(self) -> None:
+        """Cancel queued chunks and kill the workers (see :func:`_stop_pool`); the pool restarts if used again."""
+        if self._pool is not None:
+            pool, self._pool = self._pool, None
+            _stop_pool(pool)
+
+    def close(self) -> None:
+        """Let the workers end once idle and wait for them."""
+        if self._pool is not None:
+            pool, self._pool = self._pool, None
+            pool.shutdown(wait=True)
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.stop()
+
+
+def _iter_processes(plan: RunPlan, cfg: dict, workers: int, shared: WorkerPool | None = None):
+    from concurrent.futures import as_completed
+
+    pool = shared if shared is not None else WorkerPool(workers)
+    with contextlib.nullcontext() if shared is not None else pool:
+        executor = pool.executor()
+        try:
+            with _stop_signals_held():
+                futures = {executor.submit(run_chunk, plan.study_module, cfg, plan.seed, idx): idx
+                           for idx in plan.todo_chunks}
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        except BaseException:  # KeyboardInterrupt, GeneratorExit (the consumer stopped), a failed trial
+            pool.stop()
+            raise
 
 
 def _iter_dask(plan: RunPlan, cfg: dict, scheduler: str):

@@ -54,7 +54,13 @@ class Calibration:
 
     @classmethod
     def identity(cls) -> Calibration:
-        """Samples already in pascals (p = x)."""
+        """Samples already in pascals (p = x).
+
+        Returns
+        -------
+        Calibration
+            S = -120 dB re 1 V/uPa, G = 0 dB, V_fs = 1 V (1 Pa per unit), flagged ``is_identity``.
+        """
         return cls(np.array([-120.0]), np.array([0.0]), np.array([1.0]), True)
 
     @property
@@ -85,19 +91,52 @@ class Calibration:
         return np.broadcast_to(self.full_scale_v * P_REF_PA / gain, (channels,)).copy()
 
     def to_pascals(self, block: np.ndarray) -> np.ndarray:
-        """A (channels, m) block of samples as pressure (Pa), a new array."""
+        """A (channels, m) block of samples as pressure (Pa), a new array.
+
+        Parameters
+        ----------
+        block : ndarray, shape (channels, m)
+            Recorded samples (full-scale units).
+
+        Returns
+        -------
+        ndarray, shape (channels, m), float64
+            Pressure (Pa): each channel times its :meth:`pa_per_unit`.
+        """
         x = np.asarray(block, dtype=np.float64)
         return x * self.pa_per_unit(x.shape[0])[:, None]
 
 
 def level_db_re_1upa(pressure_pa) -> np.ndarray:
-    """20 log10(|p| / 1 uPa): the level (dB re 1 uPa) of a pressure amplitude or rms (Pa); -inf at 0."""
+    """20 log10(|p| / 1 uPa): the level (dB re 1 uPa) of a pressure amplitude or rms (Pa); -inf at 0.
+
+    Parameters
+    ----------
+    pressure_pa : float or array_like
+        Pressure amplitude or rms (Pa).
+
+    Returns
+    -------
+    ndarray
+        Level (dB re 1 uPa), shape of the input.
+    """
     with np.errstate(divide="ignore"):
         return 20.0 * np.log10(np.abs(np.asarray(pressure_pa, dtype=float)) / P_REF_PA)
 
 
 def rms_level_db(block_pa: np.ndarray) -> np.ndarray:
-    """Per-channel rms level (dB re 1 uPa) of a (channels, m) block of pressure (Pa)."""
+    """Per-channel rms level (dB re 1 uPa) of a (channels, m) block of pressure (Pa).
+
+    Parameters
+    ----------
+    block_pa : ndarray, shape (channels, m)
+        Pressure (Pa).
+
+    Returns
+    -------
+    ndarray, shape (channels,)
+        20 log10(p_rms / 1 uPa) (dB re 1 uPa).
+    """
     x = np.asarray(block_pa, dtype=float)
     return level_db_re_1upa(np.sqrt(np.mean(x * x, axis=-1)))
 
@@ -179,6 +218,17 @@ def read_calibration(path) -> Calibration:
 
 
 def sensitivity_db_re_v_per_upa(v_per_pa: float) -> float:
-    """Sensitivity in dB re 1 V/uPa of a hydrophone giving ``v_per_pa`` volts per pascal (20 log10(v / 1e6))."""
+    """Sensitivity in dB re 1 V/uPa of a hydrophone giving ``v_per_pa`` volts per pascal (20 log10(v / 1e6)).
+
+    Parameters
+    ----------
+    v_per_pa : float
+        Sensitivity (V/Pa), > 0.
+
+    Returns
+    -------
+    float
+        Sensitivity (dB re 1 V/uPa).
+    """
     require(v_per_pa > 0, f"a sensitivity must be > 0 V/Pa, got {v_per_pa:g}")
     return 20.0 * math.log10(v_per_pa * P_REF_PA)

@@ -222,8 +222,8 @@ def check_array_fallback(nav: Navigation, path="navigation") -> str | None:
     turn_deg = float(np.rad2deg(np.ptp(nav.heading_rad)))
     require(turn_deg <= MAX_FALLBACK_TURN_DEG,
             f"navigation file {path} has no array columns and the ship turns {turn_deg:.0f} deg: the side of each "
-            "target would be decided on array headings the file does not give (a towed array's headings lag the ship's); "
-            f"add {', '.join(ARRAY_COLUMNS)} (for a hull array, copies of x_m, y_m, heading_deg)")
+            "target would be decided on array headings the file does not give (a towed array's headings lag the "
+            f"ship's); add {', '.join(ARRAY_COLUMNS)} (for a hull array, copies of x_m, y_m, heading_deg)")
     return (f"warning: navigation file {path} has no array columns: the array is taken at the ship along its heading "
             "(a hull array); the ship keeps its course, so no side is resolved")
 

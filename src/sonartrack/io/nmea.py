@@ -54,6 +54,7 @@ class GeoTrack:
 
     @property
     def start_utc(self) -> datetime:
+        """The UTC time of the first fix (a timezone-aware datetime)."""
         return datetime.fromtimestamp(float(self.time_unix_s[0]), UTC)
 
 
@@ -70,6 +71,13 @@ class NmeaCounts:
     other: int = 0
 
     def describe(self) -> str:
+        """One line of the counts for a log or an error message.
+
+        Returns
+        -------
+        str
+            "N lines: U used, B bad checksums, M unparsable, F without a fix, O of other types".
+        """
         return (f"{self.lines} lines: {self.used} used, {self.bad_checksum} bad checksums, {self.malformed} "
                 f"unparsable, {self.no_fix} without a fix, {self.other} of other types")
 
@@ -83,7 +91,18 @@ class NmeaLog:
 
 
 def nmea_checksum(body: str) -> int:
-    """XOR of the characters between ``$`` and ``*`` of a sentence (NMEA 0183)."""
+    """XOR of the characters between ``$`` and ``*`` of a sentence (NMEA 0183).
+
+    Parameters
+    ----------
+    body : str
+        The characters between ``$`` and ``*`` (non-ASCII characters count as "?").
+
+    Returns
+    -------
+    int
+        The checksum, 0..255 (written as two hexadecimal digits after ``*``).
+    """
     c = 0
     for ch in body.encode("ascii", "replace"):
         c ^= ch
@@ -245,12 +264,34 @@ class LocalProjection:
         self._fwd = Transformer.from_crs(CRS.from_epsg(4326), local, always_xy=True)
 
     def xy(self, lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
-        """x east and y north (m) of latitudes and longitudes (deg)."""
+        """x east and y north (m) of latitudes and longitudes (deg).
+
+        Parameters
+        ----------
+        lat_deg, lon_deg : float or array_like
+            Latitudes and longitudes (deg, WGS84).
+
+        Returns
+        -------
+        x, y : ndarray
+            Local coordinates (m; x east, y north).
+        """
         x, y = self._fwd.transform(np.asarray(lon_deg, float), np.asarray(lat_deg, float))
         return np.asarray(x, float), np.asarray(y, float)
 
     def latlon(self, x_m, y_m) -> tuple[np.ndarray, np.ndarray]:
-        """Latitude and longitude (deg) of local x east, y north (m)."""
+        """Latitude and longitude (deg) of local x east, y north (m).
+
+        Parameters
+        ----------
+        x_m, y_m : float or array_like
+            Local coordinates (m; x east, y north).
+
+        Returns
+        -------
+        lat, lon : ndarray
+            Latitudes and longitudes (deg, WGS84).
+        """
         lon, lat = self._fwd.transform(np.asarray(x_m, float), np.asarray(y_m, float), direction="INVERSE")
         return np.asarray(lat, float), np.asarray(lon, float)
 

@@ -80,6 +80,13 @@ class Discontinuity:
     after: Path
 
     def describe(self) -> str:
+        """One line naming the discontinuity for a warning or a status file.
+
+        Returns
+        -------
+        str
+            Kind, length (s), start..end (s on the recording's time axis) and the names of the two files.
+        """
         return (f"{self.kind} of {self.end_s - self.start_s:.3f} s at {self.start_s:.3f}..{self.end_s:.3f} s "
                 f"between {self.before.name} and {self.after.name}")
 
@@ -104,6 +111,7 @@ class RecordingSequence:
 
     @property
     def duration_s(self) -> float:
+        """Seconds from the first sample to the last, gaps included (``frames`` / ``sample_rate_hz``)."""
         return self.frames / self.sample_rate_hz
 
     @property
@@ -372,7 +380,13 @@ def iter_sequence_blocks(seq: RecordingSequence, block_frames: int, *, start_fra
 
 
 def check_no_gaps(seq: RecordingSequence) -> None:
-    """Refuse a sequence with gaps where a caller needs one unbroken recording (one line naming the first)."""
+    """Refuse a sequence with gaps where a caller needs one unbroken recording (one line naming the first).
+
+    Parameters
+    ----------
+    seq : RecordingSequence
+        The sequence; raises :class:`InputError` when it has a gap.
+    """
     if seq.gaps:
         raise InputError(f"the recording has {len(seq.gaps)} gap(s), the first a {seq.gaps[0].describe()}: "
                          "process the parts separately, or join the files with the gaps filled")

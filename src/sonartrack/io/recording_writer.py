@@ -106,7 +106,13 @@ class RecordingWriter:
         return np.ascontiguousarray(q, dtype=np.int32)
 
     def write(self, block) -> None:
-        """Append a block of shape (channels, m) (float samples; integers quantised as the module doc says)."""
+        """Append a block of shape (channels, m) (float samples; integers quantised as the module doc says).
+
+        Parameters
+        ----------
+        block : array_like, shape (channels, m)
+            Samples; a .wav that would pass 4 GiB without a stated length is refused (:class:`InputError`).
+        """
         x = np.asarray(block, dtype=np.float64)
         require(x.ndim == 2 and x.shape[0] == self.channels,
                 f"a recording block must be ({self.channels}, m) samples, got {x.shape}")

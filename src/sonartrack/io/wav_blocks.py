@@ -234,9 +234,24 @@ def read_wav_info(path) -> WavInfo:
 
 
 def check_block(block: np.ndarray, path, start_s: float) -> None:
-    """Refuse a block (float64) holding NaN/inf or a sample beyond :data:`MAX_FLOAT_SAMPLE`, naming the block's
-    start time ``start_s`` (s) in ``path``. Two reductions and no temporary: max and -min are NaN or inf if any
-    sample is."""
+    """Refuse a block holding NaN/inf or a sample beyond :data:`MAX_FLOAT_SAMPLE`.
+
+    Two reductions and no temporary: max and -min are NaN or inf if any sample is.
+
+    Parameters
+    ----------
+    block : ndarray of float64
+        Samples (Pa, or normalised full scale).
+    path : str or path-like
+        The recording, named in the message.
+    start_s : float
+        Start time of the block (s), named in the message.
+
+    Raises
+    ------
+    InputError
+        On a NaN/inf or an implausibly large sample.
+    """
     hi, lo = float(block.max()), float(block.min())
     peak = max(hi, -lo)
     if not (np.isfinite(hi) and np.isfinite(lo)):
@@ -248,16 +263,46 @@ def check_block(block: np.ndarray, path, start_s: float) -> None:
 
 
 def native_buffer(info: WavInfo, frames: int) -> np.ndarray:
-    """A reusable (frames, channels) buffer of the type libsndfile decodes ``info``'s samples to without a
-    conversion loop of its own (float32, float64, or int32 for every integer width)."""
+    """A reusable buffer of the type libsndfile decodes ``info``'s samples to without a conversion loop of its own.
+
+    Parameters
+    ----------
+    info : WavInfo
+        The recording's header (its sample format and channel count).
+    frames : int
+        Rows of the buffer.
+
+    Returns
+    -------
+    ndarray, shape (frames, channels)
+        Uninitialised; float32, float64, or int32 for every integer width.
+    """
     return np.empty((int(frames), info.channels), dtype=_NATIVE[info.sample_format][0])
 
 
 def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s: float) -> None:
-    """Decode ``out.shape[1]`` frames from the open SoundFile ``f`` into ``out`` (channels, m) float64, through
-    ``raw`` (:func:`native_buffer`, at least m rows). Integers arrive as int32 k 2^(32 - bits) and are scaled by
-    2^-31 (exact in float64); a short read or a decoder error (the data ends early) raises InputError naming
-    the time ``start_s`` (s)."""
+    """Decode ``out.shape[1]`` frames from an open SoundFile into ``out``, through ``raw``.
+
+    Integers arrive as int32 k 2^(32 - bits) and are scaled by 2^-31 (exact in float64).
+
+    Parameters
+    ----------
+    f : soundfile.SoundFile
+        The open recording, positioned at the first frame wanted.
+    raw : ndarray
+        Buffer from :func:`native_buffer` with at least m rows.
+    out : ndarray of float64, shape (channels, m)
+        Destination, written in place.
+    info : WavInfo
+        The recording's header.
+    start_s : float
+        Time of the first frame (s), named in errors.
+
+    Raises
+    ------
+    InputError
+        On a short read or a decoder error (the data ends early).
+    """
     part = raw[: out.shape[1]]
     dtype, scale = _NATIVE[info.sample_format]
     try:

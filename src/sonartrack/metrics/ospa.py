@@ -90,7 +90,18 @@ def cutoff_costs(truth, estimate, c: float, p: float) -> np.ndarray:
 
 def optimal_assignment(costs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The assignment of the smaller side into the larger of least total cost (Kuhn-Munkres / Jonker-Volgenant
-    as scipy's ``linear_sum_assignment``): (rows, cols) of the pairs, min(m, n) of them."""
+    as scipy's ``linear_sum_assignment``): (rows, cols) of the pairs, min(m, n) of them.
+
+    Parameters
+    ----------
+    costs : ndarray, shape (m, n)
+        Pair costs.
+
+    Returns
+    -------
+    rows, cols : ndarray of intp, shape (min(m, n),)
+        The assigned pairs (empty for an empty matrix).
+    """
     from scipy.optimize import linear_sum_assignment  # scipy: loaded where a metric is computed
 
     if costs.size == 0:

@@ -14,7 +14,17 @@ from sonartrack.core.settings import to_commented_toml
 from sonartrack.report.html import _CSS
 
 _HEAD = ("<tr><th>track</th><th>confirmed (s)</th><th>pings</th><th>x (km)</th><th>y (km)</th><th>speed (kn)</th>"
-         "<th>course (deg)</th><th>existence</th><th>mode probabilities</th></tr>")
+         "<th>course (deg)</th><th>existence</th><th>mode probabilities</th><th>side (ln LR, from s)</th></tr>")
+
+
+def _side_cell(result, tid: int) -> str:
+    """The track's side decision (systems/active/sides.py): side, ln LR and the time it held from."""
+    d = result.tracks.sides
+    k = None if d is None else d.of(tid)
+    if k is None or d.decision[k] == "undecided":
+        return "undecided" + ("" if k is None else f" ({d.log_lr[k]:+.1f})")
+    ghost = " — this track is its mirror" if d.decision[k] == "mirror" else ""
+    return f"{d.side[k]}{ghost} ({d.log_lr[k]:+.1f}, {d.resolved_s[k]:.0f})"
 
 
 def _rows(result) -> str:
@@ -28,7 +38,7 @@ def _rows(result) -> str:
         cells = [tid, f"{t.time_s[conf[0]]:.0f}..{t.time_s[conf[-1]]:.0f}", len(conf),
                  f"{x[0] / 1e3:.2f} ± {t.sd_x_m[k] / 1e3:.2f}", f"{x[1] / 1e3:.2f} ± {t.sd_y_m[k] / 1e3:.2f}",
                  f"{np.hypot(x[2], x[3]) / 0.514444:.1f}", f"{np.rad2deg(np.arctan2(x[2], x[3])) % 360:.0f}",
-                 f"{t.existence[k]:.2f}", " / ".join(f"{m:.2f}" for m in t.mode_prob[k])]
+                 f"{t.existence[k]:.2f}", " / ".join(f"{m:.2f}" for m in t.mode_prob[k]), _side_cell(result, tid)]
         out.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")
     return "".join(out)
 

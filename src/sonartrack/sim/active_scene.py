@@ -139,6 +139,11 @@ class TargetSettings(Settings):
     speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
     depth_m: float = setting(100.0, "depth (transmission loss with propagation = ram)", unit="m", gt=0)
     target_strength_db: float = setting(..., "target strength TS", unit="dB re 1 m^2")
+    turn_start_s: float | None = setting(None, "time a course change starts (not set: constant velocity)", unit="s",
+                                         ge=0)
+    turn_deg: float = setting(0.0, "course change from turn_start_s (negative: to port)", unit="deg", ge=-360,
+                              le=360)
+    turn_rate_deg_s: float = setting(1.0, "rate of that turn", unit="deg/s", gt=0, le=10)
 
 
 @cache
@@ -327,11 +332,18 @@ def echo_geometry(points_xy, points_velocity, tx_xy, tx_velocity, rx_xy, rx_velo
 
 
 def target_motion(target: TargetSettings, t_s) -> tuple[np.ndarray, np.ndarray]:
-    """Positions (T, 2) and velocities (T, 2) of a constant-velocity target at times ``t_s``."""
+    """Positions (T, 2) and velocities (T, 2) of a target at times ``t_s``: constant velocity, or with one
+    constant-rate course change (sim/platforms.py :class:`ManeuveringTrack`, in closed form)."""
     course = np.deg2rad(target.course_deg)
     v = target.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
     t = np.atleast_1d(np.asarray(t_s, dtype=float))
-    return np.array([target.x_m, target.y_m]) + t[:, None] * v, np.broadcast_to(v, (t.size, 2)).copy()
+    if target.turn_start_s is None or target.turn_deg == 0:
+        return np.array([target.x_m, target.y_m]) + t[:, None] * v, np.broadcast_to(v, (t.size, 2)).copy()
+    a = float(target.turn_start_s)
+    turn = ((a, a + abs(target.turn_deg) / target.turn_rate_deg_s,
+             float(np.sign(target.turn_deg) * np.deg2rad(target.turn_rate_deg_s))),)
+    st = ManeuveringTrack(target.x_m, target.y_m, target.speed_kn * KNOT_MPS, float(course), turn).state(t)
+    return np.asarray(st[0], float).reshape(-1, 2), np.asarray(st[1], float).reshape(-1, 2)
 
 
 #: RAM transmission loss is tabulated on this range step (m) and out to a whole number of RAM_RANGE_STEP_M

@@ -40,7 +40,18 @@ AMPLITUDE = "amplitude"
 
 
 def amplitude_of(detection) -> float:
-    """The detection's peak amplitude (metadata["amplitude"])."""
+    """The detection's peak amplitude (metadata["amplitude"]).
+
+    Parameters
+    ----------
+    detection : Detection
+        A detection with ``metadata["amplitude"]``; raises :class:`InputError` without one.
+
+    Returns
+    -------
+    float
+        The amplitude (units of the peaks, e.g. 0..30000 for the cross-correlation peaks).
+    """
     try:
         return float(detection.metadata[AMPLITUDE])
     except (KeyError, TypeError):
@@ -63,11 +74,40 @@ class AmplitudeHypothesiser(PDAHypothesiser):
             raise InputError("AmplitudeHypothesiser needs normalise=False")
 
     def strength_of(self, track) -> float:
-        """The track's strength z_hat (metadata), or ``initial_strength``."""
+        """The track's strength z_hat (metadata), or ``initial_strength``.
+
+        Parameters
+        ----------
+        track : Track
+            The track.
+
+        Returns
+        -------
+        float
+            z_hat (amplitude units).
+        """
         return float(track.metadata.get(STRENGTH, self.initial_strength))
 
     def hypothesise(self, track, detections, timestamp, **kwargs):
-        """PDA hypotheses with w_t0 and w_tj of the module doc."""
+        """PDA hypotheses with w_t0 and w_tj of the module doc.
+
+        Parameters
+        ----------
+        track : Track
+            The track (its last state the prior).
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to Stone Soup's ``PDAHypothesiser.hypothesise``.
+
+        Returns
+        -------
+        MultipleHypothesis
+            Unnormalised: hits weighted by the amplitude likelihood ratio r_tj, the miss by
+            1 - P_D0 Phi((z_hat - tau) / sigma_a) P_G.
+        """
         multi = super().hypothesise(track, detections, timestamp, **kwargs)
         strength = self.strength_of(track)
         pd_eff = float(detection_probability_above(float(self.prob_detect), strength, self.amplitude_spread,
@@ -89,7 +129,24 @@ class JPDAWithAmplitude(JPDA):
     hypothesiser: AmplitudeHypothesiser = Property(doc="Amplitude-aided PDA hypothesiser")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> MultipleHypothesis (exact marginals); stages each track's new strength z_hat."""
+        """Mapping track -> MultipleHypothesis (exact marginals); stages each track's new strength z_hat.
+
+        Parameters
+        ----------
+        tracks : set of Track
+            The live tracks.
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the hypothesiser.
+
+        Returns
+        -------
+        dict of Track to MultipleHypothesis
+            The exact JPDA marginal weights of each track's hypotheses.
+        """
         hypotheses, table, log_beta = associate_exact(self, tracks, detections, timestamp, **kwargs)
         out = {}
         for t, track in enumerate(table.tracks):

@@ -43,12 +43,38 @@ Scans = list[tuple[datetime.datetime, set]]
 
 
 def to_timestamp(time_s: float, epoch: datetime.datetime = EPOCH) -> datetime.datetime:
-    """The datetime ``time_s`` seconds after ``epoch``."""
+    """The datetime ``time_s`` seconds after ``epoch``.
+
+    Parameters
+    ----------
+    time_s : float
+        Time (s) after the epoch.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    datetime.datetime
+        ``epoch + time_s``.
+    """
     return epoch + datetime.timedelta(seconds=float(time_s))
 
 
 def to_seconds(timestamp: datetime.datetime, epoch: datetime.datetime = EPOCH) -> float:
-    """Seconds from ``epoch`` to ``timestamp``."""
+    """Seconds from ``epoch`` to ``timestamp``.
+
+    Parameters
+    ----------
+    timestamp : datetime.datetime
+        The time stamp.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    float
+        ``timestamp - epoch`` in s.
+    """
     return (timestamp - epoch).total_seconds()
 
 
@@ -71,7 +97,34 @@ def detections_from_arrays(time_s, z, R=None, *, measurement_model=None, ndim_st
 
     Each row gets ``measurement_model``, or (when None) ``LinearGaussian(ndim_state, mapping, R[i])`` with
     its own covariance ``R (k, m, m)``. ``amplitude (k,)`` goes to ``metadata["amplitude"]``; rows where
-    ``clutter (k,)`` is True become ``Clutter``."""
+    ``clutter (k,)`` is True become ``Clutter``.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (k,)
+        Detection times (s after ``epoch``); equal times form one scan.
+    z : array_like, shape (k, m)
+        Measurements (units of the state entries they measure: m, rad ...).
+    R : array_like, shape (k, m, m) or broadcastable, optional
+        Measurement covariances; needed when ``measurement_model`` is None.
+    measurement_model : MeasurementModel, optional
+        One model for every detection.
+    ndim_state : int
+        State dimension of the built LinearGaussian models.
+    mapping : sequence of int
+        State entries measured by the built models (default (0, 2): x and y in Stone Soup's [x, vx, y, vy]).
+    amplitude : array_like, shape (k,), optional
+        Detection amplitudes (metadata).
+    clutter : array_like of bool, shape (k,), optional
+        Rows that are clutter.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    list of (datetime.datetime, set of Detection)
+        One scan per distinct time, in time order.
+    """
     t = np.asarray(time_s, float).reshape(-1)
     z = np.asarray(z, float).reshape(len(t), -1)
     if measurement_model is None and R is None:
@@ -92,7 +145,26 @@ def detections_from_arrays(time_s, z, R=None, *, measurement_model=None, ndim_st
 def detections_from_contacts(contacts, *, ndim_state: int = 4, mapping: Sequence[int] = (0, 2),
                              epoch: datetime.datetime = EPOCH, **read_options) -> Scans:
     """Scans of ``Detection``s from a :class:`~sonartrack.io.contacts.Contacts` or a contacts file path
-    (``read_options`` go to :func:`~sonartrack.io.contacts.read_contacts`): x_m, y_m with their covariances."""
+    (``read_options`` go to :func:`~sonartrack.io.contacts.read_contacts`): x_m, y_m with their covariances.
+
+    Parameters
+    ----------
+    contacts : Contacts or str or Path
+        The contacts (positions in m, covariances in m^2) or their file.
+    ndim_state : int
+        State dimension of the detections' LinearGaussian models.
+    mapping : sequence of int
+        State entries measured (default x and y of Stone Soup's [x, vx, y, vy]).
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+    **read_options
+        Passed to ``read_contacts`` when a path is given.
+
+    Returns
+    -------
+    list of (datetime.datetime, set of Detection)
+        One scan per distinct time, in time order.
+    """
     if not hasattr(contacts, "z"):
         from sonartrack.io.contacts import read_contacts
 
@@ -105,7 +177,24 @@ def detections_from_peaks(peaks, *, bearing_sigma_deg: float | None = None, meas
                           epoch: datetime.datetime = EPOCH) -> Scans:
     """Scans of bearing ``Detection``s (cone angle in rad, amplitude in metadata) from a
     :class:`~sonartrack.acoustics.xcorr_bearing.PeakRecord` or a peaks file path. The measurement model is
-    ``measurement_model`` or LinearGaussian on state [bearing, rate] with sigma ``bearing_sigma_deg``."""
+    ``measurement_model`` or LinearGaussian on state [bearing, rate] with sigma ``bearing_sigma_deg``.
+
+    Parameters
+    ----------
+    peaks : PeakRecord or str or Path
+        The peaks (``bearing_deg``: cone angle in degrees) or their file.
+    bearing_sigma_deg : float, optional
+        Bearing standard deviation (deg); needed when ``measurement_model`` is None.
+    measurement_model : MeasurementModel, optional
+        One model for every detection.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    list of (datetime.datetime, set of Detection)
+        One scan per distinct time, measurements in rad.
+    """
     if not hasattr(peaks, "amplitude"):
         from sonartrack.io.peaks import read_peaks_csv
 
@@ -121,7 +210,22 @@ def detections_from_peaks(peaks, *, bearing_sigma_deg: float | None = None, meas
 
 def detections_to_arrays(detections: Iterable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``z (m, k)``, ``R (m, k, k)`` (each detection's measurement-model covariance) and ``amplitude (m,)``
-    (NaN where a detection has none) of one scan's detections, in iteration order."""
+    (NaN where a detection has none) of one scan's detections, in iteration order.
+
+    Parameters
+    ----------
+    detections : iterable of Detection
+        One scan's m detections (each with a measurement model).
+
+    Returns
+    -------
+    z : ndarray, shape (m, k)
+        Measurements.
+    R : ndarray, shape (m, k, k)
+        Their covariances.
+    amplitude : ndarray, shape (m,)
+        ``metadata["amplitude"]``, NaN where absent.
+    """
     dets = list(detections)
     if not dets:
         return np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0)
@@ -134,7 +238,23 @@ def detections_to_arrays(detections: Iterable) -> tuple[np.ndarray, np.ndarray, 
 def tracks_from_snapshots(snapshots: Sequence[TrackSnapshot], *, order=STONESOUP_ORDER,
                           epoch: datetime.datetime = EPOCH) -> set:
     """``ExistenceTrack``s (id = str(track_id)) of ``GaussianState``s, one per snapshot a track appears in;
-    each state's metadata holds the existence (when finite), confirmation and strength of that scan."""
+    each state's metadata holds the existence (when finite), confirmation and strength of that scan.
+
+    Parameters
+    ----------
+    snapshots : sequence of TrackSnapshot
+        Our track snapshots (state [x, y, vx, vy] in m and m/s), in time order.
+    order : sequence of int or None
+        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
+        reordering.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    set of ExistenceTrack
+        One Stone Soup track per track id.
+    """
     tracks: dict[int, ExistenceTrack] = {}
     for snap in snapshots:
         x, P = _reorder(snap.x, snap.P, order)
@@ -178,7 +298,26 @@ def _id_key(track_id):
 def snapshot_from_tracks(tracks: Iterable, timestamp: datetime.datetime, *, order=STONESOUP_ORDER,
                          epoch: datetime.datetime = EPOCH) -> TrackSnapshot:
     """Our ``TrackSnapshot`` of the tracks that have a state at ``timestamp`` (one mode, mu = 1), in id order.
-    Ids that are not numbers become the track's rank; existence is NaN where the metadata has none."""
+    Ids that are not numbers become the track's rank; existence is NaN where the metadata has none.
+
+    Parameters
+    ----------
+    tracks : iterable of Track
+        Stone Soup tracks.
+    timestamp : datetime.datetime
+        The scan time.
+    order : sequence of int or None
+        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
+        reordering.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    TrackSnapshot
+        States and covariances in our order, confirmation, existence, the first state's covariance as ``P_init``,
+        birth times (s) and the strength (``attrs``) when every track has one.
+    """
     live = sorted(((tr, _state_at(tr, timestamp)) for tr in tracks), key=lambda p: _id_key(p[0].id))
     live = [(tr, *found) for tr, found in live if found is not None]
     x, P = _stack_states([state for _, state, _ in live], order)
@@ -197,7 +336,27 @@ def snapshot_from_tracks(tracks: Iterable, timestamp: datetime.datetime, *, orde
 
 def groundtruth_paths(time_s, states, *, order=STONESOUP_ORDER, ids: Sequence | None = None,
                       epoch: datetime.datetime = EPOCH) -> list[GroundTruthPath]:
-    """One ``GroundTruthPath`` per target from ``states (n_targets, k, d)`` at ``time_s (k,)`` (our state order)."""
+    """One ``GroundTruthPath`` per target from ``states (n_targets, k, d)`` at ``time_s (k,)`` (our state order).
+
+    Parameters
+    ----------
+    time_s : array_like, shape (k,)
+        Times (s after ``epoch``).
+    states : array_like, shape (n_targets, k, d) or (k, d)
+        True states in our order ([x, y, vx, vy]: m, m/s).
+    order : sequence of int or None
+        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
+        reordering.
+    ids : sequence, optional
+        Path ids (default 0, 1, ...; stored as strings).
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    list of GroundTruthPath
+        One path per target.
+    """
     t = np.asarray(time_s, float).reshape(-1)
     s = np.asarray(states, float)
     if s.ndim == 2:
@@ -212,7 +371,25 @@ def groundtruth_paths(time_s, states, *, order=STONESOUP_ORDER, ids: Sequence | 
 
 def groundtruth_to_arrays(path: GroundTruthPath, *, order=STONESOUP_ORDER,
                           epoch: datetime.datetime = EPOCH) -> tuple[np.ndarray, np.ndarray]:
-    """``time_s (k,)`` and ``states (k, d)`` (our state order) of one ground-truth path."""
+    """``time_s (k,)`` and ``states (k, d)`` (our state order) of one ground-truth path.
+
+    Parameters
+    ----------
+    path : GroundTruthPath
+        The path.
+    order : sequence of int or None
+        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
+        reordering.
+    epoch : datetime.datetime
+        The datetime of time_s = 0 (default :data:`EPOCH`).
+
+    Returns
+    -------
+    time_s : ndarray, shape (k,)
+        Times (s after ``epoch``).
+    states : ndarray, shape (k, d)
+        States in our order.
+    """
     t = np.array([to_seconds(s.timestamp, epoch) for s in path.states])
     x = np.array([np.asarray(s.state_vector, float).ravel() for s in path.states])
     inv = _inverse(order)

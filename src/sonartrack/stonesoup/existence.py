@@ -31,7 +31,22 @@ class ExistenceInitiator(Initiator):
                                               doc="P0, the new tracks' existence probability")
 
     def initiate(self, detections, timestamp, **kwargs):
-        """The wrapped initiator's tracks, as ExistenceTracks with P(E) = P0."""
+        """The wrapped initiator's tracks, as ExistenceTracks with P(E) = P0.
+
+        Parameters
+        ----------
+        detections : set of Detection
+            Detections no track took.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the wrapped initiator.
+
+        Returns
+        -------
+        set of ExistenceTrack
+            The new tracks, existence ``initial_existence`` in their metadata.
+        """
         return {ExistenceTrack(list(track.states), id=track.id,
                                init_metadata={**track.init_metadata, EXISTENCE: float(self.initial_existence)})
                 for track in self.initiator.initiate(detections, timestamp, **kwargs)}
@@ -47,7 +62,20 @@ class ExistenceDeleter(Deleter):
                                                        "never)")
 
     def check_for_deletion(self, track, **kwargs):
-        """True when P(E) < deletion_threshold; marks the track confirmed when P(E) > confirmation_threshold."""
+        """True when P(E) < deletion_threshold; marks the track confirmed when P(E) > confirmation_threshold.
+
+        Parameters
+        ----------
+        track : Track
+            A track with an existence probability.
+        **kwargs
+            Not used (Stone Soup's signature).
+
+        Returns
+        -------
+        bool
+            Whether to delete the track.
+        """
         p = existence_of(track)
         if self.confirmation_threshold is not None and p > float(self.confirmation_threshold):
             track.metadata[CONFIRMED] = True
@@ -55,5 +83,16 @@ class ExistenceDeleter(Deleter):
 
 
 def confirmed_tracks(tracks) -> set:
-    """The tracks that an :class:`ExistenceDeleter` has confirmed."""
+    """The tracks that an :class:`ExistenceDeleter` has confirmed.
+
+    Parameters
+    ----------
+    tracks : iterable of Track
+        Tracks.
+
+    Returns
+    -------
+    set of Track
+        Those with metadata :data:`CONFIRMED` true.
+    """
     return {track for track in tracks if track.metadata.get(CONFIRMED, False)}

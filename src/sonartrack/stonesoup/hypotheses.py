@@ -24,7 +24,18 @@ from stonesoup.types.numeric import Probability
 
 
 def log_probability(p) -> float:
-    """log of a Stone Soup :class:`Probability` (kept in log space) or of a plain number."""
+    """log of a Stone Soup :class:`Probability` (kept in log space) or of a plain number.
+
+    Parameters
+    ----------
+    p : Probability or float
+        The probability or weight.
+
+    Returns
+    -------
+    float
+        Its natural log (-inf for 0).
+    """
     log_value = getattr(p, "log_value", None)
     if log_value is not None:
         return float(log_value)
@@ -44,7 +55,20 @@ class HypothesisTable:
 
 
 def tabulate(tracks, hypotheses) -> HypothesisTable:
-    """Arrays of the single-target weights (module doc); detections are matched by identity, as Stone Soup does."""
+    """Arrays of the single-target weights (module doc); detections are matched by identity, as Stone Soup does.
+
+    Parameters
+    ----------
+    tracks : iterable of Track
+        The tracks (the rows, in this order).
+    hypotheses : dict of Track to MultipleHypothesis
+        Each track's hypotheses.
+
+    Returns
+    -------
+    HypothesisTable
+        log w_tj (n, m), log w_t0 (n,), the detections in order of first mention and each hypothesis' column.
+    """
     tracks = list(tracks)
     index: dict[int, int] = {}
     detections: list = []
@@ -78,7 +102,28 @@ def weighted_hypotheses(multi, columns, log_beta_row, timestamp, multiple_type=M
     As Stone Soup's ``JPDA.associate``: a new missed-detection hypothesis at ``timestamp`` on the
     prediction of the track's first hypothesis, then a copy of each detection hypothesis with its
     marginal; the marginals must sum to 1 (the result is marked normalised to total weight 1, as Stone Soup's).
-    ``properties`` go to ``multiple_type``."""
+    ``properties`` go to ``multiple_type``.
+
+    Parameters
+    ----------
+    multi : MultipleHypothesis
+        The track's hypotheses.
+    columns : list of int
+        The table column of each hypothesis (-1: missed detection).
+    log_beta_row : sequence of float, length m + 1
+        The track's log marginals.
+    timestamp : datetime.datetime
+        Time of the scan.
+    multiple_type : type
+        The MultipleHypothesis class to build.
+    **properties
+        Its further properties.
+
+    Returns
+    -------
+    MultipleHypothesis (or ``multiple_type``)
+        The re-weighted hypotheses.
+    """
     first = multi[0]
     out = [SingleProbabilityHypothesis(first.prediction, MissedDetection(timestamp=timestamp),
                                        measurement_prediction=first.measurement_prediction,

@@ -115,7 +115,25 @@ class IMMState(GaussianState):
 
     @classmethod
     def from_modes(cls, mode_means, mode_covars, mode_probabilities, **kwargs):
-        """The state of these modes, its combined estimate by filters/imm.py's ``imm_combine``."""
+        """The state of these modes, its combined estimate by filters/imm.py's ``imm_combine``.
+
+        Parameters
+        ----------
+        mode_means : array_like, shape (r, n)
+            Mode-conditioned means x_j.
+        mode_covars : array_like, shape (r, n, n)
+            Mode-conditioned covariances P_j.
+        mode_probabilities : array_like, shape (r,)
+            Mode probabilities mu_j (sum 1).
+        **kwargs
+            Further properties of the state (``timestamp``, ``hypothesis``, ``existence_probability`` ...).
+
+        Returns
+        -------
+        IMMState (or the subclass it is called on)
+            Combined estimate x = sum_j mu_j x_j, P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T) with the modes attached;
+            one mode is taken as given.
+        """
         x, P, mu = (np.asarray(a, dtype=float) for a in (mode_means, mode_covars, mode_probabilities))
         # one mode is its own combination (as given: a one-mode IMM is exactly the mode filter, round-off included)
         xc, Pc = (x[0], P[0]) if len(mu) == 1 else imm_combine(mu, x, P)
@@ -124,6 +142,7 @@ class IMMState(GaussianState):
 
     @property
     def n_modes(self) -> int:
+        """The number of modes r."""
         return len(self.mode_probabilities)
 
     @property
@@ -146,7 +165,18 @@ class IMMStateUpdate(Update, IMMState):
 
 
 def current_state(track_or_state) -> State:
-    """The latest state of a Track (any StateMutableSequence), or the state itself."""
+    """The latest state of a Track (any StateMutableSequence), or the state itself.
+
+    Parameters
+    ----------
+    track_or_state : Track, StateMutableSequence or State
+        A track or a single state.
+
+    Returns
+    -------
+    State
+        The track's last state, or ``track_or_state`` unchanged when it is a state.
+    """
     if isinstance(track_or_state, StateMutableSequence) and not isinstance(track_or_state, State):
         return track_or_state.state
     return track_or_state
@@ -154,7 +184,22 @@ def current_state(track_or_state) -> State:
 
 def as_imm_state(state, n_modes: int, mode_probabilities=None) -> IMMState:
     """``state`` as an r-mode IMMState: an IMMState is checked, a plain GaussianState is given to every mode
-    with ``mode_probabilities`` (default equal, as P4's 1/r initial mode probabilities)."""
+    with ``mode_probabilities`` (default equal, as P4's 1/r initial mode probabilities).
+
+    Parameters
+    ----------
+    state : GaussianState or IMMState
+        The state to convert.
+    n_modes : int
+        The number of modes r the IMM expects (an IMMState with another count is refused).
+    mode_probabilities : array_like, shape (r,), optional
+        Mode probabilities of a plain GaussianState; default 1/r each.
+
+    Returns
+    -------
+    IMMState
+        ``state`` itself when already an IMMState, else r copies of its mean and covariance.
+    """
     if isinstance(state, IMMState):
         require(state.n_modes == n_modes, f"state has {state.n_modes} modes, the IMM {n_modes}")
         return state
@@ -188,7 +233,23 @@ class IMMPredictor(Predictor):
                 f"{r} mode predictors need a {r} x {r} transition matrix, got {self.transition_probabilities.shape}")
 
     def predict(self, prior, timestamp=None, **kwargs) -> IMMStatePrediction:
-        """Interaction, then every mode's prediction to ``timestamp``; returns the mode predictions with c_j."""
+        """Interaction, then every mode's prediction to ``timestamp``; returns the mode predictions with c_j.
+
+        Parameters
+        ----------
+        prior : Track or State
+            The prior (a Track's last state is used); a plain GaussianState becomes an IMMState with
+            ``initial_mode_probabilities``.
+        timestamp : datetime.datetime, optional
+            Time to predict to.
+        **kwargs
+            Passed to every mode's predictor (``control_input`` ...).
+
+        Returns
+        -------
+        IMMStatePrediction
+            The mode-matched predictions x-_j, P-_j, the predicted mode probabilities c_j and their combination.
+        """
         prior = as_imm_state(current_state(prior), len(self.predictors), self.initial_mode_probabilities)
         c, x0, P0 = prior.mode_probabilities, prior.mode_means, prior.mode_covars  # one mode: mixing is identity
         if len(c) > 1:
@@ -245,7 +306,31 @@ def _linear_kalman(updater, model) -> bool:
 
 def mode_measurement_moments(updater, state: IMMState, model, measurement_noise: bool = True, **kwargs):
     """Each mode's predicted measurement z_j (r, k) (typed, e.g. Bearing, where the model types it), innovation
-    covariance S_j = H P_j H^T + R (r, k, k) and cross-covariance P_j H^T (r, n, k), by ``updater``."""
+    covariance S_j = H P_j H^T + R (r, k, k) and cross-covariance P_j H^T (r, n, k), by ``updater``.
+
+    Parameters
+    ----------
+    updater : stonesoup.updater.Updater
+        The mode updater whose ``predict_measurement`` gives the moments (a plain (E)KF updater on a linear model is
+        done on arrays with the same equations).
+    state : IMMState
+        The predicted IMM state (r modes, n state entries).
+    model : MeasurementModel
+        The measurement model (k measured entries).
+    measurement_noise : bool
+        Add R to S_j (True) or not.
+    **kwargs
+        Passed to the model's ``matrix``/``covar`` or the updater.
+
+    Returns
+    -------
+    z_hat : ndarray, shape (r, k)
+        Predicted measurements per mode.
+    S : ndarray, shape (r, k, k)
+        Innovation covariances per mode.
+    cross : ndarray, shape (r, n, k)
+        Cross-covariances P_j H^T per mode.
+    """
     if _linear_kalman(updater, model):
         H = np.asarray(model.matrix(**kwargs), dtype=float)
         cross = state.mode_covars @ H.T
@@ -259,7 +344,20 @@ def mode_measurement_moments(updater, state: IMMState, model, measurement_noise:
 
 
 def innovations(measurement, z_hat) -> np.ndarray:
-    """nu = z - z_hat per mode (r, k), with angular entries wrapped by their Stone Soup types."""
+    """nu = z - z_hat per mode (r, k), with angular entries wrapped by their Stone Soup types.
+
+    Parameters
+    ----------
+    measurement : Detection or State
+        The measurement z (its ``state_vector``, k entries).
+    z_hat : array_like, shape (r, k)
+        Predicted measurements per mode (typed entries keep their wrapping).
+
+    Returns
+    -------
+    ndarray, shape (r, k)
+        Innovations nu_j, in the measurement's units (m, rad, ...).
+    """
     z = np.asarray(measurement.state_vector).ravel()
     return np.asarray(z[None, :] - z_hat, dtype=float)
 
@@ -285,7 +383,25 @@ class IMMUpdater(Updater):
 
     def predict_measurement(self, predicted_state, measurement_model=None, measurement_noise=True, **kwargs):
         """The moment-matched measurement prediction of the modes: z = sum_j c_j z_j,
-        S = sum_j c_j (S_j + (z_j - z)(z_j - z)^T), cross = sum_j c_j (C_j + (x_j - x)(z_j - z)^T)."""
+        S = sum_j c_j (S_j + (z_j - z)(z_j - z)^T), cross = sum_j c_j (C_j + (x_j - x)(z_j - z)^T).
+
+        Parameters
+        ----------
+        predicted_state : IMMState or GaussianState
+            The prediction (a plain Gaussian is taken as one mode).
+        measurement_model : MeasurementModel, optional
+            The model; default the updater's (``measurement_model``, else the mode updater's).
+        measurement_noise : bool
+            Include R in the mode covariances S_j.
+        **kwargs
+            Passed to the mode updater / model.
+
+        Returns
+        -------
+        GaussianMeasurementPrediction
+            Mean z, covariance S and ``cross_covar`` of the mode mixture (angles combined as offsets from mode 0's
+            prediction, so they do not average across the wrap).
+        """
         state = as_imm_state(predicted_state, getattr(predicted_state, "n_modes", 1))
         z_hat, S, cross = mode_measurement_moments(self.updater, state, self._model(measurement_model),
                                                    measurement_noise, **kwargs)
@@ -299,7 +415,22 @@ class IMMUpdater(Updater):
                                                 target_type=GaussianMeasurementPrediction)
 
     def update(self, hypothesis, **kwargs) -> IMMStateUpdate:
-        """Every mode's update with the hypothesis' detection, then mu_j = c_j Lambda_j / sum and combination."""
+        """Every mode's update with the hypothesis' detection, then mu_j = c_j Lambda_j / sum and combination.
+
+        Parameters
+        ----------
+        hypothesis : SingleHypothesis
+            The prediction (IMMState or plain Gaussian) and the detection; a missed detection keeps the modes and the
+            probabilities as predicted.
+        **kwargs
+            Passed to the mode updater.
+
+        Returns
+        -------
+        IMMStateUpdate
+            The mode updates x_j, P_j, the posterior mode probabilities mu_j, their combination and
+            ``log_likelihood`` = log sum_j c_j Lambda_j (not set for a missed detection).
+        """
         pred = as_imm_state(hypothesis.prediction, getattr(hypothesis.prediction, "n_modes", 1))
         c = pred.mode_probabilities
         if not hypothesis:  # missed detection: no measurement, the modes and probabilities stay predicted
@@ -352,7 +483,18 @@ class IMMUpdater(Updater):
 
 def track_existence(track) -> float:
     """P(E) of a track after its last scan: its metadata's ``EXISTENCE`` entry (stonesoup/tracks.py), else its
-    last state's ``existence_probability``."""
+    last state's ``existence_probability``.
+
+    Parameters
+    ----------
+    track : Track or State
+        The track (or a state).
+
+    Returns
+    -------
+    float
+        The existence probability P(E) in [0, 1].
+    """
     return existence_of(track, getattr(current_state(track), "existence_probability", None))
 
 
@@ -360,7 +502,24 @@ def track_likelihoods(log_ratio, nu, S_inv, pd: float, pg: float) -> Likelihoods
     """One track's gated detections in association/likelihood.py's layout (n = 1 track, g gated pairs), the input
     of association/pda.py's weights and mixture (P4 eqs. 13-20).
 
-    ``log_ratio (r, g)``: log N(nu_rm; 0, S_rm) - log rho; ``nu (r, g, k)``; ``S_inv (r, g, k, k)``."""
+    Parameters
+    ----------
+    log_ratio : ndarray, shape (r, g)
+        log N(nu_rm; 0, S_rm) - log rho per mode r and gated detection m.
+    nu : ndarray, shape (r, g, k)
+        Innovations.
+    S_inv : ndarray, shape (r, g, k, k)
+        Inverse innovation covariances.
+    pd : float
+        Probability of detection P_D.
+    pg : float
+        Gate probability P_G (the miss term is 1 - P_D P_G).
+
+    Returns
+    -------
+    Likelihoods
+        One track, g pairs, with the modes as the last axis of ``pair_log_ratio`` (g, r).
+    """
     g = log_ratio.shape[1]
     return Likelihoods(pair_log_ratio=log_ratio.T, gated=np.ones((1, g), bool), pd=float(pd), miss=1.0 - pd * pg,
                        pair_track=np.zeros(g, dtype=np.intp), pair_meas=np.arange(g), nu=np.swapaxes(nu, 0, 1),
@@ -369,7 +528,26 @@ def track_likelihoods(log_ratio, nu, S_inv, pd: float, pg: float) -> Likelihoods
 
 def detection_moments(imm_updater: IMMUpdater, state: IMMState, detections):
     """Innovations nu (r, m, k), their covariances S (r, m, k, k) and cross-covariances P H^T (r, m, n, k) of
-    every mode against every detection, by the IMM updater's mode updater (all detections must measure k entries)."""
+    every mode against every detection, by the IMM updater's mode updater (all detections must measure k entries).
+
+    Parameters
+    ----------
+    imm_updater : IMMUpdater
+        Gives the mode updater and the measurement model of a detection without its own.
+    state : IMMState
+        The predicted IMM state (r modes, n entries).
+    detections : sequence of Detection
+        The scan's m detections.
+
+    Returns
+    -------
+    nu : ndarray, shape (r, m, k)
+        Innovations.
+    S : ndarray, shape (r, m, k, k)
+        Innovation covariances H P_r H^T + R.
+    cross : ndarray, shape (r, m, n, k)
+        Cross-covariances P_r H^T.
+    """
     updater = imm_updater.updater
     models = [imm_updater._model(d.measurement_model) for d in detections]
     if all(_linear_kalman(updater, mm) for mm in models):
@@ -420,6 +598,26 @@ class IMMIPDAHypothesiser(Hypothesiser):
                                  doc="Existence Markov chain p21: a non-existing target appears")
 
     def hypothesise(self, track, detections, timestamp, **kwargs) -> IMMIPDAHypotheses:
+        """IMM-IPDA hypotheses of one track against one scan (class doc).
+
+        Parameters
+        ----------
+        track : Track
+            The track (its last state the prior; its existence from :func:`track_existence`).
+        detections : iterable of Detection
+            The scan's detections, all at ``timestamp``.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the IMM predictor.
+
+        Returns
+        -------
+        IMMIPDAHypotheses
+            Missed detection first, then the detections inside any mode's gate, each with its marginal weight
+            beta_m = sum_r mu_r beta_rm; the predicted existence, log Lambda_r, the per-mode weights and moments
+            attached.
+        """
         detections = list(detections)
         prediction = self.predictor.predict(track, timestamp=timestamp, **kwargs)
         e_pred = float(existence_predict(track_existence(track), self.prob_survive, self.prob_birth))
@@ -454,6 +652,21 @@ class IMMIPDAUpdater(IMMUpdater):
     hypothesis goes to :meth:`IMMUpdater.update`."""
 
     def update(self, hypotheses, **kwargs) -> IMMStateUpdate:
+        """IMM-IPDA update of one track from its hypotheses (class doc); others go to :meth:`IMMUpdater.update`.
+
+        Parameters
+        ----------
+        hypotheses : IMMIPDAHypotheses or SingleHypothesis
+            From :meth:`IMMIPDAHypothesiser.hypothesise` (or a single hypothesis for the plain IMM update).
+        **kwargs
+            Passed to :meth:`IMMUpdater.update` for a single hypothesis.
+
+        Returns
+        -------
+        IMMStateUpdate
+            The mode PDA updates, mu_r = c_r Lambda_r / Lambda, their combination, ``existence_probability`` P(E) and
+            ``log_likelihood`` = log Lambda.
+        """
         if not isinstance(hypotheses, IMMIPDAHypotheses):
             return super().update(hypotheses, **kwargs)
         pred = hypotheses.single_hypotheses[0].prediction
@@ -503,6 +716,7 @@ class IMMIPDATracker(Tracker):
 
     @property
     def tracks(self) -> set[Track]:
+        """The live tracks (tentative and confirmed) as a set."""
         return set(self._live)
 
     @property
@@ -512,6 +726,7 @@ class IMMIPDATracker(Tracker):
 
     @property
     def confirmed_tracks(self) -> set[Track]:
+        """The live tracks confirmed so far (metadata :data:`CONFIRMED` true)."""
         return {t for t in self._live if t.metadata.get(CONFIRMED)}
 
     def __iter__(self):
@@ -525,7 +740,22 @@ class IMMIPDATracker(Tracker):
         return self.update_tracker(time, detections)
 
     def update_tracker(self, time, detections):
-        """Process one scan (detections in a list keep their order for initiation); returns (time, tracks)."""
+        """Process one scan (detections in a list keep their order for initiation); returns (time, tracks).
+
+        Parameters
+        ----------
+        time : datetime.datetime
+            Time of the scan.
+        detections : iterable of Detection
+            The scan's detections (linear measurement models with a ``mapping`` to start tracks).
+
+        Returns
+        -------
+        time : datetime.datetime
+            ``time`` unchanged.
+        tracks : set of Track
+            The live tracks after the update, confirmation, deletion and initiation.
+        """
         detections = list(detections)
         used = self._update_tracks(time, detections)
         for track in self._live:
@@ -577,6 +807,21 @@ def imm_ipda_tracker(settings: PositionTrackerSettings | None = None, measuremen
     Mode j: ``KalmanPredictor(CombinedLinearGaussianTransitionModel([ConstantVelocity(q_j)] * 2))`` -- Stone Soup's
     state order [x, vx, y, vy]; every mode updates with ``KalmanUpdater(measurement_model)`` (None: each detection
     brings its own model, e.g. ``LinearGaussian(4, (0, 2), R)`` with its covariance R, as P4's contacts do).
+
+    Parameters
+    ----------
+    settings : PositionTrackerSettings, optional
+        Mode noise intensities q (m^2/s^3), transition matrix, P_D, P_G, clutter density (1/m^2), existence chain,
+        thresholds, initial velocity standard deviation (m/s), most tracks; default the library defaults.
+    measurement_model : MeasurementModel, optional
+        Model of the Kalman updater; None: each detection's own.
+    detector : DetectionReader, optional
+        Scans to iterate over (else call ``update_tracker``).
+
+    Returns
+    -------
+    IMMIPDATracker
+        The tracker with its hypothesiser and updater.
     """
     from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel, ConstantVelocity
 

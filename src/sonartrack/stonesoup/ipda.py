@@ -68,7 +68,24 @@ class IPDAHypothesiser(PDAHypothesiser):
     normalise: bool = Property(default=False, doc="Normalise the weights (IPDA and JIPDA need False)")
 
     def hypothesise(self, track, detections, timestamp, **kwargs):
-        """The PDA hypotheses of ``track`` with its predicted existence P(E)- (module doc)."""
+        """The PDA hypotheses of ``track`` with its predicted existence P(E)- (module doc).
+
+        Parameters
+        ----------
+        track : Track
+            The track (its last state the prior).
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to Stone Soup's ``PDAHypothesiser.hypothesise``.
+
+        Returns
+        -------
+        ExistenceMultipleHypothesis
+            Stone Soup's PDA hypotheses with ``existence_prediction`` = p11 P(E) + p21 (1 - P(E)).
+        """
         multi = super().hypothesise(track, detections, timestamp, **kwargs)
         p_pred = existence_predict(existence_of(track, self.default_existence), float(self.prob_survive),
                                    float(self.prob_birth))
@@ -92,7 +109,24 @@ class IPDA(DataAssociator):
     hypothesiser: IPDAHypothesiser = Property(doc="Hypothesiser that predicts the existence probability")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on the track."""
+        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on the track.
+
+        Parameters
+        ----------
+        tracks : set of Track
+            The live tracks.
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the hypothesiser.
+
+        Returns
+        -------
+        dict of Track to ExistenceMultipleHypothesis
+            Per track the weights beta_tj = w_tj / Lambda with the predicted and posterior existence.
+        """
         _check_hypothesiser(self.hypothesiser)
         hypotheses = self.generate_hypotheses(tracks, detections, timestamp, **kwargs)
         out = {}
@@ -112,7 +146,24 @@ class IPDA(DataAssociator):
 def jipda_log_weights(log_lik, log_miss, p_pred):
     """JIPDA on arrays (module doc): (log beta given existence (n, m + 1), posterior existence (n,)).
 
-    ``log_lik (n, m)`` log w_tj, ``log_miss (n,)`` log w_t0 (unnormalised PDA weights), ``p_pred (n,)`` P(E)-."""
+    ``log_lik (n, m)`` log w_tj, ``log_miss (n,)`` log w_t0 (unnormalised PDA weights), ``p_pred (n,)`` P(E)-.
+
+    Parameters
+    ----------
+    log_lik : array_like, shape (n, m)
+        log w_tj (-inf where not gated).
+    log_miss : array_like, shape (n,)
+        log w_t0.
+    p_pred : array_like, shape (n,)
+        Predicted existence P(E)- of each track.
+
+    Returns
+    -------
+    log_beta : ndarray, shape (n, m + 1)
+        log beta_t0 (missed, given existence), then log beta_tj.
+    existence : ndarray, shape (n,)
+        Posterior existence P(E_t | Z).
+    """
     p_pred = np.clip(np.asarray(p_pred, dtype=float), 1e-300, 1.0)  # P(E)- = 0 would leave beta 0/0
     w0 = np.exp(np.asarray(log_miss, dtype=float))
     with np.errstate(divide="ignore"):
@@ -132,7 +183,24 @@ class JIPDA(DataAssociator):
     hypothesiser: IPDAHypothesiser = Property(doc="Hypothesiser that predicts the existence probability")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on each track."""
+        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on each track.
+
+        Parameters
+        ----------
+        tracks : set of Track
+            The live tracks.
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the hypothesiser.
+
+        Returns
+        -------
+        dict of Track to ExistenceMultipleHypothesis
+            Per track the JIPDA weights given existence with the predicted and posterior existence.
+        """
         _check_hypothesiser(self.hypothesiser)
         hypotheses = self.generate_hypotheses(tracks, detections, timestamp, **kwargs)
         table = tabulate(tracks, hypotheses)

@@ -48,7 +48,20 @@ def exact_log_marginals(log_lik, log_miss) -> np.ndarray:
     """log beta (n, m + 1) of :func:`sonartrack.association.jpda.jpda_log_weights`, for any number of detections.
 
     Above 62 detections the private detections of each track are merged first (module doc):
-    log beta_tj = log beta_t,merged + log w_tj - log W_t."""
+    log beta_tj = log beta_t,merged + log w_tj - log W_t.
+
+    Parameters
+    ----------
+    log_lik : array_like, shape (n, m)
+        log w_tj of the single-target weights (-inf where not gated).
+    log_miss : array_like, shape (n,)
+        log w_t0.
+
+    Returns
+    -------
+    ndarray, shape (n, m + 1)
+        Exact JPDA marginals, log beta_t0 in column 0.
+    """
     ll = np.asarray(log_lik, dtype=float)
     if ll.shape[1] <= MAX_CLUSTER_MEASUREMENTS:
         return jpda_log_weights(ll, log_miss)
@@ -67,7 +80,30 @@ def exact_log_marginals(log_lik, log_miss) -> np.ndarray:
 
 
 def associate_exact(associator, tracks, detections, timestamp, **kwargs):
-    """Hypothesise, table, exact marginals: (hypotheses, table, log beta (n, m + 1))."""
+    """Hypothesise, table, exact marginals: (hypotheses, table, log beta (n, m + 1)).
+
+    Parameters
+    ----------
+    associator : DataAssociator
+        Gives ``generate_hypotheses`` (its hypothesiser).
+    tracks : set of Track
+        The live tracks.
+    detections : set of Detection
+        The scan's detections.
+    timestamp : datetime.datetime
+        Time of the scan.
+    **kwargs
+        Passed to the hypothesiser.
+
+    Returns
+    -------
+    hypotheses : dict of Track to MultipleHypothesis
+        The single-target hypotheses.
+    table : HypothesisTable
+        Their weights as arrays (stonesoup/hypotheses.py).
+    log_beta : ndarray, shape (n, m + 1)
+        The exact marginals.
+    """
     hypotheses = associator.generate_hypotheses(tracks, detections, timestamp, **kwargs)
     table = tabulate(tracks, hypotheses)
     return hypotheses, table, exact_log_marginals(table.log_lik, table.log_miss)
@@ -83,7 +119,24 @@ class JPDA(DataAssociator):
         doc="Generate a set of hypotheses for each prediction-detection pair")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> MultipleHypothesis with the exact JPDA marginals as probabilities."""
+        """Mapping track -> MultipleHypothesis with the exact JPDA marginals as probabilities.
+
+        Parameters
+        ----------
+        tracks : set of Track
+            The live tracks.
+        detections : set of Detection
+            The scan's detections.
+        timestamp : datetime.datetime
+            Time of the scan.
+        **kwargs
+            Passed to the hypothesiser.
+
+        Returns
+        -------
+        dict of Track to MultipleHypothesis
+            Missed detection first, then each detection hypothesis with its marginal.
+        """
         hypotheses, table, log_beta = associate_exact(self, tracks, detections, timestamp, **kwargs)
         return {track: weighted_hypotheses(hypotheses[track], table.columns[t], _row(log_beta, t), timestamp)
                 for t, track in enumerate(table.tracks)}

@@ -135,10 +135,42 @@ def stonesoup_gospa(truth_time, truth_id, truth_pos, est_time, est_id, est_pos, 
 
 def ospa_generator(c: float, p: float = 1.0, **kwargs) -> OSPAMetric:
     """Stone Soup's OSPA generator for a ``MetricManager`` over paths from :func:`position_paths` (kwargs: its
-    other properties, e.g. ``tracks_key``)."""
+    other properties, e.g. ``tracks_key``).
+
+    Parameters
+    ----------
+    c : float
+        Cut-off distance (m for position paths).
+    p : float
+        Order.
+    **kwargs
+        Further properties of Stone Soup's OSPAMetric.
+
+    Returns
+    -------
+    OSPAMetric
+        The generator.
+    """
     return OSPAMetric(c=c, p=p, **kwargs)
 
 
 def gospa_generator(c: float, p: float = 1.0, switching_penalty: float = 0.0, **kwargs) -> GOSPAMetric:
-    """Stone Soup's GOSPA generator (alpha = 2) for a ``MetricManager`` over paths from :func:`position_paths`."""
+    """Stone Soup's GOSPA generator (alpha = 2) for a ``MetricManager`` over paths from :func:`position_paths`.
+
+    Parameters
+    ----------
+    c : float
+        Cut-off distance (m for position paths).
+    p : float
+        Order.
+    switching_penalty : float
+        Penalty of a track switch.
+    **kwargs
+        Further properties of Stone Soup's GOSPAMetric.
+
+    Returns
+    -------
+    GOSPAMetric
+        The generator.
+    """
     return GOSPAMetric(c=c, p=p, switching_penalty=switching_penalty, **kwargs)

@@ -81,7 +81,22 @@ class BearingFrequency(NonLinearGaussianMeasurement):
         return np.array([[Bearing(0.0)], [0.0]], dtype=object)[: self.ndim_meas]
 
     def function(self, state, noise=False, **kwargs):
-        """h(X) (+ noise), as a typed StateVector (one state) or StateVectors (several columns)."""
+        """h(X) (+ noise), as a typed StateVector (one state) or StateVectors (several columns).
+
+        Parameters
+        ----------
+        state : State
+            Relative state(s) [x, y, vx, vy, f0] (m, m/s, Hz), one column or N columns.
+        noise : bool or array_like
+            True: add a draw of :meth:`rvs`; False/None: none; an array: added as given.
+        **kwargs
+            Passed to :meth:`rvs`.
+
+        Returns
+        -------
+        StateVector or StateVectors, shape (m, 1) or (m, N)
+            Bearing (rad clockwise from north, a Stone Soup Bearing) and, when m = 2, frequency (Hz).
+        """
         X = _as_float_columns(state)
         h = bf_measurement(X.T, self.sound_speed_mps)[:, : self.ndim_meas].T  # (m, N)
         if isinstance(noise, bool) or noise is None:
@@ -90,22 +105,79 @@ class BearingFrequency(NonLinearGaussianMeasurement):
         return StateVector(out) if out.shape[1] == 1 else StateVectors(out)
 
     def jacobian(self, state, **kwargs) -> np.ndarray:
-        """dh/dX (m, 5) at the state (models/passive.py: ``bf_jacobian``)."""
+        """dh/dX (m, 5) at the state (models/passive.py: ``bf_jacobian``).
+
+        Parameters
+        ----------
+        state : State
+            Relative state [x, y, vx, vy, f0] (its first column is used).
+        **kwargs
+            Not used (Stone Soup's signature).
+
+        Returns
+        -------
+        ndarray, shape (m, 5)
+            Rows d b / dX (rad per state unit) and, when m = 2, d f / dX (Hz per state unit).
+        """
         return bf_jacobian(_as_float_columns(state)[:, 0], self.sound_speed_mps)[: self.ndim_meas]
 
     def modified_jacobian(self, state, measurement, exact: bool = False) -> np.ndarray:
         """Song & Speyer's modified matrix G = g(z, X_hat) (m, 5): the Jacobian with its bearing row replaced
-        by ``[cos z, -sin z, 0, 0, 0] / (x_hat sin z + y_hat cos z)`` (models/passive.py: ``modified_matrix``)."""
+        by ``[cos z, -sin z, 0, 0, 0] / (x_hat sin z + y_hat cos z)`` (models/passive.py: ``modified_matrix``).
+
+        Parameters
+        ----------
+        state : State
+            Predicted relative state X_hat [x, y, vx, vy, f0].
+        measurement : State or Detection
+            The measurement z: bearing (rad) first, then frequency (Hz) when measured.
+        exact : bool
+            Scale the bearing row by d / tan d, d = wrap(z - b_hat), so that g (X - X_hat) = z - b_hat exactly
+            (models/passive.py: ``bearing_modified_row``).
+
+        Returns
+        -------
+        ndarray, shape (m, 5)
+            G: the modified bearing row, then the frequency row of the Jacobian.
+        """
         z = np.asarray(measurement.state_vector, dtype=float).ravel()
         x_hat = _as_float_columns(state)[:, 0]
         return modified_matrix(z[: self.ndim_meas], x_hat, self.jacobian(state), exact=exact)
 
     def rvs(self, num_samples: int = 1, **kwargs):
-        """Noise samples v ~ N(0, R), the bearing row typed as a Bearing."""
+        """Noise samples v ~ N(0, R), the bearing row typed as a Bearing.
+
+        Parameters
+        ----------
+        num_samples : int
+            Number of samples N.
+        **kwargs
+            Passed to Stone Soup's ``rvs``.
+
+        Returns
+        -------
+        ndarray, shape (m, N)
+            Samples (rad for the bearing, Hz for the frequency).
+        """
         return self._typed_vector() + super().rvs(num_samples, **kwargs)
 
     def logpdf(self, state1, state2, **kwargs):
-        """log N(z - h(X); 0, R) with the bearing residual wrapped to [-pi, pi)."""
+        """log N(z - h(X); 0, R) with the bearing residual wrapped to [-pi, pi).
+
+        Parameters
+        ----------
+        state1 : State
+            The measurement z.
+        state2 : State
+            The state(s) X (one or N columns).
+        **kwargs
+            Passed to :meth:`function`.
+
+        Returns
+        -------
+        float or ndarray, shape (N,)
+            The log density, one value per state column.
+        """
         nu = np.asarray(state1.state_vector - self.function(state2, **kwargs), dtype=float).T  # (N, m)
         R = np.asarray(self.covar(), dtype=float)
         ll = gaussian_loglik(nu, R, np.linalg.inv(R))
@@ -129,19 +201,52 @@ class RelativeConstantVelocity(LinearGaussianTransitionModel, TimeVariantModel):
 
     @property
     def ndim_state(self) -> int:
+        """5: the relative state [x, y, vx, vy, f0]."""
         return STATE_DIM
 
     def matrix(self, time_interval, **kwargs) -> np.ndarray:
-        """F over ``time_interval`` (a datetime.timedelta)."""
+        """F over ``time_interval`` (a datetime.timedelta).
+
+        Parameters
+        ----------
+        time_interval : datetime.timedelta
+            The prediction interval T.
+        **kwargs
+            Not used (Stone Soup's signature).
+
+        Returns
+        -------
+        ndarray, shape (5, 5)
+            The transition matrix F (class doc).
+        """
         return relative_transition(time_interval.total_seconds())
 
     def covar(self, time_interval, **kwargs) -> CovarianceMatrix:
-        """Q over ``time_interval`` (a datetime.timedelta)."""
+        """Q over ``time_interval`` (a datetime.timedelta).
+
+        Parameters
+        ----------
+        time_interval : datetime.timedelta
+            The prediction interval T.
+        **kwargs
+            Not used (Stone Soup's signature).
+
+        Returns
+        -------
+        CovarianceMatrix, shape (5, 5)
+            The process noise Q (class doc) with ``noise_diff_coeff`` (m^2/s^3) and ``f0_noise_diff_coeff`` (Hz^2/s).
+        """
         dt_s = time_interval.total_seconds()
         return CovarianceMatrix(relative_process_noise(dt_s, self.noise_diff_coeff, self.f0_noise_diff_coeff))
 
 
 def observer_control_model() -> LinearControlModel:
     """The observer's motion as a Stone Soup control model: B = -I (5 x 5), no control noise, so that a
-    KalmanPredictor given ``control_input=State(u_k)`` predicts x- = F x - u_k (module doc)."""
+    KalmanPredictor given ``control_input=State(u_k)`` predicts x- = F x - u_k (module doc).
+
+    Returns
+    -------
+    LinearControlModel
+        Control matrix -I and a zero control noise (5 x 5).
+    """
     return LinearControlModel(control_matrix=-np.eye(STATE_DIM), control_noise=np.zeros((STATE_DIM, STATE_DIM)))

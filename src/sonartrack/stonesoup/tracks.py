@@ -39,7 +39,16 @@ class ExistenceTrack(Track):
 
 
 def stage(track, **values) -> None:
-    """Give ``track`` the values (metadata key -> value) computed for the state about to be appended."""
+    """Give ``track`` the values (metadata key -> value) computed for the state about to be appended.
+
+    Parameters
+    ----------
+    track : Track
+        An :class:`ExistenceTrack` (the values land in its metadata when the next state is appended) or any
+        track (its metadata is updated now).
+    **values
+        Metadata key -> value.
+    """
     if isinstance(track, ExistenceTrack):
         track.__dict__.setdefault("_staged", {}).update(values)
     else:
@@ -50,7 +59,20 @@ def existence_of(track, default=None) -> float:
     """The track's existence probability P(E) after its last state (``default`` when it has none).
 
     Hypothesisers may be handed a bare state instead of a track (Stone Soup's CompositeHypothesiser does):
-    it has no metadata, so ``default`` applies."""
+    it has no metadata, so ``default`` applies.
+
+    Parameters
+    ----------
+    track : Track or State
+        The track.
+    default : float, optional
+        Value without one; None: raise :class:`InputError`.
+
+    Returns
+    -------
+    float
+        P(E).
+    """
     value = (getattr(track, "metadata", None) or {}).get(EXISTENCE, default)
     if value is None:
         raise InputError(f"track {getattr(track, 'id', track)!r} has no existence probability: create it with "

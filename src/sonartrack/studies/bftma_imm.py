@@ -17,25 +17,28 @@ config -> run_trial -> summarize -> claims; the pictures are ``report/figures/bf
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.settings import Settings, setting
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.experiment.claims import Claim
-from sonartrack.metrics.statistics import paired_difference, rmse_over_runs
-from sonartrack.metrics.tma_errors import diverged, time_averaged_rmse, tma_errors
-from sonartrack.models.passive import bf_measurement
-from sonartrack.models.relative_motion import observer_inputs
-from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.tma.imm_mgekf import ImmBfModel, run_imm_bf, transition_matrix
-from sonartrack.tma.sequential_bf import initial_estimate
 from sonartrack.tma.settings import ImmSettings
+
+if TYPE_CHECKING:
+    from sonartrack.sim.platforms import ManeuveringTrack
+    from sonartrack.tma.imm_mgekf import ImmBfModel
 
 STUDY_ID = "bftma-imm"
 TITLE = "Bearing + frequency TMA of a maneuvering target with IMM-MGEKF"
 PAPER = "Yoo & Song, passive-sonar TMA with the IMM (paper 002, P2)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 100
+QUICK_RUNS = 20
 CHUNK_SIZE = 20
 
 MEASUREMENTS = {"bf": "bearings + frequency", "b": "bearings only"}
@@ -78,7 +81,7 @@ class Config(Settings):
       whatever the error; neither is closer to the paper's text than this definition, so it stays.
     """
 
-    runs: int = setting(100, "Monte Carlo runs", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs", unit="1", ge=1)
     duration_s: float = setting(2400.0, "length of the scenario", unit="s", gt=0)
     sample_period_s: float = setting(2.0, "time between measurements T", unit="s", gt=0)
     record_every_s: float = setting(20.0, "time between recorded errors", unit="s", gt=0)
@@ -113,7 +116,7 @@ class Config(Settings):
     @classmethod
     def quick(cls) -> Config:
         """CI preset: the full scenario and every filter, 20 runs."""
-        return cls(runs=20)
+        return cls(runs=QUICK_RUNS)
 
     # ---- derived objects ---------------------------------------------------------------------
     def times_s(self) -> np.ndarray:
@@ -124,11 +127,13 @@ class Config(Settings):
         return np.arange(0, len(self.times_s()), step)
 
     def observer(self) -> ManeuveringTrack:
+        from sonartrack.sim.platforms import ManeuveringTrack
         turns = tuple((a, b, float(np.deg2rad(w))) for a, b, w in self.observer_turns)
         return ManeuveringTrack(0.0, 0.0, self.observer_speed_kn * KNOT_MPS,
                                 float(np.deg2rad(self.observer_course_deg)), turns)
 
     def target(self) -> ManeuveringTrack:
+        from sonartrack.sim.platforms import ManeuveringTrack
         a = self.target_turn_start_s
         turn = ((a, a + self.target_turn_duration_s, float(np.deg2rad(self.target_turn_rate_deg_s))),)
         return ManeuveringTrack(self.target_x0_m, self.target_y0_m, self.target_speed_kn * KNOT_MPS,
@@ -159,6 +164,8 @@ def _label(case: str, config: Config) -> str:
 
 def simulate(config: Config, rng: np.random.Generator):
     """Truth and measurements of one run: (t, observer pos/vel, target pos/vel, bearings, frequencies)."""
+    from sonartrack.models.passive import bf_measurement
+
     t = config.times_s()
     po, vo, _ = config.observer().state(t)
     pt, vt, _ = config.target().state(t)
@@ -171,6 +178,8 @@ def simulate(config: Config, rng: np.random.Generator):
 
 def initial_estimates(config: Config, rng: np.random.Generator, zb, zf, po, vo, pt, vt) -> dict:
     """The range-prior initial estimate of each measurement set, drawn once around the truth (Config doc)."""
+    from sonartrack.tma.sequential_bf import initial_estimate
+
     sb = float(np.deg2rad(config.sigma_bearing_deg))
     r_true0 = float(np.hypot(*(pt[0] - po[0])))
     e = float(np.clip(rng.standard_normal(), -config.init_range_clip_sigma, config.init_range_clip_sigma))
@@ -185,6 +194,8 @@ def initial_estimates(config: Config, rng: np.random.Generator, zb, zf, po, vo, 
 
 def case_model(config: Config, filt: str, qs) -> ImmBfModel:
     """The filter of one case: one mode per q (a single EKF/MGEKF with one q)."""
+    from sonartrack.tma.imm_mgekf import ImmBfModel, transition_matrix
+
     return ImmBfModel(qs=np.asarray(qs, float), Pi=transition_matrix(len(qs), config.imm.transition_diagonal),
                       sigma_bearing_rad=float(np.deg2rad(config.sigma_bearing_deg)), sigma_freq_hz=config.sigma_freq_hz,
                       q_f0=config.imm.q_f0, sound_speed_mps=config.sound_speed_mps, modified=filt == "mgekf")
@@ -192,6 +203,10 @@ def case_model(config: Config, filt: str, qs) -> ImmBfModel:
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """One Monte Carlo run: simulate once, run every filter on the same measurements."""
+    from sonartrack.metrics.tma_errors import tma_errors
+    from sonartrack.models.relative_motion import observer_inputs
+    from sonartrack.tma.imm_mgekf import run_imm_bf
+
     t, po, vo, pt, vt, zb, zf = simulate(config, rng)
     init = initial_estimates(config, rng, zb, zf, po, vo, pt, vt)
     u = observer_inputs(t, po, vo)
@@ -229,6 +244,9 @@ def true_range(config: Config) -> np.ndarray:
 
 def _case_summary(trials: dict[str, np.ndarray], config: Config, case: str, k0: int, rng_true) -> dict:
     """One filter's RMSE curves, time-averaged RMSEs, per-run MSEs, divergence counts, mode probabilities."""
+    from sonartrack.metrics.statistics import rmse_over_runs
+    from sonartrack.metrics.tma_errors import diverged, time_averaged_rmse
+
     meas, filt, qs = config.cases()[case]
     pos = np.asarray(trials[f"{case}_pos"], float)
     with np.errstate(invalid="ignore"):
@@ -273,6 +291,8 @@ TOL_LOWER = ("lower by more than 2 standard errors of the paired per-run differe
 def _lower(cs: dict, a: str, b: str, key: str, rmse_key: str) -> tuple[bool, float, float]:
     """Whether case a's time-averaged RMSE is lower than b's and their paired per-run MSE difference
     (metrics/statistics.py NaN rule) is below -2 SE; with that mean and SE."""
+    from sonartrack.metrics.statistics import paired_difference
+
     m, se = paired_difference(cs[a][key], cs[b][key])
     return bool(cs[a][rmse_key] < cs[b][rmse_key] and m < -2 * se), m, se
 

@@ -36,18 +36,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.settings import setting
-from sonartrack.metrics.roc import binomial_interval
-from sonartrack.metrics.statistics import paired_difference
-from sonartrack.metrics.tma_errors import tma_errors
-from sonartrack.models.relative_motion import observer_inputs
 from sonartrack.studies import bftma_imm as base
-from sonartrack.tma.imm_mgekf import run_imm_bf
-from sonartrack.tma.sequential_bf import initial_estimate
 
 STUDY_ID = "bftma-sensitivity"
 TITLE = "P2 sensitivity: MGEKF vs EKF divergence under the open choices"
-PAPER = base.PAPER
+PAPER = "Yoo & Song, passive-sonar TMA with the IMM (paper 002, P2)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 400
+QUICK_RUNS = 4
 CHUNK_SIZE = 20
 
 DEFAULT_READING = "default"
@@ -57,7 +55,7 @@ DEFAULT_DEFINITION = "end_25"
 class Config(base.Config):
     """bftma-imm's scenario (every field of its Config, same defaults) plus the grid of readings."""
 
-    runs: int = setting(400, "Monte Carlo runs", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs", unit="1", ge=1)
     extra_q_banks: list[list[float]] = setting(
         default_factory=lambda: [[1e-4, 1e-2, 1.0], [1e-3, 1e-2, 1e-1], [1e-5, 1e-1]],
         doc="IMM q banks besides imm.q_values (each also sets its single-q pairs)", unit="m^2/s^3")
@@ -84,7 +82,7 @@ class Config(base.Config):
     @classmethod
     def quick(cls) -> Config:
         """CI preset: every reading and definition, 4 runs."""
-        return cls(runs=4)
+        return cls(runs=QUICK_RUNS)
 
     def banks(self) -> list[tuple[float, ...]]:
         """The IMM q banks: imm.q_values first."""
@@ -182,6 +180,8 @@ def _variant_config(config: Config, variant: Variant) -> Config:
 
 def _zero_mean_velocity(config: Config, init: dict, zb, zf, vo, sd: float) -> dict:
     """The initial estimates with the drawn range kept but a zero-mean target-velocity prior of sd ``sd``."""
+    from sonartrack.tma.sequential_bf import initial_estimate
+
     out = {}
     for meas, (x0, _) in init.items():
         out[meas] = initial_estimate(float(zb[0]), float(zf[0]) if meas == "bf" else None, vo[0],
@@ -211,6 +211,9 @@ def _case_stats(config: Config, rel_err, nees, rec, k_cp) -> tuple[np.ndarray, n
 
 
 def _run_variant(config: Config, variant: Variant, rng: np.random.Generator, series: bool) -> dict:
+    from sonartrack.metrics.tma_errors import tma_errors
+    from sonartrack.models.relative_motion import observer_inputs
+    from sonartrack.tma.imm_mgekf import run_imm_bf
     cfg = _variant_config(config, variant)
     t, po, vo, pt, vt, zb, zf = base.simulate(cfg, rng)
     init = base.initial_estimates(cfg, rng, zb, zf, po, vo, pt, vt)
@@ -270,6 +273,9 @@ def reading_pairs(config: Config, reading: dict) -> list[tuple[str, str]]:
 
 def _cell(trials: dict, config: Config, reading: dict, definition: dict) -> dict:
     """Counts, Clopper-Pearson intervals and the paired difference of one reading under one definition."""
+    from sonartrack.metrics.roc import binomial_interval
+    from sonartrack.metrics.statistics import paired_difference
+
     pairs = reading_pairs(config, reading)
     mg = sum(diverged_flags(trials, a, definition, config).astype(int) for a, _ in pairs)
     ekf = sum(diverged_flags(trials, b, definition, config).astype(int) for _, b in pairs)

@@ -17,25 +17,28 @@ report/figures/bistatic_imm_ipda.py.
 from __future__ import annotations
 
 import functools
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydantic import model_validator
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.experiment.claims import Claim
-from sonartrack.metrics.statistics import mean_and_standard_error, paired_difference, rmse_over_runs
 from sonartrack.metrics.tracking import CTT_CHI2_4DOF_99, scan_ctt_measures
-from sonartrack.models.bistatic import BistaticErrors
-from sonartrack.models.clutter import Region
-from sonartrack.sim.bistatic_sonar import BistaticSonar, simulate_scan
-from sonartrack.sim.platforms import ManeuveringTrack, constant_velocity_track
-from sonartrack.tracking.configurations import position_tracker
 from sonartrack.tracking.settings import PositionTrackerSettings
+
+if TYPE_CHECKING:
+    from sonartrack.sim.bistatic_sonar import BistaticSonar
+    from sonartrack.sim.platforms import ManeuveringTrack
 
 STUDY_ID = "bistatic-imm-ipda"
 TITLE = "IMM-IPDA for a bistatic active towed-array sonar"
 PAPER = "Park, Song, Lee 2017, J. Acoust. Soc. Korea 36(3) (P4)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 500
+QUICK_RUNS = 20
 CHUNK_SIZE = 10
 
 
@@ -75,7 +78,7 @@ class Config(Settings):
     * CTT test threshold 13.28 (chi-square(4), 0.99) on the initiation covariance (eq. 23).
     """
 
-    runs: int = setting(500, "Monte Carlo runs", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs", unit="1", ge=1)
     n_scans: int = setting(100, "scans per run", unit="1", ge=2)
     scan_period_s: float = setting(30.0, "scan period T", unit="s", gt=0)
     ownship_speed_mps: float = setting(2.5, "ownship speed", unit="m/s")
@@ -105,15 +108,19 @@ class Config(Settings):
     @classmethod
     def quick(cls) -> Config:
         """CI preset: the full scenario and every tracker, 20 runs."""
-        return cls(runs=20)
+        return cls(runs=QUICK_RUNS)
 
     # ---- derived objects -------------------------------------------------------------------
     def ownship(self) -> ManeuveringTrack:
+        from sonartrack.sim.platforms import ManeuveringTrack
         turn = (self.turn_start_s, self.turn_start_s + self.n_scans * self.scan_period_s,
                 np.deg2rad(self.turn_rate_deg_s))
         return ManeuveringTrack(0.0, 0.0, self.ownship_speed_mps, np.deg2rad(self.ownship_heading_deg), (turn,))
 
     def sonar(self) -> BistaticSonar:
+        from sonartrack.models.bistatic import BistaticErrors
+        from sonartrack.models.clutter import Region
+        from sonartrack.sim.bistatic_sonar import BistaticSonar
         errors = BistaticErrors(self.sigma_time_s, np.deg2rad(self.sigma_bearing_deg), 0.0,
                                 self.sigma_sound_speed_mps, self.sigma_position_m)
         return BistaticSonar(Region(*self.region_m), self.tx_cable_m, self.rx_cable_m, self.pd,
@@ -124,6 +131,7 @@ class Config(Settings):
         return np.arange(self.n_scans) * self.scan_period_s
 
     def target_states(self) -> np.ndarray:
+        from sonartrack.sim.platforms import constant_velocity_track
         return constant_velocity_track(self.times_s(), self.target_x0_m, self.target_y0_m,
                                        self.target_vx_mps, self.target_vy_mps)
 
@@ -176,6 +184,8 @@ def _towing(ship: ManeuveringTrack) -> _TowingShip:
 
 def simulate(config: Config, rng: np.random.Generator):
     """The scans of one run (sim/bistatic_sonar.py) and the target's true states (n_scans, 4)."""
+    from sonartrack.sim.bistatic_sonar import simulate_scan
+
     ship, sonar = _towing(config.ownship()), config.sonar()
     truth = config.target_states()
     return [simulate_scan(rng, sonar, ship, float(t), truth[k, :2]) for k, t in enumerate(config.times_s())], truth
@@ -183,6 +193,8 @@ def simulate(config: Config, rng: np.random.Generator):
 
 def track_case(config: Config, q: tuple[float, ...], scans, truth) -> dict[str, np.ndarray]:
     """One tracker over the scans; per scan: CTT indicator, confirmed false tracks, CTT error, mode probabilities."""
+    from sonartrack.tracking.configurations import position_tracker
+
     n = len(scans)
     tracker = position_tracker(config.tracker_settings(q))
     out = {"ctt": np.zeros(n, bool), "cft": np.zeros(n, np.int64), "err": np.full(n, np.nan),
@@ -223,6 +235,7 @@ def _window_mean(a, lo, hi):
 
 
 def _case_summary(trials, case: str, q, k0: int) -> dict:
+    from sonartrack.metrics.statistics import rmse_over_runs
     ctt = trials[f"{case}_ctt"].astype(float)
     per_run_before, per_run_after, per_run_all = ctt[:, :k0].mean(axis=1), ctt[:, k0:].mean(axis=1), ctt.mean(axis=1)
     rmse = rmse_over_runs(trials[f"{case}_err"])
@@ -243,6 +256,8 @@ def _case_summary(trials, case: str, q, k0: int) -> dict:
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     """Per-scan curves (over runs) and before/after-turn averages with their standard errors."""
+    from sonartrack.metrics.statistics import rmse_over_runs
+
     k0 = config.turn_scan
     err_xy = trials["meas_error_xy"]
     err_m = np.hypot(err_xy[..., 0], err_xy[..., 1])
@@ -261,6 +276,8 @@ TOLERANCE = "2 standard errors of the paired per-run difference (Monte Carlo noi
 
 def _paired(summary, a, b, key):
     """Mean and standard error of the paired per-run difference a - b (metrics/statistics.py)."""
+    from sonartrack.metrics.statistics import paired_difference
+
     return paired_difference(summary["cases"][a][key], summary["cases"][b][key])
 
 
@@ -287,6 +304,7 @@ def _imm_best_claims(summary) -> list[Claim]:
 
 
 def _single_q_claims(summary, config: Config) -> list[Claim]:
+    from sonartrack.metrics.statistics import mean_and_standard_error
     pre, late = _windows(config)
     small = summary["cases"]["ipda_small"]
     r_pre = _window_mean(small["ctt_rate"], pre.start, pre.stop)

@@ -20,19 +20,26 @@ Definitions:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from pydantic import model_validator
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.experiment.claims import Claim
-from sonartrack.sim.bearing_peaks import STRONG, WEAK, PeakModel, TrackPeaks, generate_scans
-from sonartrack.tracking.configurations import bearing_tracker, bearing_tracks
 from sonartrack.tracking.settings import BearingTrackerSettings
+
+if TYPE_CHECKING:
+    from sonartrack.sim.bearing_peaks import PeakModel, TrackPeaks
 
 STUDY_ID = "jpda-amplitude"
 TITLE = "Bearing tracking of crossing and approaching targets: JPDA vs amplitude-aided JPDA_A"
 PAPER = "Park, Ryu & Lee 1994, cross-correlation bearings and JPDA_A (paper 000, P0)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 100
+QUICK_RUNS = 10
 CHUNK_SIZE = 5
 
 TRACKERS = ("jpda", "jpda_a")
@@ -61,7 +68,7 @@ class Config(Settings):
     false_rate / gate_deg x exp(-alpha tau), checked).
     """
 
-    runs: int = setting(100, "Monte Carlo runs", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs", unit="1", ge=1)
     duration_s: int = setting(160, "scans (1 s each) per encounter", unit="s", ge=20)
     crossing_angles_deg: list[float] = setting(default_factory=lambda: [10.0, 20.0, 30.0, 45.0, 60.0, 90.0],
                                                doc="crossing angles psi of the crossing grid", unit="deg")
@@ -84,7 +91,7 @@ class Config(Settings):
     def quick(cls) -> Config:
         """Demo preset: every geometry, case and tracker, 10 runs (the rates within about +-0.3; the full
         100 runs are needed for the claims' intervals)."""
-        return cls(runs=10)
+        return cls(runs=QUICK_RUNS)
 
     @model_validator(mode="after")
     def _tracker_assumes_the_simulated_clutter(self):
@@ -96,6 +103,8 @@ class Config(Settings):
 
     def model(self) -> PeakModel:
         """The simulated peaks (sim/bearing_peaks.py) with the tracker's gate, alpha and threshold."""
+        from sonartrack.sim.bearing_peaks import PeakModel
+
         t = self.tracker
         return PeakModel(false_rate=self.false_rate, gate_deg=t.gate_deg, false_amplitude_rate=t.false_amplitude_rate,
                          amplitude_threshold=t.amplitude_threshold)
@@ -118,6 +127,7 @@ class Config(Settings):
 
 
 def _targets(case: str) -> list[TrackPeaks]:
+    from sonartrack.sim.bearing_peaks import STRONG, WEAK
     return [STRONG, WEAK] if case == "strong_weak" else [STRONG, STRONG]
 
 
@@ -127,6 +137,8 @@ def run_tracker(settings: BearingTrackerSettings, scans, truth_deg, targets: lis
     """Bearing estimates (K, n) of a tracker started on the true bearings and rates of ``truth_deg`` (K, n).
 
     The tracks start one scan (1 s) before the first, as the paper's filter: predict, then update."""
+    from sonartrack.tracking.configurations import bearing_tracker, bearing_tracks
+
     init = bearing_tracks(truth_deg[0], truth_deg[1] - truth_deg[0], [t.sigma_p_deg for t in targets],
                           [t.amplitude_mean for t in targets], [t.amplitude_sd for t in targets],
                           adaptive_strength=adaptive_strength, time_s=-1.0)
@@ -142,6 +154,8 @@ def succeeded(config: Config, est_deg, truth_deg) -> bool:
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """Success (0/1) per case, geometry and tracker: arrays (n_geometries,) per case and tracker."""
+    from sonartrack.sim.bearing_peaks import generate_scans
+
     model = config.model()
     geoms = config.geometries()
     out = {}
@@ -163,6 +177,7 @@ def end_to_end(config: Config, seed: int = 1994) -> dict:
     the weak one with a multipath arrival; one fixed-seed run (the waterfall of the report)."""
     from sonartrack.acoustics.signals import Multipath, SourceSpec, simulate_two_channel
     from sonartrack.acoustics.xcorr_bearing import estimate_peaks
+    from sonartrack.tracking.configurations import bearing_tracker, bearing_tracks
 
     rng = np.random.default_rng(seed)
     T = config.e2e_duration_s
@@ -188,6 +203,8 @@ def end_to_end(config: Config, seed: int = 1994) -> dict:
 
 def synthetic_example(config: Config, seed: int = 7) -> dict:
     """One crossing (the second psi) of strong and weak tracks, both trackers: peaks, truth and estimates."""
+    from sonartrack.sim.bearing_peaks import STRONG, WEAK, generate_scans
+
     rng = np.random.default_rng(seed)
     _, val, truth = config.geometries()[1]
     scans = generate_scans(rng, config.model(), truth, [STRONG, WEAK])
@@ -206,6 +223,7 @@ def peak_model_sample(config: Config, n_scans: int = 2000, seed: int = 3):
     """Synthetic scans at threshold 0 of a strong (50 deg) and a weak (130 deg) track, for the paper's
     histograms, and the model fitted back from them (acoustics/peak_fit.py): (scans, truth, fit)."""
     from sonartrack.acoustics.peak_fit import fit_peak_model
+    from sonartrack.sim.bearing_peaks import STRONG, WEAK, PeakModel, generate_scans
 
     rng = np.random.default_rng(seed)
     t = config.tracker

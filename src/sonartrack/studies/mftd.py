@@ -18,27 +18,26 @@ example comes from :func:`scenario_example`).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.mftd import MftdDetector, MftdResult, MftdSettings, pruned_detect_fast
-from sonartrack.detection.prior import cached_prior
 from sonartrack.experiment.claims import Claim
-from sonartrack.metrics.roc import min_pfa, rise_is_significant, roc_curve
 from sonartrack.models.range_doppler import CwPlaneSettings, RangeDopplerGrid
-from sonartrack.models.swerling import (
-    clairvoyant_pd,
-    db_to_ratio,
-    sample_cells,
-    single_cell_pd,
-    single_frame_plane_pd,
-)
-from sonartrack.sim.range_doppler import TargetTrack, simulate_target
+
+if TYPE_CHECKING:
+    from sonartrack.sim.range_doppler import TargetTrack
 
 STUDY_ID = "mftd"
 TITLE = "Multi-frame track-before-detect on a range-Doppler plane (system ROC)"
 PAPER = "Im & Kim 1996, multiframe target detection for guidance sonar (paper 001, P1)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 10000
+QUICK_RUNS = 1000
 CHUNK_SIZE = 100
 
 #: false-alarm probabilities at which the ROC is evaluated (those below min_pfa(runs) are dropped)
@@ -107,7 +106,7 @@ class Config(Settings):
       its 5-minute budget). The quick preset (1000 trials, all with H1) reaches Pfa = 1e-2.
     """
 
-    runs: int = setting(10000, "Monte Carlo trials (each gives one H0 and one H1 statistic per curve)", unit="1",
+    runs: int = setting(RUNS, "Monte Carlo trials (each gives one H0 and one H1 statistic per curve)", unit="1",
                         ge=1)
     n_range: int = setting(16, "range cells on the plane", unit="1", ge=1)
     n_doppler: int = setting(64, "Doppler cells on the plane", unit="1", ge=1)
@@ -129,7 +128,7 @@ class Config(Settings):
 
     @classmethod
     def quick(cls) -> Config:
-        return cls(runs=1000, h1_fraction=1.0)
+        return cls(runs=QUICK_RUNS, h1_fraction=1.0)
 
     def grid(self) -> RangeDopplerGrid:
         return self.plane.grid(self.n_range, self.n_doppler)
@@ -182,6 +181,8 @@ class Config(Settings):
 
 def _k1_statistic(y: float, snr: float) -> float:
     """The MFTD statistic with K = 1 on a one-cell plane (run through the detector, not a formula)."""
+    from sonartrack.detection.prior import cached_prior
+
     g = RangeDopplerGrid(1, 1, 1.0, 1.0)
     prior = cached_prior(g, 1.0, 1.0, 1, "centre")
     return pruned_detect_fast(np.array([[[y]]]), g, prior, snr, 1, checked=True).statistic
@@ -198,6 +199,9 @@ def _first_rank(y0: np.ndarray, track: TargetTrack, echo0: float) -> int:
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """One H0 stack and, per target mobility, one target track; every variant on both."""
+    from sonartrack.models.swerling import sample_cells
+    from sonartrack.sim.range_doppler import simulate_target
+
     grid = config.grid()
     K = config.n_frames
     y0 = sample_cells(rng, (K, grid.n_range, grid.n_doppler))
@@ -229,6 +233,9 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 def scenario_example(config: Config, seed: int = 11) -> tuple[np.ndarray, TargetTrack, MftdResult]:
     """One target-present stack at the default detector (frames, the target's track, the detection):
     the report's scenario picture."""
+    from sonartrack.models.swerling import sample_cells
+    from sonartrack.sim.range_doppler import simulate_target
+
     rng = np.random.default_rng(seed)
     grid = config.grid()
     K = config.n_frames
@@ -241,11 +248,13 @@ def scenario_example(config: Config, seed: int = 11) -> tuple[np.ndarray, Target
 
 # -- summary -------------------------------------------------------------------------------------
 def _pfa_grid(n_h0: int) -> np.ndarray:
+    from sonartrack.metrics.roc import min_pfa
     lo = min_pfa(n_h0)
     return np.array([p for p in PFA_GRID if p >= lo - 1e-15])
 
 
 def _curve(trials, name, pfa) -> dict:
+    from sonartrack.metrics.roc import roc_curve
     c = roc_curve(trials[f"h0_{name}"], trials[f"h1_{name}"], pfa)
     return {"pfa": c.pfa.tolist(), "pd": c.pd.tolist(), "pd_low": c.pd_low.tolist(), "pd_high": c.pd_high.tolist(),
             "pfa_achieved": c.pfa_achieved.tolist(), "pfa_low": c.pfa_low.tolist(), "pfa_high": c.pfa_high.tolist(),
@@ -255,6 +264,8 @@ def _curve(trials, name, pfa) -> dict:
 def _curves(trials, config: Config, pfa: np.ndarray, n_cells: int) -> dict:
     """ROC per variant, with the bounds at the ends of each point's false-alarm interval (a Monte
     Carlo threshold is uncertain): single frame at pfa_low, clairvoyant at pfa_high."""
+    from sonartrack.models.swerling import clairvoyant_pd, db_to_ratio, single_frame_plane_pd
+
     curves = {}
     for name, v in config.variants().items():
         c = {"snr_db": v.snr_db, "sigma_a_mps2": v.sigma_a_mps2, "n_tracks": v.n_tracks,
@@ -268,6 +279,8 @@ def _curves(trials, config: Config, pfa: np.ndarray, n_cells: int) -> dict:
 
 def _references(config: Config, pfa: np.ndarray, n_cells: int) -> dict:
     """Closed-form ROCs per SNR: single frame over the plane, the known cell, the clairvoyant known track."""
+    from sonartrack.models.swerling import clairvoyant_pd, db_to_ratio, single_cell_pd, single_frame_plane_pd
+
     refs = {}
     for s in sorted({v.snr_db for v in config.variants().values()}):
         rho = float(db_to_ratio(s))
@@ -314,6 +327,9 @@ def _steps(trials, config: Config, pfa: float) -> dict:
 
 def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
     """ROC per variant, the closed-form references, the K = 1 check and the first-pruning statistics."""
+    from sonartrack.metrics.roc import roc_curve
+    from sonartrack.models.swerling import single_cell_pd
+
     n = len(next(iter(trials.values())))
     pfa = _pfa_grid(n)
     grid = config.grid()
@@ -362,6 +378,8 @@ def _step_se(summary: dict, a: str, b: str) -> float:
 
 def _rises(summary: dict, a: str, b: str, pfa: float) -> tuple[bool, bool]:
     """(Pd rises from curve ``a`` to ``b`` by > 1.96 paired SE, by > 1.96 unpaired binomial SE)."""
+    from sonartrack.metrics.roc import rise_is_significant
+
     ca, cb = summary["curves"][a], summary["curves"][b]
     pa, pb, n = _at(ca, pfa), _at(cb, pfa), min(ca["n_h1"], cb["n_h1"])
     return pb - pa > Z_STEP * max(_step_se(summary, a, b), 1e-12), rise_is_significant(pa, pb, n, Z_STEP)

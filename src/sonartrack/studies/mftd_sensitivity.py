@@ -45,16 +45,17 @@ import numpy as np
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.mftd import MftdDetector, MftdSettings
-from sonartrack.metrics.roc import min_pfa, rise_is_significant, roc_curve
 from sonartrack.models.range_doppler import CwPlaneSettings
-from sonartrack.models.swerling import sample_cells
-from sonartrack.sim.range_doppler import simulate_target
 from sonartrack.studies import mftd
 
 STUDY_ID = "mftd-sensitivity"
 TITLE = "P1 sensitivity: the sigma_a and N claims under plane size, prior density and final decision"
 PAPER = "Im & Kim 1996, multiframe target detection for guidance sonar (paper 001, P1)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 5000
+QUICK_RUNS = 200
 CHUNK_SIZE = 50
 
 #: the Pfa at which the claims compare curves (raised to the lowest Pfa the H0 trials support)
@@ -72,7 +73,7 @@ class Config(Settings):
     the two cores shared with other jobs). The quick preset (200 trials, one plane) runs in ~2 s.
     """
 
-    runs: int = setting(5000, "Monte Carlo trials (each gives one H0 and one H1 statistic per reading and curve)",
+    runs: int = setting(RUNS, "Monte Carlo trials (each gives one H0 and one H1 statistic per reading and curve)",
                         unit="1", ge=1)
     planes: list[list[int]] = setting(default_factory=lambda: [[2, 64], [4, 64], [2, 256], [16, 64], [32, 64]],
                                       doc="planes as [range cells, Doppler cells]", unit="1")
@@ -95,7 +96,7 @@ class Config(Settings):
     @classmethod
     def quick(cls) -> Config:
         """CI preset: the small plane only, two sigma_a, three N; every density / final reading."""
-        return cls(runs=200, planes=[[4, 64]], sigma_a_family_mps2=[0.25, 4.0], n_family=[1, 10, 30], large_n=30)
+        return cls(runs=QUICK_RUNS, planes=[[4, 64]], sigma_a_family_mps2=[0.25, 4.0], n_family=[1, 10, 30], large_n=30)
 
     def readings(self) -> list[dict]:
         """Every plane x density x final: id, plane, density, final (the default reading first per plane)."""
@@ -142,6 +143,9 @@ def _first_ranks(y_first: np.ndarray, tracks: dict, echo0: float, sigmas) -> np.
 
 def _run_plane(config: Config, plane, echo: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """Every reading and curve on one plane: shared noise stack and target tracks (common random numbers)."""
+    from sonartrack.models.swerling import sample_cells
+    from sonartrack.sim.range_doppler import simulate_target
+
     grid = config.plane.grid(*plane)
     K, d = config.n_frames, config.detector
     y0 = sample_cells(rng, (K, grid.n_range, grid.n_doppler))
@@ -178,10 +182,13 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 # -- summary -------------------------------------------------------------------------------------
 def claim_pfa(n_h0: int) -> float:
     """PFA_CLAIM, or the lowest Pfa ``n_h0`` target-absent trials support if that is higher."""
+    from sonartrack.metrics.roc import min_pfa
+
     return max(PFA_CLAIM, min_pfa(n_h0))
 
 
 def _point(trials, cid: str, pfa: float) -> dict:
+    from sonartrack.metrics.roc import roc_curve
     c = roc_curve(trials[f"h0_{cid}"], trials[f"h1_{cid}"], [pfa])
     return {"pd": float(c.pd[0]), "pd_low": float(c.pd_low[0]), "pd_high": float(c.pd_high[0]),
             "pfa_achieved": float(c.pfa_achieved[0]), "n_h1": int(c.n_h1)}
@@ -262,6 +269,8 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
 
 def _step_counts(summary: dict, cid: str) -> list[int]:
     """Per step of a sigma_a family: in how many readings it is a significant fall."""
+    from sonartrack.metrics.roc import rise_is_significant
+
     n_steps = len(summary["sigma_a_family_mps2"]) - 1
     out = [0] * n_steps
     for c in summary["readings"]:

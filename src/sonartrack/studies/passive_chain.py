@@ -27,12 +27,16 @@ import numpy as np
 from sonartrack.core.settings import Settings, setting
 from sonartrack.experiment.claims import Claim
 from sonartrack.sim.scene import PassiveSceneSettings
-from sonartrack.systems.passive.settings import FrontEndSettings, PassiveSettings
+from sonartrack.systems.passive.settings import PassiveSettings
 
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on simulated towed-array scenes (our own study)"
 PAPER = "sonartrack's own: papers P0 (JPDA_A), P2 (IMM-MGEKF) and P3 (batch ML) joined into one system"
-TRIAL_VERSION = 3
+TRIAL_VERSION = 4
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 20
+QUICK_RUNS = 1
 #: one trial per stored chunk: a trial takes tens of seconds, so an interruption loses at most one
 CHUNK_SIZE = 1
 HOLD_REQUIRED = 0.8
@@ -44,27 +48,23 @@ FALSE_PER_HOUR = 1.0
 
 
 def study_chain() -> PassiveSettings:
-    """The chain of ``sonartrack passive`` with the band of the scene's ships (50-1000 Hz) and grating lobes
-    accepted. CHOICE: the simulated array is half a wavelength apart at 300 Hz, so the CLI's safe default band
-    (the octave below aliasing, 150-300 Hz) uses a third of the ships' band and has beams three times wider:
-    it merges the crossing ships and loses the tanker where it crosses the merchant in the turn. Broadband
-    grating lobes move with frequency and smear over bearing, and on these scenes the wide band measures
-    better (quick, seed 1: trawler held 0.99 vs 0.96 of its detectable time, crossing identities kept; no false
-    target in either). At full size the safe band holds 4 of the 5 checks (the tanker's ML fails its CRB check:
-    its track breaks where it crosses the merchant in the turn); rerun it with a ``--config`` file holding
-    ``[chain.front_end]``, ``band_hz = [150.0, 300.0]``, ``allow_grating_lobes = false``."""
-    return PassiveSettings(front_end=FrontEndSettings(band_hz=[50.0, 1000.0], allow_grating_lobes=True))
+    """The chain of ``sonartrack passive`` with its defaults: the automatic band (acoustics/beamforming.py
+    :class:`~sonartrack.acoustics.beamforming.BeamformerSettings`), 50-1000 Hz on the simulated array, grating lobes
+    above its 300 Hz aliasing frequency smeared over the band. The old default band (the octave below aliasing,
+    150-300 Hz) held 4 of the 5 checks at full size (the tanker's track broke where it crosses the merchant in the
+    turn); rerun it with a ``--config`` file holding ``[chain.front_end]``, ``band_hz = [150.0, 300.0]``."""
+    return PassiveSettings()
 
 
 class Config(Settings):
     """Monte Carlo of the passive chain. The scene is the default of ``sonartrack simulate``; the chain is that of
-    ``sonartrack passive`` on the ships' band (:func:`study_chain`), its element spacing taken from the scene."""
+    ``sonartrack passive`` with its defaults (:func:`study_chain`), its element spacing taken from the scene."""
 
-    runs: int = setting(20, "Monte Carlo runs (each: a scene with ships and a noise-only scene)", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs (each: a scene with ships and a noise-only scene)", unit="1", ge=1)
     scene: PassiveSceneSettings = setting(default_factory=PassiveSceneSettings, doc="the simulated scene (its seed "
                                           "is replaced by each trial's)")
-    chain: PassiveSettings = setting(default_factory=study_chain, doc="the chain (the ships' band 50-1000 Hz, grating "
-                                                                      "lobes accepted: see study_chain)")
+    chain: PassiveSettings = setting(default_factory=study_chain, doc="the chain of sonartrack passive with its "
+                                                                      "defaults (see study_chain)")
     match_deg: float = setting(3.0, "a track follows a ship at a time when within this of its true cone angle",
                                unit="deg", gt=0)
     min_detectable_s: float = setting(60.0, "a ship above the detection threshold for less than this in a run is "
@@ -77,7 +77,7 @@ class Config(Settings):
     def quick(cls) -> Config:
         """Demo preset: one run (a ship scene and a noise-only scene, ~20 s of computing); every check is
         computed on it."""
-        return cls(runs=1)
+        return cls(runs=QUICK_RUNS)
 
 
 def ship_names(config: Config) -> list[str]:

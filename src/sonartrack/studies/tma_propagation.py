@@ -20,20 +20,26 @@ from __future__ import annotations
 import functools
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sonartrack.core.settings import Settings, setting
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.experiment.claims import Claim
-from sonartrack.metrics.statistics import rmse_over_runs
-from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.tma.settings import EmMapSettings
+
+if TYPE_CHECKING:
+    from sonartrack.sim.platforms import ManeuveringTrack
 
 STUDY_ID = "tma-propagation"
 TITLE = "TMA with SNR and a RAM propagation model in six Korean seas (EM/MAP vs bearings-only ML)"
 PAPER = "Seo 2019, target motion analysis with an acoustic propagation model (paper 003, P3)"
 TRIAL_VERSION = 3
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 100
+QUICK_RUNS = 4
 CHUNK_SIZE = 2
 
 ENVIRONMENTS = ("east-summer", "east-winter", "yellow-summer", "yellow-winter", "south-summer", "south-winter")
@@ -100,7 +106,7 @@ class Config(Settings):
       (start and end points pooled) stays below 10 %.
     """
 
-    runs: int = setting(100, "Monte Carlo runs (each: every environment)", unit="1", ge=1)
+    runs: int = setting(RUNS, "Monte Carlo runs (each: every environment)", unit="1", ge=1)
     environments: list[str] = setting(default_factory=lambda: list(ENVIRONMENTS), doc="shipped environments run")
     freq_hz: float = setting(200.0, "frequency of the tonal", unit="Hz", gt=0)
     sl_db: float = setting(140.0, "true source level", unit="dB")
@@ -136,12 +142,13 @@ class Config(Settings):
     @classmethod
     def quick(cls) -> Config:
         """Demo preset: every environment, 4 runs, each with the SL sweep."""
-        return cls(runs=4, sweep_fraction=1.0)
+        return cls(runs=QUICK_RUNS, sweep_fraction=1.0)
 
     def times_s(self) -> np.ndarray:
         return np.arange(self.n_frames) * self.frame_period_s
 
     def observer(self) -> ManeuveringTrack:
+        from sonartrack.sim.platforms import ManeuveringTrack
         return ManeuveringTrack(0.0, 0.0, self.own_speed_kn * KNOT_MPS, np.deg2rad(self.own_course_deg),
                                 tuple((a, b, np.deg2rad(r)) for a, b, r in self.own_turns))
 
@@ -149,6 +156,7 @@ class Config(Settings):
         return env.split("-")[0]
 
     def target(self, r0_m: float) -> ManeuveringTrack:
+        from sonartrack.sim.platforms import ManeuveringTrack
         b = np.deg2rad(self.target_bearing_deg)
         return ManeuveringTrack(r0_m * np.sin(b), r0_m * np.cos(b), self.target_speed_kn * KNOT_MPS,
                                 np.deg2rad(self.target_course_deg))
@@ -331,6 +339,7 @@ def tolerated_interval(deltas, curve) -> tuple[float | None, float | None]:
 
 
 def _environment_summary(trials: dict[str, np.ndarray], config: Config, env: str, deltas) -> dict:
+    from sonartrack.metrics.statistics import rmse_over_runs
     em, ml, sw = trials[f"{env}_em"], trials[f"{env}_ml"], trials[f"{env}_sweep"]
     r0, s_min = placement(config, env)
     n_sweep = int(np.sum(np.all(np.isfinite(sw.reshape(sw.shape[0], len(deltas) * 2)), axis=1)))

@@ -35,13 +35,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.settings import setting
-from sonartrack.metrics.statistics import rmse_over_runs
 from sonartrack.studies import tma_propagation as base
 
 STUDY_ID = "tma-sensitivity"
 TITLE = "P3 sensitivity: EM/MAP accuracy in South winter and East's tolerated SL mismatch under the open choices"
-PAPER = base.PAPER
+PAPER = "Seo 2019, target motion analysis with an acoustic propagation model (paper 003, P3)"
 TRIAL_VERSION = 1
+#: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
+#: ``sonartrack studies`` reads them from this file's source without importing it
+RUNS = 100
+QUICK_RUNS = 2
 CHUNK_SIZE = 2
 
 RMSE_LIMIT_PCT = base.RMSE_LIMIT_PCT
@@ -50,7 +53,7 @@ RMSE_LIMIT_PCT = base.RMSE_LIMIT_PCT
 class Config(base.Config):
     """tma-propagation's scenario (every field of its Config, same defaults) plus the grid of readings."""
 
-    runs: int = setting(100, "Monte Carlo runs (South readings in each; East readings in east_fraction of them)",
+    runs: int = setting(RUNS, "Monte Carlo runs (South readings in each; East readings in east_fraction of them)",
                         unit="1", ge=1)
     south_env: str = setting("south-winter", "environment of the em_map_under_10pct readings")
     east_envs: list[str] = setting(default_factory=lambda: ["east-summer", "east-winter"],
@@ -82,7 +85,7 @@ class Config(base.Config):
     @classmethod
     def quick(cls) -> Config:
         """CI preset: one East environment, a few readings, a short sweep, 2 runs (TL fields cached)."""
-        return cls(runs=2, east_envs=["east-summer"], tl_windows_m=[1000.0], south_depths_m=[80.0],
+        return cls(runs=QUICK_RUNS, east_envs=["east-summer"], tl_windows_m=[1000.0], south_depths_m=[80.0],
                    south_r_max_m=[], east_depths_m=[], east_r_min_m=[500.0], south_sweep_db=[0.0], other_envs=[],
                    sl_mismatch_db=[-6.0, -3.0, 0.0, 3.0, 6.0], east_fraction=1.0, bootstrap=50)
 
@@ -232,6 +235,8 @@ def _ran(a: np.ndarray) -> np.ndarray:
 
 def _accuracy(trials: dict, config: Config, r: Reading) -> dict:
     """RMSE (%) per component with intervals, and the largest component with its bootstrap interval."""
+    from sonartrack.metrics.statistics import rmse_over_runs
+
     em = _ran(trials[f"{r.id}_em"])
     idx = _boot_indices(len(em), config)
     rmse = rmse_over_runs(em)
@@ -251,6 +256,8 @@ def _verdict(holds: bool, fails: bool) -> str:
 
 def _sweep(trials: dict, config: Config, r: Reading) -> dict:
     """Pooled range RMSE per SL mismatch, the tolerated interval and bootstrap intervals on its ends."""
+    from sonartrack.metrics.statistics import rmse_over_runs
+
     deltas = np.asarray(deltas_of(config, r), dtype=float)
     sw = _ran(trials[f"{r.id}_sweep"])  # (runs, deltas, 2)
     idx = _boot_indices(len(sw), config)

@@ -29,7 +29,36 @@ class UnobservableWarning(UserWarning):
 def snr_model(env, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m: float,
               nl_db: float | None = None, di_db: float | None = None, tl_store=None, window_m: float | None = None):
     """xi_bar(r) for an :class:`Environment` (or a shipped environment's name): (callable, environment, depth);
-    TL averaged over ``window_m`` (default: ``EmMapSettings().tl_average_m``)."""
+    TL averaged over ``window_m`` (default: ``EmMapSettings().tl_average_m``).
+
+    Parameters
+    ----------
+    env : Environment or str
+        The environment or a shipped environment's name.
+    sl_db : float
+        Source level SL (dB re 1 uPa at 1 m).
+    freq_hz : float
+        Frequency of the TL field (Hz).
+    depth_m : float or None
+        Source and receiver depth (m); None: min(50 m, half the water depth).
+    r_max_m : float
+        Largest range of the TL field (m).
+    nl_db, di_db : float, optional
+        Noise level NL and directivity index DI (dB); default acoustics/sonar_equation.py's NL_DB, DI_DB.
+    tl_store : FieldStore, optional
+        Cache of TL fields.
+    window_m : float, optional
+        Range window (m) of the incoherent TL average.
+
+    Returns
+    -------
+    xi_bar : callable
+        r (m) -> SL - TL(r) + DI - NL (dB), TL interpolated in range.
+    environment : Environment
+        The environment used.
+    depth_m : float
+        The depth used (m).
+    """
     from sonartrack.acoustics.environment import load_environment
     from sonartrack.acoustics.sonar_equation import DI_DB, NL_DB, passive_snr_db
     from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field
@@ -51,7 +80,20 @@ def snr_model(env, sl_db: float, freq_hz: float, depth_m: float | None, r_max_m:
 
 
 def estimate_to_solution(est: BatchEstimate, time_s) -> TmaSolution:
-    """A batch estimate propagated to ``time_s`` (constant velocity) as a :class:`TmaSolution`."""
+    """A batch estimate propagated to ``time_s`` (constant velocity) as a :class:`TmaSolution`.
+
+    Parameters
+    ----------
+    est : BatchEstimate
+        X0 at its reference time and its covariance.
+    time_s : array_like, shape (n,)
+        Times (s).
+
+    Returns
+    -------
+    TmaSolution
+        States [x, y, vx, vy] (m, m/s) and covariances at ``time_s``, method of the estimate.
+    """
     x, P = est.state_at(time_s)
     return TmaSolution(time_s=np.asarray(time_s, dtype=float), state=x, covariance=P, method=est.method)
 
@@ -72,7 +114,31 @@ def _ml_start(record: BearingRecord, t, own, sigma_bearing_rad: float):
 
 def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_bearing_rad: float, batch: BatchSettings,
                     em_map: EmMapSettings, environment=None, tl_store=None) -> BatchEstimate:
-    """EM/MAP X0 of a record with SNRs (tma/em_map.py); ``environment`` overrides ``batch.env`` (a name)."""
+    """EM/MAP X0 of a record with SNRs (tma/em_map.py); ``environment`` overrides ``batch.env`` (a name).
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
+    ownship : OwnshipTrack
+        Ownship positions (m; x east, y north) over time.
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+    batch : BatchSettings
+        Propagation-model settings (environment, SL, frequency, depth, NL, DI, sigma_SNR).
+    em_map : EmMapSettings
+        EM/MAP solver settings.
+    environment : Environment or str, optional
+        Overrides ``batch.env``.
+    tl_store : FieldStore, optional
+        Cache of TL fields.
+
+    Returns
+    -------
+    BatchEstimate
+        X0 at the first bearing's time with the observed-information covariance (the bearings-only ML estimate
+        is one of the starts when it exists).
+    """
     from sonartrack.tma.em_map import make_problem, solve_em_map
 
     if record.snr_db is None:
@@ -97,7 +163,33 @@ def solve_batch(record: BearingRecord, ownship: OwnshipTrack, method: str, *, si
                 batch: BatchSettings | None = None, em_map: EmMapSettings | None = None, environment=None,
                 tl_store=None) -> TmaSolution:
     """Batch TMA of a whole record: ``method`` 'ml' (bearings only) or 'em-map' (bearings + SNR + TL);
-    the solution at every measurement time."""
+    the solution at every measurement time.
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
+    ownship : OwnshipTrack
+        Ownship positions (m; x east, y north) over time.
+    method : str
+        "ml" or "em-map".
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+    batch : BatchSettings, optional
+        Propagation-model settings of em-map (environment, SL, frequency, depth, NL, DI, sigma_SNR); default
+        the library defaults.
+    em_map : EmMapSettings, optional
+        EM/MAP solver settings (range interval, kappa, TL averaging, iterations).
+    environment : Environment or str, optional
+        Overrides ``batch.env``.
+    tl_store : FieldStore, optional
+        Cache of TL fields.
+
+    Returns
+    -------
+    TmaSolution
+        States [x, y, vx, vy] (m, m/s) and covariances at the bearing times.
+    """
     require(method in ("ml", "em-map"), f"unknown batch method '{method}': choose ml or em-map")
     t = np.asarray(record.time_s, dtype=float)
     if method == "ml":
@@ -115,7 +207,35 @@ def solve_batch_then_ekf(record: BearingRecord, ownship: OwnshipTrack, method: s
                          em_map: EmMapSettings | None = None, environment=None, tl_store=None) -> TmaSolution:
     """Batch TMA on the bearings of the first ``window_s`` seconds, then a sequential EKF from the batch's
     last state and covariance over the rest (paper P3, sec. 2: the batch solution initialises the tracker);
-    one solution over the whole record (method '<batch>+ekf')."""
+    one solution over the whole record (method '<batch>+ekf').
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
+    ownship : OwnshipTrack
+        Ownship positions (m; x east, y north) over time.
+    method : str
+        Batch method, "ml" or "em-map".
+    window_s : float
+        Length (s) of the batch window from the first bearing; bearings must remain after it.
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+    batch : BatchSettings, optional
+        Propagation-model settings of em-map (environment, SL, frequency, depth, NL, DI, sigma_SNR); default
+        the library defaults.
+    em_map : EmMapSettings, optional
+        EM/MAP solver settings (range interval, kappa, TL averaging, iterations).
+    environment : Environment or str, optional
+        Overrides ``batch.env``.
+    tl_store : FieldStore, optional
+        Cache of TL fields.
+
+    Returns
+    -------
+    TmaSolution
+        The batch solution over the window followed by the EKF's over the rest.
+    """
     batch = BatchSettings() if batch is None else batch
     head = record.until(float(record.time_s[0]) + window_s)
     require(0 < len(head.time_s) < len(record.time_s),
@@ -131,7 +251,28 @@ def solve_batch_then_ekf(record: BearingRecord, ownship: OwnshipTrack, method: s
 
 def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstimate, *, start_s: float,
                    sigma_bearing_rad: float, q_m2_s3: float = 1e-4) -> TmaSolution:
-    """:func:`ekf_from_state` started from a batch estimate propagated to ``start_s``."""
+    """:func:`ekf_from_state` started from a batch estimate propagated to ``start_s``.
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
+    ownship : OwnshipTrack
+        Ownship positions (m; x east, y north) over time.
+    est : BatchEstimate
+        The batch estimate.
+    start_s : float
+        Time (s) the EKF starts from; only later bearings are filtered.
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+    q_m2_s3 : float
+        White-acceleration noise intensity (m^2/s^3).
+
+    Returns
+    -------
+    TmaSolution
+        As :func:`ekf_from_state`, method "<batch method>+ekf".
+    """
     x0, P0 = est.state_at(np.array([start_s]))
     return ekf_from_state(record, ownship, x0[0], P0[0], start_s=start_s, sigma_bearing_rad=sigma_bearing_rad,
                           q_m2_s3=q_m2_s3, method=f"{est.method}+ekf")
@@ -147,6 +288,20 @@ def ekf_from_state(record: BearingRecord, ownship: OwnshipTrack, state, covarian
     F = [[I, T I], [0, I]], Q = q [[T^3/3 I, T^2/2 I], [T^2/2 I, T I]]; bearing h = atan2(x - ox, y - oy)
     with the Jacobian of batch_ml.bearing_model; Joseph-form update. Returns the states at ``start_s``
     and at every later bearing.
+
+    Parameters
+    ----------
+    record, ownship : BearingRecord, OwnshipTrack
+        Bearings (rad, clockwise from north) and ownship positions (m; x east, y north).
+    state, covariance : array_like, shapes (4,), (4, 4)
+        Start [x, y, vx, vy] (m, m/s) at ``start_s`` and its covariance (finite).
+    start_s, sigma_bearing_rad, q_m2_s3, method : float, float, float, str
+        Start time (s), bearing noise sd (rad), acceleration noise (m^2/s^3), method label.
+
+    Returns
+    -------
+    TmaSolution
+        States and covariances at ``start_s`` and at every later bearing time.
     """
     from sonartrack.core.angles import wrap_angle
     from sonartrack.filters.kalman import joseph_update, kf_gain

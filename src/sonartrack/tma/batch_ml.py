@@ -47,7 +47,20 @@ class BatchEstimate:
     method: str
 
     def state_at(self, t_s) -> tuple[np.ndarray, np.ndarray]:
-        """States (n, 4) and covariances (n, 4, 4) at times ``t_s`` (constant-velocity propagation)."""
+        """States (n, 4) and covariances (n, 4, 4) at times ``t_s`` (constant-velocity propagation).
+
+        Parameters
+        ----------
+        t_s : float or array_like, shape (n,)
+            Times (s, same clock as ``t0_s``).
+
+        Returns
+        -------
+        x : ndarray, shape (n, 4)
+            [x, y, vx, vy] (m, m/s) at each time.
+        P : ndarray, shape (n, 4, 4)
+            F P0 F^T at each time.
+        """
         t = np.atleast_1d(np.asarray(t_s, dtype=float)) - self.t0_s
         F = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
         F[:, 0, 2] = F[:, 1, 3] = t
@@ -55,7 +68,26 @@ class BatchEstimate:
 
 
 def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Predicted bearings h (n,), Jacobian H (n, 4) (eq. 16) and ranges (n,) of the CV track x0."""
+    """Predicted bearings h (n,), Jacobian H (n, 4) (eq. 16) and ranges (n,) of the CV track x0.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (4,)
+        Target state [x0, y0, vx, vy] at t0 (m, m/s).
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+
+    Returns
+    -------
+    h : ndarray, shape (n,)
+        Bearings (rad, clockwise from north), eq. 6.
+    H : ndarray, shape (n, 4)
+        dh/dX0 (eq. 16).
+    r : ndarray, shape (n,)
+        Ranges (m).
+    """
     x0 = np.asarray(x0, dtype=float)
     tau = np.asarray(tau_s, dtype=float)
     dx = x0[0] + x0[2] * tau - own_xy[:, 0]
@@ -66,19 +98,66 @@ def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def fisher_information(x0, tau_s, own_xy, sigma_rad) -> np.ndarray:
-    """J = sum_n H_n^T H_n / sigma_n^2: the bearings' Fisher information about X0."""
+    """J = sum_n H_n^T H_n / sigma_n^2: the bearings' Fisher information about X0.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (4,)
+        Target state [x0, y0, vx, vy] at t0 (m, m/s).
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise standard deviation (rad).
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        J.
+    """
     _, H, _ = bearing_model(x0, tau_s, own_xy)
     w = 1.0 / np.broadcast_to(np.asarray(sigma_rad, dtype=float), (len(H),)) ** 2
     return (H * w[:, None]).T @ H
 
 
 def crb(x0_true, tau_s, own_xy, sigma_rad) -> np.ndarray:
-    """Cramer-Rao bound on X0 for this geometry: the inverse Fisher information at the true state."""
+    """Cramer-Rao bound on X0 for this geometry: the inverse Fisher information at the true state.
+
+    Parameters
+    ----------
+    x0_true : array_like, shape (4,)
+        True [x0, y0, vx, vy] at t0 (m, m/s).
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise standard deviation (rad).
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        J^-1 at the true state (m^2, m^2/s, m^2/s^2).
+    """
     return np.linalg.inv(fisher_information(x0_true, tau_s, own_xy, sigma_rad))
 
 
 def ownship_deviation_m(tau_s, own_xy) -> float:
-    """Largest distance (m) of the ownship from its least-squares constant-velocity line."""
+    """Largest distance (m) of the ownship from its least-squares constant-velocity line.
+
+    Parameters
+    ----------
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+
+    Returns
+    -------
+    float
+        The largest distance (m).
+    """
     tau = np.asarray(tau_s, dtype=float)
     A = np.column_stack([np.ones_like(tau), tau])
     coef, *_ = np.linalg.lstsq(A, own_xy, rcond=None)
@@ -86,7 +165,22 @@ def ownship_deviation_m(tau_s, own_xy) -> float:
 
 
 def check_observability(tau_s, own_xy, min_maneuver_m: float = MIN_MANEUVER_M) -> str | None:
-    """A one-line message if the ownship has not maneuvered enough for bearings-only range, else None."""
+    """A one-line message if the ownship has not maneuvered enough for bearings-only range, else None.
+
+    Parameters
+    ----------
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+    min_maneuver_m : float
+        Smallest deviation (m) from the best constant-velocity line that makes range observable.
+
+    Returns
+    -------
+    str or None
+        The message naming the problem and the fix, or None when the maneuver suffices.
+    """
     dev = ownship_deviation_m(tau_s, own_xy)
     if dev < min_maneuver_m:
         return (f"ownship has not maneuvered (it stays within {dev:.0f} m of a straight constant-velocity line): "
@@ -102,13 +196,43 @@ def observable_range_limit_m(tau_s, own_xy, sigma_rad: float) -> float:
     (Nardone & Aidala 1981): a departure of ``dev`` metres turns the line of sight by about dev / R rad. With n
     bearings of noise sigma, a turn is resolved only if it exceeds the standard error sigma / sqrt(n) of their
     mean, so ranges beyond ``R_max = dev sqrt(n) / sigma`` are not determined by the data: the likelihood is flat
-    out there, and an ML solution that lands beyond R_max is an artefact of the noise, not a measurement."""
+    out there, and an ML solution that lands beyond R_max is an artefact of the noise, not a measurement.
+
+    Parameters
+    ----------
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+    sigma_rad : float
+        Bearing noise standard deviation (rad).
+
+    Returns
+    -------
+    float
+        R_max (m).
+    """
     n = len(np.asarray(tau_s))
     return ownship_deviation_m(tau_s, own_xy) * float(np.sqrt(n)) / float(sigma_rad)
 
 
 def pseudo_linear_estimate(z_rad, tau_s, own_xy) -> np.ndarray:
-    """Pseudo-linear X0 (Lindgren & Gong 1978): least squares over the bearing-line equations."""
+    """Pseudo-linear X0 (Lindgren & Gong 1978): least squares over the bearing-line equations.
+
+    Parameters
+    ----------
+    z_rad : ndarray, shape (n,)
+        Measured bearings (rad, clockwise from north).
+    tau_s : array_like, shape (n,)
+        Times since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        [x0, y0, vx, vy] at t0 (m, m/s).
+    """
     c, s = np.cos(z_rad), np.sin(z_rad)
     A = np.column_stack([c, -s, tau_s * c, -tau_s * s])
     b = own_xy[:, 0] * c - own_xy[:, 1] * s
@@ -140,8 +264,23 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
     """ML X0 from bearings by Gauss-Newton / Levenberg-Marquardt (module doc); stops when no damped step
     lowers the cost or the relative decrease falls below ``tol``.
 
-    ``own_xy`` (n, 2): ownship positions at the bearing times. ``check`` raises
-    :class:`InputError` when the ownship has not maneuvered (range unobservable).
+    Parameters
+    ----------
+    z_rad, time_s : array_like, shape (n,)
+        Bearings (rad, clockwise from north) and their strictly increasing times (s); n >= 5.
+    own_xy : array_like, shape (n, 2)
+        Ownship positions (m; x east, y north) at the bearing times.
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise standard deviation (rad).
+    x_init, max_iter, tol : array_like (4,) or None, int, float
+        Start (None: the pseudo-linear estimate), iteration limit, relative cost decrease that ends the search.
+    check : bool
+        Raise :class:`InputError` when the ownship has not maneuvered (range unobservable).
+
+    Returns
+    -------
+    BatchEstimate
+        X0 at the first bearing's time, covariance (J^T J)^-1, iterations, convergence, cost C, method "ml".
     """
     z = np.asarray(z_rad, dtype=float)
     t = np.asarray(time_s, dtype=float)

@@ -120,7 +120,33 @@ def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, 
                  r_min_m: float, r_max_m: float, kappa: float = KAPPA, n_range: int | None = None) -> EmProblem:
     """Precompute the range grid and log p(xi_n | r) (``snr_of_range(r) -> dB`` is xi_bar).
 
-    The grid has ``n_range`` points (default: a step of kappa / 2 in log range)."""
+    The grid has ``n_range`` points (default: a step of kappa / 2 in log range).
+
+    Parameters
+    ----------
+    z_rad, snr_db, time_s : array_like, shape (n,)
+        Bearings (rad, clockwise from north), measured SNRs (dB; None or NaN entries: no SNR term) and strictly
+        increasing frame times (s); n >= 3.
+    own_xy : array_like, shape (n, 2)
+        Ownship positions (m; x east, y north).
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise standard deviation (rad).
+    sigma_snr_db : float
+        SNR noise standard deviation sigma_SNR (dB).
+    snr_of_range : callable
+        xi_bar(r): predicted SNR (dB) at ranges r (m), eq. 30.
+    r_min_m, r_max_m : float
+        Range interval of the latent range (m).
+    kappa : float
+        Relative along-range spread of the position model (:data:`KAPPA`).
+    n_range : int, optional
+        Grid points.
+
+    Returns
+    -------
+    EmProblem
+        Times since the first frame, the grid and log p(xi_n | r_j), with the per-frame constants.
+    """
     z = np.asarray(z_rad, dtype=float)
     t = np.asarray(time_s, dtype=float)
     own = np.asarray(own_xy, dtype=float)
@@ -203,7 +229,22 @@ def _e_step(prob: EmProblem, x0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
 
 
 def objective(prob: EmProblem, x0, full: bool = False) -> float:
-    """L(X0) = sum_n log sum_j psi_n(r_j) r_j^2 (dlog r dropped: a constant)."""
+    """L(X0) = sum_n log sum_j psi_n(r_j) r_j^2 (dlog r dropped: a constant).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    x0 : array_like, shape (4,)
+        [x0, y0, vx, vy] at the first frame (m, m/s).
+    full : bool
+        Evaluate the whole range grid (the reference) instead of a window around each frame's peak.
+
+    Returns
+    -------
+    float
+        L(X0).
+    """
     if not full:
         return _e_step(prob, np.asarray(x0, dtype=float))[4]
     lp, _ = _log_psi(prob, np.asarray(x0, dtype=float), full)
@@ -212,7 +253,22 @@ def objective(prob: EmProblem, x0, full: bool = False) -> float:
 
 
 def em_step(prob: EmProblem, x0) -> tuple[np.ndarray, float]:
-    """One E and M step from ``x0``: (X0_new, L(x0))."""
+    """One E and M step from ``x0``: (X0_new, L(x0)).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    x0 : ndarray, shape (4,)
+        Current X0 (m, m/s).
+
+    Returns
+    -------
+    x0_new : ndarray, shape (4,)
+        X0 of eq. 29.
+    L : float
+        L at ``x0``.
+    """
     r, r2, w, tot, L = _e_step(prob, x0)
     q = w / tot[:, None]  # posterior mass of r_j
     e_inv_r2 = (q / r2).sum(axis=1)  # E[1/r^2] = integral p_n dr / r
@@ -225,7 +281,22 @@ def em_step(prob: EmProblem, x0) -> tuple[np.ndarray, float]:
 
 
 def direct_log_likelihood(prob: EmProblem, x0s, snr_of_range_on_grid=None) -> np.ndarray:
-    """log p(bearings, SNRs | X0) for many X0 (m, 4): the initial grid search's score."""
+    """log p(bearings, SNRs | X0) for many X0 (m, 4): the initial grid search's score.
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    x0s : array_like, shape (m, 4) or (4,)
+        Candidate X0s (m, m/s).
+    snr_of_range_on_grid : optional
+        Not used.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        The scores; -inf for a candidate whose ranges leave the grid.
+    """
     x0s = np.atleast_2d(x0s)
     bearing_term, j, outside = _candidate_geometry(prob, x0s)
     ll_snr = prob.log_snr_lik[prob.terms.rows[:, 0], j]  # log p(xi_n | r_j) at each candidate's range
@@ -261,7 +332,22 @@ def _candidate_geometry(prob: EmProblem, x0s) -> tuple[np.ndarray, np.ndarray, n
 def grid_initialisation(prob: EmProblem, n: int = 64, n_starts: int = 4) -> np.ndarray:
     """Starting X0s: tracks through (first bearing, range r_a) and (last bearing, range r_b) over an
     n x n log grid, scored by the direct bearing + SNR log-likelihood; the best ``n_starts`` whose
-    initial ranges differ by more than 20 % (distinct basins: direct path, convergence zones), best first."""
+    initial ranges differ by more than 20 % (distinct basins: direct path, convergence zones), best first.
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    n : int
+        Ranges per bearing line.
+    n_starts : int
+        Most starts returned.
+
+    Returns
+    -------
+    ndarray, shape (k, 4)
+        Starts [x0, y0, vx, vy] (m, m/s), 1 <= k <= n_starts.
+    """
     r = np.geomspace(prob.r_grid[0] * 1.01, prob.r_grid[-1] * 0.99, n)
     u0 = np.array([np.sin(prob.theta_rad[0]), np.cos(prob.theta_rad[0])])
     u1 = np.array([np.sin(prob.theta_rad[-1]), np.cos(prob.theta_rad[-1])])
@@ -314,6 +400,28 @@ def em_map(prob: EmProblem, x_init, max_iter: int = 500, tol: float = 1e-10,
     x - 2 a r + a^2 v with a = -|r| / |v| (<= -1), then one EM step from there; the result is kept
     only if L did not decrease, else a is halved towards -1 (plain EM), so L never decreases.
     Stops when L changes by less than ``tol`` (relative) and the position by less than 1e-7 of the range.
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    x_init : array_like, shape (4,)
+        Start (m, m/s).
+    max_iter : int
+        Iteration limit.
+    tol : float
+        Relative change of L that ends the iteration.
+    accelerate : bool
+        Use SQUAREM.
+
+    Returns
+    -------
+    x0 : ndarray, shape (4,)
+        Final X0.
+    iterations : int
+        Iterations run.
+    history : list of float
+        L at the start and after each iteration.
     """
     x = np.asarray(x_init, dtype=float)
     L_x = objective(prob, x)
@@ -338,7 +446,22 @@ def em_map(prob: EmProblem, x_init, max_iter: int = 500, tol: float = 1e-10,
 
 
 def observed_information(prob: EmProblem, x0, scale=None) -> np.ndarray:
-    """-Hessian of L at X0 by central differences (the covariance of the estimate is its inverse)."""
+    """-Hessian of L at X0 by central differences (the covariance of the estimate is its inverse).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    x0 : array_like, shape (4,)
+        X0 (m, m/s).
+    scale : array_like, shape (4,), optional
+        Difference steps; default 1e-3 of the range (m) for the position and 1e-3 m/s for the velocity.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        The observed information.
+    """
     x0 = np.asarray(x0, dtype=float)
     rng = float(np.hypot(*(x0[:2] - prob.own_xy[0])))
     h = np.array([1e-3 * rng, 1e-3 * rng, 1e-3, 1e-3]) if scale is None else np.asarray(scale)
@@ -359,7 +482,26 @@ def observed_information(prob: EmProblem, x0, scale=None) -> np.ndarray:
 def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: int = 500,
                  covariance: bool = True) -> BatchEstimate:
     """EM/MAP X0 with the robust initialisation (module doc) and the observed-information covariance
-    (``covariance=False`` skips it: NaN)."""
+    (``covariance=False`` skips it: NaN).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`).
+    t0_s : float
+        Time of the first frame (s), stored in the estimate.
+    extra_starts : iterable of array_like (4,) or None
+        More starts (e.g. the bearings-only ML estimate); None entries are skipped.
+    max_iter : int
+        Iteration limit of each EM run.
+    covariance : bool
+        Compute the covariance (inverse observed information; NaN when not positive definite).
+
+    Returns
+    -------
+    BatchEstimate
+        The start whose EM run ends with the highest L, method "em-map".
+    """
     starts = [*grid_initialisation(prob), *[np.asarray(s, dtype=float) for s in extra_starts if s is not None]]
     best = None
     for s in starts:

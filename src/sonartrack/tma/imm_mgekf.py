@@ -40,7 +40,20 @@ from sonartrack.models.relative_motion import relative_process_noise_stack, rela
 
 
 def transition_matrix(n_modes: int, diagonal: float) -> np.ndarray:
-    """Markov matrix with ``diagonal`` on the diagonal and the rest spread evenly over each row."""
+    """Markov matrix with ``diagonal`` on the diagonal and the rest spread evenly over each row.
+
+    Parameters
+    ----------
+    n_modes : int
+        Number of modes r.
+    diagonal : float
+        Probability of staying in a mode.
+
+    Returns
+    -------
+    ndarray, shape (r, r)
+        Rows sum to 1 ([[1]] for one mode).
+    """
     if n_modes == 1:
         return np.ones((1, 1))
     Pi = np.full((n_modes, n_modes), (1.0 - diagonal) / (n_modes - 1))
@@ -55,6 +68,31 @@ def imm_bf_step_reference(x, P, mu, z, u, dt_s, qs, Pi, R, *, modified: bool, q_
     x (r, 5), P (r, 5, 5), mu (r,) at k-1; z (m,) = [bearing] or [bearing, frequency]; u (5,) the
     observer input (models/relative_motion.py); qs (r,) process-noise intensities; Pi (r, r);
     R (m, m); ``modified`` selects the MGEKF covariance update.
+
+    Parameters
+    ----------
+    x, P, mu : array_like
+        Mode estimates [x, y, vx, vy, f0] (m, m/s, Hz) and mode probabilities at k-1.
+    z : array_like, shape (m,)
+        Bearing (rad, clockwise from north), then frequency (Hz) when m = 2.
+    u : array_like, shape (5,)
+        Observer input over the step.
+    dt_s : float
+        Step (s).
+    qs, Pi, R : array_like
+        Mode intensities (m^2/s^3), transition matrix, measurement covariance (rad^2, Hz^2).
+    modified : bool
+        MGEKF (True) or EKF (False) covariance update.
+    q_f0 : float
+        Random-walk intensity of f0 (Hz^2/s).
+    c : float
+        Sound speed (m/s).
+
+    Returns
+    -------
+    tuple
+        Mode means (r, 5), covariances (r, 5, 5), probabilities (r,), combined mean (5,) and covariance (5, 5),
+        log sum_j c_j Lambda_j.
     """
     z = np.atleast_1d(np.asarray(z, dtype=float))
     m = z.shape[0]
@@ -131,6 +169,26 @@ def imm_bf_step(x, P, mu, z, u, dt_s: float, model: ImmBfModel, out=None):
     z: float array [bearing] or [bearing, frequency] (a NaN frequency: bearing only). ``out``: optional
     preallocated ``(x_r, P_r, mu, x_comb, P_comb)`` arrays, reused to avoid allocation in a tight loop.
     Returns ``(x_r, P_r, mu, x_comb, P_comb, log_lik_total)``.
+
+    Parameters
+    ----------
+    x, P, mu : ndarray
+        Mode estimates (r, 5), (r, 5, 5) and probabilities (r,) at k-1.
+    z : array_like, shape (1,) or (2,)
+        Bearing (rad), frequency (Hz).
+    u : ndarray, shape (5,)
+        Observer input over the step.
+    dt_s : float
+        Step (s).
+    model : ImmBfModel
+        Modes, transition matrix, noises, sound speed.
+    out : tuple of ndarray, optional
+        Output arrays.
+
+    Returns
+    -------
+    tuple
+        As :func:`imm_bf_step_reference` (log-likelihood NaN when some S is singular).
     """
     if out is None:
         r = x.shape[0]
@@ -150,6 +208,20 @@ def run_imm_bf(times_s, bearing_rad, frequency_hz, u, x0, P0, model: ImmBfModel,
     ``(x (n, 5), P (n, 5, 5), mu (n, r), failed_at)``; after a numerical failure at step k
     (``failed_at = k``, else -1) the rows from k on are NaN. ``engine="reference"`` runs the NumPy
     reference step instead of the kernel.
+
+    Parameters
+    ----------
+    times_s, bearing_rad, frequency_hz, u, x0, P0, mu0
+        As above (s, rad clockwise from north, Hz; states in m, m/s, Hz).
+    model : ImmBfModel
+        Modes, transition matrix, noises, sound speed.
+    engine : str
+        "numba" or "reference".
+
+    Returns
+    -------
+    tuple
+        Combined means (n, 5), covariances (n, 5, 5), mode probabilities (n, r), index of the failed step or -1.
     """
     t = _c(times_s)
     n_t, r = len(t), len(model.qs)

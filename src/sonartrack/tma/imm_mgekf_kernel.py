@@ -50,7 +50,19 @@ _step = numba.njit(cache=True, error_model="numpy", inline="always")
 @_step
 def mix(x, P, mu, Pi, c_pred, w, x0, P0):
     """Interaction: c_j = sum_i Pi[i, j] mu_i;  w_i = mu_i|j = Pi[i, j] mu_i / c_j;
-    x0_j = sum_i w_i x_i;  P0_j = sum_i w_i (P_i + (x_i - x0_j)(x_i - x0_j)^T). Writes c_pred, w, x0, P0."""
+    x0_j = sum_i w_i x_i;  P0_j = sum_i w_i (P_i + (x_i - x0_j)(x_i - x0_j)^T). Writes c_pred, w, x0, P0.
+
+    Parameters
+    ----------
+    x, P : ndarray, shape (r, 5), (r, 5, 5)
+        Mode estimates at k-1 (m, m/s, Hz).
+    mu : ndarray, shape (r,)
+        Mode probabilities at k-1.
+    Pi : ndarray, shape (r, r)
+        Markov matrix, Pi[i, j] = P(mode j at k | mode i at k-1).
+    c_pred, w, x0, P0 : ndarray, shapes (r,), (r,), (r, 5), (r, 5, 5)
+        Outputs: predicted mode probabilities, scratch mixing weights, mixed means and covariances.
+    """
     r, n = x.shape[0], N_STATE
     for j in range(r):
         s = 0.0
@@ -77,7 +89,25 @@ def mix(x, P, mu, Pi, c_pred, w, x0, P0):
 def predict(x0, P0, j, u, dt, q, q_f0, xp, Pp):
     """Mode j's prediction from its mixed estimate x0[j], P0[j] (P2 eq. 2 discretised, models/relative_motion.py):
     x- = F x0 - u,  P- = F P0 F^T + Q, with F = [[I, dt I, 0], [0, I, 0], [0, 0, 1]] applied as row/column
-    operations and Q = [[q dt^3/3 I, q dt^2/2 I, 0], [q dt^2/2 I, q dt I, 0], [0, 0, q_f0 dt]]. Writes xp, Pp."""
+    operations and Q = [[q dt^3/3 I, q dt^2/2 I, 0], [q dt^2/2 I, q dt I, 0], [0, 0, q_f0 dt]]. Writes xp, Pp.
+
+    Parameters
+    ----------
+    x0, P0 : ndarray, shape (r, 5), (r, 5, 5)
+        Mixed estimates.
+    j : int
+        The mode.
+    u : ndarray, shape (5,)
+        Observer input over the step (m, m/s, Hz).
+    dt : float
+        Step (s).
+    q : float
+        Mode j's acceleration noise intensity (m^2/s^3).
+    q_f0 : float
+        Random-walk intensity of f0 (Hz^2/s).
+    xp, Pp : ndarray, shape (5,), (5, 5)
+        Outputs: predicted mean and covariance.
+    """
     n = N_STATE
     for a in range(n):
         xp[a] = x0[j, a] - u[a]
@@ -111,7 +141,21 @@ def innovation(xp, z, use_f, c, H, nu):
         bearing    h_b = atan2(x, y),         H_b = [y / r^2, -x / r^2, 0, 0, 0],   nu_b wrapped to (-pi, pi]
         frequency  h_f = f0 (1 - rdot / c),  H_f = [-k y w / r^3, k x w / r^3, -k x / r, -k y / r, 1 - rdot / c]
 
-    with r^2 = x^2 + y^2, rdot = (x vx + y vy) / r, w = y vx - x vy, k = f0 / c. Writes H, nu."""
+    with r^2 = x^2 + y^2, rdot = (x vx + y vy) / r, w = y vx - x vy, k = f0 / c. Writes H, nu.
+
+    Parameters
+    ----------
+    xp : ndarray, shape (5,)
+        Predicted state [x, y, vx, vy, f0] (m, m/s, Hz).
+    z : ndarray, shape (1,) or (2,)
+        Bearing (rad clockwise from north) and frequency (Hz).
+    use_f : bool
+        Use the frequency row.
+    c : float
+        Speed of sound (m/s).
+    H, nu : ndarray, shape (2, 5), (2,)
+        Outputs (only the first 1 or 2 rows/entries are meaningful).
+    """
     X, Y, VX, VY, F0 = xp[0], xp[1], xp[2], xp[3], xp[4]
     r2 = X * X + Y * Y
     rr = math.sqrt(r2)
@@ -140,7 +184,28 @@ def gain(Pp, H, nu, m, var_b, var_f, PHt, K):
     """S = H P- H^T + R (R = diag(var_b, var_f)),  K = P- H^T S^-1 (S inverted in closed form, m = 1 or 2).
 
     Writes PHt, K; returns the mode log-likelihood log N(nu; 0, S) = -(m log 2 pi + log det S + nu^T S^-1 nu) / 2,
-    or NaN when S is not positive definite."""
+    or NaN when S is not positive definite.
+
+    Parameters
+    ----------
+    Pp : ndarray, shape (5, 5)
+        Predicted covariance.
+    H : ndarray, shape (2, 5)
+        Jacobian (first m rows used).
+    nu : ndarray, shape (2,)
+        Innovation (first m entries used).
+    m : int
+        Measured entries, 1 (bearing) or 2 (bearing and frequency).
+    var_b, var_f : float
+        Bearing (rad^2) and frequency (Hz^2) noise variances.
+    PHt, K : ndarray, shape (5, 2)
+        Outputs: P- H^T and the gain.
+
+    Returns
+    -------
+    float
+        log N(nu; 0, S), NaN when S is not positive definite.
+    """
     n = N_STATE
     for a in range(n):
         for row in range(m):
@@ -178,7 +243,23 @@ def gain(Pp, H, nu, m, var_b, var_f, PHt, K):
 
 @_step
 def update_mean(xp, K, nu, m, x_new, j):
-    """x+ = x- + K nu. Writes x_new[j]."""
+    """x+ = x- + K nu. Writes x_new[j].
+
+    Parameters
+    ----------
+    xp : ndarray, shape (5,)
+        Predicted mean.
+    K : ndarray, shape (5, 2)
+        Gain (first m columns used).
+    nu : ndarray, shape (2,)
+        Innovation.
+    m : int
+        Measured entries (1 or 2).
+    x_new : ndarray, shape (r, 5)
+        Output: row j is written.
+    j : int
+        The mode.
+    """
     for a in range(N_STATE):
         s = xp[a]
         for row in range(m):
@@ -190,7 +271,23 @@ def update_mean(xp, K, nu, m, x_new, j):
 def covariance_rows(xp, z_b, H, m, modified, G):
     """The rows G of the covariance update: the Jacobian H (EKF), or for the MGEKF H with its bearing row
     replaced by Song & Speyer's g = [cos z, -sin z, 0, 0, 0] / (x sin z + y cos z) at the measured bearing z
-    (models/passive.py; the Jacobian row is kept where the denominator is below MIN_COS_DELTA r). Writes G."""
+    (models/passive.py; the Jacobian row is kept where the denominator is below MIN_COS_DELTA r). Writes G.
+
+    Parameters
+    ----------
+    xp : ndarray, shape (5,)
+        Predicted state.
+    z_b : float
+        Measured bearing (rad clockwise from north).
+    H : ndarray, shape (2, 5)
+        Jacobian.
+    m : int
+        Measured entries (1 or 2).
+    modified : bool
+        MGEKF (True) or EKF (False).
+    G : ndarray, shape (2, 5)
+        Output.
+    """
     for row in range(m):
         for a in range(N_STATE):
             G[row, a] = H[row, a]
@@ -204,7 +301,27 @@ def covariance_rows(xp, z_b, H, m, modified, G):
 
 @_step
 def joseph_covariance(Pp, K, G, m, r_diag, A, AP, P_new, j):
-    """P+ = (I - K G) P- (I - K G)^T + K R K^T (Joseph form; symmetric by construction). Writes A, AP, P_new[j]."""
+    """P+ = (I - K G) P- (I - K G)^T + K R K^T (Joseph form; symmetric by construction). Writes A, AP, P_new[j].
+
+    Parameters
+    ----------
+    Pp : ndarray, shape (5, 5)
+        Predicted covariance.
+    K : ndarray, shape (5, 2)
+        Gain.
+    G : ndarray, shape (2, 5)
+        Rows of the covariance update (:func:`covariance_rows`).
+    m : int
+        Measured entries (1 or 2).
+    r_diag : ndarray, shape (2,)
+        Diagonal of R (rad^2, Hz^2).
+    A, AP : ndarray, shape (5, 5)
+        Scratch.
+    P_new : ndarray, shape (r, 5, 5)
+        Output: mode j is written.
+    j : int
+        The mode.
+    """
     n = N_STATE
     for a in range(n):
         for b in range(n):
@@ -232,7 +349,22 @@ def joseph_covariance(Pp, K, G, m, r_diag, A, AP, P_new, j):
 @_step
 def mode_probabilities(c_pred, log_lik, mu_new):
     """mu_j = c_j Lambda_j / sum_l c_l Lambda_l, in log space (largest term factored out).
-    Writes mu_new; returns log sum_j c_j Lambda_j (the IMM likelihood of the measurement)."""
+    Writes mu_new; returns log sum_j c_j Lambda_j (the IMM likelihood of the measurement).
+
+    Parameters
+    ----------
+    c_pred : ndarray, shape (r,)
+        Predicted mode probabilities c_j.
+    log_lik : ndarray, shape (r,)
+        Mode log-likelihoods log Lambda_j.
+    mu_new : ndarray, shape (r,)
+        Output: posterior mode probabilities.
+
+    Returns
+    -------
+    float
+        log sum_j c_j Lambda_j.
+    """
     r = c_pred.shape[0]
     a_max = -np.inf
     for j in range(r):
@@ -250,7 +382,17 @@ def mode_probabilities(c_pred, log_lik, mu_new):
 
 @_step
 def combine(mu, x, P, xc, Pc):
-    """x = sum_j mu_j x_j,  P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T). Writes xc, Pc."""
+    """x = sum_j mu_j x_j,  P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T). Writes xc, Pc.
+
+    Parameters
+    ----------
+    mu : ndarray, shape (r,)
+        Mode probabilities.
+    x, P : ndarray, shape (r, 5), (r, 5, 5)
+        Mode estimates.
+    xc, Pc : ndarray, shape (5,), (5, 5)
+        Outputs: the combined estimate.
+    """
     r, n = x.shape[0], N_STATE
     for a in range(n):
         s = 0.0
@@ -271,7 +413,18 @@ Workspace = namedtuple("Workspace", "c_pred w x0 P0 log_lik xp Pp H G nu PHt K A
 
 @_step
 def workspace(r):
-    """Scratch arrays of one cycle with r modes (allocated once per record, not once per step)."""
+    """Scratch arrays of one cycle with r modes (allocated once per record, not once per step).
+
+    Parameters
+    ----------
+    r : int
+        Number of modes.
+
+    Returns
+    -------
+    Workspace
+        The named scratch arrays of :func:`cycle`.
+    """
     n = N_STATE
     return Workspace(np.zeros(r), np.zeros(r), np.zeros((r, n)), np.zeros((r, n, n)), np.zeros(r), np.zeros(n),
                      np.zeros((n, n)), np.zeros((2, n)), np.zeros((2, n)), np.zeros(2), np.zeros((n, 2)),
@@ -281,7 +434,20 @@ def workspace(r):
 @_step
 def cycle(x, P, mu, z, u, dt, qs, Pi, consts, modified, x_new, P_new, mu_new, xc, Pc, ws):
     """One IMM cycle (module docstring) for one track, in the scratch arrays ``ws``. Arguments and return as
-    :func:`imm_step`."""
+    :func:`imm_step`.
+
+    Parameters
+    ----------
+    x, P, mu, z, u, dt, qs, Pi, consts, modified, x_new, P_new, mu_new, xc, Pc
+        As :func:`imm_step`.
+    ws : Workspace
+        Scratch arrays from :func:`workspace`.
+
+    Returns
+    -------
+    float
+        log sum_j c_j Lambda_j, NaN if some S is not positive definite.
+    """
     r = x.shape[0]
     use_f = z.shape[0] > 1 and math.isfinite(z[1])
     m = 2 if use_f else 1
@@ -306,7 +472,34 @@ def imm_step(x, P, mu, z, u, dt, qs, Pi, consts, modified, x_new, P_new, mu_new,
     (a NaN frequency means none at this time); u (5,) observer input; qs (r,); Pi (r, r); consts as in the
     module docstring. Writes the mode estimates x_new, P_new, mu_new (which may be x, P, mu themselves: the
     inputs are read only before the first write) and the combination xc, Pc; returns log sum_j c_j Lambda_j,
-    NaN if some S is singular."""
+    NaN if some S is singular.
+
+    Parameters
+    ----------
+    x, P, mu : ndarray, shapes (r, 5), (r, 5, 5), (r,)
+        Mode estimates [x, y, vx, vy, f0] (m, m/s, Hz) and probabilities at k-1.
+    z : ndarray, shape (1,) or (2,)
+        Bearing (rad clockwise from north) and frequency (Hz; NaN: none).
+    u : ndarray, shape (5,)
+        Observer input over the step.
+    dt : float
+        Step (s).
+    qs : ndarray, shape (r,)
+        Acceleration noise intensity of each mode (m^2/s^3).
+    Pi : ndarray, shape (r, r)
+        Mode transition matrix.
+    consts : ndarray, shape (4,)
+        [var_b (rad^2), var_f (Hz^2), q_f0 (Hz^2/s), c (m/s)].
+    modified : bool
+        MGEKF covariance rows (True) or EKF (False).
+    x_new, P_new, mu_new, xc, Pc : ndarray
+        Outputs.
+
+    Returns
+    -------
+    float
+        log sum_j c_j Lambda_j, NaN if some S is singular.
+    """
     return cycle(x, P, mu, z, u, dt, qs, Pi, consts, modified, x_new, P_new, mu_new, xc, Pc, workspace(x.shape[0]))
 
 
@@ -314,7 +507,28 @@ def imm_step(x, P, mu, z, u, dt, qs, Pi, consts, modified, x_new, P_new, mu_new,
 def run_record(times, z, u, x, P, mu, qs, Pi, consts, modified, xc_hist, Pc_hist, mu_hist):
     """Filter a whole record: the estimate (x, P, mu, updated in place) holds at times[0]; one IMM cycle per
     later time, z (n, 2) with NaN where a frequency is missing. Writes the combined estimates and mode
-    probabilities at every time; returns the index of the first step that failed (NaN), or -1."""
+    probabilities at every time; returns the index of the first step that failed (NaN), or -1.
+
+    Parameters
+    ----------
+    times : ndarray, shape (n,)
+        Measurement times (s).
+    z : ndarray, shape (n, 2)
+        Bearings (rad clockwise from north) and frequencies (Hz; NaN: none).
+    u : ndarray, shape (n - 1, 5)
+        Observer input of each step.
+    x, P, mu : ndarray, shapes (r, 5), (r, 5, 5), (r,)
+        Mode estimates at times[0]; updated in place.
+    qs, Pi, consts, modified
+        As :func:`imm_step`.
+    xc_hist, Pc_hist, mu_hist : ndarray, shapes (n, 5), (n, 5, 5), (n, r)
+        Outputs: combined estimates and mode probabilities per time (NaN from the failed step).
+
+    Returns
+    -------
+    int
+        Index of the first failed step, or -1 when all succeeded.
+    """
     combine(mu, x, P, xc_hist[0], Pc_hist[0])
     mu_hist[0, :] = mu
     ws = workspace(x.shape[0])

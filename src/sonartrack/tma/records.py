@@ -32,7 +32,18 @@ class BearingRecord:
     snr_db: np.ndarray | None = None
 
     def until(self, end_s: float) -> BearingRecord:
-        """The measurements at times <= ``end_s``."""
+        """The measurements at times <= ``end_s``.
+
+        Parameters
+        ----------
+        end_s : float
+            Last time kept (s).
+
+        Returns
+        -------
+        BearingRecord
+            The rows with time_s <= end_s (optional columns stay None).
+        """
         keep = np.asarray(self.time_s) <= end_s
 
         def cut(a):
@@ -51,7 +62,18 @@ class OwnshipTrack:
     y_m: np.ndarray
 
     def position_at(self, t_s) -> np.ndarray:
-        """Linearly interpolated position (..., 2) at times ``t_s`` (caller checks the time span)."""
+        """Linearly interpolated position (..., 2) at times ``t_s`` (caller checks the time span).
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times (s).
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            (x, y) (m; x east, y north); clamped to the end positions outside the span (np.interp).
+        """
         t = np.asarray(t_s, dtype=float)
         return np.stack([np.interp(t, self.time_s, self.x_m), np.interp(t, self.time_s, self.y_m)], axis=-1)
 
@@ -69,13 +91,30 @@ class TmaSolution:
     range_determined: np.ndarray | None = None
 
     def range_flags(self) -> np.ndarray:
-        """``range_determined`` as a boolean array (all True when not set)."""
+        """``range_determined`` as a boolean array (all True when not set).
+
+        Returns
+        -------
+        ndarray of bool, shape (n,)
+            Whether the range of each row is determined by the data.
+        """
         n = len(np.asarray(self.time_s))
         return np.ones(n, bool) if self.range_determined is None else np.asarray(self.range_determined, bool)
 
     def followed_by(self, later: TmaSolution) -> TmaSolution:
         """This solution, then ``later`` from its second row on (its first row restates this one's last time),
-        under ``later``'s method name."""
+        under ``later``'s method name.
+
+        Parameters
+        ----------
+        later : TmaSolution
+            The solution that takes over (its first row at this one's last time).
+
+        Returns
+        -------
+        TmaSolution
+            The joined rows.
+        """
         return TmaSolution(time_s=np.concatenate([self.time_s, later.time_s[1:]]),
                            state=np.concatenate([self.state, later.state[1:]]),
                            covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method,
@@ -84,7 +123,17 @@ class TmaSolution:
 
 def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:
     """Every measurement time must lie within the ownship span, in no gap longer than ``max_gap_s``
-    (positions are interpolated linearly, never extrapolated). Raises :class:`InputError`."""
+    (positions are interpolated linearly, never extrapolated). Raises :class:`InputError`.
+
+    Parameters
+    ----------
+    record : BearingRecord
+        The measurements (times in s).
+    ownship : OwnshipTrack
+        The ownship samples (times in s).
+    max_gap_s : float
+        Longest ownship gap (s) interpolated across; a measurement exactly on an ownship sample is always fine.
+    """
     t = np.asarray(record.time_s, float)
     nt = np.asarray(ownship.time_s, float)
     outside = (t < nt[0]) | (t > nt[-1])

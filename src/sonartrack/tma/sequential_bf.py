@@ -49,7 +49,26 @@ class SequentialTrack:
 def filter_model(method: str, *, sigma_bearing_rad: float, sigma_freq_hz: float, imm: ImmSettings,
                  sequential: SequentialSettings) -> ImmBfModel:
     """The filter a method name stands for: ``ekf`` / ``mgekf`` one model with q = ``q_single``,
-    ``imm-ekf`` / ``imm-mgekf`` one mode per ``imm.q_values``; ``*mgekf`` the MGEKF covariance update."""
+    ``imm-ekf`` / ``imm-mgekf`` one mode per ``imm.q_values``; ``*mgekf`` the MGEKF covariance update.
+
+    Parameters
+    ----------
+    method : str
+        One of ekf, mgekf, imm-ekf, imm-mgekf.
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+    sigma_freq_hz : float
+        Frequency noise standard deviation (Hz).
+    imm : ImmSettings
+        Mode intensities q (m^2/s^3), transition diagonal, f0 random walk q_f0 (Hz^2/s).
+    sequential : SequentialSettings
+        Single-model q (m^2/s^3) and sound speed (m/s).
+
+    Returns
+    -------
+    ImmBfModel
+        The mode intensities, transition matrix, noises and covariance-update choice.
+    """
     if method not in SEQUENTIAL_METHODS:
         raise InputError(f"unknown sequential method '{method}': choose one of {', '.join(SEQUENTIAL_METHODS)}")
     qs = tuple(imm.q_values) if method.startswith("imm") else (sequential.q_single,)
@@ -60,7 +79,22 @@ def filter_model(method: str, *, sigma_bearing_rad: float, sigma_freq_hz: float,
 
 def observer_kinematics(ownship: OwnshipTrack, times_s):
     """Own-ship position (linear interpolation) and velocity (central differences of the navigation
-    samples, interpolated) at ``times_s``; returns ``pos (n, 2)``, ``vel (n, 2)``."""
+    samples, interpolated) at ``times_s``; returns ``pos (n, 2)``, ``vel (n, 2)``.
+
+    Parameters
+    ----------
+    ownship : OwnshipTrack
+        At least two samples.
+    times_s : array_like, shape (n,)
+        Times (s).
+
+    Returns
+    -------
+    pos : ndarray, shape (n, 2)
+        Positions (m; x east, y north).
+    vel : ndarray, shape (n, 2)
+        Velocities (m/s).
+    """
     t = np.asarray(times_s, dtype=float)
     pos = ownship.position_at(t)
     nt = np.asarray(ownship.time_s, float)
@@ -76,7 +110,36 @@ def initial_estimate(bearing0_rad: float, freq0_hz: float | None, obs_vel0, *, r
                      sigma_bearing_rad: float, target_velocity_mps=(0.0, 0.0), sigma_target_velocity_mps: float = 5.0,
                      sigma_f0_hz: float | None = None, c: float = SOUND_SPEED_MPS):
     """Initial relative estimate ``x0 (5,)``, ``P0 (5, 5)`` (module docstring). With no frequency,
-    f0 is a placeholder (0 Hz, unit variance) that the bearings never touch."""
+    f0 is a placeholder (0 Hz, unit variance) that the bearings never touch.
+
+    Parameters
+    ----------
+    bearing0_rad : float
+        First bearing (rad, clockwise from north).
+    freq0_hz : float or None
+        First measured frequency (Hz); None or NaN: none.
+    obs_vel0 : array_like, shape (2,)
+        Ownship velocity (m/s) at the first time.
+    range_m, sigma_range_m : float
+        Assumed range and its standard deviation (m).
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad): the cross-range spread is range_m times it.
+    target_velocity_mps : array_like, shape (2,)
+        Assumed target velocity (m/s).
+    sigma_target_velocity_mps : float
+        Its standard deviation per axis (m/s).
+    sigma_f0_hz : float, optional
+        Standard deviation of f0 (Hz); default f0 (|v_own| + 2 sigma_v) / c.
+    c : float
+        Sound speed (m/s).
+
+    Returns
+    -------
+    x0 : ndarray, shape (5,)
+        [x, y, vx, vy, f0] relative to the ownship (m, m/s, Hz).
+    P0 : ndarray, shape (5, 5)
+        Its covariance.
+    """
     ur = np.array([np.sin(bearing0_rad), np.cos(bearing0_rad)])
     un = np.array([np.cos(bearing0_rad), -np.sin(bearing0_rad)])
     vo = np.asarray(obs_vel0, float)
@@ -114,6 +177,26 @@ def solve_sequential(record: BearingRecord, ownship: OwnshipTrack, method: str =
 
     The ownship track must cover the record (tma/records.py ``check_coverage``). Raises
     :class:`InputError` when frequencies are asked for but absent, or when the filter fails.
+
+    Parameters
+    ----------
+    record, ownship : BearingRecord, OwnshipTrack
+        At least 3 bearings (rad, clockwise from north); ownship positions (m; x east, y north).
+    method : str
+        ekf, mgekf, imm-ekf or imm-mgekf.
+    sigma_bearing_rad, sigma_freq_hz : float
+        Bearing (rad) and frequency (Hz) noise standard deviations.
+    use_frequency : bool
+        Use the record's frequencies too.
+    imm, sequential : ImmSettings, SequentialSettings, optional
+        Filter settings (default the library defaults).
+
+    Returns
+    -------
+    solution : TmaSolution
+        Absolute states (m, m/s) and their 4 x 4 covariances at the bearing times.
+    track : SequentialTrack
+        Relative states with f0, covariances, mode probabilities, method and mode intensities.
     """
     imm = ImmSettings() if imm is None else imm
     seq = SequentialSettings() if sequential is None else sequential

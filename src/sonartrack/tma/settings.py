@@ -110,4 +110,5 @@ class TmaSettings(Settings):
 
     @property
     def is_sequential(self) -> bool:
+        """The method is a sequential filter (ekf, mgekf, imm-ekf, imm-mgekf), not a batch method (ml, em-map)."""
         return self.method in SEQUENTIAL_METHODS

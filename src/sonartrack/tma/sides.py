@@ -63,6 +63,27 @@ class SideDecision:
     starboard: BatchEstimate | None
     port: BatchEstimate | None
     note: str = ""
+    #: times (s) at which the target crossed the array's axis (endfire; the side changes there), in order
+    crossings_s: tuple[float, ...] = ()
+    #: the unfolded cone angles (rad) the decision was taken on (through the crossings), or None (plain cone angles)
+    unfolded_rad: np.ndarray | None = None
+
+    def side_at(self, time_s) -> np.ndarray:
+        """The side at each of ``time_s`` (s): ``side`` (the side at the record's start) before the first axis
+        crossing, the other side after it, and so on; "unresolved" everywhere when unresolved."""
+        t = np.asarray(time_s, float)
+        if self.side == "unresolved":
+            return np.full(t.shape, "unresolved", dtype=object)
+        flips = np.searchsorted(np.asarray(self.crossings_s, float), t, side="right") % 2
+        other = "port" if self.side == "starboard" else "starboard"
+        return np.where(flips == 0, self.side, other).astype(object)
+
+    @property
+    def final_side(self) -> str:
+        """The side after the last axis crossing (``side`` when there was none)."""
+        if self.side == "unresolved" or len(self.crossings_s) % 2 == 0:
+            return self.side
+        return "port" if self.side == "starboard" else "starboard"
 
 
 def mirror_bearings_rad(cone_rad, array_heading_rad) -> tuple[np.ndarray, np.ndarray]:
@@ -101,7 +122,7 @@ def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -
     return best
 
 
-def _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m):
+def _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m, unfolded: bool = False):
     """Arrays as float, or InputError naming the problem (NaNs, shapes, unsorted times, cone outside 0..pi)."""
     t, cone = np.asarray(time_s, dtype=float), np.asarray(cone_rad, dtype=float)
     head, xy = np.asarray(array_heading_rad, dtype=float), np.asarray(sensor_xy_m, dtype=float)
@@ -112,21 +133,22 @@ def _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m):
     for name, a in (("time_s", t), ("cone_rad", cone), ("array_heading_rad", head), ("sensor_xy_m", xy)):
         require(bool(np.all(np.isfinite(a))), f"resolve_side: {name} holds NaN or infinite values: drop those rows")
     require(bool(np.all(np.diff(t) > 0)), "resolve_side: times must increase strictly: sort and drop duplicates")
-    require(bool(np.all((cone >= 0) & (cone <= np.pi))),
+    require(unfolded or bool(np.all((cone >= 0) & (cone <= np.pi))),
             "resolve_side: cone angles must lie in 0..pi rad from the array's forward axis")
     return t, cone, head, xy
 
 
 def resolve_side(time_s, cone_rad, array_heading_rad, sensor_xy_m, *, sigma_bearing_rad: float | None = None,
                  min_log_lr: float = float(np.log(100.0)), sigma_floor_rad: float = SIGMA_FLOOR_RAD,
-                 initial_ranges_m=INITIAL_RANGES_M) -> SideDecision:
+                 initial_ranges_m=INITIAL_RANGES_M, unfolded: bool = False) -> SideDecision:
     """The side of the array a cone-angle track's target is on (module doc for the equations).
 
     ``time_s`` (n,) s, ``cone_rad`` (n,) rad in 0..pi, ``array_heading_rad`` (n,) rad clockwise from north,
     ``sensor_xy_m`` (n, 2) the array centre (x east, y north) at those times. ``sigma_bearing_rad``: the
-    bearing noise if known, else measured. Unresolved (ln LR 0, a ``note``) with fewer than 6 bearings or
-    when a side's fit fails; NaN inputs raise :class:`InputError`."""
-    t, cone, head, xy = _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m)
+    bearing noise if known, else measured. ``unfolded``: ``cone_rad`` are unfolded angles phi through axis
+    crossings (:func:`resolve_side_through_crossings`), any real values. Unresolved (ln LR 0, a ``note``) with
+    fewer than 6 bearings or when a side's fit fails; NaN inputs raise :class:`InputError`."""
+    t, cone, head, xy = _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m, unfolded)
     require(sigma_bearing_rad is None or (np.isfinite(sigma_bearing_rad) and sigma_bearing_rad > 0),
             f"resolve_side: sigma_bearing_rad must be a positive number, got {sigma_bearing_rad}")
     nan = float("nan") if sigma_bearing_rad is None else float(sigma_bearing_rad)
@@ -151,3 +173,93 @@ def resolve_side(time_s, cone_rad, array_heading_rad, sensor_xy_m, *, sigma_bear
                                            "turned enough to tell the mirror images apart"
     return SideDecision(side, float(log_lr), sigma, replace(fit_s, covariance=fit_s.covariance * sigma**2),
                         replace(fit_p, covariance=fit_p.covariance * sigma**2), note)
+
+
+#: most axis crossings whose alternative (the target turned back before the axis) is tried: 2^k hypotheses
+MAX_CROSSING_ALTERNATIVES = 3
+
+
+def axis_crossings(time_s, phi_rad) -> np.ndarray:
+    """Times (s) at which an unfolded cone angle phi passes a multiple of pi (the array's axis, endfire): the
+    midpoints between the samples where floor(phi / pi) changes."""
+    t, k = np.asarray(time_s, float), np.floor(np.asarray(phi_rad, float) / np.pi)
+    i = np.nonzero(np.diff(k) != 0)[0]
+    return 0.5 * (t[i] + t[i + 1])
+
+
+#: a track that comes this close to the array's axis and turns back may have crossed it (the beams are widest at
+#: endfire and the peaks there are clipped at the grid's end): its crossing is tried as an alternative (rad)
+NEAR_AXIS_RAD = float(np.deg2rad(3.0))
+
+
+def _reflect_after(phi, time_s, event_s: float, axis_rad: float) -> np.ndarray:
+    """phi reflected about ``axis_rad`` after ``event_s``: a crossing undone, or a turning back made a crossing."""
+    out = phi.copy()
+    after = np.asarray(time_s) > event_s
+    out[after] = 2.0 * axis_rad - phi[after]
+    return out
+
+
+def crossing_events(time_s, phi_rad) -> list[tuple[float, float]]:
+    """(time s, axis rad) of each pass of phi through a multiple of pi, and of each approach to within
+    ``NEAR_AXIS_RAD`` of one that turns back without passing it (a crossing the tracker may have reflected)."""
+    t, phi = np.asarray(time_s, float), np.asarray(phi_rad, float)
+    k = np.floor(phi / np.pi)
+    events = [(0.5 * (t[i] + t[i + 1]), np.pi * max(k[i], k[i + 1])) for i in np.nonzero(np.diff(k) != 0)[0]]
+    axis = np.pi * np.round(phi / np.pi)
+    near = np.abs(phi - axis) < NEAR_AXIS_RAD
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], near.astype(int), [0]])))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if len(np.unique(k[max(a - 1, 0):min(b + 1, len(k))])) == 1 and a > 0 and b < len(k):
+            j = a + int(np.argmin(np.abs(phi[a:b] - axis[a:b])))
+            events.append((float(t[j]), float(axis[j])))
+    return sorted(events)
+
+
+def resolve_side_through_crossings(time_s, phi_rad, array_heading_rad, sensor_xy_m, **options) -> SideDecision:
+    """The side decision of a track that may cross the array's axis (endfire), on its unfolded cone angles.
+
+    The tracker follows phi through endfire (tracking/measurements.py ``fold_cone_deg``); the true bearing on the
+    starboard hypothesis is b = h + phi and on the port one b = h - phi, continuous through the crossings (each
+    pass of phi through a multiple of pi changes the side). Both mirror hypotheses are carried through every
+    crossing; in addition, each event's alternative (:func:`crossing_events`: a crossing undone -- the target
+    turned back before the axis -- or a turning back within ``NEAR_AXIS_RAD`` of the axis made a crossing; phi
+    reflected about the axis after it) is fitted (the first ``MAX_CROSSING_ALTERNATIVES`` events, 2^k
+    patterns), and the pattern
+    whose better side has the lowest constant-velocity ML cost wins: the motion that follows the crossing decides
+    it. ``side`` is the side at the record's start; :meth:`SideDecision.side_at` and ``final_side`` follow the
+    crossings.
+
+    Parameters
+    ----------
+    time_s : ndarray (n,)
+        Times (s), increasing.
+    phi_rad : ndarray (n,)
+        Unfolded cone angles (rad).
+    array_heading_rad : ndarray (n,)
+        The array's heading (rad, clockwise from north).
+    sensor_xy_m : ndarray (n, 2)
+        The array centre (m).
+    **options
+        Passed to :func:`resolve_side` (``min_log_lr``, ``sigma_bearing_rad`` ...).
+
+    Returns
+    -------
+    SideDecision
+        The decision with ``crossings_s`` and ``unfolded_rad`` of the winning pattern.
+    """
+    phi = np.asarray(phi_rad, float)
+    if len(phi) and int(np.floor(phi[0] / np.pi)) % 2:  # started on the mirrored half: the same bearings as -phi
+        phi = -phi
+    phi = phi - 2.0 * np.pi * np.floor(phi[0] / (2.0 * np.pi)) if len(phi) else phi  # so that phi[0] in [0, pi]
+    patterns = [phi]
+    for when, axis in crossing_events(time_s, phi)[:MAX_CROSSING_ALTERNATIVES]:
+        patterns += [_reflect_after(p, time_s, when, axis) for p in patterns]
+    best, best_cost = None, np.inf
+    for p in patterns:
+        d = resolve_side(time_s, p, array_heading_rad, sensor_xy_m, unfolded=True, **options)
+        costs = [f.objective for f in (d.starboard, d.port) if f is not None]
+        cost = min(costs) if costs else np.inf
+        if best is None or cost < best_cost:
+            best, best_cost = replace(d, crossings_s=tuple(axis_crossings(time_s, p)), unfolded_rad=p), cost
+    return best

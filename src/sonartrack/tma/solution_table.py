@@ -28,6 +28,19 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
         bearing = atan2(dx, dy): J = [dy, -dx] / r^2 on (x, y);     range r = |d|:  J = [dx, dy] / r
 
     with d = target - ownship position. A course is undefined at zero speed: its std saturates at 180 deg.
+
+    Parameters
+    ----------
+    solution : TmaSolution
+        Absolute states [x, y, vx, vy] (m, m/s) and covariances over time.
+    ownship : OwnshipTrack
+        Ownship positions (m; x east, y north).
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (n,)
+        time_s, x_m, y_m, vx_mps, vy_mps, course_deg and bearing_deg (0..360, clockwise from north), speed_kn,
+        range_m, their standard deviations (``*_std_*``) and range_determined.
     """
     t = np.asarray(solution.time_s, float)
     X = np.asarray(solution.state, float)

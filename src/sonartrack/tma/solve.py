@@ -52,7 +52,15 @@ class TmaResult:
     warnings: tuple[str, ...] = ()
 
     def summary(self) -> str:
-        """One line: the record, and the target's range, bearing, course and speed at the last time."""
+        """One line: the record, and the target's range, bearing, course and speed at the last time.
+
+        Returns
+        -------
+        str
+            Method, number of measurements and their span (s); at the last time range (km), bearing (deg), course
+            (deg), speed (kn) with one-sigma values (or the bearing alone when the range is not determined), f0 (Hz)
+            and mode probabilities when present.
+        """
         from sonartrack.tma.solution_table import solution_columns
 
         cols = solution_columns(self.solution, self.ownship)
@@ -76,7 +84,14 @@ class TmaResult:
 
 
 def check_settings(settings: TmaSettings) -> None:
-    """Refuse settings that belong to the other family of methods (a sign of a mistaken method)."""
+    """Refuse settings that belong to the other family of methods (a sign of a mistaken method).
+
+    Parameters
+    ----------
+    settings : TmaSettings
+        The settings; raises :class:`InputError` when a sequential method has ``batch.env``/``batch.sl_db`` or a
+        batch method asks for ``frequency``.
+    """
     if settings.is_sequential:
         require(settings.batch.env is None and settings.batch.sl_db is None,
                 f"--env and --sl (batch.env, batch.sl_db) apply to the batch methods ({', '.join(BATCH_METHODS)}), "
@@ -106,7 +121,25 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
     """Bearings-only ML: flag the rows whose range lies beyond what the record can resolve
     (:func:`~sonartrack.tma.batch_ml.observable_range_limit_m`), whose range standard deviation exceeds the range
     itself (the one-sigma interval reaches the ownship), or whose covariance is not finite, and warn.
-    The numbers stay in the table (the bearing is still good); the flag column says the range is not."""
+    The numbers stay in the table (the bearing is still good); the flag column says the range is not.
+
+    Parameters
+    ----------
+    solution : TmaSolution
+        The batch solution.
+    record : BearingRecord
+        Its bearings (times in s).
+    ownship : OwnshipTrack
+        Ownship positions (m).
+    sigma_bearing_rad : float
+        Bearing noise standard deviation (rad).
+
+    Returns
+    -------
+    TmaSolution
+        ``solution`` with ``range_determined`` false on the flagged rows (an :class:`UnobservableWarning` is
+        issued when any is).
+    """
     from dataclasses import replace
 
     from sonartrack.tma.batch_ml import observable_range_limit_m

@@ -94,7 +94,7 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
     return MultiTargetTracker(
         ImmConstantVelocity((s.q,), dims=1),
         BearingMeasurements(s.p_detect, s.gate_deg, s.clutter_density_per_deg, s.amplitude_threshold,
-                            s.false_amplitude_rate, amplitude_aided, adaptive_strength),
+                            s.false_amplitude_rate, amplitude_aided, adaptive_strength, s.endfire_fold),
         associator or JPDA(),
         initiator=(PeakInitiator(s.init_amplitude, s.init_sigma_p_deg, s.init_amplitude_sd, s.gate_deg)
                    if auto else None),

@@ -14,7 +14,7 @@ tracks' ``attrs``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -80,6 +80,39 @@ class PositionMeasurements:
         return attrs
 
 
+def fold_cone_deg(phi_deg) -> tuple[np.ndarray, np.ndarray]:
+    """The cone angle theta in [0, 180] deg of an unfolded angle phi, and the fold's slope d theta / d phi (+1 or -1).
+
+    A target that passes through endfire (the array's axis) has a cone angle that reflects at 0 or 180 deg while
+    its true bearing h + phi (on the side it started) moves on smoothly; the tracker follows phi, which runs on
+    through 180 (or below 0), and the array measures theta = fold(phi) = |((phi + 180) mod 360) - 180|. Each
+    pass of phi through a multiple of 180 deg is one crossing of the array's axis: the target changes side.
+
+    Parameters
+    ----------
+    phi_deg : array_like
+        Unfolded cone angles (deg).
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        theta (deg, 0..180) and the slope (+1 where theta = phi mod 360, -1 on the mirrored half).
+    """
+    r = np.mod(np.asarray(phi_deg, float), 360.0)
+    mirrored = r > 180.0
+    return np.where(mirrored, 360.0 - r, r), np.where(mirrored, -1.0, 1.0)
+
+
+def fold_cone_state(x):
+    """States [phi, phi rate] (..., 2) folded into [theta, theta rate], and the fold's slope (:func:`fold_cone_deg`;
+    the covariance is unchanged: the Jacobian diag(s, s) with s = +-1 gives J P J = P)."""
+    theta, sign = fold_cone_deg(x[..., 0])
+    out = np.array(x, float, copy=True)
+    out[..., 0] = theta
+    out[..., 1] = x[..., 1] * sign
+    return out, sign
+
+
 @dataclass(frozen=True)
 class BearingMeasurements:
     """Bearing peaks (deg) with amplitudes (P0); tracks carry ``sigma_p``, ``strength`` and ``sigma_a``."""
@@ -91,6 +124,8 @@ class BearingMeasurements:
     false_amplitude_rate: float
     amplitude_aided: bool  # JPDA_A: weigh the peak amplitudes
     adaptive_strength: bool  # eq. 9 strength update (JPDA_A only, as in the paper)
+    #: a line array's cone angle: the state is the unfolded angle phi (through endfire), measured as fold(phi)
+    endfire_fold: bool = False
 
     measurement_dim = 1
     scan_needs = ("amplitude",)
@@ -124,9 +159,16 @@ class BearingMeasurements:
             extra = amplitude_log_ratio(scan.amplitude, strength, sigma_a, self.false_amplitude_rate,
                                         self.amplitude_threshold)
             pd_hit = np.full(len(strength), self.p_detect)
-        return window_likelihoods(x_pred, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
-                                  pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
-                                  log_ratio_extra=extra)
+        if not self.endfire_fold:
+            return window_likelihoods(x_pred, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
+                                      pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
+                                      log_ratio_extra=extra)
+        folded, sign = fold_cone_state(x_pred)
+        lik = window_likelihoods(folded, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
+                                 pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
+                                 log_ratio_extra=extra)
+        # the innovation of the unfolded state: z - fold(phi) read back through the fold's slope (+1 or -1)
+        return replace(lik, nu=lik.nu * sign[lik.pair_track][:, :, None])
 
     def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
         """Track strength update, paper P0 eq. 9: ``z_hat = 0.7 z_hat + 0.3`` (largest amplitude in the gate).

@@ -17,6 +17,7 @@ import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.tracking.configurations import bearing_tracker, position_tracker
+from sonartrack.tracking.measurements import fold_cone_state
 from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
 
 CONTACT_TRACK_COLUMNS = ["time_s", "track_id", "status", "existence", "x_m", "y_m", "vx_mps", "vy_mps", "sd_x_m",
@@ -31,7 +32,9 @@ class BearingTracks:
 
     time_s (s), track_id, bearing_deg and bearing_rate_deg_s (the combined estimate, deg and deg/s),
     bearing_std_deg (sqrt of P[0, 0], deg), strength (the track's amplitude strength, paper P0 eq. 9),
-    confirmed (bool, M-of-N): equal-length 1-D arrays.
+    confirmed (bool, M-of-N): equal-length 1-D arrays. ``unfolded_deg``: the tracker's state phi where it runs on
+    through endfire (``endfire_fold``; bearing_deg and its rate are then fold(phi), tracking/measurements.py
+    :func:`~sonartrack.tracking.measurements.fold_cone_deg`), else None.
     """
 
     time_s: np.ndarray
@@ -41,6 +44,7 @@ class BearingTracks:
     bearing_std_deg: np.ndarray
     strength: np.ndarray
     confirmed: np.ndarray
+    unfolded_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.time_s)
@@ -189,14 +193,18 @@ def track_peaks(time_s, bearing_deg, amplitude, settings: BearingTrackerSettings
         One row per live track per scan.
     """
     trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True)
+    fold = settings is not None and settings.endfire_fold
     b, a = np.asarray(bearing_deg, float), np.asarray(amplitude, float)
-    cols: dict[str, list] = {c: [] for c in PEAK_TRACK_COLUMNS}
+    cols: dict[str, list] = {c: [] for c in [*PEAK_TRACK_COLUMNS, "unfolded_deg"]}
     for t, rows in scan_slices(time_s):
         snap = trk.step(t, b[rows], amplitude=a[rows])
+        x = fold_cone_state(snap.x)[0] if fold else snap.x
         for c, v in (("time_s", np.full(len(snap.x), t)), ("track_id", snap.track_id),
-                     ("bearing_deg", snap.x[:, 0]), ("bearing_rate_deg_s", snap.x[:, 1]),
+                     ("bearing_deg", x[:, 0]), ("bearing_rate_deg_s", x[:, 1]),
                      ("bearing_std_deg", np.sqrt(snap.P[:, 0, 0])),
-                     ("strength", snap.attrs.get("strength", np.zeros(0))), ("confirmed", snap.confirmed)):
+                     ("strength", snap.attrs.get("strength", np.zeros(0))), ("confirmed", snap.confirmed),
+                     ("unfolded_deg", snap.x[:, 0])):
             cols[c].append(v)
     empty = {"track_id": np.zeros(0, np.int64), "confirmed": np.zeros(0, bool)}
-    return BearingTracks(*(_stack(cols[c], empty.get(c, np.zeros(0))) for c in PEAK_TRACK_COLUMNS))
+    out = [_stack(cols[c], empty.get(c, np.zeros(0))) for c in PEAK_TRACK_COLUMNS]
+    return BearingTracks(*out, _stack(cols["unfolded_deg"], np.zeros(0)) if fold else None)

@@ -118,6 +118,9 @@ class BearingTrackerSettings(Settings):
     confirm_n: int = setting(4, "... N (a track failing M-of-N is dropped)", unit="1", ge=1)
     delete_after: int = setting(5, "a track is dropped after this many consecutive scans with an empty gate",
                                 unit="1", ge=1)
+    endfire_fold: bool = setting(False, "the state is the unfolded cone angle phi, measured as its reflection into "
+                                        "0..180 deg, so a track runs on through endfire (the array's axis) instead "
+                                        "of ending there (P0: off)", unit="")
 
     @model_validator(mode="after")
     def _consistent(self):

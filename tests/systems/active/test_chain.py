@@ -71,7 +71,7 @@ def test_files_written_all_or_nothing(result, tmp_path):
     from sonartrack.systems.active.files import summary_lines, write_active_tables
 
     files = write_active_tables(result, tmp_path / "out")
-    assert sorted(p.name for p in files) == ["contacts.csv", "detections.csv", "tracks.csv"]
+    assert sorted(p.name for p in files) == ["contacts.csv", "detections.csv", "sides.csv", "tracks.csv"]
     tracks = pd.read_csv(tmp_path / "out" / "tracks.csv")
     assert {"time_s", "track_id", "status", "existence", "x_m", "sd_x_m", "mode_prob_0", "mode_prob_1",
             "sd_vx_mps"} <= set(tracks.columns)

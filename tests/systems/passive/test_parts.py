@@ -81,9 +81,13 @@ def test_root_quantities_reach_every_stage():
     assert st.front_end.threshold == st.tracker.amplitude_threshold == 5.5
     assert st.array.sound_speed_mps == st.sequential.sound_speed_mps == 1480.0
     assert (st.array.elements, st.array.spacing_m) == (16, 2.5) and st.settings.elements == 16
-    # the automatic band: the octave below c / (2 d) = 296 Hz; min separation = one beamwidth at its centre
-    assert (st.band.low_hz, st.band.high_hz) == (148.0, 296.0)
-    assert st.min_separation_deg == pytest.approx(np.rad2deg(0.89 * (1480.0 / 222.0) / (16 * 2.5)), rel=1e-12)
+    # the automatic band: the ships' 50-1000 Hz (c / (N d) = 37 Hz lies below it); min separation = one beamwidth
+    # at its centre 525 Hz
+    assert (st.band.low_hz, st.band.high_hz) == (50.0, 1000.0)
+    assert st.min_separation_deg == pytest.approx(np.rad2deg(0.89 * (1480.0 / 525.0) / (16 * 2.5)), rel=1e-12)
+    # on 8 x 0.5 m the aperture is one wavelength at c / (N d) = 370 Hz: the band starts there
+    st8 = PassiveSettings(spacing_m=0.5, sound_speed_mps=1480.0).stages(4000.0, channels=8)
+    assert (st8.band.low_hz, st8.band.high_hz) == (370.0, 1000.0)
 
 
 def test_two_channels_are_two_sensors():

@@ -94,12 +94,15 @@ class ActiveGeometry:
         return np.stack([np.interp(t, self.time_s, v[:, k]) for k in range(v.shape[1])], axis=-1)
 
     def tx_at(self, t) -> np.ndarray:
+        """Source position(s) (m) at time(s) ``t`` (s)."""
         return self._interp(t, self.tx_xy)
 
     def rx_at(self, t) -> np.ndarray:
+        """Receiver (array centre) position(s) (m) at time(s) ``t`` (s)."""
         return self._interp(t, self.rx_xy)
 
     def heading_at(self, t) -> np.ndarray:
+        """Array axis heading(s) (rad, unwrapped) at time(s) ``t`` (s)."""
         return self._interp(t, self.array_heading_rad)
 
     def velocity(self, t, which: str, dt_s: float = 1.0) -> np.ndarray:
@@ -108,7 +111,14 @@ class ActiveGeometry:
         t = np.asarray(t, float)
         return (at(t + dt_s) - at(t - dt_s)) / (2.0 * dt_s)
 
+    def side_of(self, t, xy) -> np.ndarray:
+        """+1 (starboard) / -1 (port) of the array's axis for positions ``xy (n, 2)`` at time(s) ``t``."""
+        d = np.asarray(xy, float) - self.rx_at(t)
+        h = self.heading_at(t)
+        return np.where(np.sin(np.arctan2(d[..., 0], d[..., 1]) - h) >= 0, 1, -1)
+
     def covers(self, t0: float, t1: float) -> bool:
+        """True when the navigation spans [t0, t1] (s)."""
         return bool(self.time_s[0] <= t0 and t1 <= self.time_s[-1])
 
 
@@ -151,6 +161,7 @@ class Contacts:
 
     @classmethod
     def empty(cls) -> Contacts:
+        """No contacts."""
         z = np.zeros(0)
         return cls(np.zeros(0, np.int64), z, np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros((0, 2)),
                    np.zeros((0, 2, 2)), z, z, z)
@@ -277,7 +288,7 @@ def range_rate_gate(contacts: Contacts, rate_sd_mps, track_x, track_P, tx, rx, *
     measured = np.isfinite(contacts.range_rate_mps)
     if not len(x) or not measured.any():
         return keep
-    in_gate = _in_position_gate(contacts, x, P, gate_probability) & measured[None]
+    in_gate = in_position_gate(contacts, x, P, gate_probability) & measured[None]
     if not in_gate.any():
         return keep
     rate, g = predicted_range_rate(x[:, :2], x[:, 2:], tx[0], tx[1], rx[0], rx[1])
@@ -287,7 +298,7 @@ def range_rate_gate(contacts: Contacts, rate_sd_mps, track_x, track_P, tx, rx, *
     return keep
 
 
-def _in_position_gate(contacts: Contacts, track_x, track_P, gate_probability: float) -> np.ndarray:
+def in_position_gate(contacts: Contacts, track_x, track_P, gate_probability: float) -> np.ndarray:
     """(n tracks, m contacts) bool: nu^T (P_xy + R_m)^-1 nu < chi2_2(gate_probability)."""
     x, P = np.asarray(track_x, float).reshape(-1, 4), np.asarray(track_P, float).reshape(-1, 4, 4)
     if not len(x) or not len(contacts):
@@ -322,7 +333,7 @@ def resolve_mirrors(contacts: Contacts, track_x, track_P, gate_probability: floa
         (m,) bool, True where the contact is kept.
     """
     keep = np.ones(len(contacts), bool)
-    gated = _in_position_gate(contacts, track_x, track_P, gate_probability).any(axis=0)
+    gated = in_position_gate(contacts, track_x, track_P, gate_probability).any(axis=0)
     if not gated.any():
         return keep
     for d in np.unique(contacts.detection[gated]):

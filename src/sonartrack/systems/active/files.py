@@ -103,6 +103,17 @@ def tracks_table(result: ActiveResult):
     return df
 
 
+def sides_table(result: ActiveResult):
+    """sides.csv (module doc)."""
+    import pandas as pd
+
+    d = result.tracks.sides
+    cols = ["track_id", "decision", "side", "log_lr", "resolved_s", "contacts"]
+    if d is None:
+        return pd.DataFrame(columns=cols)
+    return pd.DataFrame({c: getattr(d, c) for c in cols}, columns=cols)
+
+
 def write_active_tables(result: ActiveResult, out, extra: dict | None = None) -> list[Path]:
     """detections.csv, contacts.csv and tracks.csv (and ``extra`` files) into ``out``, all or nothing.
 
@@ -127,7 +138,8 @@ def write_active_tables(result: ActiveResult, out, extra: dict | None = None) ->
 
     files = {name: frame.to_csv(index=False) for name, frame in (("detections.csv", detections_table(result)),
                                                                    ("contacts.csv", contacts_table(result)),
-                                                                   ("tracks.csv", tracks_table(result)))}
+                                                                   ("tracks.csv", tracks_table(result)),
+                                                                   ("sides.csv", sides_table(result)))}
     files.update(extra or {})
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -157,7 +169,18 @@ def track_line(result: ActiveResult, track_id: int) -> str:
             f"at {t.time_s[last]:.0f} s ({x[0] / 1e3:.2f}, {x[1] / 1e3:.2f}) km ± ({t.sd_x_m[last] / 1e3:.2f}, "
             f"{t.sd_y_m[last] / 1e3:.2f}), {speed / 0.514444:.1f} kn course {course:.0f} deg, "
             f"{_side(result, t.time_s[last], x[:2])} of the array; existence {t.existence[last]:.2f}, "
-            f"mode probabilities {modes}")
+            f"mode probabilities {modes}; {_side_text(result, track_id)}")
+
+
+def _side_text(result: ActiveResult, track_id: int) -> str:
+    """The track's side decision in words (sides.py)."""
+    d = result.tracks.sides
+    k = None if d is None else d.of(track_id)
+    if k is None or d.decision[k] == "undecided":
+        lr = "" if k is None else f" (ln LR {d.log_lr[k]:+.1f})"
+        return f"side undecided{lr}"
+    what = "on its target's side" if d.decision[k] == "track" else "a mirror ghost"
+    return f"{what}: target {d.side[k]} (ln LR {d.log_lr[k]:+.1f}, from {d.resolved_s[k]:.0f} s)"
 
 
 def summary_lines(result: ActiveResult) -> list[str]:

@@ -12,10 +12,12 @@ the number of pings beyond the per-ping tables and a small B-scan):
    eq. 2 with covariance J Sigma J^T, Doppler carried;
 4. gates in front of the tracker (contacts.py): the range-rate gate (:func:`range_rate_gate`: a contact in a
    confirmed track's position gate with a range rate the track cannot have is kept from the tracker) and the
-   resolved sides (:func:`resolve_mirrors`: once a confirmed track has lived through a turn of the array, the
-   mirror contact of each detection it gates is dropped);
+   decided sides (sides.py: each confirmed track's side by the likelihood ratio of its contacts and their
+   mirrors under constant-velocity motion, once it has lived through a turn of the array; a track decided on
+   its target's side has the mirror contact of each detection it gates dropped (:func:`resolve_mirrors`), a
+   track decided a ghost has the contacts in its gate dropped, so it starves);
 5. tracking: P4's IMM-IPDA with one-point initiation and existence-based confirmation (tracking/), one scan
-   per ping; the mirror tracks starve after the ownship turns and die.
+   per ping.
 
 :func:`track_detections` runs stages 3-5 alone on stored detections (the study tracks one set of detections
 with several trackers).
@@ -35,10 +37,12 @@ from sonartrack.systems.active.contacts import (
     ActiveGeometry,
     Contacts,
     form_contacts,
+    in_position_gate,
     range_rate_gate,
     resolve_mirrors,
 )
 from sonartrack.systems.active.settings import ActiveSettings
+from sonartrack.systems.active.sides import SideDecisions, SideTracker
 from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
@@ -61,10 +65,12 @@ class BScan:
 @dataclass(frozen=True, slots=True)
 class ActiveTracks:
     """The tracker's output, one row per live track per ping: ``tracks`` (tracking/run.py :class:`PositionTracks`)
-    and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds)."""
+    and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds);
+    ``sides`` the side decision of each confirmed track (sides.py)."""
 
     tracks: PositionTracks
     P: np.ndarray
+    sides: SideDecisions | None = None
 
     def __len__(self) -> int:
         return len(self.tracks)
@@ -77,7 +83,8 @@ class ActiveResult:
     ``detections``: the tracked detector's (``settings.detector``); ``single`` and ``mftd``: each detector's
     (``mftd`` empty when the MFTD did not run); ``contacts`` the mirror pairs of ``detections`` with the gate's
     verdict (``gated_out``: refused by the range-rate gate); ``tracks``; ``bscan``; ``geometry`` the source and
-    receiver; ``ping_time_s``; ``stage_seconds`` wall time per stage (s)."""
+    receiver; ``ping_time_s``; ``stage_seconds`` wall time per stage (s); ``thresholds`` each detector's
+    threshold on its statistic ("single": on s; "mftd": on P1's S for K pings)."""
 
     detections: Detections
     single: Detections
@@ -90,9 +97,11 @@ class ActiveResult:
     ping_time_s: np.ndarray
     settings: ActiveSettings
     stage_seconds: dict = field(default_factory=dict)
+    thresholds: dict = field(default_factory=dict)
 
     @property
     def duration_s(self) -> float:
+        """Span of the pings (s): first to last transmit time plus one interval."""
         t = self.ping_time_s
         return float(t[-1] - t[0] + (t[1] - t[0] if len(t) > 1 else 0.0)) if len(t) else 0.0
 
@@ -122,9 +131,10 @@ class ContactTracker:
     rate_sd_mps : float
         Standard deviation of a measured range rate (m/s): a Doppler cell / sqrt(12).
     side_turn_deg : float or None
-        A confirmed track that has lived through this much change of the array's heading has its side resolved:
-        the mirror contacts of the detections it gates are dropped (contacts.py :func:`resolve_mirrors`); None:
-        both mirror contacts always go to the tracker.
+        A confirmed track that has lived through this much change of the array's heading has its side decided
+        by the likelihood ratio of sides.py; a track on its target's side then has the mirror contacts of the
+        detections it gates dropped (contacts.py :func:`resolve_mirrors`), a ghost the contacts in its gate;
+        None: the decisions are reported only, both mirror contacts always go to the tracker.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -134,8 +144,8 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.tracker = position_tracker(settings)
+        self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
         self._last_t: float | None = None
-        self._confirmed_heading: dict[int, float] = {}
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
     def _predicted_confirmed(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -165,9 +175,11 @@ class ContactTracker:
             rx = (g.rx_at(t_s), g.velocity(t_s, "rx"))
             keep &= range_rate_gate(contacts, self.rate_sd, x, P, tx, rx, n_sigma=self.gate_sigma, gate_probability=pg)
         if self.side_turn is not None and len(ids):
-            h = float(g.heading_at(t_s))
-            turned = np.array([abs(h - self._confirmed_heading.get(int(i), h)) >= self.side_turn for i in ids])
-            keep &= resolve_mirrors(contacts, x[turned], P[turned], pg)
+            d = np.array([self.sides.decision(int(i)) for i in ids])
+            keep &= resolve_mirrors(contacts, x[d > 0], P[d > 0], pg)
+            if (d < 0).any():  # a ghost's contacts (unless a decided track holds them too) go to no track
+                gate = in_position_gate(contacts, x, P, pg)
+                keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
         return keep
 
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
@@ -176,9 +188,9 @@ class ContactTracker:
         keep = self._gates(t_s, contacts)
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
-        h = float(self.geometry.heading_at(t_s))
-        for i in snap.track_id[snap.confirmed]:
-            self._confirmed_heading.setdefault(int(i), h)
+        c = snap.confirmed
+        self.sides.update(float(t_s), float(self.geometry.heading_at(t_s)), contacts, snap.track_id[c], snap.x[c],
+                          snap.P[c], self.geometry.side_of)
         r = self._rows
         for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
                      ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
@@ -198,7 +210,7 @@ class ContactTracker:
                                 cat("confirmed", np.zeros(0, bool)), cat("existence", np.zeros(0)),
                                 cat("x", np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
                                 cat("mu", np.zeros((0, n_modes))))
-        return ActiveTracks(tracks, P)
+        return ActiveTracks(tracks, P, self.sides.result())
 
 
 def rate_sd_of(cells_range_rate_mps) -> float:
@@ -354,7 +366,14 @@ class _Chain:
             self.settings.tracker_settings(), self.geometry, None, 1.0).result()
         return ActiveResult(multi if self.mftd is not None else single, single, multi, Contacts.concat(self.contacts),
                             np.concatenate(self.gate) if self.gate else np.zeros(0, bool), tracks, bscan,
-                            self.geometry, t[:len(self.bscan)], self.settings, dict(self.timer.seconds))
+                            self.geometry, t[:len(self.bscan)], self.settings, dict(self.timer.seconds),
+                            self._thresholds())
+
+    def _thresholds(self) -> dict:
+        out = {"single": float(self.threshold)}
+        if self.mftd is not None:
+            out["mftd"] = float(self.mftd.threshold(self.mftd.settings.frames))
+        return out
 
 
 def run_active(pings: Iterable[tuple[int, float, np.ndarray]], ping_table, nav, settings: ActiveSettings, *,

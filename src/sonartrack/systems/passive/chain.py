@@ -9,8 +9,9 @@ from the system's one settings tree (:meth:`~sonartrack.systems.passive.settings
 2. bearing tracking (tracking/run.py :func:`track_peaks`): JPDA_A on the peaks (paper P0), tracks started
    on strong peaks and confirmed M-of-N, dropped after a run of empty gates -> :class:`BearingTracks`;
 3. each confirmed track's raw peaks (systems/passive/measurements.py; two tracks on the same peaks joined,
-   scans where two targets share a beam left out) and, in a second pass over the recording, its tonal line on
-   its own beam (systems/passive/tonal_pass.py);
+   scans where two targets share a beam left out, fragments of one target -- a track that broke at a crossing
+   or a turn -- joined when one constant-velocity target explains them) and, in a second pass over the
+   recording, its tonal line on its own beam (systems/passive/tonal_pass.py);
 4. per track: the array side from the two mirror hypotheses, batch ML and IMM-MGEKF TMA
    (systems/passive/targets.py).
 
@@ -34,7 +35,12 @@ from sonartrack.acoustics.beamforming import BearingTimeRecord, bearing_time_rec
 from sonartrack.acoustics.xcorr_bearing import PeakRecord
 from sonartrack.detection.btr_mftd import BtrDetections
 from sonartrack.io.navigation import Navigation
-from sonartrack.systems.passive.measurements import drop_unresolved, merge_duplicates, track_measurements
+from sonartrack.systems.passive.measurements import (
+    drop_unresolved,
+    join_fragments,
+    merge_duplicates,
+    track_measurements,
+)
 from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
 from sonartrack.systems.passive.targets import UNSUPPORTED_RANGE, Target, solve_target
 from sonartrack.systems.passive.tonal_pass import measure_tonals
@@ -120,7 +126,7 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
         pk, mftd = _with_mftd_peaks(btr, s)
     tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker)
     meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
-    meas = drop_unresolved(meas, s.min_separation_deg)
+    meas = join_fragments(drop_unresolved(meas, s.min_separation_deg), nav, min_fragment_s=settings.min_track_s)
     long_enough = [m for m in meas if m.duration_s >= settings.min_track_s and len(m.time_s) >= 10]
     short = [m.track_id for m in meas if m not in long_enough]
     tonals = [None] * len(long_enough)

@@ -295,7 +295,10 @@ def _check_delays(fp: FirstPass, name: str, array: LineArray) -> None:
     z = np.where(outside, fp.pair_z, -np.inf)
     p, k = np.unravel_index(int(np.argmax(z)), z.shape)
     lag = abs(float(fp.lag_s[k]))
-    if z[p, k] >= MIN_LAG_Z:
+    # a band-limited correlation has sidelobes about 1 / bandwidth from its peak: only a peak outside the allowed
+    # lags that stands above every one inside them says the channels are further apart
+    inside = float(np.max(np.where(outside, -np.inf, fp.pair_z[p]))) if not np.all(outside) else -np.inf
+    if z[p, k] >= MIN_LAG_Z and z[p, k] > inside:
         raise InputError(f"{name}: channels {p + 1} and {p + 2} hear a common signal {1e3 * lag:.2f} ms apart, more "
                          f"than the {1e3 * limit:.2f} ms a spacing of {array.spacing_m:g} m allows: they are at least "
                          f"{lag * array.sound_speed_mps:.3g} m apart; give their spacing in metres (--spacing; a "

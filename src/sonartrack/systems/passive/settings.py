@@ -82,10 +82,12 @@ PASSIVE_TRACKER_DEFAULTS = {
                  "value; 0.01 and 0.05 gave the same targets on the default scene)"),
     "gate_deg": (6.0, "gate width V: a peak within V/2 = 3 deg of the predicted cone angle is validated"),
     "p_detect": (0.9, "probability that a target's peak is present in a window before the threshold on z"),
-    "clutter_density_per_deg": (1e-3, "false-peak density above the threshold (noise-only recordings: 0.066 "
-                                      "peaks a window at z >= 4 over 0..180 deg, 3.7e-4 /deg)"),
-    "false_amplitude_rate": (1.4, "alpha of the exponential excess z - threshold of false peaks (noise-only "
-                                  "recordings: 1.39 per unit z, 95 % interval 1.14..1.64)"),
+    "clutter_density_per_deg": (1e-3, "false-peak density above the threshold (noise-only recordings, automatic "
+                                      "band: 0.043 peaks a window at z >= 4 over 0..180 deg, 2.4e-4 /deg; kept "
+                                      "above it for the loud ships' sidelobes)"),
+    "false_amplitude_rate": (2.0, "alpha of the exponential excess z - threshold of false peaks (noise-only "
+                                  "recordings, automatic band: 1.92 per unit z at threshold 3, 95 % interval "
+                                  "1.77..2.08; 2.16 at 4; 2.06 on 32 x 1.25 m at 8 kHz)"),
     "init_amplitude": (6.0, "a new track starts on an unassociated peak with z at least this"),
     "init_sigma_p_deg": (0.5, "cone-angle standard deviation sigma_p of a new track's peaks (the front end's peaks "
                               "of the default scene's loud ships err by 0.16..0.36 deg RMS)"),
@@ -94,6 +96,9 @@ PASSIVE_TRACKER_DEFAULTS = {
                      "passive-chain: no false target in 13.3 h)"),
     "confirm_n": (10, "... N windows (a track failing M-of-N is dropped)"),
     "delete_after": (20, "a track is dropped after this many consecutive windows with an empty gate"),
+    "endfire_fold": (True, "a track runs on through endfire (the array's axis): its unfolded cone angle phi, "
+                           "measured as its reflection into 0..180 deg; each pass through 0 or 180 deg is a change of "
+                           "side (systems/passive/targets.py decides the sides per segment)"),
 }
 
 PassiveTrackerSettings = derived_settings(

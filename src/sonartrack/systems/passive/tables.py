@@ -2,7 +2,9 @@
 
 targets.csv: one row per target, per TMA method (``ml``: batch ML, paper P3; ``imm-mgekf``: sequential,
 paper P2), per time of its record; columns: the target and track ids, the method, the side decision
-(side, side_log_lr = ln L_starboard - ln L_port, side_resolved_s), the solution columns of
+(side at that time -- it changes where the target crosses the array's axis --, side_log_lr = ln L_starboard -
+ln L_port, side_resolved_s), joined_track_ids (the other tracks joined into this target as its fragments, space
+separated; empty when none), the solution columns of
 tma/solution_table.py (position, velocity, true bearing, range, course, speed and their standard
 deviations, range_determined; where the range is not determined, every column but the bearing is left empty, as
 no number is known there), and the track's measured tonal frequency (NaN where none).
@@ -21,7 +23,8 @@ if TYPE_CHECKING:
     from sonartrack.systems.passive.chain import PassiveResult
     from sonartrack.systems.passive.targets import Target
 
-TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "side", "side_log_lr", "side_resolved_s"]
+TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "side", "side_log_lr", "side_resolved_s",
+                     "joined_track_ids"]
 
 
 def peaks_table(record: BearingTimeRecord):
@@ -75,9 +78,10 @@ def _target_rows(target: Target, result_tma):
     freq = (np.interp(cols["time_s"], tonal.time_s, tonal.frequency_hz, left=np.nan, right=np.nan)
             if tonal is not None else np.full(n, np.nan))
     head = {"target_id": np.full(n, target.target_id), "track_id": np.full(n, target.track.track_id),
-            "method": np.full(n, result_tma.settings.method), "side": np.full(n, target.side.side),
+            "method": np.full(n, result_tma.settings.method), "side": target.side.side_at(cols["time_s"]),
             "side_log_lr": np.full(n, target.side.log_likelihood_ratio),
-            "side_resolved_s": np.full(n, target.side_resolved_s)}
+            "side_resolved_s": np.full(n, target.side_resolved_s),
+            "joined_track_ids": np.full(n, " ".join(str(i) for i in target.track.joined_track_ids))}
     return pd.DataFrame({**head, **cols, "frequency_hz": freq})
 
 
@@ -118,7 +122,9 @@ def target_line(target: Target) -> str:
     """
     c = {k: v[-1] for k, v in solution_columns(target.ml.solution, target.ml.ownship).items()}
     s = target.side
-    side = (f"{s.side} (ln LR {s.log_likelihood_ratio:+.0f}, from {target.side_resolved_s:.0f} s)"
+    crossed = "" if not s.crossings_s else (f", crossed the array's axis at "
+                                            f"{', '.join(f'{c:.0f}' for c in s.crossings_s)} s: now {s.final_side}")
+    side = (f"{s.side} (ln LR {s.log_likelihood_ratio:+.0f}, from {target.side_resolved_s:.0f} s{crossed})"
             if s.side != "unresolved" else f"side unresolved (ln LR {s.log_likelihood_ratio:+.1f})")
     line = (f"target {target.target_id} (track {target.track.track_id}, {target.track.time_s[0]:.0f}.."
             f"{target.track.time_s[-1]:.0f} s): {side}; at {c['time_s']:.0f} s bearing {c['bearing_deg']:.1f} ± "

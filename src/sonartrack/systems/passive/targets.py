@@ -7,7 +7,9 @@ Per track (its raw peaks, systems/passive/measurements.py):
    hypotheses are fitted by a constant-velocity bearings-only ML (tma/sides.py); before the array turns,
    both explain the bearings equally (ln LR ~ 0, unresolved); after the turn only the true side does.
    The decision is re-taken on the growing record every ``SIDE_CHECK_S`` seconds, so the time it was
-   resolved is known.
+   resolved is known. A track that passes endfire (the tracker's unfolded cone angle phi) changes side at each
+   axis crossing; b = h +- phi is continuous through them, and the crossing hypotheses are decided by the motion
+   that follows (tma/sides.py :func:`~sonartrack.tma.sides.resolve_side_through_crossings`).
 2. TMA on the chosen side's bearings, sensor = the array centre, both by :func:`~sonartrack.tma.solve.solve_tma`:
    batch ML (paper P3, method ``ml``) from the side decision's multi-start fit (``ml_fit``: the single
    pseudo-linear start of the plain ML can settle in a far local minimum), with the observability check
@@ -42,7 +44,7 @@ from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
 from sonartrack.tma.records import BearingRecord
 from sonartrack.tma.settings import BatchSettings, TmaSettings
-from sonartrack.tma.sides import SideDecision, mirror_bearings_rad, resolve_side
+from sonartrack.tma.sides import SideDecision, mirror_bearings_rad, resolve_side, resolve_side_through_crossings
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation, solve_tma
 
@@ -93,7 +95,8 @@ def side_resolved_time(t, cone_rad, heading_rad, xy, final: SideDecision, min_lo
     since = float(t[-1])
     for c in checkpoints[::-1]:
         n = int(np.searchsorted(t, c, side="right"))
-        d = resolve_side(t[:n], cone_rad[:n], heading_rad[:n], xy[:n], min_log_lr=min_log_lr)
+        d = resolve_side(t[:n], cone_rad[:n], heading_rad[:n], xy[:n], min_log_lr=min_log_lr,
+                         unfolded=final.unfolded_rad is not None)
         if d.side != final.side:
             break
         since = float(c)
@@ -235,9 +238,13 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     """
     min_log_lr = stages.settings.min_side_log_lr
     t = np.asarray(m.time_s, float)
-    cone = np.deg2rad(np.asarray(m.cone_deg, float))
     xy, heading = nav.array_at(t)
-    side = resolve_side(t, cone, heading, xy, min_log_lr=min_log_lr)
+    if m.unfolded_deg is not None:  # through endfire: the sides of every segment between axis crossings at once
+        side = resolve_side_through_crossings(t, np.deg2rad(m.unfolded_deg), heading, xy, min_log_lr=min_log_lr)
+        cone = side.unfolded_rad
+    else:
+        cone = np.deg2rad(np.asarray(m.cone_deg, float))
+        side = resolve_side(t, cone, heading, xy, min_log_lr=min_log_lr)
     since = side_resolved_time(t, cone, heading, xy, side, min_log_lr)
     stbd, port = mirror_bearings_rad(cone, heading)
     chosen, other = (port, stbd) if side.side == "port" else (stbd, port)

@@ -73,6 +73,35 @@ def write_active_scene(settings: ActiveSceneSettings, out_dir, progress=None, st
     return paths
 
 
+def write_active(settings: ActiveSceneSettings, out, *, progress=None, cache=None) -> tuple[list[Path], str]:
+    """``sonartrack simulate --kind active``: the scene's files in ``out``, all or none, and its one-line summary.
+
+    Parameters
+    ----------
+    settings : ActiveSceneSettings
+        The scene.
+    out : path-like
+        Output folder (made if missing; a failed or interrupted run leaves none of its files).
+    progress : optional
+        Gets ``start(label, total, done)`` once and ``advance(1)`` after each ping.
+    cache : path-like, optional
+        The RAM field cache folder (io/environment.py ``cache_dir``), used when ``settings.propagation`` is ram.
+
+    Returns
+    -------
+    tuple of (list of Path, str)
+        The files written and the scene's summary line.
+    """
+    from sonartrack.io.environment import TLDiskCache
+    from sonartrack.io.run_outputs import check_out_path, discard_on_failure
+
+    folder = check_out_path(out)
+    store = TLDiskCache(cache) if settings.propagation == "ram" else None
+    with discard_on_failure(folder):
+        paths = write_active_scene(settings, folder, progress=progress, store=store)
+    return paths, active_scene_summary(settings)
+
+
 def active_scene_summary(settings: ActiveSceneSettings) -> str:
     """One line: pings, waveform, array, and each target's echo SNR range over the scene."""
     from sonartrack.sim.active_scene import target_truth, transmission_loss_model

@@ -73,10 +73,12 @@ class RecordingLayout:
 
     @property
     def sample_format(self) -> str:
+        """The sample format of ``format`` in :data:`FORMATS`: "float32" or "int24"."""
         return FORMATS[self.format][0]
 
     @property
     def suffix(self) -> str:
+        """The file name suffix of ``format`` in :data:`FORMATS` (".wav", ".rf64" or ".flac")."""
         return FORMATS[self.format][1]
 
     @property
@@ -86,6 +88,7 @@ class RecordingLayout:
 
     @property
     def integer(self) -> bool:
+        """The samples are integers (int24: scaled by :data:`FULL_SCALE_PA`, with a calibration.toml)."""
         return self.sample_format.startswith("int")
 
 
@@ -163,7 +166,22 @@ def check_layout(layout: RecordingLayout, channels: int, duration_s: float) -> N
 
 
 def file_spans(layout: RecordingLayout, frames: int, sample_rate_hz: float) -> list[tuple[int, int]]:
-    """Frames (start, stop) of the recording written to each file, in order (module doc)."""
+    """Frames (start, stop) of the recording written to each file, in order (module doc).
+
+    Parameters
+    ----------
+    layout : RecordingLayout
+        File length ``split_s`` and gap ``gap_s`` (s).
+    frames : int
+        Frames of the whole recording.
+    sample_rate_hz : float
+        Sample rate (Hz).
+
+    Returns
+    -------
+    list of (int, int)
+        Half-open frame ranges; with a gap the second file starts ``gap_s`` later (those frames are not written).
+    """
     if layout.split_s is None:
         return [(0, int(frames))]
     s = int(round(layout.split_s * sample_rate_hz))
@@ -174,7 +192,24 @@ def file_spans(layout: RecordingLayout, frames: int, sample_rate_hz: float) -> l
 
 
 def recording_paths(folder: Path, layout: RecordingLayout, spans, sample_rate_hz: float) -> list[Path]:
-    """The file of each span: ``recording.<suffix>``, or ``recording/rec_<UTC start>.<suffix>`` (module doc)."""
+    """The file of each span: ``recording.<suffix>``, or ``recording/rec_<UTC start>.<suffix>`` (module doc).
+
+    Parameters
+    ----------
+    folder : Path
+        The scene folder.
+    layout : RecordingLayout
+        Format, UTC start, and whether the recording is split or timed.
+    spans : list of (int, int)
+        :func:`file_spans`.
+    sample_rate_hz : float
+        Sample rate (Hz), to turn a span's first frame into its UTC start.
+
+    Returns
+    -------
+    list of Path
+        One path per span (one path when the layout is not timed).
+    """
     if not layout.timed:
         return [Path(folder) / f"recording{layout.suffix}"]
     return [Path(folder) / FOLDER / f"{layout.start_utc + timedelta(seconds=a / sample_rate_hz):{NAME_FORMAT}}"
@@ -224,7 +259,14 @@ class LayoutWriter:
                              "wav or rf64), or make the loud ship quieter or further away")
 
     def write(self, block) -> None:
-        """Append a (channels, m) block of pressure (Pa) at the recording's current position."""
+        """Append a (channels, m) block of pressure (Pa) at the recording's current position.
+
+        Parameters
+        ----------
+        block : array_like, shape (channels, m)
+            Pressure (Pa); a sample beyond full scale of an integer format is refused. Frames that fall in the gap
+            are dropped.
+        """
         x = np.asarray(block, dtype=np.float64)
         self._check_full_scale(x)
         lo, hi = self._pos, self._pos + x.shape[1]
@@ -240,7 +282,13 @@ class LayoutWriter:
         self._pos = hi
 
     def close(self, exc=None) -> None:
-        """Finish (or, on ``exc``, discard) the file still open."""
+        """Finish (or, on ``exc``, discard) the file still open.
+
+        Parameters
+        ----------
+        exc : BaseException, optional
+            The error that stopped the writing; the open file is then discarded.
+        """
         self._close_current(exc)
 
 

@@ -28,11 +28,38 @@ STATUS = "status.json"
 
 
 def recording_dir(out, name: str) -> Path:
+    """The folder of one recording's outputs: ``OUT/recordings/NAME``.
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    name : str
+        The recording's name (its manifest entry).
+
+    Returns
+    -------
+    Path
+        ``out / "recordings" / name`` (not created here).
+    """
     return Path(out) / "recordings" / name
 
 
 def read_status(out, name: str) -> dict | None:
-    """The stored status of recording ``name``, or None when it has not been stored."""
+    """The stored status of recording ``name``, or None when it has not been stored.
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    name : str
+        The recording's name.
+
+    Returns
+    -------
+    dict or None
+        The parsed status.json; None when missing or unreadable.
+    """
     p = recording_dir(out, name) / STATUS
     if not p.is_file():
         return None
@@ -43,6 +70,20 @@ def read_status(out, name: str) -> dict | None:
 
 
 def is_done(out, name: str) -> bool:
+    """Whether recording ``name`` was stored complete with status ok (a rerun skips it).
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    name : str
+        The recording's name.
+
+    Returns
+    -------
+    bool
+        True when its status.json is readable and says "ok"; False when missing, unreadable or failed.
+    """
     status = read_status(out, name)
     return bool(status) and status.get("status") == "ok"
 
@@ -101,7 +142,21 @@ def store_outcome(out, entry: SurveyEntry, outcome: RecordingOutcome, extra=None
 
 
 def survey_rows(out, entries: list[SurveyEntry]) -> list[dict]:
-    """One row per recording from the stored statuses (a recording never stored: status 'not run')."""
+    """One row per recording from the stored statuses (a recording never stored: status 'not run').
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    entries : list of SurveyEntry
+        The manifest's recordings.
+
+    Returns
+    -------
+    list of dict
+        name, status, start_utc, duration_h and recorded_h (hours), targets, gaps, overlaps, level_db_re_1upa,
+        reason, wall_s.
+    """
     rows = []
     for e in entries:
         st = read_status(out, e.name) or {"name": e.name, "status": "not run", "reason": "", "targets": 0}
@@ -116,7 +171,21 @@ def survey_rows(out, entries: list[SurveyEntry]) -> list[dict]:
 
 def survey_targets(out, rows: list[dict]):
     """One row per target of every stored recording: its ML track's first and last time (s from the recording's
-    start, and UTC when known) and its side."""
+    start, and UTC when known) and its side.
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    rows : list of dict
+        :func:`survey_rows` (only recordings with status ok are read).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns recording, target_id, first_s, last_s, side, first_utc, last_utc (ISO text; empty when the start
+        is unknown).
+    """
     import pandas as pd
 
     parts = []
@@ -141,7 +210,20 @@ def survey_targets(out, rows: list[dict]):
 
 
 def write_survey_tables(out, rows: list[dict]) -> list[Path]:
-    """survey.csv and survey_targets.csv (module doc), atomically."""
+    """survey.csv and survey_targets.csv (module doc), atomically.
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+    rows : list of dict
+        :func:`survey_rows`.
+
+    Returns
+    -------
+    list of Path
+        The two files written.
+    """
     import pandas as pd
 
     out = Path(out)

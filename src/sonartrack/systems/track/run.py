@@ -37,7 +37,13 @@ class ContactTrackResult:
         return len(np.unique(self.tracks.track_id[self.tracks.confirmed]))
 
     def summary(self) -> str:
-        """One line: scans, contacts and confirmed tracks."""
+        """One line: scans, contacts and confirmed tracks.
+
+        Returns
+        -------
+        str
+            "S scans, C contacts -> N confirmed track(s)".
+        """
         t = self.contacts.time_s
         return f"{_n_scans(t)} scans, {len(t)} contacts -> {self.n_confirmed} confirmed track(s)"
 
@@ -56,7 +62,13 @@ class PeakTrackResult:
         return self.associator.upper().replace("_", "-")
 
     def summary(self) -> str:
-        """One line: scans, peaks, confirmed and started tracks."""
+        """One line: scans, peaks, confirmed and started tracks.
+
+        Returns
+        -------
+        str
+            "track NAME: S scans, P peaks, N confirmed track(s) (M started)".
+        """
         tr, t = self.tracks, self.peaks.time_s
         n_confirmed = len(np.unique(tr.track_id[tr.confirmed.astype(bool)]))
         return (f"track {self.name.lower()}: {_n_scans(t)} scans, {len(t)} peaks, {n_confirmed} confirmed track(s) "

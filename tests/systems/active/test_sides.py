@@ -1,0 +1,73 @@
+"""Side decision of the active chain's tracks: the CV fit against an independent least squares, a straight array
+that decides nothing, and a turning array that decides the true side (and calls the mirror track a ghost)."""
+
+import numpy as np
+
+from sonartrack.systems.active.contacts import Contacts
+from sonartrack.systems.active.sides import MIN_LOG_LR, SideTracker, _CvSums
+
+
+def test_cv_fit_matches_whitened_least_squares():
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(0, 900, 12))
+    z = np.stack([100 + 2 * t, -50 + 0.5 * t], -1) + rng.normal(0, 40, (12, 2))
+    L = rng.normal(0, 1, (12, 2, 2))
+    R = L @ np.swapaxes(L, 1, 2) * 900 + np.eye(2) * 400
+    sums = _CvSums()
+    for k in range(12):
+        sums.add(t[k], z[k], R[k])
+    # independent: stack the whitened system C^-1 A x = C^-1 z (R = C C^T) and solve it with lstsq
+    rows, rhs = [], []
+    for k in range(12):
+        Ci = np.linalg.inv(np.linalg.cholesky(R[k]))
+        A = np.hstack([np.eye(2), t[k] * np.eye(2)])
+        rows.append(Ci @ A)
+        rhs.append(Ci @ z[k])
+    A, b = np.vstack(rows), np.concatenate(rhs)
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    chi2 = float(np.sum((A @ x - b) ** 2))
+    logdet = sum(np.log(np.linalg.det(2 * np.pi * R[k])) for k in range(12))
+    assert abs(sums.log_likelihood() - (-0.5 * (chi2 + logdet))) < 1e-6 * abs(logdet)
+
+
+def _mirror(xy, heading):
+    a = np.array([np.sin(heading), np.cos(heading)])
+    return 2.0 * (xy @ a) * a - xy
+
+
+def _run(headings, sd=30.0, seed=0):
+    """A CV target at 5-6 km seen from a receiver at the origin whose axis heading follows ``headings``; a track
+    sits on the target (id 1) and one on its mirror (id 2). Returns the decisions."""
+    rng = np.random.default_rng(seed)
+    st = SideTracker(min_turn_rad=np.deg2rad(20.0), lookback=0)
+    R = np.eye(2) * sd**2
+    P = np.diag([sd**2, sd**2, 1.0, 1.0])
+    for k, h in enumerate(headings):
+        t = 30.0 * k
+        true = np.array([4000.0 + 3.0 * t, 3000.0 - 2.0 * t])
+        z = true + rng.normal(0, sd, 2)
+        xy = np.stack([z, _mirror(z, h)])
+        c = Contacts(np.array([k, k]), np.array([t, t]), np.array([k, k]), np.array([1, -1], np.int8), xy,
+                     np.stack([R, R]), np.full(2, np.nan), np.full(2, 5000.0), np.ones(2))
+        x = np.array([[*true, 3.0, -2.0], [*_mirror(true, h), 0.0, 0.0]])
+        st.update(t, h, c, np.array([1, 2]), x, np.stack([P, P]),
+                  lambda _t, p, h=h: np.where(np.sin(np.arctan2(p[:, 0], p[:, 1]) - h) >= 0, 1, -1))
+    return st.result()
+
+
+def test_straight_array_decides_nothing():
+    d = _run(np.zeros(40))
+    # the mirror of a CV target about a fixed axis is a CV target, isotropic errors: equal fits, ln LR = 0
+    np.testing.assert_allclose(d.log_lr, 0.0, atol=1e-6)
+    assert list(d.decision) == ["undecided", "undecided"]
+
+
+def test_turning_array_decides_the_true_side_and_the_ghost():
+    h = np.deg2rad(np.concatenate([np.zeros(15), np.linspace(0, -60, 10), np.full(15, -60.0)]))
+    d = _run(h)
+    k1, k2 = d.of(1), d.of(2)
+    assert d.decision[k1] == "track" and d.log_lr[k1] >= MIN_LOG_LR
+    assert d.decision[k2] == "mirror" and d.log_lr[k2] <= -MIN_LOG_LR
+    # the target (east of a receiver heading north, then north-west) is on the starboard side
+    assert d.side[k1] == "starboard" and d.side[k2] == "starboard"
+    assert np.isfinite(d.resolved_s[k1]) and 15 * 30.0 <= d.resolved_s[k1] <= 39 * 30.0
