@@ -74,8 +74,9 @@ def reproduce_cmd(
 
     report = write_report(out)
     for r, took in zip(results, seconds, strict=True):
+        # one line per study even in a narrow terminal or a log (rich would wrap it mid-number)
         console.print(f"{r.study_id}: {r.runs} runs ({r.computed} computed, {r.runs - r.computed} from disk), "
-                      f"claims holding {r.n_holding}/{r.n_claims}, {took:.1f} s")
+                      f"claims holding {r.n_holding}/{r.n_claims}, {took:.1f} s", soft_wrap=True)
     n_claims = sum(r.n_claims for r in results)
     n_hold = sum(r.n_holding for r in results)
     typer.echo(f"done in {time.perf_counter() - t0:.1f} s: {len(results)} studies, {n_hold}/{n_claims} claims hold; "
