@@ -301,7 +301,18 @@ def alias_free_octave(array: LineArray, settings: BeamformerSettings, fs_hz: flo
 def combined_statistic(z_band: np.ndarray, z_octave: np.ndarray) -> np.ndarray:
     """The automatic front end's statistic before its final normalisation: z_band + z_octave, the normalised
     levels of the whole band and of its alias-free octave (class doc of :class:`BeamformerSettings`: the whole band
-    gives narrow beams where grating lobes smear out, the octave a weak ship next to a loud one's grating lobes)."""
+    gives narrow beams where grating lobes smear out, the octave a weak ship next to a loud one's grating lobes).
+
+    Parameters
+    ----------
+    z_band, z_octave : numpy.ndarray
+        (B,) or (K, B) normalised beam levels (dimensionless) of the whole band and of the octave, same shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        Their sum, same shape.
+    """
     return np.asarray(z_band, float) + np.asarray(z_octave, float)
 
 
@@ -388,7 +399,20 @@ def normalise_across_bearing(power: np.ndarray, settings: BeamformerSettings) ->
     normaliser would need a guard width matched to the beam width, which changes 20-fold across the band
     and with cone angle. z is invariant to the recording's scale and offset (any recording level works);
     for noise-only windows it is roughly standard normal at each beam (P sums ~2 n_bins chi-square terms).
-    Works on (B,) or (K, B) (each row normalised alone)."""
+    Works on (B,) or (K, B) (each row normalised alone).
+
+    Parameters
+    ----------
+    power : numpy.ndarray
+        (B,) or (K, B) beam powers (any linear unit), beams along the last axis.
+    settings : BeamformerSettings
+        Its ``spread_floor`` (dimensionless).
+
+    Returns
+    -------
+    numpy.ndarray
+        z (dimensionless), same shape; 0 where the spread is 0.
+    """
     p = np.asarray(power, dtype=float)
     med = np.median(p, axis=-1, keepdims=True)
     spread = MAD_TO_SIGMA * np.median(np.abs(p - med), axis=-1, keepdims=True)
@@ -403,7 +427,24 @@ def pick_beam_peaks(z: np.ndarray, cone_deg: np.ndarray, settings: BeamformerSet
 
     The grid is mirrored at 0 and 180 deg (cos is even there), so a target at endfire is a local maximum;
     a parabola through the three beams around each maximum refines the angle (offset in (-0.5, 0.5) beams)
-    and the height. At most ``max_peaks`` peaks, the highest, in increasing cone angle."""
+    and the height. At most ``max_peaks`` peaks, the highest, in increasing cone angle.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        (B,) statistic of one window.
+    cone_deg : numpy.ndarray
+        (B,) the beams' cone angles (deg from the array's forward axis, 0 = ahead), uniform in 0..180.
+    settings : BeamformerSettings
+        Its ``threshold`` (on z) and ``max_peaks``.
+
+    Returns
+    -------
+    cone_deg : numpy.ndarray
+        (k,) refined cone angles (deg, within 0..180).
+    amplitude : numpy.ndarray
+        (k,) refined peak heights of z.
+    """
     z = np.asarray(z, dtype=float)
     padded = np.concatenate([z[1:2], z, z[-2:-1]])
     mid = padded[1:-1]

@@ -204,7 +204,28 @@ def spectral_peaks(power: np.ndarray, freqs_hz: np.ndarray, settings: TonalSetti
     """(frequencies (m,), SNRs (m,)) of the strongest narrowband peaks of ``power`` (module doc), strongest first.
 
     A peak is a local maximum standing ``min_snr_db`` (default ``settings.min_line_snr_db``) above the
-    running median of ``background_hz``; at most ``max_peaks`` (default ``settings.max_candidates``)."""
+    running median of ``background_hz``; at most ``max_peaks`` (default ``settings.max_candidates``).
+
+    Parameters
+    ----------
+    power : numpy.ndarray
+        (F,) power spectrum (any linear unit).
+    freqs_hz : numpy.ndarray
+        (F,) bin frequencies (Hz), uniformly spaced.
+    settings : TonalSettings
+        Background width and defaults.
+    min_snr_db : float, optional
+        Height above the running median a peak needs (dB).
+    max_peaks : int, optional
+        Most peaks returned.
+
+    Returns
+    -------
+    frequencies_hz : numpy.ndarray
+        (m,) sub-bin peak frequencies (Hz); empty for fewer than three bins.
+    snr_db : numpy.ndarray
+        (m,) each peak bin's height above the running median (dB).
+    """
     p = np.maximum(np.asarray(power, dtype=float), np.finfo(float).tiny)
     f = np.asarray(freqs_hz, dtype=float)
     if p.size < 3:
@@ -239,7 +260,20 @@ def _refined_hz(p: np.ndarray, f: np.ndarray, k: np.ndarray) -> np.ndarray:
 
 def line_threshold_db(settings: TonalSettings, n_windows: int | None) -> float:
     """SNR a mean-spectrum line needs: min_line_snr_db, and above the noise of a mean of T = ``n_windows``
-    periodograms (relative standard deviation 1 / sqrt(T) per bin): 10 log10(1 + z / sqrt(T))."""
+    periodograms (relative standard deviation 1 / sqrt(T) per bin): 10 log10(1 + z / sqrt(T)).
+
+    Parameters
+    ----------
+    settings : TonalSettings
+        ``min_line_snr_db`` (dB) and z = ``line_false_alarm_sigmas``.
+    n_windows : int or None
+        T, the windows in the mean; None or 0 gives ``min_line_snr_db`` alone.
+
+    Returns
+    -------
+    float
+        The threshold (dB).
+    """
     if not n_windows:
         return settings.min_line_snr_db
     noise_db = 10.0 * np.log10(1.0 + settings.line_false_alarm_sigmas / np.sqrt(n_windows))
@@ -253,7 +287,26 @@ def pick_line(mean_power: np.ndarray, freqs_hz: np.ndarray, settings: TonalSetti
     ``other_powers`` (j, F): mean spectra of the other tracks' beams. A line is this beam's only when no
     other beam holds more power at its bin (+-1 bin): a loud tonal leaks into every beam through the
     sidelobes, but it stands highest above the background (:func:`_line_excess`) on the beam that points at
-    its source."""
+    its source.
+
+    Parameters
+    ----------
+    mean_power : numpy.ndarray
+        (F,) mean spectrum of this track's beam.
+    freqs_hz : numpy.ndarray
+        (F,) bin frequencies (Hz), uniformly spaced.
+    settings : TonalSettings
+        The tonal settings.
+    other_powers : numpy.ndarray, optional
+        (j, F) mean spectra of the other tracks' beams.
+    n_windows : int, optional
+        Windows in the mean (for :func:`line_threshold_db`).
+
+    Returns
+    -------
+    tuple of (float, float) or None
+        Line frequency (Hz) and its SNR above the running median (dB), or None when no peak qualifies.
+    """
     f, snr = spectral_peaks(mean_power, freqs_hz, settings, max_peaks=mean_power.size,
                             min_snr_db=line_threshold_db(settings, n_windows))
     if other_powers is None or len(other_powers) == 0 or f.size == 0:
@@ -278,7 +331,22 @@ def follow_line(candidates_hz: np.ndarray, line_hz: float, settings: TonalSettin
     """Frequency per window (T,) from candidates (T, M) (NaN padded): NaN where none is on the line (module doc).
 
     Followed forward in time, then backward to fill the windows the forward pass missed (the start of a
-    drifting line lies away from the mean spectrum's line, which sits at its middle)."""
+    drifting line lies away from the mean spectrum's line, which sits at its middle).
+
+    Parameters
+    ----------
+    candidates_hz : numpy.ndarray
+        (T, M) candidate peak frequencies of each window (Hz), NaN padded.
+    line_hz : float
+        The mean spectrum's line (Hz).
+    settings : TonalSettings
+        ``tolerance_hz`` and ``follow_windows``.
+
+    Returns
+    -------
+    numpy.ndarray
+        (T,) frequency on the line per window (Hz), NaN where none.
+    """
     forward = _follow_forward(candidates_hz, line_hz, settings)
     backward = _follow_forward(candidates_hz[::-1], line_hz, settings)[::-1]
     return np.where(np.isfinite(forward), forward, backward)
@@ -313,7 +381,22 @@ def frequency_sigma_hz(frequency_hz: np.ndarray, settings: TonalSettings) -> tup
     exactly). First a robust scale, s0 = 1.4826 MAD(r); estimates with |r| > outlier_sigmas s0 are noise
     peaks and become NaN; then sigma = RMS of the kept r (the tails of the estimator are heavier than a
     normal's, which the MAD would miss), divided by sqrt(1 + (pi/2 - 2) / w) because the running median shares
-    the sample, floored at ``sigma_floor_hz``."""
+    the sample, floored at ``sigma_floor_hz``.
+
+    Parameters
+    ----------
+    frequency_hz : numpy.ndarray
+        (T,) frequency per window (Hz), NaN where none.
+    settings : TonalSettings
+        ``smooth_windows``, ``outlier_sigmas`` and ``sigma_floor_hz``.
+
+    Returns
+    -------
+    sigma_hz : float
+        Standard deviation of one estimate (Hz); the floor when fewer than three are valid.
+    frequency_hz : numpy.ndarray
+        (T,) a copy of the estimates with the outliers set to NaN (Hz).
+    """
     f = np.array(frequency_hz, dtype=float)
     valid = np.flatnonzero(np.isfinite(f))
     if valid.size < 3:
@@ -346,12 +429,28 @@ class TonalAccumulator:
         return len(self._times)
 
     def state_nbytes(self) -> int:
-        """Bytes held: the mean spectrum and its frequencies (fixed) plus (1 + max_candidates) floats per window."""
+        """Bytes held: the mean spectrum and its frequencies (fixed) plus (1 + max_candidates) floats per window.
+
+        Returns
+        -------
+        int
+            Bytes of the accumulated state.
+        """
         fixed = self._power_sum.nbytes + (0 if self._freqs_hz is None else self._freqs_hz.nbytes)
         return fixed + self._times.itemsize * (len(self._times) + len(self._candidates))
 
     def add(self, time_s: float, power: np.ndarray, freqs_hz: np.ndarray) -> None:
-        """Add one window's beam spectrum (F,) at time ``time_s`` (the window's centre, say)."""
+        """Add one window's beam spectrum (F,) at time ``time_s`` (the window's centre, say).
+
+        Parameters
+        ----------
+        time_s : float
+            Time of the window (s).
+        power : numpy.ndarray
+            (F,) the beam's power spectrum, F = ``n_bins``.
+        freqs_hz : numpy.ndarray
+            (F,) bin frequencies (Hz); those of the first window are kept.
+        """
         power = np.asarray(power, dtype=float)
         require(power.shape == (self.n_bins,), f"tonal: a spectrum of {power.shape} bins, expected ({self.n_bins},)")
         if self._freqs_hz is None:
@@ -379,14 +478,32 @@ class TonalAccumulator:
         return out
 
     def mean_spectrum(self) -> np.ndarray:
-        """The running mean of the windows' beam spectra (F,)."""
+        """The running mean of the windows' beam spectra (F,).
+
+        Returns
+        -------
+        numpy.ndarray
+            (F,) mean power spectrum (zeros before the first window).
+        """
         return self._power_sum / max(1, self.n_windows)
 
     def result(self, others: Sequence[TonalAccumulator] = ()) -> TonalTrack | None:
         """The tonal track, or None (no window, or no mean-spectrum line above ``min_line_snr_db``).
 
         ``others``: the accumulators of the other tracks on the same recording (same band and window); a line
-        louder on another track's beam is that track's, leaked through the sidelobes (:func:`pick_line`)."""
+        louder on another track's beam is that track's, leaked through the sidelobes (:func:`pick_line`).
+
+        Parameters
+        ----------
+        others : sequence of TonalAccumulator
+            The other tracks' accumulators (this one and those with other bins or no window are ignored).
+
+        Returns
+        -------
+        TonalTrack or None
+            Line frequency (Hz) and SNR (dB), window times (s), frequency per window (Hz, NaN where not seen) and
+            its standard deviation (Hz); None when there is no window or no line.
+        """
         if self.n_windows == 0:
             return None
         other = [o.mean_spectrum() for o in others if o is not self and o.n_windows and o.n_bins == self.n_bins]

@@ -166,7 +166,36 @@ def _kept_statistic(J, n_keep):
 
 @_jit
 def pruned(yf, plane, prior, g, margin, n_keep, n_best, restrict, final_kept):
-    """Frames (K, M) -> (S / 2 - const, histories (n, K), scores J (n,), branches scored), best first."""
+    """Frames (K, M) -> (S / 2 - const, histories (n, K), scores J (n,), branches scored), best first.
+
+    Parameters
+    ----------
+    yf : numpy.ndarray
+        (K, M) frames of the statistic on P1's noise scale, the M = n_range x n_doppler cells of each frame
+        flattened.
+    plane : tuple
+        (n_range, n_doppler, dr, dv, r_min, v_min): the cell counts, cell steps (m, m/s) and first cell edges.
+    prior : tuple
+        (S_inv, S_cov, F, L, u, w1) of the Kalman prior (module doc).
+    g : float
+        rho / (1 + rho), rho the design SNR (linear).
+    margin : float
+        Restriction margin on J (module doc, step 1).
+    n_keep : int
+        N, the branches kept per frame (eq. 20).
+    n_best : int
+        Number of best tracks returned.
+    restrict : bool
+        Whether to restrict each parent's branches to its box (step 1).
+    final_kept : bool
+        Statistic over the N kept branches (eq. 20) instead of over every branch of the last frame.
+
+    Returns
+    -------
+    tuple
+        (S / 2 - const as a float, histories (n, K) of flat cell numbers, scores J (n,), number of branches
+        scored), n <= n_best tracks, best first.
+    """
     S_inv, S_cov, F, L, u, w1 = prior
     K = yf.shape[0]
     J = np.zeros(1)
@@ -195,7 +224,7 @@ def pruned_kernel():
     -------
     callable
         ``pruned(y, plane, arrays, g, margin, N, n_best, restrict, final_kept)`` returning
-        (S - const, flat cell numbers of the best tracks, their scores J, n_branches);
+        (S / 2 - const, flat cell numbers of the best tracks, their scores J, n_branches);
         :func:`detection.mftd.pruned_detect_fast` wraps it.
     """
     return pruned

@@ -127,19 +127,47 @@ class CellAxes:
 
     @classmethod
     def of(cls, cells: PingCells) -> CellAxes:
-        """The axes of a ping's :class:`~sonartrack.detection.cells.PingCells`."""
+        """The axes of a ping's :class:`~sonartrack.detection.cells.PingCells`.
+
+        Parameters
+        ----------
+        cells : PingCells
+            One ping's cells (cone angles deg from the array axis, delays s, Doppler Hz, range rates m/s).
+
+        Returns
+        -------
+        CellAxes
+            Those axes as float arrays (``travel_time_s`` from the cells' ``delay_s``).
+        """
         return cls(np.asarray(cells.cone_deg, float), np.asarray(cells.delay_s, float),
                    np.asarray(cells.doppler_hz, float), np.asarray(cells.range_rate_mps, float))
 
 
 def empty_detections() -> Detections:
-    """A :class:`~sonartrack.detection.cells.Detections` record with no row."""
+    """A :class:`~sonartrack.detection.cells.Detections` record with no row.
+
+    Returns
+    -------
+    Detections
+        Every column of length 0 (float or int64).
+    """
     f, i = np.zeros(0), np.zeros(0, np.int64)
     return Detections(i, f, f, f, f, f, f, i, i, i)
 
 
 def concat_detections(parts: list[Detections]) -> Detections:
-    """The rows of ``parts`` one after the other."""
+    """The rows of ``parts`` one after the other.
+
+    Parameters
+    ----------
+    parts : list of Detections
+        Detection records, in order (empty ones are skipped).
+
+    Returns
+    -------
+    Detections
+        All rows; :func:`empty_detections` when no part has a row.
+    """
     parts = [p for p in parts if len(p)]
     if not parts:
         return empty_detections()
@@ -149,7 +177,22 @@ def concat_detections(parts: list[Detections]) -> Detections:
 def tile_plan(n_time: int, tile_cells: int, margin: int) -> list[tuple[int, int, int, int]]:
     """(lo, hi, own_lo, own_hi) per tile: the tile covers cells [lo, hi), all of one length L = min(n, owned +
     2 margin) (tiles at the ends are shifted inwards), and owns [own_lo, own_hi); the owned ranges partition
-    0..n_time."""
+    0..n_time.
+
+    Parameters
+    ----------
+    n_time : int
+        Number of travel-time cells.
+    tile_cells : int
+        Cells owned by each tile (the last may own fewer).
+    margin : int
+        Cells added on each side of the owned range.
+
+    Returns
+    -------
+    list of tuple of int
+        One (lo, hi, own_lo, own_hi) per tile, in order of ``own_lo``.
+    """
     length = min(n_time, tile_cells + 2 * margin)
     out = []
     for own_lo in range(0, n_time, tile_cells):
@@ -162,7 +205,20 @@ def tile_plan(n_time: int, tile_cells: int, margin: int) -> list[tuple[int, int,
 def tail_threshold(stats, pfa: float) -> float:
     """Threshold with P(S > t) = pfa from noise-only statistics: the empirical quantile (at most pfa n above it)
     when pfa n >= MIN_EMPIRICAL_EXCEEDANCES, else the exponential-excess tail fitted above the 95 % quantile
-    (module doc)."""
+    (module doc).
+
+    Parameters
+    ----------
+    stats : array (n,)
+        Noise-only statistics S.
+    pfa : float
+        Wanted exceedance probability, in (0, 1).
+
+    Returns
+    -------
+    float
+        The threshold, on the scale of ``stats``.
+    """
     s = np.sort(np.asarray(stats, float))
     n = len(s)
     if pfa * n >= MIN_EMPIRICAL_EXCEEDANCES:
@@ -220,7 +276,24 @@ def noise_tiles(rng: np.random.Generator, shape: tuple[int, int, int], pool: tup
                 cfar: CfarSettings | None) -> np.ndarray:
     """One noise-only tile (K, L, D) on P1's scale (mean 2): each cell the max over ``pool`` = (beams, delays) input
     cells; the input cells exponential (mean 1), normalised by ``cfar`` along the delay axis when given (with the
-    CFAR's own reference cells around the tile, as in a ping), then doubled."""
+    CFAR's own reference cells around the tile, as in a ping), then doubled.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the noise.
+    shape : tuple of int
+        (K frames, L travel-time cells, D Doppler cells) of the tile, after pooling.
+    pool : tuple of int
+        (beams, delays) pooled into each cell.
+    cfar : CfarSettings or None
+        The CFAR that normalises the cells, or None for none.
+
+    Returns
+    -------
+    numpy.ndarray
+        (K, L, D) float noise statistic.
+    """
     K, n_range, n_doppler = shape
     pb, pc = pool
     n = n_range * pc
@@ -299,18 +372,52 @@ class PingMftd:
                                 v0)
 
     def tile_shape(self, frames: int) -> tuple[int, int, int]:
-        """(frames, travel-time cells, Doppler cells) of one tile of ``frames`` pings."""
+        """(frames, travel-time cells, Doppler cells) of one tile of ``frames`` pings.
+
+        Parameters
+        ----------
+        frames : int
+            Number of pings in the window.
+
+        Returns
+        -------
+        tuple of int
+            (frames, pooled travel-time cells of a tile, Doppler cells).
+        """
         lo, hi, _, _ = self.tiles[0]
         return frames, hi - lo, self.axes.shape[2]
 
     def detector(self, n_range: int) -> MftdDetector:
-        """P1's MFTD detector (detection/mftd.py) on a tile of ``n_range`` travel-time cells."""
+        """P1's MFTD detector (detection/mftd.py) on a tile of ``n_range`` travel-time cells.
+
+        Parameters
+        ----------
+        n_range : int
+            Pooled travel-time cells of the tile.
+
+        Returns
+        -------
+        MftdDetector
+            The detector on the tile's range-Doppler plane (range cell in m, range-rate cell in m/s), with this
+            object's MFTD settings.
+        """
         g = self.grid
         grid = RangeDopplerGrid(n_range, g.n_doppler, g.range_cell_m, g.range_rate_cell_mps, 0.0, g.range_rate_min_mps)
         return MftdDetector(grid, self.mftd_settings)
 
     def threshold(self, frames: int) -> float:
-        """lambda for ``frames`` pings: P(S > lambda | noise) = pfa x the input cells of a tile (module doc)."""
+        """lambda for ``frames`` pings: P(S > lambda | noise) = pfa x the input cells of a tile (module doc).
+
+        Parameters
+        ----------
+        frames : int
+            Number of pings in the window (K, or fewer for the first pings).
+
+        Returns
+        -------
+        float
+            Threshold on S, calibrated on noise-only tiles (cached per detector, shape and settings).
+        """
         s = self.settings
         shape = self.tile_shape(frames)
         pfa_tile = min(self.pfa * shape[1] * shape[2] * self.pool * self.pool_b, 0.5)
@@ -329,7 +436,18 @@ class PingMftd:
 
     def push(self, cells: PingCells) -> Detections:
         """Add one ping's cells (a :class:`~sonartrack.detection.cells.PingCells`) and return the detections
-        decided at it (``statistic``: S, the log statistic)."""
+        decided at it (``statistic``: S, the log statistic).
+
+        Parameters
+        ----------
+        cells : PingCells
+            The ping's number, transmit time (s) and statistic (beams, travel-time, Doppler).
+
+        Returns
+        -------
+        Detections
+            As :meth:`push_array`.
+        """
         return self.push_array(cells.ping, cells.time_s, cells.statistic)
 
     def push_array(self, ping: int, time_s: float, cells) -> Detections:
@@ -386,7 +504,22 @@ class PingMftd:
 def parabola_offset(log_y: np.ndarray, b, d, j, axis: int) -> np.ndarray:
     """Offsets (cells, within +-0.5) of the peak of a parabola through the log statistic at the cells (b, d, j) and
     their two neighbours along ``axis`` (0 beams, 1 delays): delta = (y_- - y_+) / (2 (y_- - 2 y_0 + y_+)), zero
-    where the three do not make a maximum or the cell is at an edge."""
+    where the three do not make a maximum or the cell is at an edge.
+
+    Parameters
+    ----------
+    log_y : numpy.ndarray
+        (beams, travel-time, Doppler) log statistic of the ping.
+    b, d, j : int arrays (n,)
+        Beam, travel-time and Doppler cell of each peak.
+    axis : int
+        0 to refine along beams, 1 along travel time.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) offsets in cells, in [-0.5, 0.5].
+    """
     idx = [np.asarray(b), np.asarray(d), np.asarray(j)]
     size = log_y.shape[axis]
     i = idx[axis]
@@ -402,7 +535,22 @@ def parabola_offset(log_y: np.ndarray, b, d, j, axis: int) -> np.ndarray:
 
 def merge_across_beams(beam, time_index, statistic) -> np.ndarray:
     """Keep (bool (n,)) the detections with no stronger one in an adjacent beam within one travel-time cell (ties:
-    the lower beam wins)."""
+    the lower beam wins).
+
+    Parameters
+    ----------
+    beam : int array (n,)
+        Beam index of each detection.
+    time_index : int array (n,)
+        Travel-time cell of each detection.
+    statistic : array (n,)
+        Each detection's statistic.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool, True where the detection is kept.
+    """
     b, i, s = (np.asarray(v) for v in (beam, time_index, statistic))
     near = (np.abs(b[:, None] - b[None, :]) == 1) & (np.abs(i[:, None] - i[None, :]) <= 1)
     stronger = (s[None, :] > s[:, None]) | ((s[None, :] == s[:, None]) & (b[None, :] < b[:, None]))

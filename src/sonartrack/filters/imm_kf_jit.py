@@ -13,7 +13,30 @@ _jit = nb.njit(cache=True)
 @_jit
 def mix(x, P, mu, Pi, j, c_j):  # pragma: no cover - compiled
     """x0_j = sum_i mu_{i|j} x_i, P0_j = sum_i mu_{i|j} (P_i + (x_i - x0_j)(x_i - x0_j)^T),
-    with mu_{i|j} = Pi_ij mu_i / c_j."""
+    with mu_{i|j} = Pi_ij mu_i / c_j.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (r, n) mode-conditioned states.
+    P : numpy.ndarray
+        (r, n, n) their covariances.
+    mu : numpy.ndarray
+        (r,) mode probabilities.
+    Pi : numpy.ndarray
+        (r, r) transition probabilities, Pi[i, j] = P(mode j | mode i).
+    j : int
+        The mode mixed for.
+    c_j : float
+        sum_i Pi_ij mu_i; where it is 0 the weights are 0.
+
+    Returns
+    -------
+    x0 : numpy.ndarray
+        (n,) mixed state.
+    P0 : numpy.ndarray
+        (n, n) mixed covariance.
+    """
     r, n = x.shape
     x0 = np.zeros(n)
     for i in range(r):
@@ -26,7 +49,28 @@ def mix(x, P, mu, Pi, j, c_j):  # pragma: no cover - compiled
 
 @_jit
 def predict_update(x0, P0, z, F, Q, H, R):  # pragma: no cover - compiled
-    """KF predict (F, Q) then Joseph-form update; returns x+, P+ and the log-likelihood log N(nu; 0, S)."""
+    """KF predict (F, Q) then Joseph-form update; returns x+, P+ and the log-likelihood log N(nu; 0, S).
+
+    Parameters
+    ----------
+    x0, P0 : numpy.ndarray
+        (n,) state and (n, n) covariance at the previous step.
+    z : numpy.ndarray
+        (m,) measurement.
+    F, Q : numpy.ndarray
+        (n, n) transition matrix and process noise covariance over the step.
+    H, R : numpy.ndarray
+        (m, n) measurement matrix and (m, m) measurement noise covariance.
+
+    Returns
+    -------
+    x : numpy.ndarray
+        (n,) updated state.
+    P : numpy.ndarray
+        (n, n) updated covariance (symmetrised).
+    loglik : float
+        log N(nu; 0, S) of the innovation nu with covariance S = H P_pred H^T + R.
+    """
     xp = F @ x0
     Pp = F @ P0 @ F.T + Q
     Pp = 0.5 * (Pp + Pp.T)
@@ -42,14 +86,44 @@ def predict_update(x0, P0, z, F, Q, H, R):  # pragma: no cover - compiled
 
 @_jit
 def mode_probabilities(c, loglik):  # pragma: no cover - compiled
-    """mu_j = c_j Lambda_j / sum_l c_l Lambda_l, in log space."""
+    """mu_j = c_j Lambda_j / sum_l c_l Lambda_l, in log space.
+
+    Parameters
+    ----------
+    c : numpy.ndarray
+        (r,) predicted mode probabilities c_j.
+    loglik : numpy.ndarray
+        (r,) log-likelihoods ln Lambda_j of the modes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (r,) updated mode probabilities, summing to 1.
+    """
     a = np.log(np.maximum(c, 1e-300)) + loglik
     e = np.exp(a - a.max())
     return e / e.sum()
 
 @_jit
 def combine(mu, x, P):  # pragma: no cover - compiled
-    """x = sum_j mu_j x_j,  P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T)."""
+    """x = sum_j mu_j x_j,  P = sum_j mu_j (P_j + (x_j - x)(x_j - x)^T).
+
+    Parameters
+    ----------
+    mu : numpy.ndarray
+        (r,) mode probabilities.
+    x : numpy.ndarray
+        (r, n) mode-conditioned states.
+    P : numpy.ndarray
+        (r, n, n) their covariances.
+
+    Returns
+    -------
+    x : numpy.ndarray
+        (n,) combined state.
+    P : numpy.ndarray
+        (n, n) combined covariance (symmetrised).
+    """
     r, n = x.shape
     xc = np.zeros(n)
     for j in range(r):
@@ -63,7 +137,21 @@ def combine(mu, x, P):  # pragma: no cover - compiled
 @_jit
 def kernel(x, P, mu, z, F, Q, H, R, Pi):  # pragma: no cover - compiled
     """One IMM-KF cycle (mix, per-mode predict and Joseph update, mode probabilities, combine): the arguments and
-    results of :func:`sonartrack.filters.imm_kf.imm_kf_step`, with ``F`` as (1 or r, n, n)."""
+    results of :func:`sonartrack.filters.imm_kf.imm_kf_step`, with ``F`` as (1 or r, n, n).
+
+    Parameters
+    ----------
+    x, P, mu, z, Q, H, R, Pi : numpy.ndarray
+        As :func:`sonartrack.filters.imm_kf.imm_kf_step`.
+    F : numpy.ndarray
+        (1, n, n) transition matrix shared by the modes, or (r, n, n) one per mode.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (x_r (r, n), P_r (r, n, n), mu (r,), x (n,), P (n, n)): updated mode-conditioned states and covariances,
+        mode probabilities, combined state and covariance.
+    """
     r, n = x.shape
     c = np.zeros(r)
     for j in range(r):

@@ -91,7 +91,13 @@ class WaveformSettings(Settings):
                                   ge=0)
 
     def waveform(self) -> Waveform:
-        """The library's :class:`~sonartrack.acoustics.matched_filter.Waveform` (its checks run here)."""
+        """The library's :class:`~sonartrack.acoustics.matched_filter.Waveform` (its checks run here).
+
+        Returns
+        -------
+        Waveform
+            Kind, pulse length (s), carrier (Hz) and bandwidth (Hz; 0 for a CW).
+        """
         return Waveform(self.kind, self.duration_s, self.carrier_hz, self.bandwidth_hz if self.kind == "lfm" else 0.0)
 
 
@@ -259,7 +265,19 @@ class EchoGeometry:
 
 
 def ownship_track(scene: ActiveSceneSettings) -> ManeuveringTrack:
-    """The ownship's track (one turn starting at ``ownship.turn_start_s``, or centred on the scene)."""
+    """The ownship's track (one turn starting at ``ownship.turn_start_s``, or centred on the scene).
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (its ``ownship``: start x east / y north in m, speed in kn, course in deg clockwise from north,
+        turn in deg, negative to port, at a rate in deg/s).
+
+    Returns
+    -------
+    ManeuveringTrack
+        Constant speed (m/s) and start heading (rad, clockwise from north), with at most one turn.
+    """
     o = scene.ownship
     turns = ()
     if o.turn_deg != 0:
@@ -333,7 +351,22 @@ def echo_geometry(points_xy, points_velocity, tx_xy, tx_velocity, rx_xy, rx_velo
 
 def target_motion(target: TargetSettings, t_s) -> tuple[np.ndarray, np.ndarray]:
     """Positions (T, 2) and velocities (T, 2) of a target at times ``t_s``: constant velocity, or with one
-    constant-rate course change (sim/platforms.py :class:`ManeuveringTrack`, in closed form)."""
+    constant-rate course change (sim/platforms.py :class:`ManeuveringTrack`, in closed form).
+
+    Parameters
+    ----------
+    target : TargetSettings
+        The target (start x east / y north in m, speed in kn, course in deg clockwise from north, optional turn).
+    t_s : float or array (T,)
+        Times (s).
+
+    Returns
+    -------
+    positions : numpy.ndarray
+        (T, 2) [x east, y north] (m).
+    velocities : numpy.ndarray
+        (T, 2) [east, north] (m/s).
+    """
     course = np.deg2rad(target.course_deg)
     v = target.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
     t = np.atleast_1d(np.asarray(t_s, dtype=float))
@@ -362,11 +395,37 @@ class TransmissionLoss:
     rx_db: dict
 
     def tx(self, range_m, depth_m: float) -> np.ndarray:
-        """TL from the source to points at ``depth_m`` and ranges (m)."""
+        """TL from the source to points at ``depth_m`` and ranges (m).
+
+        Parameters
+        ----------
+        range_m : float or array
+            Horizontal ranges from the source (m).
+        depth_m : float
+            Depth of the points (m); with RAM, one of the depths tabulated for the scene.
+
+        Returns
+        -------
+        numpy.ndarray
+            One-way transmission loss (dB), shaped as ``range_m``.
+        """
         return self._leg(self.tx_db, range_m, depth_m)
 
     def rx(self, range_m, depth_m: float) -> np.ndarray:
-        """TL from points at ``depth_m`` to the array (reciprocity: the array as the source)."""
+        """TL from points at ``depth_m`` to the array (reciprocity: the array as the source).
+
+        Parameters
+        ----------
+        range_m : float or array
+            Horizontal ranges from the array centre (m).
+        depth_m : float
+            Depth of the points (m); with RAM, one of the depths tabulated for the scene.
+
+        Returns
+        -------
+        numpy.ndarray
+            One-way transmission loss (dB), shaped as ``range_m``.
+        """
         return self._leg(self.rx_db, range_m, depth_m)
 
     def _leg(self, table: dict, range_m, depth_m: float) -> np.ndarray:
@@ -377,7 +436,18 @@ class TransmissionLoss:
 
 
 def max_path_range_m(scene: ActiveSceneSettings) -> float:
-    """Longest one-way range that can echo within a ping's window (m): c T / 2 plus the baseline."""
+    """Longest one-way range that can echo within a ping's window (m): c T / 2 plus the baseline.
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (sound speed c in m/s, ping interval T in s, tow lengths in m).
+
+    Returns
+    -------
+    float
+        The range (m).
+    """
     baseline = abs(scene.sonar.array_tow_m - scene.sonar.source_tow_m)
     return scene.sound_speed_mps * scene.ping_interval_s / 2.0 + baseline
 
@@ -429,7 +499,18 @@ def transmission_loss_model(scene: ActiveSceneSettings, store=None) -> Transmiss
 
 
 def ping_geometry(scene: ActiveSceneSettings) -> Platforms:
-    """The platforms at every ping's transmit time."""
+    """The platforms at every ping's transmit time.
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene.
+
+    Returns
+    -------
+    Platforms
+        :func:`platforms` at ``scene.ping_times_s``.
+    """
     return platforms(scene, scene.ping_times_s)
 
 
@@ -493,13 +574,38 @@ TRUTH_COLUMNS = ("ping", "time_s", "target", "x_m", "y_m", "vx_mps", "vy_mps", "
 
 
 def echo_snr_db(scene: ActiveSceneSettings, echo_level_db):
-    """snr = RL - NL + 10 log10(tau) + 10 log10(N): matched-filter output SNR on the beam's axis (module doc)."""
+    """snr = RL - NL + 10 log10(tau) + 10 log10(N): matched-filter output SNR on the beam's axis (module doc).
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (noise spectral level NL, pulse length tau in s, N elements).
+    echo_level_db : float or array
+        Echo level RL at the array (dB re 1 uPa).
+
+    Returns
+    -------
+    numpy.ndarray
+        SNR (dB), shaped as ``echo_level_db``.
+    """
     return (np.asarray(echo_level_db, dtype=float) - scene.noise_level_db
             + 10.0 * np.log10(scene.waveform.duration_s * scene.sonar.elements))
 
 
 def nav_columns(plat: Platforms) -> dict[str, np.ndarray]:
-    """The navigation table: ownship, source, array centre and array axis heading (headings in deg 0..360)."""
+    """The navigation table: ownship, source, array centre and array axis heading (headings in deg 0..360).
+
+    Parameters
+    ----------
+    plat : Platforms
+        The platforms at the navigation times (positions m, headings rad clockwise from north).
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        The columns of nav.csv (systems/active/scene_files.py ``NAV_COLUMNS``): positions x east, y north (m),
+        headings (deg clockwise from north, 0..360).
+    """
     return {"time_s": plat.time_s, "x_m": plat.own_xy[:, 0], "y_m": plat.own_xy[:, 1],
             "heading_deg": np.rad2deg(plat.own_heading_rad) % 360.0,
             "source_x_m": plat.tx_xy[:, 0], "source_y_m": plat.tx_xy[:, 1],

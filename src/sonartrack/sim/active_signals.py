@@ -60,7 +60,18 @@ REFERENCE_RANGE_M = 10_000.0
 
 
 def element_offsets(scene: ActiveSceneSettings) -> np.ndarray:
-    """s_n = ((N - 1)/2 - n) d, front positive (m)."""
+    """s_n = ((N - 1)/2 - n) d, front positive (m).
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (N elements, spacing d in m).
+
+    Returns
+    -------
+    numpy.ndarray
+        (N,) offset of each element from the array centre along the axis (m), element 0 the front.
+    """
     n = scene.sonar.elements
     return ((n - 1) / 2.0 - np.arange(n)) * scene.spacing_m
 
@@ -137,8 +148,28 @@ def add_scatterers(spectrum: np.ndarray, scene: ActiveSceneSettings, travel_s: n
                    amplitude: np.ndarray, doppler_hz: np.ndarray, waveform: Waveform) -> None:
     """Add the echoes of many scatterers to the element spectra (N, F) in place (module doc).
 
-    ``travel_s`` (E,) travel times to the array centre, ``cone_rad`` (E,) their cone angles, ``amplitude`` (E,)
-    complex amplitudes (Pa), ``doppler_hz`` (E,)."""
+    Parameters
+    ----------
+    spectrum : numpy.ndarray
+        (N, F) complex element spectra (FFT order), added to in place.
+    scene : ActiveSceneSettings
+        Sample rate, window, array and the Doppler node step of the reverberation.
+    travel_s : numpy.ndarray
+        (E,) travel times to the array centre (s); echoes outside the window are skipped.
+    cone_rad : numpy.ndarray
+        (E,) cone angles from the array's forward axis (rad, 0 = ahead).
+    amplitude : numpy.ndarray
+        (E,) complex amplitudes (Pa).
+    doppler_hz : numpy.ndarray
+        (E,) Doppler shifts (Hz).
+    waveform : Waveform
+        The pulse.
+
+    Returns
+    -------
+    None
+        ``spectrum`` is changed in place.
+    """
     from scipy import fft as sfft
 
     n_fft = spectrum.shape[1]
@@ -200,7 +231,27 @@ def add_target(spectrum: np.ndarray, scene: ActiveSceneSettings, delays_s: np.nd
 def reverberation_echoes(scene: ActiveSceneSettings, plat: Platforms, k: int, tl: TransmissionLoss,
                          rng: np.random.Generator):
     """(travel times (E,) s, cone angles (E,) rad, complex amplitudes (E,) Pa, Dopplers (E,) Hz) of ping ``k``'s
-    fresh scatterers."""
+    fresh scatterers.
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (boundary and volume populations, source level, carrier, sound speed).
+    plat : Platforms
+        The platforms at the ping times.
+    k : int
+        The ping (0-based row of ``plat``).
+    tl : TransmissionLoss
+        The scene's one-way transmission loss.
+    rng : numpy.random.Generator
+        Stream of the scatterers and their phases.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Travel times (s), cone angles from the array's forward axis (rad), complex amplitudes (Pa) and Doppler
+        shifts (Hz), each (E,), boundary population first; the scatterers are still.
+    """
     rv = scene.reverberation
     travel, cone, amps, dops = [], [], [], []
     for pop in (rv.boundary, rv.volume):
@@ -218,7 +269,23 @@ def reverberation_echoes(scene: ActiveSceneSettings, plat: Platforms, k: int, tl
 
 
 def target_amplitudes(scene: ActiveSceneSettings, echo_level_db: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Complex amplitudes (Pa) of the target echoes of a ping: Swerling 1 or steady (module doc)."""
+    """Complex amplitudes (Pa) of the target echoes of a ping: Swerling 1 or steady (module doc).
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (``target_fluctuation``).
+    echo_level_db : numpy.ndarray
+        (n,) echo levels (dB re 1 uPa).
+    rng : numpy.random.Generator
+        Stream of the amplitudes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) complex amplitudes (Pa): circular complex Gaussian with mean-square the echo level (swerling1), or
+        that rms with a uniform random phase.
+    """
     n = len(echo_level_db)
     g = rng.standard_normal((n, 2))
     rms = np.sqrt(UPA2_PA2 * 10.0 ** (np.asarray(echo_level_db, dtype=float) / 10.0))

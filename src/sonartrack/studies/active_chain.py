@@ -6,7 +6,7 @@ approaching target, a weak one, two that cross and one that maneuvers) with its 
 ``sonartrack active`` on it (systems/active/run.py): front end, single-ping and MFTD detection (paper P1) at one
 false-alarm rate, mirror-pair bistatic contacts, IMM-IPDA (paper P4). The same detections are tracked four ways:
 MFTD -> IMM-IPDA (the chain), single-ping -> IMM-IPDA, and MFTD -> each single-model IPDA (P4's small and large
-q). A reverberation-only scene of the same length (no target) is run through the chain too. Checks (the issue's
+q). A reverberation-only scene of the same length (no target) is run through the chain too. Checks (our requirements'
 list), each with intervals over runs:
 
 * mftd-earlier-longer: MFTD in front of IMM-IPDA confirms the weak target earlier and holds it longer than
@@ -509,7 +509,7 @@ def _mftd_claim(summary: dict, config: Config) -> Claim:
     gain = eq["gain_db"]
     holds = ttc["mftd_imm"] < ttc["single_imm"] and hold["mftd_imm"] > hold["single_imm"] and \
         fr["mftd_imm"] <= fr["single_imm"] and _num(gain[0]) > 0
-    return Claim(id="mftd-earlier-longer", paper="issue / paper P1 at system level: MFTD in front of IMM-IPDA confirms "
+    return Claim(id="mftd-earlier-longer", paper="ours / paper P1 at system level: MFTD in front of IMM-IPDA confirms "
                                                  "the weak target earlier and holds it longer than single-ping "
                                                  "detection at the same rate of confirmed false tracks",
                  text=f"weak target '{w}': time to confirm MFTD < single, fraction of pings held MFTD > single, and "
@@ -557,7 +557,7 @@ def _side_claim(summary: dict) -> Claim:
     names = summary["targets"]
     lr = ", ".join(f"{t} {_num(summary['side_log_lr']['mftd_imm'][t][0]):+.1f}" for t in names)
     when = ", ".join(f"{t} {_num(summary['side_resolved_s']['mftd_imm'][t][0]):.0f} s" for t in names)
-    return Claim(id="side-resolved", paper="issue: left/right ambiguity resolved correctly after the turn in >= 95 % "
+    return Claim(id="side-resolved", paper="ours: left/right ambiguity resolved correctly after the turn in >= 95 % "
                                            "of runs",
                  text="fraction of (run, target) pairs, at the last ping, whose holding track is decided on its own "
                       "side by the likelihood ratio of its contacts against their mirrors under constant-velocity "
@@ -569,7 +569,7 @@ def _side_claim(summary: dict) -> Claim:
 
 def _false_claim(summary: dict) -> Claim:
     k, rate = summary["reverb_false"]["mftd_imm"], summary["reverb_false_per_hour"]["mftd_imm"]
-    return Claim(id="false-tracks", paper="issue: confirmed false tracks per hour in a reverberation-only scene <= 1",
+    return Claim(id="false-tracks", paper="ours: confirmed false tracks per hour in a reverberation-only scene <= 1",
                  text="confirmed tracks of the chain (MFTD -> IMM-IPDA) per hour of reverberation-only scenes <= 1",
                  ours=f"{k} in {summary['hours']:.2f} h = {rate:.2f} per hour (95 % upper bound "
                       f"{summary['reverb_false_upper95']['mftd_imm']:.2f}); single-ping: "
@@ -581,7 +581,7 @@ def _rmse_claim(summary: dict) -> Claim:
     r = {n: (_num(summary["rmse_after_m"]["mftd_imm"][n]), _num(summary["sd_after_m"]["mftd_imm"][n]))
          for n in summary["targets"]}
     judged = {n: a / b for n, (a, b) in r.items() if np.isfinite(a) and np.isfinite(b) and b > 0}
-    return Claim(id="rmse-bound", paper="issue: range RMSE of confirmed true tracks within 2x the propagated contact "
+    return Claim(id="rmse-bound", paper="ours: range RMSE of confirmed true tracks within 2x the propagated contact "
                                         "covariance's bound",
                  text=f"per target held after the turn: position RMSE / RMS sqrt(P_xx + P_yy) of the holding track "
                       f"<= {RMSE_FACTOR} (P: the contacts' J Sigma J^T through the IMM-IPDA)",

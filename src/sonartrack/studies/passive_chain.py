@@ -345,7 +345,7 @@ def _hold_claims(summary: dict) -> list[Claim]:
     hold = summary["hold"]
     judged = [n for n, v in hold.items() if np.isfinite(_num(v[0]))]
     held = [n for n in judged if _num(hold[n][0]) >= HOLD_REQUIRED]
-    return [Claim(id="ships-held", paper="issue 11: every ship held by a confirmed track >= 80 % of the time its SNR "
+    return [Claim(id="ships-held", paper="ours: every ship held by a confirmed track >= 80 % of the time its SNR "
                                          "is above the detection threshold",
                   text="per ship, mean over runs of the fraction of its detectable windows held by a confirmed track "
                        f"within match_deg of its cone angle >= {HOLD_REQUIRED}",
@@ -356,7 +356,7 @@ def _hold_claims(summary: dict) -> list[Claim]:
 
 def _side_claim(summary: dict) -> Claim:
     v, n = _num(summary["side_correct"]), summary["side_pairs"]
-    return Claim(id="side-resolved", paper="issue 11: left/right ambiguity resolved correctly in >= 95 % of runs "
+    return Claim(id="side-resolved", paper="ours: left/right ambiguity resolved correctly in >= 95 % of runs "
                                            "after the ownship turn",
                  text="fraction of (run, ship) pairs whose target track spans the turn with the side decided and right",
                  ours=f"{v:.3f} of {n} pairs (unresolved counts as wrong)", holds=n > 0 and v >= SIDE_REQUIRED,
@@ -366,7 +366,7 @@ def _side_claim(summary: dict) -> Claim:
 def _crb_claim(summary: dict) -> Claim:
     r = {n: _num(v) for n, v in summary["rmse_over_crb"].items()}
     finite = {n: v for n, v in r.items() if np.isfinite(v)}
-    return Claim(id="ml-near-crb", paper="issue 11: final position RMSE of each TMA solution within 2x the "
+    return Claim(id="ml-near-crb", paper="ours: final position RMSE of each TMA solution within 2x the "
                                          "bearings-only CRB from the chain's own bearing noise",
                  text=f"per tracked ship, batch-ML final position RMSE / RMS CRB position sd <= {CRB_FACTOR} (runs "
                       "with the range determined)",
@@ -378,7 +378,7 @@ def _crb_claim(summary: dict) -> Claim:
 def _crossing_claim(summary: dict) -> Claim:
     k = {m: [_num(x) for x in summary["identity_kept"][m]] for m in ("jpda_a", "jpda")}
     k["runs"] = summary["identity_kept"]["runs"]
-    return Claim(id="crossing-identities", paper="issue 11 / paper P0: crossing ships keep their identities with "
+    return Claim(id="crossing-identities", paper="ours / paper P0: crossing ships keep their identities with "
                                                  "JPDA_A at least as often as with JPDA",
                  text="fraction of runs in which both crossing ships are followed by the same tracks before and "
                       "after the crossing: JPDA_A >= JPDA",
@@ -388,7 +388,7 @@ def _crossing_claim(summary: dict) -> Claim:
 
 
 def _false_claim(summary: dict) -> Claim:
-    return Claim(id="false-targets", paper="issue 11: noise-only recordings give at most 1 confirmed false target "
+    return Claim(id="false-targets", paper="ours: noise-only recordings give at most 1 confirmed false target "
                                            "per hour",
                  text="confirmed targets following no ship, per hour of recording (noise-only scenes and the ship "
                       "scenes together) <= 1",

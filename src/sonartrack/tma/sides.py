@@ -70,7 +70,18 @@ class SideDecision:
 
     def side_at(self, time_s) -> np.ndarray:
         """The side at each of ``time_s`` (s): ``side`` (the side at the record's start) before the first axis
-        crossing, the other side after it, and so on; "unresolved" everywhere when unresolved."""
+        crossing, the other side after it, and so on; "unresolved" everywhere when unresolved.
+
+        Parameters
+        ----------
+        time_s : float or array
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            Object array of "starboard" / "port" / "unresolved", shaped as ``time_s``.
+        """
         t = np.asarray(time_s, float)
         if self.side == "unresolved":
             return np.full(t.shape, "unresolved", dtype=object)
@@ -89,7 +100,20 @@ class SideDecision:
 def mirror_bearings_rad(cone_rad, array_heading_rad) -> tuple[np.ndarray, np.ndarray]:
     """The two true bearings (rad, clockwise from north, wrapped to (-pi, pi]) of cone angles ``cone_rad``
     (0..pi from the array's forward axis) for an array whose axis heads ``array_heading_rad``:
-    (starboard = h + theta, port = h - theta)."""
+    (starboard = h + theta, port = h - theta).
+
+    Parameters
+    ----------
+    cone_rad : float or array (n,)
+        Cone angles theta from the array's forward axis (rad, 0 = ahead).
+    array_heading_rad : float or array (n,)
+        Heading h of the array's forward axis (rad, clockwise from north).
+
+    Returns
+    -------
+    starboard, port : numpy.ndarray
+        (n,) true bearings (rad, clockwise from north, in (-pi, pi]).
+    """
     theta = np.asarray(cone_rad, dtype=float)
     h = np.asarray(array_heading_rad, dtype=float)
     return wrap_angle(h + theta), wrap_angle(h - theta)
@@ -109,7 +133,24 @@ def _starts(z_rad, time_s, sensor_xy, initial_ranges_m) -> list[np.ndarray | Non
 
 def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -> BatchEstimate | None:
     """The lowest-cost bearings-only ML CV fit over the starts of :func:`_starts` (objective = sum of squared
-    wrapped residuals, rad^2; covariance for unit noise), or None if every start fails."""
+    wrapped residuals, rad^2; covariance for unit noise), or None if every start fails.
+
+    Parameters
+    ----------
+    z_rad : array (n,)
+        True bearings (rad, clockwise from north).
+    time_s : array (n,)
+        Times (s), increasing.
+    sensor_xy : array (n, 2)
+        Sensor positions [x east, y north] (m).
+    initial_ranges_m : sequence of float
+        Ranges (m) of the multi-start tracks (module doc).
+
+    Returns
+    -------
+    BatchEstimate or None
+        The best fit (state [x, y, vx, vy] at the first time, m and m/s), or None.
+    """
     best = None
     for x_init in _starts(z_rad, time_s, sensor_xy, initial_ranges_m):
         try:
@@ -143,11 +184,33 @@ def resolve_side(time_s, cone_rad, array_heading_rad, sensor_xy_m, *, sigma_bear
                  initial_ranges_m=INITIAL_RANGES_M, unfolded: bool = False) -> SideDecision:
     """The side of the array a cone-angle track's target is on (module doc for the equations).
 
-    ``time_s`` (n,) s, ``cone_rad`` (n,) rad in 0..pi, ``array_heading_rad`` (n,) rad clockwise from north,
-    ``sensor_xy_m`` (n, 2) the array centre (x east, y north) at those times. ``sigma_bearing_rad``: the
-    bearing noise if known, else measured. ``unfolded``: ``cone_rad`` are unfolded angles phi through axis
-    crossings (:func:`resolve_side_through_crossings`), any real values. Unresolved (ln LR 0, a ``note``) with
-    fewer than 6 bearings or when a side's fit fails; NaN inputs raise :class:`InputError`."""
+    Unresolved (ln LR 0, a ``note``) with fewer than 6 bearings or when a side's fit fails.
+
+    Parameters
+    ----------
+    time_s : array (n,)
+        Times (s), strictly increasing.
+    cone_rad : array (n,)
+        Cone angles (rad, 0..pi from the array's forward axis); with ``unfolded``, unfolded angles phi through
+        axis crossings (:func:`resolve_side_through_crossings`), any real values.
+    array_heading_rad : array (n,)
+        Heading of the array's axis (rad, clockwise from north).
+    sensor_xy_m : array (n, 2)
+        The array centre [x east, y north] (m).
+    sigma_bearing_rad : float, optional
+        The bearing noise (rad) if known, else measured from the better fit.
+    min_log_lr, sigma_floor_rad : float
+        |ln LR| needed for a decision, and the floor of a measured sigma (rad).
+    initial_ranges_m : sequence of float
+        Ranges (m) of the multi-start fits.
+    unfolded : bool
+        Whether ``cone_rad`` holds unfolded angles.
+
+    Returns
+    -------
+    SideDecision
+        The side, ln LR, the sigma used and both fits; NaN inputs raise :class:`InputError`.
+    """
     t, cone, head, xy = _check_inputs(time_s, cone_rad, array_heading_rad, sensor_xy_m, unfolded)
     require(sigma_bearing_rad is None or (np.isfinite(sigma_bearing_rad) and sigma_bearing_rad > 0),
             f"resolve_side: sigma_bearing_rad must be a positive number, got {sigma_bearing_rad}")
@@ -181,7 +244,20 @@ MAX_CROSSING_ALTERNATIVES = 3
 
 def axis_crossings(time_s, phi_rad) -> np.ndarray:
     """Times (s) at which an unfolded cone angle phi passes a multiple of pi (the array's axis, endfire): the
-    midpoints between the samples where floor(phi / pi) changes."""
+    midpoints between the samples where floor(phi / pi) changes.
+
+    Parameters
+    ----------
+    time_s : array (n,)
+        Times (s).
+    phi_rad : array (n,)
+        Unfolded cone angles (rad).
+
+    Returns
+    -------
+    numpy.ndarray
+        (k,) crossing times (s), in order.
+    """
     t, k = np.asarray(time_s, float), np.floor(np.asarray(phi_rad, float) / np.pi)
     i = np.nonzero(np.diff(k) != 0)[0]
     return 0.5 * (t[i] + t[i + 1])
@@ -202,7 +278,20 @@ def _reflect_after(phi, time_s, event_s: float, axis_rad: float) -> np.ndarray:
 
 def crossing_events(time_s, phi_rad) -> list[tuple[float, float]]:
     """(time s, axis rad) of each pass of phi through a multiple of pi, and of each approach to within
-    ``NEAR_AXIS_RAD`` of one that turns back without passing it (a crossing the tracker may have reflected)."""
+    ``NEAR_AXIS_RAD`` of one that turns back without passing it (a crossing the tracker may have reflected).
+
+    Parameters
+    ----------
+    time_s : array (n,)
+        Times (s).
+    phi_rad : array (n,)
+        Unfolded cone angles (rad).
+
+    Returns
+    -------
+    list of (float, float)
+        Event time (s) and the axis angle (rad, a multiple of pi), sorted by time.
+    """
     t, phi = np.asarray(time_s, float), np.asarray(phi_rad, float)
     k = np.floor(phi / np.pi)
     events = [(0.5 * (t[i] + t[i + 1]), np.pi * max(k[i], k[i + 1])) for i in np.nonzero(np.diff(k) != 0)[0]]

@@ -105,7 +105,20 @@ def fold_cone_deg(phi_deg) -> tuple[np.ndarray, np.ndarray]:
 
 def fold_cone_state(x):
     """States [phi, phi rate] (..., 2) folded into [theta, theta rate], and the fold's slope (:func:`fold_cone_deg`;
-    the covariance is unchanged: the Jacobian diag(s, s) with s = +-1 gives J P J = P)."""
+    the covariance is unchanged: the Jacobian diag(s, s) with s = +-1 gives J P J = P).
+
+    Parameters
+    ----------
+    x : array (..., 2)
+        Unfolded cone angle phi (deg) and its rate, in the rate unit of the state.
+
+    Returns
+    -------
+    state : numpy.ndarray
+        (..., 2) [theta (deg, 0..180 from the array's forward axis), theta rate].
+    sign : numpy.ndarray
+        (...,) the slope s (+1 or -1).
+    """
     theta, sign = fold_cone_deg(x[..., 0])
     out = np.array(x, float, copy=True)
     out[..., 0] = theta

@@ -59,12 +59,34 @@ class ContactSettings(Settings):
                                       ge=0, le=10_000)
 
     def variances(self, sigma_cone_rad: float) -> np.ndarray:
-        """diag(Sigma) in the input order of models/bistatic.py: [t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y]."""
+        """diag(Sigma) in the input order of models/bistatic.py: [t, theta, phi, c, Tx_x, Tx_y, Rx_x, Rx_y].
+
+        Parameters
+        ----------
+        sigma_cone_rad : float
+            Standard deviation of the cone angle (rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (8,) variances in s^2, rad^2, rad^2, (m/s)^2 and four times m^2.
+        """
         return np.array([self.sigma_time_s**2, sigma_cone_rad**2, np.deg2rad(self.sigma_heading_deg)**2,
                          self.sigma_sound_speed_mps**2] + [self.sigma_position_m**2] * 4)
 
     def cone_sigma_rad(self, beam_step_deg: float | None) -> float:
-        """The cone-angle error used: the setting, or max(beam step / sqrt(12), 0.5 deg)."""
+        """The cone-angle error used: the setting, or max(beam step / sqrt(12), 0.5 deg).
+
+        Parameters
+        ----------
+        beam_step_deg : float or None
+            Spacing of the beams' cone angles (deg); None counts as 0 (the 0.5 deg floor applies).
+
+        Returns
+        -------
+        float
+            Standard deviation of the cone angle (rad).
+        """
         if self.sigma_cone_deg is not None:
             return float(np.deg2rad(self.sigma_cone_deg))
         step = 0.0 if beam_step_deg is None else float(beam_step_deg) / np.sqrt(12.0)
@@ -94,31 +116,104 @@ class ActiveGeometry:
         return np.stack([np.interp(t, self.time_s, v[:, k]) for k in range(v.shape[1])], axis=-1)
 
     def tx_at(self, t) -> np.ndarray:
-        """Source position(s) (m) at time(s) ``t`` (s)."""
+        """Source position(s) (m) at time(s) ``t`` (s).
+
+        Parameters
+        ----------
+        t : float or array (k,)
+            Time(s) (s), on the navigation's clock; held at the end rows outside its span (numpy.interp).
+
+        Returns
+        -------
+        numpy.ndarray
+            (2,) or (k, 2) position [x east, y north] (m).
+        """
         return self._interp(t, self.tx_xy)
 
     def rx_at(self, t) -> np.ndarray:
-        """Receiver (array centre) position(s) (m) at time(s) ``t`` (s)."""
+        """Receiver (array centre) position(s) (m) at time(s) ``t`` (s).
+
+        Parameters
+        ----------
+        t : float or array (k,)
+            Time(s) (s); held at the end rows outside the navigation's span.
+
+        Returns
+        -------
+        numpy.ndarray
+            (2,) or (k, 2) position [x east, y north] (m).
+        """
         return self._interp(t, self.rx_xy)
 
     def heading_at(self, t) -> np.ndarray:
-        """Array axis heading(s) (rad, unwrapped) at time(s) ``t`` (s)."""
+        """Array axis heading(s) (rad, unwrapped) at time(s) ``t`` (s).
+
+        Parameters
+        ----------
+        t : float or array (k,)
+            Time(s) (s); held at the end rows outside the navigation's span.
+
+        Returns
+        -------
+        numpy.ndarray
+            () or (k,) heading of the array's forward axis (rad, clockwise from north, unwrapped).
+        """
         return self._interp(t, self.array_heading_rad)
 
     def velocity(self, t, which: str, dt_s: float = 1.0) -> np.ndarray:
-        """Central-difference velocity (m/s) of the source (``which="tx"``) or receiver ("rx") at times ``t``."""
+        """Central-difference velocity (m/s) of the source (``which="tx"``) or receiver ("rx") at times ``t``.
+
+        Parameters
+        ----------
+        t : float or array (k,)
+            Time(s) (s).
+        which : str
+            ``"tx"`` for the source; anything else for the receiver.
+        dt_s : float
+            Half-width of the central difference (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            (2,) or (k, 2) velocity [east, north] (m/s).
+        """
         at = self.tx_at if which == "tx" else self.rx_at
         t = np.asarray(t, float)
         return (at(t + dt_s) - at(t - dt_s)) / (2.0 * dt_s)
 
     def side_of(self, t, xy) -> np.ndarray:
-        """+1 (starboard) / -1 (port) of the array's axis for positions ``xy (n, 2)`` at time(s) ``t``."""
+        """+1 (starboard) / -1 (port) of the array's axis for positions ``xy (n, 2)`` at time(s) ``t``.
+
+        Parameters
+        ----------
+        t : float or array (n,)
+            Time(s) (s) at which to take the receiver position and array heading.
+        xy : array (n, 2)
+            Positions [x east, y north] (m).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) int: +1 where sin(bearing from the receiver - array heading) >= 0 (bearings clockwise from north),
+            else -1.
+        """
         d = np.asarray(xy, float) - self.rx_at(t)
         h = self.heading_at(t)
         return np.where(np.sin(np.arctan2(d[..., 0], d[..., 1]) - h) >= 0, 1, -1)
 
     def covers(self, t0: float, t1: float) -> bool:
-        """True when the navigation spans [t0, t1] (s)."""
+        """True when the navigation spans [t0, t1] (s).
+
+        Parameters
+        ----------
+        t0, t1 : float
+            Start and end of the interval (s).
+
+        Returns
+        -------
+        bool
+            True when the first navigation time <= t0 and t1 <= the last.
+        """
         return bool(self.time_s[0] <= t0 and t1 <= self.time_s[-1])
 
 
@@ -145,14 +240,36 @@ class Contacts:
         return len(self.ping)
 
     def rows(self, keep) -> Contacts:
-        """The contacts where ``keep`` (bool mask or indices)."""
+        """The contacts where ``keep`` (bool mask or indices).
+
+        Parameters
+        ----------
+        keep : array
+            (m,) bool mask or integer indices of the rows to keep.
+
+        Returns
+        -------
+        Contacts
+            The selected rows; ``dropped`` is carried over unchanged.
+        """
         return Contacts(self.ping[keep], self.time_s[keep], self.detection[keep], self.side[keep], self.xy[keep],
                         self.R[keep], self.range_rate_mps[keep], self.rx_range_m[keep], self.statistic[keep],
                         self.dropped)
 
     @classmethod
     def concat(cls, parts: list[Contacts]) -> Contacts:
-        """The rows of ``parts`` one after the other (dropped counts added)."""
+        """The rows of ``parts`` one after the other (dropped counts added).
+
+        Parameters
+        ----------
+        parts : list of Contacts
+            The contact sets to join, in order.
+
+        Returns
+        -------
+        Contacts
+            All rows; :meth:`empty` when ``parts`` is empty.
+        """
         if not parts:
             return cls.empty()
         names = [n for n in cls.__slots__ if n != "dropped"]
@@ -161,14 +278,41 @@ class Contacts:
 
     @classmethod
     def empty(cls) -> Contacts:
-        """No contacts."""
+        """No contacts.
+
+        Returns
+        -------
+        Contacts
+            Zero rows of every column, ``dropped`` 0.
+        """
         z = np.zeros(0)
         return cls(np.zeros(0, np.int64), z, np.zeros(0, np.int64), np.zeros(0, np.int8), np.zeros((0, 2)),
                    np.zeros((0, 2, 2)), z, z, z)
 
 
 def mirror_positions(travel_time_s, cone_rad, heading_rad, c_mps, tx_xy, rx_xy):
-    """Positions (n, 2, 2) [side +1, side -1] and r_R (n, 2) of the mirror pair (eq. 2 with beta = phi +- cone)."""
+    """Positions (n, 2, 2) [side +1, side -1] and r_R (n, 2) of the mirror pair (eq. 2 with beta = phi +- cone).
+
+    Parameters
+    ----------
+    travel_time_s : array (n,)
+        Travel time of each detection from transmission (s).
+    cone_rad : array (n,)
+        Cone angle from the array's forward axis (rad, 0 = ahead, 0..pi).
+    heading_rad : array (n,)
+        Heading phi of the array's forward axis (rad, clockwise from north).
+    c_mps : float
+        Sound speed (m/s).
+    tx_xy, rx_xy : arrays (n, 2)
+        Source and receiver positions [x east, y north] (m).
+
+    Returns
+    -------
+    positions : numpy.ndarray
+        (n, 2, 2) contact positions (m), axis 1 = side +1 (beta = phi + cone, starboard) then -1 (port).
+    rx_range_m : numpy.ndarray
+        (n, 2) receiver-to-contact range r_R (m), same order.
+    """
     theta = np.stack([np.asarray(cone_rad, float), -np.asarray(cone_rad, float)], axis=-1)  # (n, 2)
     t = np.asarray(travel_time_s, float)[..., None]
     phi = np.asarray(heading_rad, float)[..., None]
@@ -236,7 +380,26 @@ def form_contacts(detections, ping_time_s, geometry: ActiveGeometry, sound_speed
 
 def predicted_range_rate(xy, v, tx_xy, tx_v, rx_xy, rx_v) -> tuple[np.ndarray, np.ndarray]:
     """Bistatic range rate (n,) m/s of targets at ``xy`` (n, 2) moving with ``v`` (n, 2), and its gradient (n, 2)
-    with respect to the target velocity (u_T + u_R): d r_B/dt = u_T . (v - v_T) + u_R . (v - v_R)."""
+    with respect to the target velocity (u_T + u_R): d r_B/dt = u_T . (v - v_T) + u_R . (v - v_R).
+
+    Parameters
+    ----------
+    xy : array (n, 2)
+        Target positions [x east, y north] (m).
+    v : array (n, 2)
+        Target velocities (m/s).
+    tx_xy, tx_v : arrays (2,) or (n, 2)
+        Source position (m) and velocity (m/s).
+    rx_xy, rx_v : arrays (2,) or (n, 2)
+        Receiver position (m) and velocity (m/s).
+
+    Returns
+    -------
+    rate : numpy.ndarray
+        (n,) bistatic range rate (m/s, positive opening).
+    gradient : numpy.ndarray
+        (n, 2) u_T + u_R, the derivative of the rate with respect to the target velocity (dimensionless).
+    """
     dt = np.asarray(xy, float) - np.asarray(tx_xy, float)
     dr = np.asarray(xy, float) - np.asarray(rx_xy, float)
     ut = dt / np.linalg.norm(dt, axis=-1, keepdims=True)
@@ -299,7 +462,22 @@ def range_rate_gate(contacts: Contacts, rate_sd_mps, track_x, track_P, tx, rx, *
 
 
 def in_position_gate(contacts: Contacts, track_x, track_P, gate_probability: float) -> np.ndarray:
-    """(n tracks, m contacts) bool: nu^T (P_xy + R_m)^-1 nu < chi2_2(gate_probability)."""
+    """(n tracks, m contacts) bool: nu^T (P_xy + R_m)^-1 nu < chi2_2(gate_probability).
+
+    Parameters
+    ----------
+    contacts : Contacts
+        The m contacts (positions in m, covariances in m^2).
+    track_x, track_P : arrays (n, 4), (n, 4, 4)
+        Predicted states [x, y, vx, vy] (m, m/s) and their covariances.
+    gate_probability : float
+        Probability of the chi-square(2) gate.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, m) bool, True where contact m lies in track n's position gate.
+    """
     x, P = np.asarray(track_x, float).reshape(-1, 4), np.asarray(track_P, float).reshape(-1, 4, 4)
     if not len(x) or not len(contacts):
         return np.zeros((len(x), len(contacts)), bool)

@@ -13,7 +13,9 @@ and each is written atomically, so a failure leaves no half-written output):
   from the tracker by the range-rate gate);
 * tracks.csv: one row per live track per ping: time_s, track_id, status (confirmed | tentative), existence,
   x_m, y_m, vx_mps, vy_mps, sd_x_m, sd_y_m, mode_prob_<j> (tracking/run.py), and sd_vx_mps, sd_vy_mps,
-  cov_xy_m2.
+  cov_xy_m2;
+* sides.csv: the left/right decision of each confirmed track (systems/active/sides.py: decision, side, ln LR,
+  time resolved).
 """
 
 from __future__ import annotations
@@ -33,7 +35,19 @@ CONTACT_COLUMNS = ["time_s", "x_m", "y_m", "var_x_m2", "var_y_m2", "cov_xy_m2", 
 
 
 def scene_folder(pings) -> Path:
-    """The folder holding ping_table.csv: ``pings`` itself, or its parent when ``pings`` is the pings/ folder."""
+    """The folder holding ping_table.csv: ``pings`` itself, or its parent when ``pings`` is the pings/ folder.
+
+    Parameters
+    ----------
+    pings : str or path-like
+        The scene folder or its pings/ folder; an InputError when it is not a folder or neither it nor its parent
+        holds ping_table.csv.
+
+    Returns
+    -------
+    Path
+        The scene folder (the first of ``pings``, its parent that holds ping_table.csv).
+    """
     from sonartrack.systems.active.scene_files import PING_TABLE
 
     p = Path(pings)
@@ -73,7 +87,19 @@ def run_active_files(pings, nav_path, settings: ActiveSettings, *, progress=None
 
 
 def detections_table(result: ActiveResult):
-    """detections.csv (module doc)."""
+    """detections.csv (module doc).
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result (its ``mftd`` and ``single`` detections).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The MFTD detections then the single-ping ones, columns ``DETECTION_COLUMNS`` (times s, cone angle deg from
+        the array axis, Doppler Hz, range rate m/s).
+    """
     import pandas as pd
 
     parts = []
@@ -84,7 +110,19 @@ def detections_table(result: ActiveResult):
 
 
 def contacts_table(result: ActiveResult):
-    """contacts.csv (module doc)."""
+    """contacts.csv (module doc).
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result (its ``contacts`` and ``gated_out``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per contact, columns ``CONTACT_COLUMNS``: positions x east, y north (m), covariance (m^2),
+        ``side`` starboard | port.
+    """
     import pandas as pd
 
     c = result.contacts
@@ -96,7 +134,18 @@ def contacts_table(result: ActiveResult):
 
 
 def tracks_table(result: ActiveResult):
-    """tracks.csv (module doc)."""
+    """tracks.csv (module doc).
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result (its ``tracks``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The tracker's frame plus ``sd_vx_mps``, ``sd_vy_mps`` (m/s) and ``cov_xy_m2`` (m^2) from the covariances.
+    """
     t, P = result.tracks.tracks, result.tracks.P
     df = t.to_frame()
     df["sd_vx_mps"], df["sd_vy_mps"], df["cov_xy_m2"] = np.sqrt(P[:, 2, 2]), np.sqrt(P[:, 3, 3]), P[:, 0, 1]
@@ -104,7 +153,18 @@ def tracks_table(result: ActiveResult):
 
 
 def sides_table(result: ActiveResult):
-    """sides.csv (module doc)."""
+    """sides.csv: the side decision of each track.
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result (its ``tracks.sides``, None when no side decision was made).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns track_id, decision, side, log_lr, resolved_s (s), contacts; no rows when there are no decisions.
+    """
     import pandas as pd
 
     d = result.tracks.sides
@@ -156,7 +216,21 @@ def _side(result: ActiveResult, t_s: float, xy) -> str:
 
 
 def track_line(result: ActiveResult, track_id: int) -> str:
-    """One line for a confirmed track: span, last estimate with sds, speed and course, existence, modes, side."""
+    """One line for a confirmed track: span, last estimate with sds, speed and course, existence, modes, side.
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result.
+    track_id : int
+        A track that was confirmed at least once.
+
+    Returns
+    -------
+    str
+        Positions and sds in km (x east, y north), speed in knots, course in deg clockwise from north, side of the
+        array axis at the last estimate, and the side decision in words.
+    """
     t = result.tracks.tracks
     rows = np.nonzero(t.track_id == track_id)[0]
     conf = rows[t.confirmed[rows]]
@@ -184,7 +258,19 @@ def _side_text(result: ActiveResult, track_id: int) -> str:
 
 
 def summary_lines(result: ActiveResult) -> list[str]:
-    """One line per confirmed track, or one line saying that nothing was confirmed."""
+    """One line per confirmed track, or one line saying that nothing was confirmed.
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result.
+
+    Returns
+    -------
+    list of str
+        :func:`track_line` of each confirmed track in order of first confirmation, or one line with the numbers
+        of pings, detections and contacts.
+    """
     t = result.tracks.tracks
     ids = list(dict.fromkeys(t.track_id[t.confirmed].tolist()))
     if not ids:

@@ -34,7 +34,18 @@ class PingTable:
         return int(self.ping.size)
 
     def waveform(self, i: int) -> Waveform:
-        """The transmitted pulse of row ``i``."""
+        """The transmitted pulse of row ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Row of the table (0-based).
+
+        Returns
+        -------
+        Waveform
+            Kind (lfm | cw), pulse length (s), carrier (Hz) and bandwidth (Hz; 0 for a CW).
+        """
         kind = str(self.kind[i])
         return Waveform(kind, float(self.duration_s[i]), float(self.fc_hz[i]),
                         float(self.bandwidth_hz[i]) if kind == "lfm" else 0.0)
@@ -54,7 +65,20 @@ class ActiveNav:
 
     def at(self, t_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(source xy (n, 2), array centre xy (n, 2), array heading (n,) rad) at times ``t_s``, linear in time
-        (end values outside the record)."""
+        (end values outside the record).
+
+        Parameters
+        ----------
+        t_s : float or array (n,)
+            Time(s) (s).
+
+        Returns
+        -------
+        source_xy, array_xy : numpy.ndarray
+            (n, 2) positions [x east, y north] (m); n = 1 for a scalar ``t_s``.
+        array_heading_rad : numpy.ndarray
+            (n,) heading of the array's forward axis (rad, clockwise from north, unwrapped).
+        """
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
 
         def lerp(v):

@@ -184,7 +184,20 @@ class ContactTracker:
 
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
-        range-rate gate or the mirror of a resolved side)."""
+        range-rate gate or the mirror of a resolved side).
+
+        Parameters
+        ----------
+        t_s : float
+            The scan time (s), the ping's transmit time.
+        contacts : Contacts
+            The ping's mirror-pair contacts (positions m, covariances m^2).
+
+        Returns
+        -------
+        numpy.ndarray
+            (m,) bool verdict per contact.
+        """
         keep = self._gates(t_s, contacts)
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
@@ -199,7 +212,14 @@ class ContactTracker:
         return keep
 
     def result(self) -> ActiveTracks:
-        """Every ping's live tracks (:class:`ActiveTracks`)."""
+        """Every ping's live tracks (:class:`ActiveTracks`).
+
+        Returns
+        -------
+        ActiveTracks
+            The tracks of every scan so far (states [x, y, vx, vy] in m and m/s, covariances, mode probabilities) and
+            the side decisions.
+        """
         r, n_modes = self._rows, len(self.settings.q)
 
         def cat(k, empty):
@@ -215,7 +235,18 @@ class ContactTracker:
 
 def rate_sd_of(cells_range_rate_mps) -> float:
     """Standard deviation of a measured range rate: one Doppler cell / sqrt(12) (uniform within the cell); 1 m/s
-    when the pulse measures none (the gate then skips those contacts anyway)."""
+    when the pulse measures none (the gate then skips those contacts anyway).
+
+    Parameters
+    ----------
+    cells_range_rate_mps : array
+        Range rate (m/s) of each Doppler cell, evenly spaced; NaN or fewer than two cells when none is measured.
+
+    Returns
+    -------
+    float
+        Standard deviation (m/s).
+    """
     v = np.asarray(cells_range_rate_mps, float)
     if len(v) < 2 or not np.all(np.isfinite(v)):
         return 1.0
@@ -265,7 +296,18 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
 
 
 def geometry_of(nav) -> ActiveGeometry:
-    """The source and receiver of an :class:`~sonartrack.systems.active.records.ActiveNav` (array centre = Rx)."""
+    """The source and receiver of an :class:`~sonartrack.systems.active.records.ActiveNav` (array centre = Rx).
+
+    Parameters
+    ----------
+    nav : ActiveNav
+        The navigation (times s, positions m, array heading rad).
+
+    Returns
+    -------
+    ActiveGeometry
+        Source positions as Tx, array-centre positions as Rx, the array-axis heading.
+    """
     return ActiveGeometry(np.asarray(nav.time_s, float), np.asarray(nav.source_xy, float),
                           np.asarray(nav.array_xy, float), np.asarray(nav.array_heading_rad, float))
 
@@ -285,7 +327,20 @@ def _bscan_axis(delay_s: np.ndarray, bins: int) -> np.ndarray:
 
 
 def ping_interval(ping_table, settings: ActiveSettings) -> float:
-    """The ping interval T: the setting, or the ping table's median interval (one-line error for one ping)."""
+    """The ping interval T: the setting, or the ping table's median interval (one-line error for one ping).
+
+    Parameters
+    ----------
+    ping_table : PingTable
+        The pings (transmit times in s).
+    settings : ActiveSettings
+        The chain's settings (``ping_interval_s``, None to take it from the table).
+
+    Returns
+    -------
+    float
+        The ping interval (s).
+    """
     if settings.ping_interval_s is not None:
         return float(settings.ping_interval_s)
     t = np.asarray(ping_table.transmit_time_s, float)

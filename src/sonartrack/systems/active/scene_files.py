@@ -47,12 +47,38 @@ CSV_FLOAT = "%.9g"
 
 
 def ping_file(ping: int) -> str:
-    """The file of ping number ``ping`` (1-based), relative to the scene folder."""
+    """The file of ping number ``ping`` (1-based), relative to the scene folder.
+
+    Parameters
+    ----------
+    ping : int
+        The ping number (1-based).
+
+    Returns
+    -------
+    str
+        ``pings/ping_NNNN.npy`` (at least four digits).
+    """
     return f"{PING_DIR}/ping_{int(ping):04d}.npy"
 
 
 def write_ping(folder, ping: int, samples: np.ndarray) -> Path:
-    """Write one ping's samples (channels, samples) as complex64 ``.npy``, atomically."""
+    """Write one ping's samples (channels, samples) as complex64 ``.npy``, atomically.
+
+    Parameters
+    ----------
+    folder : str or path-like
+        The scene folder (pings/ is created in it).
+    ping : int
+        The ping number (1-based).
+    samples : numpy.ndarray
+        (channels, samples) complex baseband (``|x|^2`` in Pa^2), element 0 the front.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     buf = io.BytesIO()
     np.save(buf, np.ascontiguousarray(samples, dtype=np.complex64), allow_pickle=False)
     path = Path(folder) / ping_file(ping)
@@ -61,7 +87,20 @@ def write_ping(folder, ping: int, samples: np.ndarray) -> Path:
 
 
 def write_table(columns: dict, path) -> Path:
-    """A dict of equal-length columns as CSV, atomically."""
+    """A dict of equal-length columns as CSV, atomically.
+
+    Parameters
+    ----------
+    columns : dict
+        Column name -> array, all of one length.
+    path : str or path-like
+        The CSV file to write (floats with 9 significant digits).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import pandas as pd
 
     return write_csv(pd.DataFrame(columns), path, float_format=CSV_FLOAT)
@@ -118,7 +157,23 @@ def read_ping_table(path) -> PingTable:
 
 
 def read_ping(folder, table: PingTable, i: int) -> np.ndarray:
-    """Samples (channels, samples) complex64 of row ``i`` of ``table``, checked against the table."""
+    """Samples (channels, samples) complex64 of row ``i`` of ``table``, checked against the table.
+
+    Parameters
+    ----------
+    folder : str or path-like
+        The scene folder (the table's ``file`` paths are relative to it).
+    table : PingTable
+        The checked ping table.
+    i : int
+        Row of ``table`` (0-based, not the ping number).
+
+    Returns
+    -------
+    numpy.ndarray
+        (channels, samples) complex64 complex baseband; an InputError when the file is missing, not a complex
+        .npy array, or its shape disagrees with the table.
+    """
     p = Path(folder) / str(table.file[i])
     require(p.is_file(), f"ping {table.ping[i]}: file {p} is missing: the ping table and the pings folder disagree")
     try:
@@ -138,13 +193,40 @@ def read_ping(folder, table: PingTable, i: int) -> np.ndarray:
 
 
 def iter_pings(folder, table: PingTable) -> Iterator[tuple[int, float, np.ndarray]]:
-    """(ping number, transmit time s, samples) of each ping in turn (one ping in memory at a time)."""
+    """(ping number, transmit time s, samples) of each ping in turn (one ping in memory at a time).
+
+    Parameters
+    ----------
+    folder : str or path-like
+        The scene folder.
+    table : PingTable
+        The checked ping table.
+
+    Returns
+    -------
+    Iterator of (int, float, numpy.ndarray)
+        Ping number, transmit time (s) and the (channels, samples) complex64 samples of :func:`read_ping`, in the
+        table's order.
+    """
     for i in range(len(table)):
         yield int(table.ping[i]), float(table.transmit_time_s[i]), read_ping(folder, table, i)
 
 
 def read_active_nav(path) -> ActiveNav:
-    """The navigation of an active scene (module doc), checked; headings unwrapped, in radians."""
+    """The navigation of an active scene (module doc), checked; headings unwrapped, in radians.
+
+    Parameters
+    ----------
+    path : str or path-like
+        nav.csv (columns ``NAV_COLUMNS``; positions x east, y north in m, headings in deg clockwise from north,
+        times strictly increasing).
+
+    Returns
+    -------
+    ActiveNav
+        Times (s), ownship / source / array-centre positions (n, 2) m, ownship and array-axis headings (n,) rad,
+        unwrapped.
+    """
     df = read_table(path, "navigation")
     check_columns(df, NAV_COLUMNS, "navigation", path)
 
@@ -159,7 +241,22 @@ def read_active_nav(path) -> ActiveNav:
 
 
 def check_nav_covers(table: PingTable, nav: ActiveNav, slack_s: float = 1.0) -> None:
-    """The navigation must span every ping's transmit time (within ``slack_s``)."""
+    """The navigation must span every ping's transmit time (within ``slack_s``).
+
+    Parameters
+    ----------
+    table : PingTable
+        The ping table (transmit times in s, increasing).
+    nav : ActiveNav
+        The navigation.
+    slack_s : float
+        How far (s) the navigation may stop short of the first and last transmit times.
+
+    Returns
+    -------
+    None
+        Raises InputError when the navigation does not cover the pings.
+    """
     t0, t1 = float(table.transmit_time_s[0]), float(table.transmit_time_s[-1])
     require(nav.time_s[0] <= t0 + slack_s and nav.time_s[-1] >= t1 - slack_s,
             f"the navigation ({nav.time_s[0]:g}..{nav.time_s[-1]:g} s) does not cover the pings ({t0:g}..{t1:g} s): "
@@ -167,5 +264,16 @@ def check_nav_covers(table: PingTable, nav: ActiveNav, slack_s: float = 1.0) -> 
 
 
 def read_truth(path):
-    """truth.csv as a pandas DataFrame (scoring and studies; the chain never reads it)."""
+    """truth.csv as a pandas DataFrame (scoring and studies; the chain never reads it).
+
+    Parameters
+    ----------
+    path : str or path-like
+        truth.csv of the scene.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The file's columns as read (sim/active_scene.py ``TRUTH_COLUMNS``).
+    """
     return read_table(path, "truth")

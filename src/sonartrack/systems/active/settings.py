@@ -98,16 +98,35 @@ class ActiveSettings(Settings):
                                              doc="IMM-IPDA position tracker (paper P4)")
 
     def front_end_settings(self) -> FrontEndSettings:
-        """The front end's library settings with the root's sound speed and false-alarm rate."""
+        """The front end's library settings with the root's sound speed and false-alarm rate.
+
+        Returns
+        -------
+        FrontEndSettings
+            The ``front_end`` group built with the root's ``sound_speed_mps`` (m/s), ``pfa`` and
+            ``max_range_rate_mps`` (m/s).
+        """
         return self.front_end.build(sound_speed_mps=self.sound_speed_mps, pfa=self.pfa,
                                     max_range_rate_mps=self.max_range_rate_mps)
 
     def mftd_settings(self) -> PingMftdSettings:
-        """The MFTD's library settings with the root's largest range rate."""
+        """The MFTD's library settings with the root's largest range rate.
+
+        Returns
+        -------
+        PingMftdSettings
+            The ``mftd`` group built with the root's ``max_range_rate_mps`` (m/s).
+        """
         return self.mftd.build(max_range_rate_mps=self.max_range_rate_mps)
 
     def tracker_settings(self) -> PositionTrackerSettings:
-        """The tracker's library settings."""
+        """The tracker's library settings.
+
+        Returns
+        -------
+        PositionTrackerSettings
+            The ``tracker`` group built as it is.
+        """
         return self.tracker.build()
 
     def checked(self, channels: int) -> ActiveSettings:

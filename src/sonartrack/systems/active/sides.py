@@ -57,7 +57,18 @@ class SideDecisions:
         return len(self.track_id)
 
     def of(self, track_id: int) -> int | None:
-        """Row of ``track_id`` (None: not a confirmed track)."""
+        """Row of ``track_id`` (None: not a confirmed track).
+
+        Parameters
+        ----------
+        track_id : int
+            The track's id.
+
+        Returns
+        -------
+        int or None
+            The first row with that id, or None.
+        """
         hit = np.nonzero(self.track_id == track_id)[0]
         return int(hit[0]) if len(hit) else None
 
@@ -188,14 +199,32 @@ class SideTracker:
         return (best, int(other[0])) if len(other) else None
 
     def decision(self, track_id: int) -> int:
-        """+1 the track is on its target's side, -1 a ghost, 0 undecided (so far)."""
+        """+1 the track is on its target's side, -1 a ghost, 0 undecided (so far).
+
+        Parameters
+        ----------
+        track_id : int
+            The track's id.
+
+        Returns
+        -------
+        int
+            The sign of the track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also 0 for
+            a track with no history).
+        """
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0
         return 1 if h[-1][1] > 0 else -1
 
     def result(self) -> SideDecisions:
-        """Every confirmed track's decision (:class:`SideDecisions`)."""
+        """Every confirmed track's decision (:class:`SideDecisions`).
+
+        Returns
+        -------
+        SideDecisions
+            One row per track seen confirmed, by increasing id; ``resolved_s`` in s.
+        """
         ids = sorted(self._h0)
         dec, side, lr, when, n = [], [], [], [], []
         for tid in ids:

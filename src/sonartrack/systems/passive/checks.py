@@ -459,7 +459,13 @@ class ResidualCheck:
         return self.chi2 <= self.limit and self.block_chi2 <= self.block_limit
 
     def note(self) -> str:
-        """One line on the test, for a warning."""
+        """One line on the test, for a warning.
+
+        Returns
+        -------
+        str
+            Both chi-square statistics with their degrees of freedom and limits.
+        """
         return (f"residuals disagree with the stated bearing noise (chi-square {self.chi2:.0f} for {self.dof} "
                 f"degrees of freedom, limit {self.limit:.0f}; {RESIDUAL_BLOCK_S:g} s block means {self.block_chi2:.0f}"
                 f" for {self.block_dof}, limit {self.block_limit:.0f})")

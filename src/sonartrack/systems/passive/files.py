@@ -282,7 +282,20 @@ def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress
 
 
 def levels_table(level_db: np.ndarray, window_s: float):
-    """levels.csv: time_s (window centre, s) and level_db_re_1upa (broadband, mean over elements; empty in a gap)."""
+    """levels.csv: time_s (window centre, s) and level_db_re_1upa (broadband, mean over elements; empty in a gap).
+
+    Parameters
+    ----------
+    level_db : numpy.ndarray
+        (windows,) broadband level of each window (dB re 1 uPa; NaN in a gap).
+    window_s : float
+        Window length (s); window k is centred at (k + 0.5) window_s.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns time_s (s) and level_db_re_1upa, one row per window.
+    """
     import pandas as pd
 
     level = np.asarray(level_db, float)

@@ -18,7 +18,19 @@ from sonartrack.sim.active_scene import ActiveSceneSettings
 
 
 def ping_table_columns(scene: ActiveSceneSettings) -> dict:
-    """The ping table's columns (systems/active/scene_files.py) of the scene's pings."""
+    """The ping table's columns (systems/active/scene_files.py) of the scene's pings.
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The scene (ping times, waveform, sample rate, array).
+
+    Returns
+    -------
+    dict
+        Column name -> one value per ping (``PING_TABLE_COLUMNS``; pings numbered from 1, times s, frequencies
+        Hz, bandwidth 0 for a CW).
+    """
     from sonartrack.systems.active.scene_files import ping_file
 
     t = scene.ping_times_s
@@ -103,7 +115,18 @@ def write_active(settings: ActiveSceneSettings, out, *, progress=None, cache=Non
 
 
 def active_scene_summary(settings: ActiveSceneSettings) -> str:
-    """One line: pings, waveform, array, and each target's echo SNR range over the scene."""
+    """One line: pings, waveform, array, and each target's echo SNR range over the scene.
+
+    Parameters
+    ----------
+    settings : ActiveSceneSettings
+        The scene.
+
+    Returns
+    -------
+    str
+        The summary; the echo SNR (dB) of each target only with spherical propagation.
+    """
     from sonartrack.sim.active_scene import target_truth, transmission_loss_model
 
     w = settings.waveform
