@@ -50,9 +50,6 @@ ActiveTrackerSettings = derived_settings(
     PositionTrackerSettings, "ActiveTrackerSettings", "P4's IMM-IPDA on the mirror-pair contacts, with the active "
     "chain's detection probability.", defaults=ACTIVE_TRACKER_DEFAULTS)
 
-for _cls in (ActiveFrontEndSettings, ActiveMftdSettings, ActiveTrackerSettings):
-    _cls.__module__ = __name__  # pickle (the study's worker processes) looks a class up by module and name
-
 
 class ActiveSettings(Settings):
     """The active chain: pings + navigation -> detections -> mirror contacts -> IMM-IPDA tracks (module doc)."""
