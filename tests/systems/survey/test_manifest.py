@@ -33,3 +33,9 @@ def test_refused(tmp_path, text, words):
         read_manifest(tmp_path / "m.csv")
     with pytest.raises(InputError, match="not found"):
         read_manifest(tmp_path / "none.csv")
+
+
+def test_a_manifest_that_is_not_utf8_is_one_line(tmp_path):
+    (tmp_path / "m.csv").write_bytes(b"\xff\xfe\x00recording,navigation,spacing_m\n")
+    with pytest.raises(InputError, match="not UTF-8 text"):
+        read_manifest(tmp_path / "m.csv")

@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from sonartrack.core.errors import require
+from sonartrack.core.errors import InputError, require
 
 REQUIRED = ("recording", "navigation", "spacing_m")
 OPTIONAL = ("name", "calibration", "settings", "tow_length_m", "name_pattern", "time_source")
@@ -90,11 +90,15 @@ def read_manifest(path) -> list[SurveyEntry]:
     """
     p = Path(path)
     require(p.is_file(), f"survey manifest not found: {p}: give a CSV with the columns {', '.join(REQUIRED)}")
-    with open(p, newline="", encoding="utf-8") as fh:
-        reader = csv.DictReader(fh)
-        header = [h.strip() for h in (reader.fieldnames or [])]
-        reader.fieldnames = header
-        rows = list(reader)
+    try:
+        with open(p, newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            header = [h.strip() for h in (reader.fieldnames or [])]
+            reader.fieldnames = header
+            rows = list(reader)
+    except UnicodeDecodeError as exc:
+        raise InputError(f"survey manifest {p} is not UTF-8 text (byte {exc.start}): save it as a UTF-8 CSV with "
+                         f"the columns {', '.join(REQUIRED)}") from None
     missing = [c for c in REQUIRED if c not in header]
     require(not missing, f"survey manifest {p} lacks the column(s) {', '.join(missing)}: its header must name "
                          f"{', '.join(REQUIRED)} (and optionally {', '.join(OPTIONAL)})")
