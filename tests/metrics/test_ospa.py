@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sonartrack.core.errors import InputError
-from sonartrack.metrics.ospa import gospa, gospa_over_time, ospa, ospa_over_time
+from sonartrack.metrics.ospa import gospa, gospa_fixed_sets, gospa_over_time, ospa, ospa_over_time
 
 
 def brute_force_ospa(x, y, c, p):
@@ -101,6 +101,42 @@ def test_a_target_with_no_estimate_at_all_loses_its_track():
                         switching_penalty=1.0)
     np.testing.assert_allclose(g.switches, [0, 0.5, 0.5])
     np.testing.assert_allclose(g.switching, [0, np.sqrt(0.5), np.sqrt(0.5)])
+
+
+# ---- the vectorised form for fixed sets against the per-step one
+
+
+@pytest.mark.parametrize(("m", "n", "p"), [(1, 1, 1.0), (2, 2, 2.0), (2, 3, 1.0), (3, 2, 2.0), (3, 3, 1.0),
+                                           (2, 1, 1.0)])
+def test_gospa_fixed_sets_equals_the_per_step_form(m, n, p):
+    """Same m targets and n tracks at every step, in 2-D (no ties), tracks swapped at random steps so that the
+    switching term works: distance, parts and switch counts equal gospa_over_time's to 1e-12."""
+    rng = np.random.default_rng(10 * m + n)
+    K = 300
+    x = rng.normal(size=(K, m, 2)) * 3.0
+    y = np.concatenate([x, rng.normal(size=(K, max(n - m, 0), 2)) * 3.0], axis=1)[:, :n]
+    y = y + rng.normal(size=y.shape) * 1.5
+    if n >= 2:
+        sw = rng.random(K) < 0.2
+        y[sw, 0], y[sw, 1] = y[sw, 1].copy(), y[sw, 0].copy()
+    t, ti = np.repeat(np.arange(K), m).astype(float), np.tile(np.arange(m), K)
+    te, ei = np.repeat(np.arange(K), n).astype(float), np.tile(np.arange(n), K)
+    a = gospa_over_time(t, ti, x.reshape(-1, 2), te, ei, y.reshape(-1, 2), 2.0, p, 1.0)
+    b = gospa_fixed_sets(x, y, 2.0, p, 1.0)
+    assert np.any(a.switches > 0) or n < 2
+    for f in ("distance", "gospa", "localisation", "missed", "false", "switches"):
+        np.testing.assert_allclose(getattr(b, f), getattr(a, f), rtol=0, atol=1e-12, err_msg=f)
+
+
+def test_gospa_fixed_sets_by_hand():
+    """One target at 0 in 1-D; its track at 1, then beyond c = 3 (missed + false: 3), then back; two tracks that
+    swap at step 1 for two targets: s = 1 + 1 at the swap, and back at step 2."""
+    g = gospa_fixed_sets(np.zeros((3, 1, 1)), np.array([[[1.0]], [[5.0]], [[0.5]]]), c=3.0)
+    np.testing.assert_allclose(g.gospa, [1.0, 3.0, 0.5])
+    np.testing.assert_allclose(g.switches, [0.0, 0.5, 0.5])
+    x = np.array([[[0.0], [10.0]]] * 3)
+    y = np.array([[[0.2], [10.1]], [[10.2], [0.1]], [[0.3], [9.9]]])
+    np.testing.assert_allclose(gospa_fixed_sets(x, y, c=3.0).switches, [0.0, 2.0, 2.0])
 
 
 # ---- against Stone Soup

@@ -66,8 +66,25 @@ def test_trial_is_deterministic_and_shaped():
     b = p4.run_trial(cfg, trial_rng(3, 0))
     for k in a:
         np.testing.assert_array_equal(a[k], b[k])
-        assert a[k].shape[0] == 15 or k == "n_measurements"
+        per_run = k == "n_measurements" or k.endswith(p4.SET_METRICS)
+        assert a[k].shape[0] == (1 if k.endswith(p4.SET_METRICS) else 15) or per_run
     assert set(f"{c}_ctt" for c in cfg.cases()) <= a.keys()
+
+
+def test_set_metrics_by_hand():
+    """Five scans 30 s apart, target at the origin: track 4 holds it 100 m off at scans 1-2, nothing at scan 3,
+    track 9 200 m off at scan 4, and track 5 is 5 km away (false) throughout. Cut-off 1000 m, p = 1: GOSPA per
+    scan = (localisation or c/2 missed) + c/2 false; switching penalty c/2 x s_k (s: 0, 0, 0, 1/2, 1/2)."""
+    cfg = p4.Config(n_scans=5, turn_start_s=60.0, metric_cutoff_m=1000.0)
+    truth = np.zeros((5, 4))
+    rows = [(30.0, 4, 100.0, 0.0), (60.0, 4, 0.0, 100.0), (120.0, 9, 200.0, 0.0)]
+    rows += [(t, 5, 5000.0, 0.0) for t in (0.0, 30.0, 60.0, 90.0, 120.0)]
+    m = p4.set_metrics(cfg, truth, np.array(rows, float))
+    d = np.array([500 + 500, 100 + 500, 100 + 500, 500 + 500, 200 + 500], float)
+    s = np.array([0, 0, 0, 0.5, 0.5]) * 500.0
+    np.testing.assert_allclose(m["gospa_m"], [np.mean(np.hypot(d, s))])
+    assert m["segments"].tolist() == [2.0] and m["switches"].tolist() == [1.0]
+    np.testing.assert_allclose(m["confirm_s"], [30.0])
 
 
 def test_summary_and_claims_are_computed_from_trials():

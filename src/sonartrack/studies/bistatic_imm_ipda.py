@@ -10,7 +10,9 @@ experiments on the *same* measurements (common random numbers sharpen the compar
 
 Per scan and tracker it records the CTT indicator (eq. 23), the number of confirmed false tracks,
 the position error of the CTT, and the CTT's mode probabilities; per scan, the target measurement's
-error in metres. config -> run_trial (simulate -> estimate) -> summarize -> claims; the figures are
+error in metres; per run and tracker, reported beside the paper's measures (not claimed): GOSPA and OSPA of
+the confirmed tracks (metrics/ospa.py), the target's track segments, identity switches and time to confirm
+(metrics/track_quality.py). config -> run_trial (simulate -> estimate) -> summarize -> claims; the figures are
 report/figures/bistatic_imm_ipda.py.
 """
 
@@ -34,7 +36,7 @@ if TYPE_CHECKING:
 STUDY_ID = "bistatic-imm-ipda"
 TITLE = "IMM-IPDA for a bistatic active towed-array sonar"
 PAPER = "Park, Song, Lee 2017, J. Acoust. Soc. Korea 36(3) (P4)"
-TRIAL_VERSION = 1
+TRIAL_VERSION = 2
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 500
@@ -104,6 +106,10 @@ class Config(Settings):
     tracker: PositionTrackerSettings = setting(default_factory=_paper_tracker,
                                                doc="the trackers; q: the small, middle and large mode (three values)")
     ctt_threshold: float = setting(CTT_CHI2_4DOF_99, "CTT test threshold on eq. 23 (chi-square(4), 0.99)", unit="1")
+    metric_cutoff_m: float = setting(1000.0, "cut-off c of the reported GOSPA/OSPA (p = 1, switching penalty c / 2) "
+                                             "and association gate of the track segments and switches; our choice: "
+                                             "about three times the measurement error after the turn", unit="m",
+                                     gt=0)
 
     @classmethod
     def quick(cls) -> Config:
@@ -199,6 +205,7 @@ def track_case(config: Config, q: tuple[float, ...], scans, truth) -> dict[str, 
     tracker = position_tracker(config.tracker_settings(q))
     out = {"ctt": np.zeros(n, bool), "cft": np.zeros(n, np.int64), "err": np.full(n, np.nan),
            "mu": np.full((n, 3), np.nan)}
+    confirmed = []  # (time, track id, x, y) of the confirmed tracks, for the set metrics
     for k, s in enumerate(scans):
         snap = tracker.step(s.time_s, s.z, s.R)
         has, n_false, e, i = scan_ctt_measures(truth[k], snap.x, snap.P_init, snap.confirmed, snap.existence,
@@ -206,7 +213,41 @@ def track_case(config: Config, q: tuple[float, ...], scans, truth) -> dict[str, 
         out["ctt"][k], out["cft"][k], out["err"][k] = has, n_false, e
         if i >= 0:
             out["mu"][k, : len(q)] = snap.mu[i]
-    return out
+        c = snap.confirmed
+        confirmed.append(np.column_stack([np.full(int(c.sum()), s.time_s), snap.track_id[c], snap.x[c, :2]]))
+    return out | set_metrics(config, truth, np.concatenate(confirmed) if confirmed else np.zeros((0, 4)))
+
+
+def set_metrics(config: Config, truth, confirmed) -> dict[str, np.ndarray]:
+    """GOSPA (mean over the scans, m) and OSPA of the confirmed tracks against the target, and the target's track
+    segments, identity switches and time to confirm (module doc of metrics/track_quality.py).
+
+    Parameters
+    ----------
+    config : Config
+        The study (``metric_cutoff_m``).
+    truth : ndarray, shape (n_scans, 4)
+        The target's true states.
+    confirmed : ndarray, shape (N, 4)
+        Rows (time s, track id, x m, y m) of the confirmed tracks at every scan.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``gospa_m``, ``ospa_m``, ``segments``, ``switches``, ``confirm_s``: one value each (arrays of shape (1,)).
+    """
+    from sonartrack.metrics.ospa import gospa_over_time, ospa_over_time
+    from sonartrack.metrics.track_quality import associate_tracks, identity_switches, time_to_confirm, track_segments
+
+    t, c = config.times_s(), config.metric_cutoff_m
+    ids = np.zeros(len(t), np.int64)
+    est_t, est_id, est_xy = confirmed[:, 0], confirmed[:, 1].astype(np.int64), confirmed[:, 2:4]
+    g = gospa_over_time(t, ids, truth[:, :2], est_t, est_id, est_xy, c, 1.0, 0.5 * c)
+    o = ospa_over_time(t, truth[:, :2], est_t, est_xy, c, 1.0)[1]
+    a = associate_tracks(t, ids, truth[:, :2], est_t, est_id, est_xy, c, p=1.0)
+    return {"gospa_m": np.array([np.mean(g.distance)]), "ospa_m": np.array([np.mean(o)]),
+            "segments": track_segments(a).astype(float), "switches": identity_switches(a).astype(float),
+            "confirm_s": time_to_confirm(a)}
 
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -223,6 +264,10 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 
 
 # ---- summarize -----------------------------------------------------------------------------------
+#: the reported (not claimed) per-run measures of :func:`set_metrics`
+SET_METRICS = ("gospa_m", "ospa_m", "segments", "switches", "confirm_s")
+
+
 def _nanmean_quiet(a, axis=0):
     """Mean over runs ignoring NaN; all-NaN columns give NaN without a warning."""
     a = np.asarray(a, float)
@@ -251,6 +296,9 @@ def _case_summary(trials, case: str, q, k0: int) -> dict:
         "per_run_all": per_run_all.tolist(),
         "cft_mean": float(trials[f"{case}_cft"].mean()),
         "rmse_before_m": float(_nanmean_quiet(rmse[:k0])), "rmse_after_m": float(_nanmean_quiet(rmse[k0:])),
+        # reported, not claimed: set metrics and track-level measures (set_metrics), means over the runs
+        **{key: float(_nanmean_quiet(np.ravel(trials[f"{case}_{key}"]))) for key in SET_METRICS},
+        "never_confirmed": float(np.mean(np.isnan(np.ravel(trials[f"{case}_confirm_s"])))),
     }
 
 

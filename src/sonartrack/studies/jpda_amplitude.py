@@ -16,6 +16,11 @@ Definitions:
   (L apart) at t_c = 80 s;
 * success: at the last scan each filter is within 5 deg (half the gate) of its own target's bearing;
   the targets are then >= 14 deg apart, so this excludes both a swap and a loss.
+
+Also in the summary (reported, not claimed), per case, tracker and grid point, over the runs: the mean GOSPA
+distance of the two tracks to the two true bearings (metrics/ospa.py :func:`gospa_fixed_sets`; cut-off the
+success tolerance, p = 2, switching penalty half the cut-off; deg) and the identity switches per encounter (the
+GOSPA switch count s_k summed over the scans: 2 for one clean swap, 1/2 per loss or re-gain of a target).
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ if TYPE_CHECKING:
 STUDY_ID = "jpda-amplitude"
 TITLE = "Bearing tracking of crossing and approaching targets: JPDA vs amplitude-aided JPDA_A"
 PAPER = "Park, Ryu & Lee 1994, cross-correlation bearings and JPDA_A (paper 000, P0)"
-TRIAL_VERSION = 1
+TRIAL_VERSION = 2
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 100
@@ -161,15 +166,44 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
     out = {}
     for case in CASES:
         targets = _targets(case)
-        res = {tr: np.zeros(len(geoms)) for tr in TRACKERS}
+        res = {f"{tr}{m}": np.zeros(len(geoms)) for tr in TRACKERS for m in ("", METRIC_KEYS[0], METRIC_KEYS[1])}
         for g, (_, _, truth) in enumerate(geoms):
             scans = generate_scans(rng, model, truth, targets)
             for tr in TRACKERS:
                 est = run_tracker(config.tracker, scans, truth, targets, amplitude_aided=tr == "jpda_a")
                 res[tr][g] = float(succeeded(config, est, truth))
-        for tr in TRACKERS:
-            out[f"{case}_{tr}"] = res[tr]
+                res[tr + METRIC_KEYS[0]][g], res[tr + METRIC_KEYS[1]][g] = encounter_metrics(config, est, truth)
+        out.update({f"{case}_{key}": v for key, v in res.items()})
     return out
+
+
+#: suffixes of the trial keys of the reported (not claimed) metrics: mean GOSPA (deg) and identity switches
+METRIC_KEYS = ("_gospa_deg", "_switches")
+
+
+def encounter_metrics(config: Config, est_deg, truth_deg) -> tuple[float, float]:
+    """Mean GOSPA (deg) of one encounter's two tracks and its identity switches (module doc).
+
+    Parameters
+    ----------
+    config : Config
+        The study (its success tolerance is the cut-off).
+    est_deg, truth_deg : array_like, shape (K, 2)
+        The tracks' and the targets' bearings per scan (deg); column j of ``est_deg`` is track j.
+
+    Returns
+    -------
+    gospa_deg : float
+        GOSPA (p = 2, with the switching term) averaged over the scans (deg).
+    switches : float
+        The switch count summed over the scans.
+    """
+    from sonartrack.metrics.ospa import gospa_fixed_sets
+
+    c = config.success_tolerance_deg
+    g = gospa_fixed_sets(np.asarray(truth_deg, float)[..., None], np.asarray(est_deg, float)[..., None], c, 2.0,
+                         0.5 * c)
+    return float(np.mean(g.distance)), float(np.sum(g.switches))
 
 
 def end_to_end(config: Config, seed: int = 1994) -> dict:
@@ -240,8 +274,11 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
 
     geoms = config.geometries()
     n = len(next(iter(trials.values())))
-    out = {"runs": n, "kinds": [g[0] for g in geoms], "values": [g[1] for g in geoms], "rates": {}}
+    out = {"runs": n, "kinds": [g[0] for g in geoms], "values": [g[1] for g in geoms], "rates": {}, "metrics": {}}
     for key, v in trials.items():
+        if key.endswith(METRIC_KEYS):  # reported means per grid point, not rates
+            out["metrics"][key] = np.mean(v, axis=0).tolist()
+            continue
         k = np.sum(v, axis=0)
         lo, hi = binomial_interval(k, n)
         out["rates"][key] = {"rate": (k / n).tolist(), "low": np.asarray(lo).tolist(), "high": np.asarray(hi).tolist()}
