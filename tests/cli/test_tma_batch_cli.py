@@ -104,3 +104,31 @@ def test_sequential_ekf_from_the_batch_estimate(files, tmp_path, capsys):
     assert abs(sol["range_m"].iloc[-1] - r_end["turning"]) < 0.1 * r_end["turning"]
     # the filter starts from the batch covariance and does not blow up
     assert sol["range_std_m"].iloc[-1] < 0.2 * r_end["turning"]
+
+
+def test_em_map_says_whether_the_propagation_model_explains_the_snr(files, tmp_path, capsys):
+    """The SNRs follow South Sea summer; a model of the same sea explains them, one of the East Sea (deep water,
+    another TL curve) does not: with the zig-zag the bearings alone give the range, without it none is printed."""
+    d, r_end = files
+    cfg = _cfg(tmp_path)
+    out = {}
+    for name in ("turning", "straight"):
+        for env in ("south-summer", "east-summer"):
+            code, stdout, err = run(capsys, "tma", "--bearings", d / f"{name}_brg.csv", "--ownship",
+                                    d / f"{name}_own.csv", "--method", "em-map", "--env", env, "--sl", "140",
+                                    "--config", cfg, "--out", tmp_path / f"{name}-{env}")
+            assert code == 0, err
+            out[name, env] = stdout, pd.read_csv(tmp_path / f"{name}-{env}" / "tma_solution.csv")
+    for name in ("turning", "straight"):
+        line, sol = out[name, "south-summer"]
+        assert "the propagation model explains the SNR" in line and " km" in line
+        assert sol["range_determined"].all()
+        line, sol = out[name, "east-summer"]
+        assert "the propagation model does not explain the SNR (chi2 = " in line
+    line, sol = out["turning", "east-summer"]
+    assert "range from the bearings alone (ML)" in line and sol["range_determined"].iloc[-1]
+    assert abs(sol["range_m"].iloc[-1] - r_end["turning"]) < 0.25 * r_end["turning"]
+    line, sol = out["straight", "east-summer"]
+    assert "range NOT DETERMINED (SNR not explained by the propagation model)" in line and " km" not in line
+    assert not sol["range_determined"].any()
+    assert set(sol["undetermined_reason"]) == {"SNR not explained by the propagation model"}

@@ -1,5 +1,6 @@
 """`sonartrack tma` on files synthesised here: outputs, accuracy, options, and bad input."""
 
+import re
 import tomllib
 
 import numpy as np
@@ -175,3 +176,23 @@ def test_the_command_calls_the_library_with_the_resolved_settings(files, tmp_pat
     assert err == "warning: a warning\n" and stdout.startswith("tma ml: ") and stdout.count("\n") == 1
     assert len(pd.read_csv(tmp_path / "o" / "tma_solution.csv")) == len(truth)
     assert (tmp_path / "o" / "tactical_picture.png").exists()
+
+
+def test_an_undetermined_range_is_printed_as_such_with_its_reason(tmp_path, capsys):
+    """An ownship on one straight leg: the bearings do not observe range, and the IMM-MGEKF's range sd never
+    leaves its prior's; the line says so and gives no range, the CSV says why on every row."""
+    t = np.arange(0.0, 1200.0 + 1e-9, 8.0)
+    po, vo, _ = ManeuveringTrack(0.0, 0.0, 5 * KN, np.deg2rad(45)).state(t)
+    pt, vt, _ = ManeuveringTrack(-3000.0, 9500.0, 10 * KN, np.deg2rad(100)).state(t)
+    z = bf_measurement(np.column_stack([pt - po, vt - vo, np.full(len(t), 300.0)]))[:, 0]
+    z = z + np.random.default_rng(5).normal(0.0, np.deg2rad(0.5), len(t))
+    pd.DataFrame({"time_s": t, "bearing_deg": np.rad2deg(z) % 360.0}).to_csv(tmp_path / "b.csv", index=False)
+    pd.DataFrame({"time_s": t, "x_m": po[:, 0], "y_m": po[:, 1]}).to_csv(tmp_path / "o.csv", index=False)
+    code, stdout, err = run(capsys, "tma", "--bearings", tmp_path / "b.csv", "--ownship", tmp_path / "o.csv",
+                            "--method", "imm-mgekf", "--sigma-bearing-deg", "0.5", "--out", tmp_path / "out")
+    assert code == 0, err
+    assert "range NOT DETERMINED (unobservable)" in stdout
+    line = stdout.split("; wrote ")[0]
+    assert " km" not in line and not re.search(r"(course|speed) \d", line)
+    df = pd.read_csv(tmp_path / "out" / "tma_solution.csv")
+    assert not df["range_determined"].any() and set(df["undetermined_reason"]) == {"unobservable"}

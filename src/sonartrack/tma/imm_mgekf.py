@@ -36,7 +36,7 @@ from sonartrack.filters.ekf import ekf_predict, ekf_update, gaussian_loglik
 from sonartrack.filters.imm import imm_combine, imm_mix, imm_mixing, imm_mode_update, validate_transition_matrix
 from sonartrack.filters.mgekf import mgekf_update
 from sonartrack.models.passive import SOUND_SPEED_MPS, bf_jacobian, bf_measurement, modified_matrix
-from sonartrack.models.relative_motion import relative_process_noise_stack, relative_transition
+from sonartrack.models.relative_motion import relative_process_noise, relative_process_noise_stack, relative_transition
 
 
 def transition_matrix(n_modes: int, diagonal: float) -> np.ndarray:
@@ -268,3 +268,64 @@ def _run_reference(t, z, u, estimate, model: ImmBfModel, hist) -> int:
             return k
         xh[k], Ph[k], mh[k] = xc, Pc, mu
     return -1
+
+
+def combined_nis(times_s, bearing_rad, frequency_hz, u, x, P, mu, model: ImmBfModel) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised innovation squared (NIS) of the combined IMM estimate at each measurement (Bar-Shalom, Li &
+    Kirubarajan, Estimation with Applications to Tracking and Navigation, 2001, sec. 5.4.2 and 11.6.6).
+
+    From the combined estimate (x_{k-1}, P_{k-1}) and the mode probabilities mu_{k-1} of :func:`run_imm_bf`, the
+    predicted mixture of the modes has mean and covariance (the mixing step keeps the mixture's first two moments,
+    and Q is linear in the intensity q)
+
+        x-_k = F x_{k-1} - u_{k-1},   P-_k = F P_{k-1} F^T + Q(sum_j c_j q_j),   c_j = sum_i Pi[i, j] mu_{k-1, i}
+
+    and the measurement z_k = [bearing(, frequency)] gives
+
+        nu_k = z_k - h(x-_k)  (bearing wrapped),   S_k = H P-_k H^T + R,   eps_k = nu_k^T S_k^-1 nu_k,
+
+    chi-square with m_k degrees of freedom (m_k = 1 or 2 measurements) when the filter is consistent.
+
+    Parameters
+    ----------
+    times_s, bearing_rad, frequency_hz, u
+        As :func:`run_imm_bf` (s, rad, Hz or None, observer inputs (n - 1, 5)).
+    x, P, mu : ndarray
+        Its combined means (n, 5), covariances (n, 5, 5) and mode probabilities (n, r).
+    model : ImmBfModel
+        The filter's modes, transition matrix and noises.
+
+    Returns
+    -------
+    nis : ndarray (n,)
+        eps_k (NaN at the first time, which has no innovation, and where the estimate is not finite).
+    dof : ndarray of int (n,)
+        m_k (0 where ``nis`` is NaN).
+    """
+    from sonartrack.core.angles import wrap_angle
+
+    t, n = np.asarray(times_s, float), len(times_s)
+    z = np.full((n, 2), np.nan)
+    z[:, 0] = bearing_rad
+    if frequency_hz is not None:
+        z[:, 1] = frequency_hz
+    nis, dof = np.full(n, np.nan), np.zeros(n, int)
+    c_mode = np.asarray(mu, float) @ np.asarray(model.Pi, float)  # c_j of each step, from mu_{k-1}
+    for k in range(1, n):
+        dt = float(t[k] - t[k - 1])
+        F = relative_transition(dt)
+        q = float(c_mode[k - 1] @ model.qs) if np.all(np.isfinite(c_mode[k - 1])) else np.nan
+        xp = F @ x[k - 1] - np.asarray(u[k - 1], float)
+        Pp = F @ P[k - 1] @ F.T + relative_process_noise(dt, q, model.q_f0)
+        m = 2 if np.isfinite(z[k, 1]) else 1
+        if not (np.all(np.isfinite(xp)) and np.all(np.isfinite(Pp))):
+            continue
+        nu = z[k, :m] - bf_measurement(xp, model.sound_speed_mps)[:m]
+        nu[0] = wrap_angle(nu[0])
+        H = bf_jacobian(xp, model.sound_speed_mps)[:m]
+        S = H @ Pp @ H.T + model.R[:m, :m]
+        try:
+            nis[k], dof[k] = float(nu @ np.linalg.solve(S, nu)), m
+        except np.linalg.LinAlgError:
+            continue
+    return nis, dof

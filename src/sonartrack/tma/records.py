@@ -89,6 +89,8 @@ class TmaSolution:
     #: (n,) False where the data cannot resolve the range (the state's range and speed then mean nothing;
     #: bearings still do). None: determined everywhere.
     range_determined: np.ndarray | None = None
+    #: (n,) why each undetermined row is so ("diverged", "unobservable", ...; "" where determined). None: no reasons.
+    undetermined_reason: np.ndarray | None = None
 
     def range_flags(self) -> np.ndarray:
         """``range_determined`` as a boolean array (all True when not set).
@@ -118,7 +120,22 @@ class TmaSolution:
         return TmaSolution(time_s=np.concatenate([self.time_s, later.time_s[1:]]),
                            state=np.concatenate([self.state, later.state[1:]]),
                            covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method,
-                           range_determined=np.concatenate([self.range_flags(), later.range_flags()[1:]]))
+                           range_determined=np.concatenate([self.range_flags(), later.range_flags()[1:]]),
+                           undetermined_reason=np.concatenate([self.reasons(), later.reasons()[1:]]))
+
+    def reasons(self) -> np.ndarray:
+        """Why each row's range is not determined: ``undetermined_reason``, "" on determined rows, and "not
+        determined" on an undetermined row that gives no reason.
+
+        Returns
+        -------
+        ndarray of str, shape (n,)
+            One reason per row ("" where the range is determined).
+        """
+        flags = self.range_flags()
+        given = (np.full(len(flags), "", dtype=object) if self.undetermined_reason is None
+                 else np.asarray(self.undetermined_reason, dtype=object))
+        return np.where(flags, "", np.where(given == "", "not determined", given)).astype(object)
 
 
 def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:

@@ -1,7 +1,7 @@
 """Settings of target motion analysis, each group declared once (core/settings.py).
 
 ``sonartrack tma`` reads :class:`TmaSettings` (TOML: top-level keys plus the ``[imm]``, ``[sequential]``,
-``[batch]``, ``[em_map]`` and ``[inputs]`` tables; command-line options for the common ones). The studies
+``[batch]``, ``[em_map]``, ``[inputs]`` and ``[verdict]`` tables; command-line options for the common ones). The studies
 nest the same groups: bftma-imm (paper P2) its IMM mode bank (:class:`ImmSettings`), tma-propagation
 (paper P3) its EM/MAP solver settings (:class:`EmMapSettings`).
 """
@@ -83,6 +83,30 @@ class EmMapSettings(Settings):
                                   unit="m", ge=0)
 
 
+class VerdictSettings(Settings):
+    """When a solution's range is reported as NOT DETERMINED (tma/verdict.py): the sequential filters' checks, and
+    the significance of the residual tests of every method (sequential innovations, em-map's SNR)."""
+
+    max_range_m: float = setting(
+        300_000.0, "a range beyond this is a diverged solution, not a target (beyond the third convergence zone, "
+                   "farther than towed-array TMA reaches)", unit="m", gt=0)
+    max_speed_mps: float = setting(
+        30.0, "a speed beyond this (58 kn, faster than any ship) is a diverged solution", unit="m/s", gt=0)
+    max_range_sd_fraction: float = setting(
+        1.0, "a range whose standard deviation exceeds this fraction of itself is diverged (1: the one-sigma interval "
+             "reaches the ownship, as for the batch ML)", unit="1", gt=0)
+    prior_shrink: float = setting(
+        0.5, "a sequential filter's range is observed only once its standard deviation has fallen below this "
+             "fraction of the prior's (sequential.sigma_range_m): before, the prior speaks, not the data (no ownship "
+             "maneuver yet)", unit="1", gt=0, le=1)
+    nis_window: int = setting(
+        20, "measurements in the running sum of normalised innovations squared (NIS) of a sequential filter",
+        unit="1", ge=1)
+    alpha: float = setting(
+        1e-3, "significance of the consistency tests: the running NIS above its two-sided chi-square interval, or "
+              "em-map's SNR residuals above their chi-square limit or trending with range", unit="1", gt=0, lt=0.5)
+
+
 class InputSettings(Settings):
     """Checks of a user's bearings and ownship files."""
 
@@ -107,6 +131,8 @@ class TmaSettings(Settings):
     batch: BatchSettings = setting(..., "the batch methods (ml, em-map)", default_factory=BatchSettings)
     em_map: EmMapSettings = setting(..., "the EM/MAP solver", default_factory=EmMapSettings)
     inputs: InputSettings = setting(..., "checks of the input files", default_factory=InputSettings)
+    verdict: VerdictSettings = setting(..., "when a range is reported as not determined",
+                                       default_factory=VerdictSettings)
 
     @property
     def is_sequential(self) -> bool:

@@ -2,8 +2,9 @@
 its standard deviation (what ``sonartrack tma`` writes to ``tma_solution.csv`` and prints).
 
 Columns, one row per solution time: ``time_s, x_m, y_m, vx_mps, vy_mps, course_deg, speed_kn, range_m,
-bearing_deg``, the standard deviation of each (``*_std`` columns, same unit), and ``range_determined`` (False
-where the data cannot resolve range: the range, course and speed of that row mean nothing), from the solution's
+bearing_deg``, the standard deviation of each (``*_std`` columns, same unit), ``range_determined`` (False
+where the data cannot resolve range: the range, course and speed of that row mean nothing) and
+``undetermined_reason`` (why not, tma/verdict.py; empty where determined), from the solution's
 covariance by first-order propagation; range and bearing are from the ownship to the target; courses and
 bearings in degrees clockwise from north, 0..360.
 """
@@ -40,7 +41,7 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
     -------
     dict of str to ndarray, each shape (n,)
         time_s, x_m, y_m, vx_mps, vy_mps, course_deg and bearing_deg (0..360, clockwise from north), speed_kn,
-        range_m, their standard deviations (``*_std_*``) and range_determined.
+        range_m, their standard deviations (``*_std_*``), range_determined and undetermined_reason (str).
     """
     t = np.asarray(solution.time_s, float)
     X = np.asarray(solution.state, float)
@@ -65,4 +66,4 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
             "x_std_m": sd[:, 0], "y_std_m": sd[:, 1], "vx_std_mps": sd[:, 2], "vy_std_mps": sd[:, 3],
             "course_std_deg": np.minimum(np.rad2deg(np.nan_to_num(course_std, nan=np.pi)), 180.0),
             "speed_std_kn": speed_std / KNOT_MPS, "range_std_m": range_std, "bearing_std_deg": np.rad2deg(bearing_std),
-            "range_determined": solution.range_flags()}
+            "range_determined": solution.range_flags(), "undetermined_reason": solution.reasons()}

@@ -19,6 +19,12 @@ decision, tma/sides.py), taken as the solution instead of the single-start Gauss
 the next (:func:`correlation_inflation`); and ``unobservable="flag"``, a record whose ownship did not maneuver
 returned with every row flagged ``range_determined = False`` and the reason as a warning, instead of an error
 (the bearing is still a measurement; only the range is unknown).
+
+Every solution carries its verdict row by row (``range_determined`` and ``undetermined_reason``, tma/verdict.py):
+the ML's from the maneuver (:func:`flag_unresolved_range`), the sequential filters' from their own output
+(:func:`sequential_verdict`: diverged, inconsistent innovations, unobservable), em-map's from its SNR residuals
+(:func:`em_map_verdict`); the summary prints "range NOT DETERMINED (reason)", never the number, for an
+undetermined last row.
 """
 
 from __future__ import annotations
@@ -50,6 +56,9 @@ class TmaResult:
     mode_probabilities: tuple[float, ...] | None = None
     #: warnings of the solver (e.g. range unobservable from bearings alone), one line each
     warnings: tuple[str, ...] = ()
+    #: what the method found about its own answer (em-map: whether the propagation model explains the SNR), printed
+    #: at the end of the summary
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> str:
         """One line: the record, and the target's range, bearing, course and speed at the last time.
@@ -58,29 +67,34 @@ class TmaResult:
         -------
         str
             Method, number of measurements and their span (s); at the last time range (km), bearing (deg), course
-            (deg), speed (kn) with one-sigma values (or the bearing alone when the range is not determined), f0 (Hz)
-            and mode probabilities when present.
+            (deg), speed (kn) with one-sigma values (or the bearing and "range NOT DETERMINED (reason)" when the
+            range is not determined: no number), f0 (Hz) and mode probabilities when present, and the method's notes.
         """
         from sonartrack.tma.solution_table import solution_columns
+        from sonartrack.tma.verdict import not_determined_text
 
         cols = solution_columns(self.solution, self.ownship)
         i, s, t = len(cols["time_s"]) - 1, self.settings, self.record.time_s
         what = "bearings + frequencies" if s.frequency else "bearings"
         line = f"tma {s.method}: {len(t)} {what} over {t[0]:g}..{t[-1]:g} s; at {cols['time_s'][i]:g} s the target "
         if not cols["range_determined"][i]:
-            return line + (f"is at bearing {cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg; "
-                           "range, course and speed NOT DETERMINED by this record (see the warning)")
-        line += (f"is at range {cols['range_m'][i] / 1e3:.2f} ± {cols['range_std_m'][i] / 1e3:.2f} km, bearing "
-                 f"{cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg, course "
-                 f"{cols['course_deg'][i]:.0f} ± {cols['course_std_deg'][i]:.0f} deg, speed {cols['speed_kn'][i]:.1f} "
-                 f"± {cols['speed_std_kn'][i]:.1f} kn")
-        if self.f0_hz is not None:
-            line += f", f0 {self.f0_hz:.2f} ± {self.f0_std_hz:.2f} Hz"
+            bearing = (f"is at bearing {cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg"
+                       if np.isfinite(cols["bearing_deg"][i]) and np.isfinite(cols["bearing_std_deg"][i])
+                       else "has no finite estimate")
+            line += (f"{bearing}; {not_determined_text(cols['undetermined_reason'][i])} by this record, nor its "
+                     "course and speed")
+        else:
+            line += (f"is at range {cols['range_m'][i] / 1e3:.2f} ± {cols['range_std_m'][i] / 1e3:.2f} km, bearing "
+                     f"{cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg, course "
+                     f"{cols['course_deg'][i]:.0f} ± {cols['course_std_deg'][i]:.0f} deg, speed "
+                     f"{cols['speed_kn'][i]:.1f} ± {cols['speed_std_kn'][i]:.1f} kn")
+            if self.f0_hz is not None:
+                line += f", f0 {self.f0_hz:.2f} ± {self.f0_std_hz:.2f} Hz"
         if self.mode_probabilities is not None:
             line += ", mode probabilities " + "/".join(f"{m:.2f}" for m in self.mode_probabilities)
         if not s.is_sequential and s.batch.window_s is not None:
             line += f", batch on the first {s.batch.window_s:g} s then a sequential EKF"
-        return line
+        return line + "".join(f"; {n}" for n in self.notes)
 
 
 def check_settings(settings: TmaSettings) -> None:
@@ -108,13 +122,53 @@ def _solve_sequential(record, ownship, settings: TmaSettings) -> dict:
                                        sigma_bearing_rad=float(np.deg2rad(settings.sigma_bearing_deg)),
                                        sigma_freq_hz=settings.sigma_freq_hz, use_frequency=settings.frequency,
                                        imm=settings.imm, sequential=settings.sequential)
-    out: dict = {"solution": solution}
+    out: dict = {"solution": sequential_verdict(solution, track, record, ownship, settings)}
     if settings.frequency:
         out["f0_hz"] = float(track.rel_state[-1, 4])
         out["f0_std_hz"] = float(np.sqrt(track.rel_cov[-1, 4, 4]))
     if settings.method.startswith("imm"):
         out["mode_probabilities"] = tuple(float(m) for m in track.mode_prob[-1])
     return out
+
+
+def sequential_verdict(solution: TmaSolution, track, record: BearingRecord, ownship: OwnshipTrack,
+                       settings: TmaSettings) -> TmaSolution:
+    """A sequential filter's solution with its verdict row by row (tma/verdict.py: diverged, unobservable,
+    inconsistent innovations), from the filter's own output.
+
+    Parameters
+    ----------
+    solution : TmaSolution
+        The filter's absolute solution.
+    track : SequentialTrack
+        Its relative states, covariances and mode probabilities (tma/sequential_bf.py).
+    record : BearingRecord
+        The bearings (rad) and frequencies (Hz) it was run on.
+    ownship : OwnshipTrack
+        The sensor's track (m).
+    settings : TmaSettings
+        The method, noises, modes, the prior's range sd (``sequential.sigma_range_m``) and ``verdict``.
+
+    Returns
+    -------
+    TmaSolution
+        ``solution`` with ``range_determined`` and ``undetermined_reason`` set.
+    """
+    from sonartrack.models.relative_motion import observer_inputs
+    from sonartrack.tma.imm_mgekf import combined_nis
+    from sonartrack.tma.sequential_bf import filter_model, observer_kinematics
+    from sonartrack.tma.verdict import sequential_reasons, with_reasons
+
+    model = filter_model(settings.method, sigma_bearing_rad=float(np.deg2rad(settings.sigma_bearing_deg)),
+                         sigma_freq_hz=settings.sigma_freq_hz, imm=settings.imm, sequential=settings.sequential)
+    t = np.asarray(record.time_s, float)
+    pos, vel = observer_kinematics(ownship, t)
+    freq = np.asarray(record.frequency_hz, float) if settings.frequency else None
+    with np.errstate(all="ignore"):
+        nis, dof = combined_nis(t, record.bearing_rad, freq, observer_inputs(t, pos, vel), track.rel_state,
+                                track.rel_cov, track.mode_prob, model)
+    reasons = sequential_reasons(solution, ownship, nis, dof, settings.sequential.sigma_range_m, settings.verdict)
+    return with_reasons(solution, reasons)
 
 
 def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_rad: float) -> TmaSolution:
@@ -137,13 +191,12 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
     Returns
     -------
     TmaSolution
-        ``solution`` with ``range_determined`` false on the flagged rows (an :class:`UnobservableWarning` is
-        issued when any is).
+        ``solution`` with ``range_determined`` false on the flagged rows, reason "diverged" (covariance not
+        finite) or "unobservable" (an :class:`UnobservableWarning` is issued when any is).
     """
-    from dataclasses import replace
-
     from sonartrack.tma.batch_ml import observable_range_limit_m
     from sonartrack.tma.solution_table import solution_columns
+    from sonartrack.tma.verdict import DIVERGED, UNOBSERVABLE, with_reasons
 
     t = np.asarray(record.time_s, float)
     limit_m = observable_range_limit_m(t - t[0], ownship.position_at(t), sigma_bearing_rad)
@@ -153,6 +206,7 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
     bad_cov = ~np.all(np.isfinite(P), axis=(1, 2)) | (np.einsum("nii->n", P[:, :2, :2]) <= 0)
     with np.errstate(invalid="ignore"):
         ok = (range_m <= limit_m) & (range_std_m < range_m) & ~bad_cov
+    reasons = np.where(bad_cov, DIVERGED, np.where(ok, "", UNOBSERVABLE)).astype(object)
     if not ok.all():
         from sonartrack.tma.batch import UnobservableWarning
 
@@ -162,7 +216,7 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
                       f"resolves range only to {limit_m / 1e3:.3g} km; trust the bearing, not the range (flag column "
                       "range_determined), or use a record with a larger maneuver or em-map with SNR",
                       UnobservableWarning, stacklevel=2)
-    return replace(solution, range_determined=solution.range_flags() & ok)
+    return with_reasons(solution, reasons)
 
 
 def correlation_inflation(residuals_rad) -> float:
@@ -224,6 +278,7 @@ def _solve_ml(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     """Bearings-only batch ML over the whole record (module docstring: ``ml_fit``, the inflation, ``unobservable``)."""
     from sonartrack.tma.batch import UnobservableWarning, estimate_to_solution
     from sonartrack.tma.batch_ml import check_observability
+    from sonartrack.tma.verdict import UNOBSERVABLE, with_reasons
 
     t = np.asarray(record.time_s, float)
     own = ownship.position_at(t)
@@ -238,13 +293,28 @@ def _solve_ml(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
         solution = estimate_to_solution(est, t)
     if why is not None:
         warnings.warn(why, UnobservableWarning, stacklevel=2)
-        return {"solution": replace(solution, range_determined=np.zeros(len(t), bool))}
+        return {"solution": with_reasons(solution, np.full(len(t), UNOBSERVABLE, dtype=object))}
     return {"solution": flag_unresolved_range(solution, record, ownship, sigma)}
+
+
+class _MemoryStore:
+    """TL fields kept for the length of one solve (em-map's fit and its SNR check share one field)."""
+
+    def __init__(self):
+        self.fields: dict = {}
+
+    def load(self, key: str):
+        return self.fields.get(key)
+
+    def save(self, key: str, ranges_m, depths_m, tl_db) -> None:
+        self.fields[key] = (ranges_m, depths_m, tl_db)
 
 
 def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) -> dict:
     from sonartrack.tma.batch import solve_batch, solve_batch_then_ekf
 
+    if settings.method == "em-map" and tl_store is None:
+        tl_store = _MemoryStore()
     kw = dict(sigma_bearing_rad=float(np.deg2rad(settings.sigma_bearing_deg)), batch=settings.batch,
               em_map=settings.em_map, environment=environment, tl_store=tl_store)
     if settings.batch.window_s is None:
@@ -252,8 +322,71 @@ def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) 
     else:
         solution = solve_batch_then_ekf(record, ownship, settings.method, window_s=settings.batch.window_s, **kw)
     if settings.method == "ml":  # em-map resolves range from the SNR, not from the maneuver
-        solution = flag_unresolved_range(solution, record, ownship, kw["sigma_bearing_rad"])
-    return {"solution": solution}
+        return {"solution": flag_unresolved_range(solution, record, ownship, kw["sigma_bearing_rad"])}
+    return em_map_verdict(solution, record, ownship, settings, environment=environment, tl_store=tl_store)
+
+
+def em_map_verdict(solution: TmaSolution, record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, *,
+                   environment=None, tl_store=None) -> dict:
+    """em-map's solution judged by its SNR residuals (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
+
+    When the propagation model explains the SNRs along the solution's track the solution stands. When it does
+    not, the SNR's range is not to be trusted: over the whole record with bearings that determine the range
+    alone (an ownship maneuver; :func:`flag_unresolved_range`), the solution becomes the bearings-only ML's;
+    otherwise every row is undetermined (reason :data:`~sonartrack.tma.verdict.SNR_NOT_EXPLAINED`). Either way
+    the test's line is a note of the result (printed in its summary).
+
+    Parameters
+    ----------
+    solution : TmaSolution
+        The em-map solution (m, m/s) at the record's times.
+    record : BearingRecord
+        Bearings (rad), times (s) and SNRs (dB).
+    ownship : OwnshipTrack
+        The sensor's track (m).
+    settings : TmaSettings
+        The model (``batch``: environment, SL, frequency, depth, NL, DI, sigma_SNR; ``em_map``), the bearing noise
+        and ``verdict.alpha``.
+    environment : Environment, optional
+        Overrides ``settings.batch.env``.
+    tl_store : FieldStore, optional
+        Cache of TL fields (the one the solve used).
+
+    Returns
+    -------
+    dict
+        "solution" and "notes" of the :class:`TmaResult`.
+    """
+    from sonartrack.tma.batch import snr_model
+    from sonartrack.tma.em_map import snr_residual_check
+    from sonartrack.tma.verdict import SNR_NOT_EXPLAINED, with_reasons
+
+    b, em = settings.batch, settings.em_map
+    xi_bar, _, _ = snr_model(environment if environment is not None else b.env, b.sl_db, b.freq_hz, b.depth_m,
+                             em.r_max_m * 1.05, b.nl_db, b.di_db, tl_store=tl_store, window_m=em.tl_average_m)
+    t = np.asarray(solution.time_s, float)
+    r = np.hypot(*(np.asarray(solution.state, float)[:, :2] - ownship.position_at(t)).T)
+    check = snr_residual_check(record.snr_db, xi_bar(r), r, b.sigma_snr_db, alpha=settings.verdict.alpha)
+    if check.explained:
+        return {"solution": solution, "notes": (check.note(),)}
+    if b.window_s is None:
+        ml = _bearings_alone(record, ownship, settings)
+        if ml is not None:
+            return {"solution": ml, "notes": (f"{check.note()}: range from the bearings alone (ML)",)}
+    undetermined = with_reasons(solution, np.full(len(t), SNR_NOT_EXPLAINED, dtype=object))
+    return {"solution": undetermined, "notes": (f"{check.note()}, and the bearings alone do not determine the range",)}
+
+
+def _bearings_alone(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings) -> TmaSolution | None:
+    """The bearings-only ML solution of the record when it determines the range at the last time, else None."""
+    ml_settings = settings.model_copy(update={"method": "ml"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            sol = _solve_ml(record, ownship, ml_settings, None, "flag")["solution"]
+        except (InputError, np.linalg.LinAlgError):
+            return None
+    return sol if sol.range_flags()[-1] else None
 
 
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,

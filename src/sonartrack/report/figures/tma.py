@@ -42,19 +42,29 @@ def ellipses(ax, state, covariance, n_ellipses: int, color: str = "r", alpha: fl
 
 
 def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str = "TMA"):
-    """Ownship track, measured bearing lines, estimated target track and its 95 % position ellipses (Figure)."""
+    """Ownship track, measured bearing lines, estimated target track and its 95 % position ellipses (Figure).
+
+    Only the rows whose range is determined (``solution.range_flags()``) are drawn: a diverged, unobservable or
+    otherwise undetermined position is not a position, so where no row is determined the picture shows the
+    bearings and says why in its title."""
     import matplotlib.pyplot as plt
 
-    X = np.asarray(solution.state, float)
+    ok = solution.range_flags() & np.all(np.isfinite(np.asarray(solution.state, float)), axis=1)
+    X = np.asarray(solution.state, float)[ok]
     fig, ax = plt.subplots(figsize=(7, 7))
-    est_range = np.hypot(*(X[:, :2] - ownship.position_at(solution.time_s)).T)
-    length = 1.3 * float(np.nanmax(est_range)) if np.isfinite(est_range).any() else 10_000.0
+    est_range = np.hypot(*(X[:, :2] - ownship.position_at(np.asarray(solution.time_s)[ok])).T) if ok.any() else []
+    length = 1.3 * float(np.max(est_range)) if len(est_range) else 10_000.0
     _bearing_lines(ax, record, ownship, length)
     ax.plot(np.asarray(ownship.x_m) / 1e3, np.asarray(ownship.y_m) / 1e3, "b-", lw=1.5, label="ownship", zorder=3)
     ax.plot(ownship.x_m[0] / 1e3, ownship.y_m[0] / 1e3, "bo", zorder=3)
-    ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "r-", lw=1.5, label="target (estimated)", zorder=3)
-    ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "r^", ms=8, zorder=4)
-    ellipses(ax, solution.state, solution.covariance, n_ellipses)
+    if ok.any():
+        ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "r-", lw=1.5, label="target (estimated)", zorder=3)
+        ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "r^", ms=8, zorder=4)
+        ellipses(ax, X, np.asarray(solution.covariance, float)[ok], n_ellipses)
+    else:
+        reasons = solution.undetermined_reason
+        why = sorted({str(r) for r in reasons if str(r)}) if reasons is not None else []
+        title = f"{title}: range NOT DETERMINED ({', '.join(why) or 'see the summary'})"
     ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title=title)
     ax.legend(fontsize=8, loc="best")
     return fig

@@ -519,6 +519,33 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     return ResidualCheck(float(w @ w), dof, float(chi2_dist.ppf(q, dof)), block_chi2, b, float(chi2_dist.ppf(q, b)))
 
 
+#: residuals whose measured variance exceeds the stated noise's (and its correlation inflation) this many times are
+#: no noise but a wrong track (two ships joined): the range is then not determined rather than given with a
+#: covariance inflated that much. A 1 deg pull over 60 s of a 300 s, 0.3 deg record measures ~ 29 (its 30 s block
+#: means), and inflated by that the final position's NEES falls from 9-47 to 0.3-1.6
+MAX_RESIDUAL_SCALE = 100.0
+
+
+def residual_scale(check: ResidualCheck) -> float:
+    """The variance factor s2 >= 1 that makes a fit's residuals agree with its stated noise: the larger of
+    chi2 / dof and chi2_B / B (:func:`residual_check`), the measured scale of the residuals and of their block means
+    against what the noise states (the usual ML rescaling by the reduced chi-square, Bevington & Robinson, Data
+    Reduction and Error Analysis, 3rd ed., 2003, sec. 8.1; here also of the block means, for errors correlated over
+    a block). Scaling sigma^2 by s2 brings both statistics to their expected values.
+
+    Parameters
+    ----------
+    check : ResidualCheck
+        The test's statistics.
+
+    Returns
+    -------
+    float
+        s2 (1 when both statistics are at most their degrees of freedom).
+    """
+    return max(1.0, check.chi2 / check.dof, check.block_chi2 / check.block_dof)
+
+
 #: a determined range must tell the target from one this many times as far, or at the stated +3 sd if that is
 #: farther: the profile likelihood's rise there (in units of the stated covariance) must reach the 95 % point of
 #: chi-square(1) (a Gaussian likelihood rises 9 at 3 sd). Default scene: the tanker's 2.44 +- 0.87 km of the first

@@ -6,8 +6,9 @@ paper P2), per time of its record; columns: the target and track ids, the method
 ln L_port, side_resolved_s), joined_track_ids (the other tracks joined into this target as its fragments, space
 separated; empty when none), the solution columns of
 tma/solution_table.py (position, velocity, true bearing, range, course, speed and their standard
-deviations, range_determined; where the range is not determined, every column but the bearing is left empty, as
-no number is known there), and the track's measured tonal frequency (NaN where none).
+deviations, range_determined and undetermined_reason -- tma/verdict.py, for the ML and the IMM-MGEKF rows alike;
+where the range is not determined, every column but the bearing is left empty, as no number is known there), and
+the track's measured tonal frequency (NaN where none).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sonartrack.tma.solution_table import solution_columns
+from sonartrack.tma.verdict import not_determined_text
 
 if TYPE_CHECKING:
     from sonartrack.acoustics.beamforming import BearingTimeRecord
@@ -118,7 +120,8 @@ def target_line(target: Target) -> str:
     Returns
     -------
     str
-        Side, then the ML solution at the last time (or NOT DETERMINED), tonal, IMM-MGEKF range.
+        Side, then the ML solution at the last time (or "range NOT DETERMINED (reason)"), tonal, IMM-MGEKF range
+        (or "NOT DETERMINED (reason)": no number for an undetermined range).
     """
     c = {k: v[-1] for k, v in solution_columns(target.ml.solution, target.ml.ownship).items()}
     s = target.side
@@ -133,11 +136,13 @@ def target_line(target: Target) -> str:
         line += (f"range {c['range_m'] / 1e3:.2f} ± {c['range_std_m'] / 1e3:.2f} km, course {c['course_deg']:.0f} ± "
                  f"{c['course_std_deg']:.0f} deg, speed {c['speed_kn']:.1f} ± {c['speed_std_kn']:.1f} kn (ML)")
     else:
-        line += "range NOT DETERMINED by this record (ML)"
+        line += f"{not_determined_text(c['undetermined_reason'])} by this record (ML)"
     if target.tonal is not None:
         line += f"; tonal {target.tonal.line_hz:.2f} Hz"
     q = {k: v[-1] for k, v in solution_columns(target.sequential.solution, target.sequential.ownship).items()}
-    return line + f"; IMM-MGEKF range {q['range_m'] / 1e3:.2f} ± {q['range_std_m'] / 1e3:.2f} km"
+    if q["range_determined"]:
+        return line + f"; IMM-MGEKF range {q['range_m'] / 1e3:.2f} ± {q['range_std_m'] / 1e3:.2f} km"
+    return line + f"; IMM-MGEKF {not_determined_text(q['undetermined_reason'])}"
 
 
 def summary_lines(result: PassiveResult) -> list[str]:

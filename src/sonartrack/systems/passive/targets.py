@@ -20,8 +20,16 @@ Per track (its raw peaks, systems/passive/measurements.py):
    so that the solution's uncertainty reflects this recording, not a nominal value; the ML covariance is
    inflated for the residuals' correlation from window to window (tma/solve.py
    :func:`~sonartrack.tma.solve.correlation_inflation`; setting ``ml_correlation_inflation``).
-   A determined ML range whose residuals disagree with that stated noise, or whose likelihood is flatter than
-   its stated covariance claims, is reported as not determined (:func:`determination_checked`).
+   Scans at which another track lies within a beam of this one are left out first (:func:`without_neighbour_scans`:
+   a louder ship sharing the beam pulls the peak, a bias the ML would take as information). ML residuals larger
+   than that stated noise inflate the covariance by their measured scale (reported), or, far larger, leave the
+   range not determined, as does a likelihood flatter than the stated covariance claims
+   (:func:`determination_checked`).
+3. Verdict (tma/verdict.py). Every row of both solutions says whether its range is determined and why not: the
+   ML's (unobservable, inconsistent residuals, flat likelihood), the IMM-MGEKF's own (diverged, inconsistent
+   innovations, unobservable), and for both the side: every row when the side was never decided, and for the
+   sequential filter, whose row at a time uses only the bearings up to then, the rows before it was decided
+   (:func:`side_checked`).
 """
 
 from __future__ import annotations
@@ -32,21 +40,25 @@ import numpy as np
 
 from sonartrack.acoustics.tonal import TonalTrack
 from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import InputError
 from sonartrack.io.navigation import Navigation
 from sonartrack.systems.passive.checks import (
+    MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
     PROFILE_MIN_RISE,
     PROFILE_SIGMAS,
     range_profile_rise,
     residual_check,
+    residual_scale,
 )
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
-from sonartrack.tma.records import BearingRecord
+from sonartrack.tma.records import BearingRecord, TmaSolution
 from sonartrack.tma.settings import BatchSettings, TmaSettings
 from sonartrack.tma.sides import SideDecision, mirror_bearings_rad, resolve_side, resolve_side_through_crossings
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation, solve_tma
+from sonartrack.tma.verdict import DIVERGED, FLAT_LIKELIHOOD, INCONSISTENT_RESIDUALS, SIDE_UNRESOLVED, with_reasons
 
 #: how the warning of a range the record does not support begins (:func:`determination_checked`)
 UNSUPPORTED_RANGE = "range not supported by the record:"
@@ -157,23 +169,36 @@ def usable_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack 
     return tonal
 
 
-def _undetermined_because(result: TmaResult) -> str | None:
-    """Why a determined ML range is not what its record supports (:func:`determination_checked`), or None."""
+def _residual_inflation(result: TmaResult) -> tuple[float, float, str | None]:
+    """(kappa, s2, note) of a determined ML solution: kappa the correlation inflation it states, s2 >= 1 the
+    variance factor its residuals measure beyond kappa (1 when they are consistent), and the residual test's line
+    when s2 > 1."""
+    t, z, own, at_t = _fit_at_bearings(result)
+    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1]))
+    kappa = correlation_inflation(e) if result.settings.batch.correlation_inflation else 1.0
+    check = residual_check(t, e, float(np.deg2rad(result.settings.sigma_bearing_deg)), inflation=kappa)
+    if check.consistent:
+        return kappa, 1.0, None
+    return kappa, residual_scale(check), check.note()
+
+
+def _fit_at_bearings(result: TmaResult):
+    """(times, bearings, sensor positions, the solution's states) at the record's bearings."""
     t = np.asarray(result.record.time_s, float)
     z = np.asarray(result.record.bearing_rad, float)
     ts, state = np.asarray(result.solution.time_s, float), np.asarray(result.solution.state, float)
     own = result.ownship.position_at(t)
-    at_t = np.stack([np.interp(t, ts, state[:, k]) for k in range(4)], axis=1)
-    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1]))
-    kappa = correlation_inflation(e) if result.settings.batch.correlation_inflation else 1.0
+    return t, z, own, np.stack([np.interp(t, ts, state[:, k]) for k in range(4)], axis=1)
+
+
+def _flat_likelihood_note(result: TmaResult, variance_factor: float) -> str | None:
+    """Why a determined ML range is not what its record supports by the profile test, or None."""
+    t, z, own, at_t = _fit_at_bearings(result)
     sigma = float(np.deg2rad(result.settings.sigma_bearing_deg))
-    check = residual_check(t, e, sigma, inflation=kappa)
-    if not check.consistent:
-        return check.note()
     cols = solution_columns(result.solution, result.ownship)
     r, sd = float(cols["range_m"][-1]), float(cols["range_std_m"][-1])
     far = max(PROFILE_FAR_FACTOR * r, r + PROFILE_SIGMAS * sd)
-    rise = range_profile_rise(t, z, own, sigma, at_t[-1], far) / kappa
+    rise = range_profile_rise(t, z, own, sigma, at_t[-1], far) / variance_factor
     if rise >= PROFILE_MIN_RISE:
         return None
     return (f"the bearings fit a target at {far / 1e3:.1f} km almost as well as at {r / 1e3:.2f} km (likelihood "
@@ -182,17 +207,22 @@ def _undetermined_because(result: TmaResult) -> str | None:
 
 
 def determination_checked(result: TmaResult) -> TmaResult:
-    """An ML range that its record does not support is reported as not determined.
+    """An ML range that its record does not support is reported as not determined; residuals larger than the stated
+    noise widen the stated covariance.
 
-    Two tests (systems/passive/checks.py), on the solution's own bearings and the noise it states: the residuals
-    must agree with that noise (:func:`~sonartrack.systems.passive.checks.residual_check`: chi-square of the
-    residuals and of their 30 s block means, 99.9 % limits), and the likelihood must fall off as the stated
-    covariance would have it: held at twice the range (or at the stated range + 3 sd, if farther), the best fit
-    must be worse by at least the 95 % point of chi-square(1)
-    (:func:`~sonartrack.systems.passive.checks.range_profile_rise`, in units of the stated covariance). A far
-    target seen through a small maneuver has a likelihood flat towards long ranges, so its first-order covariance
-    at a near estimate claims a narrow interval the data do not give (on the default scene's first 300 s: the
-    tanker at 13.9 km estimated 2.44 +- 0.87 km, its likelihood at 5.0 km only 2.2 worse).
+    Two tests (systems/passive/checks.py), on the solution's own bearings and the noise it states. First the
+    residuals must agree with that noise (:func:`~sonartrack.systems.passive.checks.residual_check`: chi-square of
+    the residuals and of their 30 s block means, 99.9 % limits). Where they do not (bearings biased for a while,
+    e.g. by a louder ship nearby), the covariance is multiplied by the measured variance factor s2
+    (:func:`~sonartrack.systems.passive.checks.residual_scale`, which passes both tests) and the inflation is
+    reported; beyond :data:`~sonartrack.systems.passive.checks.MAX_RESIDUAL_SCALE` the residuals are no noise and
+    the range is not determined (reason "inconsistent residuals"). Then the likelihood must fall off as the
+    (inflated) covariance would have it: held at twice the range (or at the stated range + 3 sd, if farther), the
+    best fit must be worse by at least the 95 % point of chi-square(1) in units of that covariance
+    (:func:`~sonartrack.systems.passive.checks.range_profile_rise`; reason "flat likelihood"). A far target seen
+    through a small maneuver has a likelihood flat towards long ranges, so its first-order covariance at a near
+    estimate claims a narrow interval the data do not give (on the default scene's first 300 s: the tanker at
+    13.9 km estimated 2.44 +- 0.87 km, its likelihood at 5.0 km only 2.2 worse).
 
     Parameters
     ----------
@@ -202,20 +232,111 @@ def determination_checked(result: TmaResult) -> TmaResult:
     Returns
     -------
     TmaResult
-        ``result``, or, when its range was determined and a test fails, a copy with every row's
-        ``range_determined`` False and the reason as a warning.
+        ``result`` when its range was undetermined or both tests pass; else a copy with the covariance inflated
+        (and the note as a warning), or with every row undetermined and the reason as a warning.
     """
     if not result.solution.range_flags().any():
         return result
-    reason = _undetermined_because(result)
-    if reason is None:
+    kappa, s2, note = _residual_inflation(result)
+    if s2 > MAX_RESIDUAL_SCALE:
+        return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note} (more than {MAX_RESIDUAL_SCALE:g} times)")
+    if note is not None:
+        solution = replace(result.solution, covariance=np.asarray(result.solution.covariance) * s2)
+        result = replace(result, solution=solution, warnings=result.warnings + (
+            f"{note}: covariance inflated by {s2:.3g} (the residuals' measured scale)",))
+        cols = solution_columns(result.solution, result.ownship)
+        if not cols["range_std_m"][-1] < cols["range_m"][-1]:
+            return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note}: inflated by {s2:.3g}, the range's standard "
+                                 "deviation exceeds the range")
+    flat = _flat_likelihood_note(result, kappa * s2)
+    return result if flat is None else _undetermined(result, FLAT_LIKELIHOOD, flat)
+
+
+def _undetermined(result: TmaResult, reason: str, why: str) -> TmaResult:
+    """``result`` with every row undetermined for ``reason``, and the warning ``why``."""
+    solution = with_reasons(result.solution, np.full(len(result.solution.time_s), reason, dtype=object))
+    return replace(result, solution=solution, warnings=result.warnings + (f"{UNSUPPORTED_RANGE} {why}",))
+
+
+def side_checked(result: TmaResult, side: SideDecision, resolved_s: float, *, causal: bool) -> TmaResult:
+    """A solution's rows whose array side is not decided made undetermined (reason "side unresolved").
+
+    Parameters
+    ----------
+    result : TmaResult
+        A solution on the chosen side's bearings.
+    side : SideDecision
+        The side decision (``side_at``: "unresolved" everywhere when it was never decided).
+    resolved_s : float
+        First time from which the decision held (:func:`side_resolved_time`; NaN if never).
+    causal : bool
+        The solution at a time uses the bearings up to then only (a sequential filter): its rows before
+        ``resolved_s`` were computed on a side the data had not decided yet, and are undetermined too.
+
+    Returns
+    -------
+    TmaResult
+        ``result`` with those rows undetermined.
+    """
+    t = np.asarray(result.solution.time_s, float)
+    open_side = side.side_at(t) == "unresolved"
+    if causal:
+        open_side |= ~(t >= resolved_s)
+    if not open_side.any():
         return result
-    solution = replace(result.solution, range_determined=np.zeros(len(result.solution.time_s), bool))
-    return replace(result, solution=solution, warnings=result.warnings + (f"{UNSUPPORTED_RANGE} {reason}",))
+    reasons = np.where(open_side, SIDE_UNRESOLVED, "").astype(object)
+    return replace(result, solution=with_reasons(result.solution, reasons))
+
+
+def without_neighbour_scans(m: TrackMeasurements, neighbours, min_separation_deg: float
+                            ) -> tuple[TrackMeasurements, str | None]:
+    """The track's measurements without the scans at which another track lies within ``min_separation_deg``.
+
+    Where two ships share a beam each one's peak is pulled towards the other (by up to a degree near a crossing):
+    a bias, not noise, which the white-noise ML would take as information. The other tracks' filtered cone
+    angles (``track_cone_deg``, at every scan they lived, also where they had no peak) are compared with this
+    track's measured cone angles; those scans are left out when at least 10 scans remain.
+
+    Parameters
+    ----------
+    m : TrackMeasurements
+        The track's raw peaks.
+    neighbours : sequence of TrackMeasurements
+        The other confirmed tracks (this one, by its track id, is skipped).
+    min_separation_deg : float
+        About a beamwidth (deg).
+
+    Returns
+    -------
+    TrackMeasurements
+        ``m`` without those scans (its filtered track kept whole).
+    str or None
+        What was left out, or None when nothing was.
+    """
+    t = np.asarray(m.time_s, float)
+    close = np.zeros(len(t), bool)
+    ids = []
+    for other in neighbours:
+        if other.track_id == m.track_id or len(other.track_time_s) == 0:
+            continue
+        tt = np.asarray(other.track_time_s, float)
+        alive = (t >= tt[0]) & (t <= tt[-1])
+        near = alive & (np.abs(np.interp(t, tt, np.asarray(other.track_cone_deg, float)) - m.cone_deg)
+                        < min_separation_deg)
+        if near.any():
+            close |= near
+            ids.append(other.track_id)
+    if not close.any() or int((~close).sum()) < 10:
+        return m, None
+    keep = ~close
+    reduced = replace(m, time_s=m.time_s[keep], cone_deg=m.cone_deg[keep], amplitude=m.amplitude[keep],
+                      unfolded_deg=None if m.unfolded_deg is None else m.unfolded_deg[keep])
+    return reduced, (f"{int(close.sum())} scan(s) left out of the TMA: track(s) {', '.join(map(str, ids))} within "
+                     f"{min_separation_deg:.2g} deg (one beam)")
 
 
 def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None, nav: Navigation,
-                 stages: PassiveStages) -> Target:
+                 stages: PassiveStages, neighbours=()) -> Target:
     """Side, true bearings and TMA of one track (module docstring).
 
     Parameters
@@ -230,12 +351,16 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
         The array's position and heading over the recording.
     stages : PassiveStages
         The chain's built settings.
+    neighbours : sequence of TrackMeasurements
+        The other confirmed tracks: the scans at which one lies within ``stages.min_separation_deg`` of this
+        track are left out (:func:`without_neighbour_scans`; reported among the ML's warnings).
 
     Returns
     -------
     Target
-        The side decision, the ML fits of both sides, and the IMM-MGEKF solution.
+        The side decision, the ML fits of both sides, and the IMM-MGEKF solution, each row with its verdict.
     """
+    m, left_out = without_neighbour_scans(m, neighbours, stages.min_separation_deg)
     min_log_lr = stages.settings.min_side_log_lr
     t = np.asarray(m.time_s, float)
     xy, heading = nav.array_at(t)
@@ -253,12 +378,31 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
     ml = determination_checked(solve_tma(rec, sensor, ml_settings, ml_fit=fit, unobservable="flag"))
+    ml = side_checked(ml, side, since, causal=False)
+    if left_out is not None:
+        ml = replace(ml, warnings=ml.warnings + (left_out,))
     mirror = solve_tma(rec_other, sensor, ml_settings, ml_fit=other_fit, unobservable="flag")
-    seq_settings = _tma_settings("imm-mgekf", side.sigma_bearing_rad, stages, usable_tonal(tonal, stages))
+    seq = side_checked(_sequential(t, chosen, tonal, sensor, side.sigma_bearing_rad, stages), side, since,
+                       causal=True)
+    return Target(target_id, m, side, since, ml, mirror, seq, tonal)
+
+
+def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: float, stages: PassiveStages
+                ) -> TmaResult:
+    """The IMM-MGEKF on the chosen bearings, with the tonal's frequency when usable on at least 10 of them; a filter
+    that fails numerically gives a solution of NaN rows, each "diverged", with the failure as a warning."""
+    seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, usable_tonal(tonal, stages))
     record = frequency_record(t, chosen, tonal) if seq_settings.frequency else BearingRecord(time_s=t,
                                                                                               bearing_rad=chosen)
     if seq_settings.frequency and len(record.time_s) < 10:
-        seq_settings = _tma_settings("imm-mgekf", side.sigma_bearing_rad, stages, None)
+        seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, None)
         record = BearingRecord(time_s=t, bearing_rad=chosen)
-    seq = solve_tma(record, sensor, seq_settings)
-    return Target(target_id, m, side, since, ml, mirror, seq, tonal)
+    try:
+        return solve_tma(record, sensor, seq_settings)
+    except InputError as failure:  # the filter failed numerically on this track: a diverged answer, not a failed run
+        n = len(record.time_s)
+        solution = TmaSolution(time_s=np.asarray(record.time_s, float), state=np.full((n, 4), np.nan),
+                               covariance=np.full((n, 4, 4), np.nan), method=seq_settings.method,
+                               range_determined=np.zeros(n, bool), undetermined_reason=np.full(n, DIVERGED, object))
+        return TmaResult(solution=solution, record=record, ownship=sensor, settings=seq_settings,
+                         warnings=(str(failure),))
