@@ -53,12 +53,14 @@ def test_split_array_peaks_at_the_arrival_cone_angle():
         assert abs(angle[np.argmax(amp)] - cone) < 1.0
 
 
-def test_cbf_equals_the_direct_sum_over_elements_and_bins():
-    """The lag-domain matrix product (module doc) against Y = sum_n exp(+2 pi i f tau_n) X_n summed |Y|^2."""
+@pytest.mark.parametrize("beams", [37, 36, 3])
+def test_cbf_equals_the_direct_sum_over_elements_and_bins(beams):
+    """The lag-domain matrix product (module doc; the mirror beams from the first half's products, odd and even
+    beam counts) against Y = sum_n exp(+2 pi i f tau_n) X_n summed |Y|^2."""
     rng = np.random.default_rng(4)
     n, m = 5, 256
     x = rng.standard_normal((n, m))
-    s = BeamformerSettings(band_hz=[200.0, 1500.0], beams=37, whiten=False, fft_precision="double")
+    s = BeamformerSettings(band_hz=[200.0, 1500.0], beams=beams, whiten=False, fft_precision="double")
     got = cbf_powers(x[None], FS, LineArray(n, 0.5, C), s)[0]
     f = np.fft.rfftfreq(m, 1 / FS)
     band = (f >= 200) & (f < 1500)
@@ -230,3 +232,18 @@ def test_any_line_array_finds_a_loud_ship_at_its_cone_angle(n, d, fs):
     assert btr.peaks.amplitude.size >= 1
     best = btr.peaks.bearing_deg[np.argmax(btr.peaks.amplitude)]
     assert abs(best - cone) < 1.0, (n, d, fs, cone, best)
+
+
+def test_one_blas_thread_sets_and_restores_the_callers_count():
+    from sonartrack.acoustics.blas_threads import _set_blas_threads_local, blas_reachable, one_blas_thread
+
+    if not blas_reachable():
+        pytest.skip("numpy's OpenBLAS is not reachable here: one_blas_thread does nothing")
+    set_threads = _set_blas_threads_local()
+    original = set_threads(3)
+    try:
+        with one_blas_thread():
+            assert set_threads(1) == 1  # one thread inside
+        assert set_threads(3) == 3  # the caller's 3 restored after
+    finally:
+        set_threads(original)

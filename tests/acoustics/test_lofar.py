@@ -123,3 +123,61 @@ def test_sidelobe_guard_drops_a_weaker_copy_of_a_line():
         gram = LofarGram(np.array([8.0]), np.array([0.0, 90.0, 180.0]), f, power, stat)
         lines = detect_lines(gram, LofarSettings(integration=16))
         assert len(lines) == kept
+
+
+def _noisy_blocks(n_windows, m=2000, seed=9):
+    """Windows of the quiet-target record (a 200 Hz tonal at 70 deg in noise), m samples each."""
+    x = _quiet_target_record(n_windows * m / FS, 70.0, np.random.default_rng(seed))
+    return [x[:, k * m:(k + 1) * m] for k in range(n_windows)]
+
+
+@pytest.mark.parametrize("method", ["cbf", "mvdr"])
+def test_lofar_of_the_front_end_pass_equals_lofar_gram(method):
+    """The gram the front end accumulates from its own rectangular spectra (the Hann window applied in frequency)
+    against lofar_gram's windowed transforms of the same 37 windows: 2 whole periods of 16, the last 5 windows
+    dropped by both; to rounding in double precision (float64 power), to float32's rounding in the gram."""
+    blocks = _noisy_blocks(37)
+    s = LofarSettings(integration=16, band_hz=[120.0, 330.0], beams=31)
+    fe = BeamformerSettings(method=method, band_hz=[150.0, 300.0], fft_precision="double")
+    btr = bearing_time_record(iter(blocks), FS, ARRAY, fe, narrowband=s)
+    ref = lofar_gram(iter(blocks), FS, ARRAY, s, window_s=1.0)
+    want = integrate(np.concatenate([beam_power_spectra(np.stack(blocks[i:i + 8]), FS, ARRAY, s.cone_deg,
+                                                        s.band_hz)[1] for i in range(0, 32, 8)]), 16)
+    assert btr.lofar is not None and btr.lofar.power.shape == ref.power.shape == want.shape == (2, 31, 210)
+    from sonartrack.acoustics.lofar import LofarAccumulator
+
+    acc = LofarAccumulator(FS, ARRAY, s, 2000)
+    acc.add(np.fft.rfft(np.stack(blocks), axis=2)[:, :, acc.bins])
+    np.testing.assert_allclose(acc.power(), want, rtol=1e-9)
+    np.testing.assert_array_equal(btr.lofar.freqs_hz, ref.freqs_hz)
+    np.testing.assert_allclose(btr.lofar.time_s, ref.time_s)
+    np.testing.assert_allclose(btr.lofar.power, ref.power, rtol=3e-7)  # one float32 rounding apart at most
+    np.testing.assert_allclose(btr.lofar.statistic, ref.statistic, rtol=3e-7)
+    np.testing.assert_array_equal(btr.lofar.cone_deg, s.cone_deg)
+    plain = bearing_time_record(iter(blocks), FS, ARRAY, fe)
+    np.testing.assert_array_equal(btr.level, plain.level)  # the broadband record unchanged by the narrowband
+
+
+def test_lofar_of_the_front_end_pass_in_single_precision_and_too_short():
+    blocks = _noisy_blocks(20)
+    s = LofarSettings(integration=16)
+    single = bearing_time_record(iter(blocks), FS, ARRAY, BeamformerSettings(band_hz=[150.0, 300.0]), narrowband=s)
+    ref = lofar_gram(iter(blocks), FS, ARRAY, s, window_s=1.0)
+    np.testing.assert_allclose(single.lofar.statistic, ref.statistic, rtol=1e-5)  # float32 transforms: ~1e-6
+    short = bearing_time_record(iter(blocks[:15]), FS, ARRAY, BeamformerSettings(), narrowband=s)
+    assert short.lofar is None and short.level.shape[0] == 15  # no whole period: no gram, the record as ever
+    assert bearing_time_record(iter(blocks), FS, ARRAY, BeamformerSettings()).lofar is None
+
+
+@pytest.mark.parametrize("m", [2000, 1999])
+def test_lofar_accumulator_up_to_half_the_sample_rate(m):
+    """A band reaching fs / 2 (even window: the bin beyond the band is the Nyquist bin; odd window: the band's last
+    bin is the last rfft bin, its neighbour the conjugate) against the windowed transforms, to rounding."""
+    from sonartrack.acoustics.lofar import LofarAccumulator
+
+    x = np.random.default_rng(4).standard_normal((3, 16, m))
+    s = LofarSettings(integration=3, band_hz=[900.0, FS / 2], beams=7)
+    acc = LofarAccumulator(FS, ARRAY, s, m)
+    acc.add(np.fft.rfft(x, axis=2)[:, :, acc.bins])
+    _, want = beam_power_spectra(x, FS, ARRAY, s.cone_deg, s.band_hz)
+    np.testing.assert_allclose(acc.power(), want.mean(axis=0, keepdims=True), rtol=1e-9)

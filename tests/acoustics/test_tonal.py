@@ -70,22 +70,27 @@ def test_hann_parabola_bias_is_removed():
     assert np.max(np.abs(table_hat - table_true)) > 0.01  # the bias corrected is real at the 0.01-bin level
 
 
-def test_beam_spectra_matches_loop_over_bins_and_psd_scale():
-    s = TonalSettings(band_hz=[100.0, 400.0])
+@pytest.mark.parametrize("band_hz,m", [([100.0, 400.0], 4000), ([0.0, 2000.0], 4000), ([0.0, 2000.0], 3999)])
+def test_beam_spectra_matches_loop_over_bins_and_psd_scale(band_hz, m):
+    """Against the windowed transform written out (the window applied in time), summed over the elements for each
+    beam and bin: inside the band (the window applied in frequency) and a band from 0 Hz to fs / 2 with even and odd
+    window lengths (the edge bins)."""
+    s = TonalSettings(band_hz=band_hz)
     rng = np.random.default_rng(3)
-    x = rng.standard_normal((N_EL, int(FS)))
+    x = rng.standard_normal((N_EL, m))
     cones = [20.0, 70.0, 135.0]
     f, p = beam_spectra(x, FS, ARRAY, cones, s)
-    w = np.hanning(int(FS) + 1)[:-1]  # periodic Hann
+    w = np.hanning(m + 1)[:-1]  # periodic Hann
     spec = np.fft.rfft(x * w, axis=1)
-    fall = np.fft.rfftfreq(int(FS), 1.0 / FS)
+    fall = np.fft.rfftfreq(m, 1.0 / FS)
+    assert f.size == np.sum((fall >= band_hz[0]) & (fall <= band_hz[1]))
     for j, cone in enumerate(cones):
-        for i in (0, 57, f.size - 1):
+        for i in (0, 1, 57, f.size - 2, f.size - 1):
             b = int(np.flatnonzero(fall == f[i])[0])
             beam = np.mean(np.exp(2j * np.pi * fall[b] * _delays_s(cone)) * spec[:, b])
             assert p[j, i] == pytest.approx(2.0 * abs(beam) ** 2 / (FS * np.sum(w**2)), rel=1e-9)
     _, p1 = beam_spectra(x[:1], FS, ARRAY, [90.0], s)
-    assert np.mean(p1) == pytest.approx(2.0 / FS, rel=0.1)  # white noise, variance 1: one-sided PSD 2 / fs
+    assert np.mean(p1[0, 1:-1]) == pytest.approx(2.0 / FS, rel=0.1)  # white noise, variance 1: one-sided PSD 2 / fs
 
 
 def test_plane_wave_tonal_frequency_and_array_gain():

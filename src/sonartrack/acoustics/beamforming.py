@@ -15,6 +15,11 @@ On a uniform line |Y|^2 depends on the element pairs only through their lag l = 
 
 so P is ONE real matrix product: a fixed steering matrix (B beams x (1 + 2 (N-1) n_bins)) times the vector
 [sum_f r_0, Re r_l(f), Im r_l(f)] of the window (windows batched), exact, with no interpolation between beams.
+The grid is symmetric about 90 deg and cos(180 deg - theta) = -cos(theta), so the mirror beam has the same cosine
+terms and the opposite sine terms: with a = sum Re r_l 2 cos(.) and b = sum Im r_l (-2 sin(.)) over the first half
+of the beams, P(theta) = sum_f r_0 + a + b and P(180 deg - theta) = sum_f r_0 + a - b (half the products and half
+the steering matrix). The channels' spectra and the lags are computed in the precision ``fft_precision`` asks,
+the products in double.
 
 Split-array (``split-array``; paper P0 applied to a line array): the front and rear halves are summed
 (unsteered, so each half hears mainly near broadside), band-passed, and cross-correlated
@@ -35,7 +40,9 @@ from typing import Literal
 
 import numpy as np
 
+from sonartrack.acoustics.blas_threads import blas_reachable, one_blas_thread
 from sonartrack.acoustics.line_array import Band, LineArray
+from sonartrack.acoustics.lofar import LofarAccumulator, LofarGram, LofarSettings
 from sonartrack.acoustics.xcorr_bearing import PeakRecord, correlate_window
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, setting
@@ -116,8 +123,9 @@ class BeamformerSettings(Settings):
     spread_floor: float = setting(1e-3, "normaliser: the spread is at least this fraction of the background "
                                         "(guards against a zero or constant recording)", unit="1", gt=0)
     fft_precision: Literal["single", "double"] = setting(
-        "single", "precision of the channels' FFT: single halves its time (the front end's largest cost) with errors "
-        "~1e-7 of a bin, far below the noise the normaliser measures; double for reference checks", unit="")
+        "single", "precision of the channels' FFT and of the lags across elements (the products are double): single "
+        "halves their time with errors ~5e-8 of a beam's power (~1e-5 in z), far below the noise the normaliser "
+        "measures; double for reference checks", unit="")
 
     @property
     def cone_deg(self) -> np.ndarray:
@@ -128,12 +136,14 @@ class BeamformerSettings(Settings):
 @dataclass(frozen=True)
 class BearingTimeRecord:
     """The bearing-time record: window centres (T,), beam cone angles (B,), normalised level z (T, B) and
-    the peaks (time, cone angle deg as ``bearing_deg``, amplitude = z at the peak)."""
+    the peaks (time, cone angle deg as ``bearing_deg``, amplitude = z at the peak); ``lofar``: the narrowband
+    LOFAR gram per beam made in the same pass (:func:`bearing_time_record` with ``narrowband``), or None."""
 
     time_s: np.ndarray
     cone_deg: np.ndarray
     level: np.ndarray
     peaks: PeakRecord
+    lofar: LofarGram | None = None
 
 
 def front_end_band(array: LineArray, settings: BeamformerSettings, fs_hz: float) -> Band:
@@ -170,62 +180,78 @@ def _band_bins(n_samples: int, fs_hz: float, band_hz) -> tuple[np.ndarray, np.nd
 
 @lru_cache(maxsize=4)
 def _steering_matrix(n_elements: int, n_samples: int, fs_hz: float, spacing_m: float, sound_speed_mps: float,
-                     band: tuple[float, float], beams: int) -> tuple[np.ndarray, np.ndarray]:
-    """(band bin indices, steering matrix M (B, 1 + 2 (N - 1) n_bins)) of P = M v (module doc)."""
+                     band: tuple[float, float], beams: int) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, int]]:
+    """(band bin indices, steering (C, S, B)) of P = M v (module doc): C = 2 cos(2 pi f l kappa) and
+    S = -2 sin(2 pi f l kappa), (ceil(B / 2), (N - 1) n_bins) each, for the first half of the beams (the mirror
+    beams at 180 deg - theta reuse them: module doc)."""
     idx, f = _band_bins(n_samples, fs_hz, band)
-    kappa = spacing_m * np.cos(np.deg2rad(np.linspace(0.0, 180.0, beams))) / sound_speed_mps  # (B,)
+    half = (beams + 1) // 2
+    kappa = spacing_m * np.cos(np.deg2rad(np.linspace(0.0, 180.0, beams)[:half])) / sound_speed_mps  # (B/2,)
     n_f, n_lags = f.size, n_elements - 1
-    m = np.empty((beams, 1 + 2 * n_lags * n_f))
-    m[:, 0] = 1.0
+    c, s = np.empty((half, n_lags * n_f)), np.empty((half, n_lags * n_f))
     for lag in range(1, n_elements):  # one lag at a time: no (B, N-1, F) temporaries (memory at 64 elements)
-        phase = (2.0 * np.pi * lag) * kappa[:, None] * f[None, :]  # (B, F)
-        j = 1 + (lag - 1) * n_f
-        m[:, j:j + n_f] = 2.0 * np.cos(phase)
-        m[:, j + n_lags * n_f:j + n_lags * n_f + n_f] = -2.0 * np.sin(phase)
-    return idx, m
+        phase = (2.0 * np.pi * lag) * kappa[:, None] * f[None, :]  # (B/2, F)
+        j = (lag - 1) * n_f
+        c[:, j:j + n_f] = 2.0 * np.cos(phase)
+        s[:, j:j + n_f] = -2.0 * np.sin(phase)
+    return idx, (c, s, beams)
+
+
+def _dtypes(settings: BeamformerSettings) -> tuple[type, type]:
+    """(real, complex) dtype of the front end's spectra and products (``fft_precision``)."""
+    return (np.float32, np.complex64) if settings.fft_precision == "single" else (np.float64, np.complex128)
+
+
+def _rfft_bins(blocks: np.ndarray, bins: slice, real_dtype: type) -> np.ndarray:
+    """rfft along the last axis of ``blocks`` in ``real_dtype``, the ``bins`` kept (scipy's pocketfft: in single
+    precision 7 times numpy's speed on 8000-sample windows, whose float32 path is slower than its float64 one)."""
+    import scipy.fft
+
+    return scipy.fft.rfft(np.asarray(blocks, dtype=real_dtype), axis=-1)[..., bins]
+
+
+def _whitened(spectra: np.ndarray) -> np.ndarray:
+    """The spectra (K, N, F) divided, per window and bin, by the root of their mean element power (a new array)."""
+    power = np.mean(spectra.real**2 + spectra.imag**2, axis=1, keepdims=True)
+    return spectra * (1.0 / np.sqrt(np.where(power > 0, power, 1.0))).astype(spectra.real.dtype)
 
 
 def _lag_vectors(spectra: np.ndarray) -> np.ndarray:
-    """[sum_f r_0, Re r_l(f), Im r_l(f)] (K, 1 + 2 (N-1) F) of band spectra (K, N, F) (module doc).
+    """[sum_f r_0, Re r_l(f), Im r_l(f)] (K, 1 + 2 (N-1) F) of band spectra (K, N, F) (module doc), computed in the
+    spectra's precision and returned in double (the product with the steering matrix sums ~1e5 terms that cancel:
+    in single precision it errs by ~2e-6 of the power, 3e-4 in z, against 5e-8 and 1e-5 in double).
 
     All lags at once through the element axis: with A = DFT_2N of X_n (zero-padded to 2N, so nothing wraps),
     r_l = IDFT_2N(|A|^2)[l] = sum_n conj(X_n) X_{n+l} for 0 <= l < N (Wiener-Khinchin; 2 N log 2N operations per
-    bin instead of N^2 / 2)."""
-    k, n, _ = spectra.shape
-    a = np.fft.fft(spectra, 2 * n, axis=1)
-    r = np.fft.ifft(a.real**2 + a.imag**2, axis=1)[:, :n]
-    return np.concatenate([r[:, 0].real.sum(axis=1)[:, None], r[:, 1:].real.reshape(k, -1),
-                           r[:, 1:].imag.reshape(k, -1)], axis=1)
+    bin instead of N^2 / 2); |A|^2 is real, so its inverse transform is Hermitian and ``ihfft`` gives its first
+    half at half the cost."""
+    import scipy.fft
+
+    k, n, f = spectra.shape
+    a = scipy.fft.fft(spectra, 2 * n, axis=1)
+    r = scipy.fft.ihfft(a.real**2 + a.imag**2, axis=1)[:, :n]
+    out = np.empty((k, 1 + 2 * (n - 1) * f))
+    out[:, 0] = r[:, 0].real.sum(axis=1)
+    out[:, 1:1 + (n - 1) * f].reshape(k, n - 1, f)[...] = r[:, 1:].real  # views: no intermediate copies
+    out[:, 1 + (n - 1) * f:].reshape(k, n - 1, f)[...] = r[:, 1:].imag
+    return out
 
 
-@lru_cache(maxsize=1)
-def _set_blas_threads_local():
-    """numpy's bundled OpenBLAS ``openblas_set_num_threads_local`` (returns the previous count), or None."""
-    import ctypes
-    import glob
-    import os
-
-    try:
-        libs = glob.glob(os.path.join(os.path.dirname(np.__file__), os.pardir, "numpy.libs", "libscipy_openblas*"))
-        f = ctypes.CDLL(libs[0]).openblas_set_num_threads_local
-    except (IndexError, OSError, AttributeError):
-        return None
-    f.restype, f.argtypes = ctypes.c_int, [ctypes.c_int]
-    return f
-
-
-def _steer(lag_vectors: np.ndarray, steer: np.ndarray) -> np.ndarray:
-    """P = v M^T: one BLAS product on one thread (a threaded BLAS spins its workers against the other processes
-    of a loaded 2-core machine: measured 16 windows/s threaded, 1000 on one thread, 115 with einsum, the fallback
-    when numpy's OpenBLAS cannot be reached)."""
-    set_threads = _set_blas_threads_local()
-    if set_threads is None:
-        return np.einsum("kj,bj->kb", lag_vectors, steer)
-    previous = set_threads(1)
-    try:
-        return lag_vectors @ steer.T
-    finally:
-        set_threads(previous)
+def _steer(lag_vectors: np.ndarray, steer: tuple[np.ndarray, np.ndarray, int]) -> np.ndarray:
+    """P (K, B) of lag vectors [v_0, v_re, v_im] (K, 1 + 2 L) and the steering (C, S, B) of the first half of the
+    beams: P(theta) = v_0 + v_re C^T + v_im S^T, and P(180 deg - theta) = v_0 + v_re C^T - v_im S^T (module doc).
+    BLAS products on one thread (acoustics/blas_threads.py; einsum, 9 times slower, where numpy's OpenBLAS cannot
+    be reached)."""
+    c, s, beams = steer
+    n = c.shape[1]
+    v0, v_re, v_im = lag_vectors[:, :1], lag_vectors[:, 1:1 + n], lag_vectors[:, 1 + n:]
+    if not blas_reachable():
+        even, odd = np.einsum("kj,bj->kb", v_re, c), np.einsum("kj,bj->kb", v_im, s)
+    else:
+        with one_blas_thread():
+            even, odd = v_re @ c.T, v_im @ s.T
+    mirror = (v0 + even - odd)[:, :beams - c.shape[0]]
+    return np.concatenate([v0 + even + odd, mirror[:, ::-1]], axis=1)
 
 
 def _band_of(array: LineArray, settings: BeamformerSettings, fs_hz: float, band: Band | None) -> Band:
@@ -256,17 +282,27 @@ def cbf_powers(blocks: np.ndarray, fs_hz: float, array: LineArray, settings: Bea
         Beam power over the band at each of the B cone angles ``settings.cone_deg`` (input units^2).
     """
     s = settings
-    k, n, m = blocks.shape
+    _, n, m = blocks.shape
     band = _band_of(array, s, fs_hz, band)
-    idx, steer = _steering_matrix(n, m, float(fs_hz), float(array.spacing_m), float(array.sound_speed_mps),
-                                  band.as_tuple(), int(s.beams))
+    idx, steer = _band_steering(n, m, fs_hz, array, s, band)
     bins = slice(idx[0], idx[-1] + 1) if idx.size else slice(0, 0)  # contiguous bins: a view, not a copy
-    # single precision by default: half the FFT's time (4.1 -> 1.9 ms a window at 32 x 8 kHz; settings doc)
-    dtype = np.float32 if s.fft_precision == "single" else np.float64
-    spectra = np.fft.rfft(np.asarray(blocks, dtype), axis=2)[:, :, bins].astype(np.complex128)
-    if s.whiten:
-        power = np.mean(spectra.real**2 + spectra.imag**2, axis=1, keepdims=True)
-        spectra *= 1.0 / np.sqrt(np.where(power > 0, power, 1.0))
+    return _cbf_from_spectra(_rfft_bins(blocks, bins, _dtypes(s)[0]), steer, s.whiten)
+
+
+def _band_steering(n: int, m: int, fs_hz: float, array: LineArray, s: BeamformerSettings,
+                   band: Band) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, int]]:
+    """(bin indices, steering (C, S, B): :func:`_steering_matrix`) of ``band`` for N elements and M-sample windows
+    (cached: built once per recording)."""
+    return _steering_matrix(n, m, float(fs_hz), float(array.spacing_m), float(array.sound_speed_mps),
+                            band.as_tuple(), int(s.beams))
+
+
+def _cbf_from_spectra(spectra: np.ndarray, steer: tuple[np.ndarray, np.ndarray, int], whiten: bool) -> np.ndarray:
+    """Beam powers (K, B) of band spectra (K, N, F): whitened (``whiten``), lag vectors, one product with the
+    steering matrix (module doc); the spectra's precision sets the transforms' (single: ~5e-8 of a beam's power,
+    ~1e-5 in z, far below the noise the normaliser measures), the product is in double."""
+    if whiten:
+        spectra = _whitened(spectra)
     return _steer(_lag_vectors(spectra), steer)
 
 
@@ -473,27 +509,95 @@ def _batches(blocks: Iterable[np.ndarray], size: int):
         yield np.stack(batch)
 
 
-def _batch_powers(batch: np.ndarray, fs_hz: float, array: LineArray, s: BeamformerSettings, band: Band,
-                  mvdr, octave: Band | None = None) -> np.ndarray:
-    """Beam powers (K, B) of a batch of windows with the method of ``s`` (split-array: a batch of one); with
-    ``octave``, the combined statistic of the band and that octave (:func:`combined_statistic`)."""
-    if s.method == "cbf" and octave is not None:
-        return combined_statistic(normalise_across_bearing(cbf_powers(batch, fs_hz, array, s, band), s),
-                                  normalise_across_bearing(cbf_powers(batch, fs_hz, array, s, octave), s))
-    if s.method == "cbf":
-        return cbf_powers(batch, fs_hz, array, s, band)
-    if s.method == "mvdr":
-        from sonartrack.acoustics.mvdr import mvdr_powers
+def _check_block(shape: tuple[int, ...], n: int, nw: int) -> None:
+    require(tuple(shape) == (n, nw), f"blocks must be (elements, window_s * fs) = ({n}, {nw}), got {tuple(shape)}")
 
-        return mvdr_powers(batch, fs_hz, array, s, band, mvdr)
-    return split_array_powers(batch[0], fs_hz, array, s, band)[None]
+
+def _spectra_batches(blocks: Iterable[np.ndarray], n: int, nw: int, bins: slice, real_dtype: type, size: int):
+    """Batches (K <= size, N, bins) of the windows' rectangular rfft spectra over ``bins``, each window transformed
+    as it arrives (only the band's bins are kept: a batch's samples are never held together). The batch is one
+    buffer, reused for the next: its consumer is done with it when it asks for the next."""
+    width = bins.stop - bins.start
+    buf, k = np.empty((size, n, width), dtype=np.result_type(real_dtype, np.complex64)), 0
+    for block in blocks:
+        _check_block(np.shape(block), n, nw)
+        buf[k] = _rfft_bins(block, bins, real_dtype)
+        k += 1
+        if k == size:
+            yield buf
+            k = 0
+    if k:
+        yield buf[:k]
+
+
+def _cbf_batches(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, s: BeamformerSettings, band: Band,
+                 octave: Band | None, lofar: LofarAccumulator | None):
+    """CBF beam powers (K, B) per batch of windows (the band's, or with ``octave`` the combined statistic of the
+    band and that octave: :func:`combined_statistic`), each window transformed once; the same spectra feed the
+    LOFAR gram (``lofar``), so the narrowband gram costs no pass of its own."""
+    n, nw = array.elements, int(round(s.window_s * fs_hz))
+    steering = [_band_steering(n, nw, fs_hz, array, s, b) for b in [band] + ([octave] if octave else [])]
+    spans = [(int(i[0]), int(i[-1]) + 1) if i.size else (0, 0) for i, _ in steering]
+    spans += [(lofar.bins.start, lofar.bins.stop)] if lofar is not None else []
+    lo, hi = min(a for a, _ in spans), max(b for _, b in spans)
+    for spectra in _spectra_batches(blocks, n, nw, slice(lo, hi), _dtypes(s)[0], BATCH_WINDOWS):
+        if lofar is not None:
+            lofar.add(spectra[:, :, spans[-1][0] - lo: spans[-1][1] - lo])
+        powers = [_cbf_from_spectra(spectra[:, :, a - lo: b - lo], st, s.whiten)  # the LOFAR's span left out
+                  for (a, b), (_, st) in zip(spans, steering, strict=False)]
+        yield powers[0] if octave is None else combined_statistic(normalise_across_bearing(powers[0], s),
+                                                                  normalise_across_bearing(powers[1], s))
+
+
+def _other_batches(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, s: BeamformerSettings, band: Band,
+                   mvdr, lofar: LofarAccumulator | None):
+    """Beam powers (K, B) per batch of windows of the ``split-array`` (a batch of one) and ``mvdr`` methods; the
+    LOFAR gram (``lofar``) from the same windows' spectra."""
+    nw = int(round(s.window_s * fs_hz))
+    for batch in _batches(blocks, 1 if s.method == "split-array" else BATCH_WINDOWS):
+        _check_block(batch.shape[1:], array.elements, nw)
+        if lofar is not None:
+            lofar.add(_rfft_bins(batch, lofar.bins, np.float64))
+        if s.method == "mvdr":
+            from sonartrack.acoustics.mvdr import mvdr_powers
+
+            yield mvdr_powers(batch, fs_hz, array, s, band, mvdr)
+        else:
+            yield split_array_powers(batch[0], fs_hz, array, s, band)[None]
+
+
+class _RecordBuilder:
+    """The bearing-time record's rows and peaks, window by window (``progress`` called with k after window k)."""
+
+    def __init__(self, s: BeamformerSettings, progress: Callable[[int], None] | None):
+        self.s, self.progress, self.k = s, progress, 0
+        self.levels, self.ts, self.bs, self.amps = [], [], [], []
+
+    def add(self, z: np.ndarray) -> None:
+        for row in z:
+            angle, height = pick_beam_peaks(row, self.s.cone_deg, self.s)
+            self.ts.append(np.full(len(angle), (self.k + 0.5) * self.s.window_s))
+            self.bs.append(angle)
+            self.amps.append(height)
+            self.levels.append(row.astype(np.float32))
+            if self.progress is not None:
+                self.progress(self.k)
+            self.k += 1
+
+    def record(self, lofar: LofarGram | None) -> BearingTimeRecord:
+        s, cone = self.s, self.s.cone_deg
+        level = np.stack(self.levels) if self.levels else np.zeros((0, cone.size), dtype=np.float32)
+        cat = (lambda parts: np.concatenate(parts)) if self.ts else (lambda parts: np.zeros(0))
+        return BearingTimeRecord(np.arange(self.k) * s.window_s + 0.5 * s.window_s, cone, level,
+                                 PeakRecord(cat(self.ts), cat(self.bs), cat(self.amps)), lofar)
 
 
 def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, settings: BeamformerSettings,
                         *, band: Band | None = None, progress: Callable[[int], None] | None = None,
-                        mvdr=None) -> BearingTimeRecord:
+                        mvdr=None, narrowband: LofarSettings | None = None) -> BearingTimeRecord:
     """Beamform, normalise and pick peaks in every window of ``blocks``; CBF windows in batches of
-    ``BATCH_WINDOWS`` (one matrix product each).
+    ``BATCH_WINDOWS`` (one matrix product each); with ``narrowband``, the LOFAR gram per beam from the same
+    windows' spectra (acoustics/lofar.py :class:`~sonartrack.acoustics.lofar.LofarAccumulator`: no pass of its own).
 
     Parameters
     ----------
@@ -512,35 +616,26 @@ def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineA
         Called with k after window k.
     mvdr : MvdrSettings, optional
         Segment and loading of the ``mvdr`` method (acoustics/mvdr.py; its defaults when None).
+    narrowband : LofarSettings, optional
+        The narrowband settings (band, beams, integration, normaliser; any subclass, such as the passive chain's):
+        when given, the record's ``lofar`` is the gram :func:`~sonartrack.acoustics.lofar.lofar_gram` makes of
+        the same windows (None when they hold no whole integration period).
 
     Returns
     -------
     BearingTimeRecord
         Window centres time_s = (k + 0.5) window_s (s), the beams' cone angles (deg), the normalised level z per
-        window and beam, and the peaks.
+        window and beam, the peaks, and the LOFAR gram (or None).
     """
     s = settings
     band = front_end_band(array, s, fs_hz) if band is None else band
-    octave = alias_free_octave(array, s, fs_hz, band)
-    cone = s.cone_deg
     nw = int(round(s.window_s * fs_hz))
-    levels, ts, bs, amps = [], [], [], []
-    k = 0
-    for batch in _batches(blocks, 1 if s.method == "split-array" else BATCH_WINDOWS):
-        require(batch.shape[1:] == (array.elements, nw), f"blocks must be (elements, window_s * fs) = "
-                                                         f"({array.elements}, {nw}), got {batch.shape[1:]}")
-        power = _batch_powers(batch, fs_hz, array, s, band, mvdr, octave)
-        z = normalise_across_bearing(power, s)
-        for row in z:
-            angle, height = pick_beam_peaks(row, cone, s)
-            ts.append(np.full(len(angle), (k + 0.5) * s.window_s))
-            bs.append(angle)
-            amps.append(height)
-            levels.append(row.astype(np.float32))
-            if progress is not None:
-                progress(k)
-            k += 1
-    level = np.stack(levels) if levels else np.zeros((0, cone.size), dtype=np.float32)
-    cat = (lambda parts: np.concatenate(parts)) if ts else (lambda parts: np.zeros(0))
-    return BearingTimeRecord(np.arange(k) * s.window_s + 0.5 * s.window_s, cone, level,
-                             PeakRecord(cat(ts), cat(bs), cat(amps)))
+    lofar = None if narrowband is None else LofarAccumulator(fs_hz, array, narrowband, nw)
+    if s.method == "cbf":
+        batches = _cbf_batches(blocks, fs_hz, array, s, band, alias_free_octave(array, s, fs_hz, band), lofar)
+    else:
+        batches = _other_batches(blocks, fs_hz, array, s, band, mvdr, lofar)
+    rows = _RecordBuilder(s, progress)
+    for power in batches:
+        rows.add(normalise_across_bearing(power, s))
+    return rows.record(None if lofar is None else lofar.gram(s.window_s))

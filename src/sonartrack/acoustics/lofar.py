@@ -41,6 +41,7 @@ from typing import Literal
 
 import numpy as np
 
+from sonartrack.acoustics.blas_threads import one_blas_thread
 from sonartrack.acoustics.line_array import LineArray
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, setting
@@ -154,17 +155,121 @@ def beam_power_spectra(blocks: np.ndarray, fs_hz: float, array: LineArray, cone_
         PSD per window, beam and bin (input units^2/Hz).
     """
     x = np.asarray(blocks, dtype=float)
-    k, n, m = x.shape
+    m = x.shape[2]
+    idx, f, w = _lofar_bins(m, fs_hz, band_hz)
+    spec = np.fft.rfft(x * w, axis=2)[:, :, idx[0]: idx[-1] + 1]  # (K, N, F)
+    return f, _beam_psd(spec, _lofar_steering(f, array, cone_deg, x.shape[1]), 2.0 / (fs_hz * np.sum(w**2)))
+
+
+def _lofar_bins(m: int, fs_hz: float, band_hz) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(indices of the rfft bins of M-sample windows in [low, high), their frequencies Hz, the periodic Hann
+    window of M samples)."""
     w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(m) / m)
     f = np.fft.rfftfreq(m, 1.0 / fs_hz)
     idx = np.nonzero((f >= band_hz[0]) & (f < band_hz[1]))[0]
     require(idx.size >= 3, f"the LOFAR band {list(band_hz)} Hz holds fewer than 3 bins of {fs_hz / m:g} Hz")
-    spec = np.fft.rfft(x * w, axis=2)[:, :, idx[0]: idx[-1] + 1]  # (K, N, F)
+    return idx, f[idx], w
+
+
+def _lofar_steering(f_hz: np.ndarray, array: LineArray, cone_deg, n: int) -> np.ndarray:
+    """exp(+2 pi i f tau_n(theta)) / N (F, B, N), the beams' weights (module doc)."""
     kappa = array.spacing_m * np.cos(np.deg2rad(np.asarray(cone_deg, float))) / array.sound_speed_mps
     tau = (np.arange(n) - 0.5 * (n - 1))[None, :] * kappa[:, None]  # (B, N)
-    steer = np.exp(2j * np.pi * f[idx][:, None, None] * tau[None])  # (F, B, N)
-    beams = np.matmul(steer, spec.transpose(2, 1, 0)).transpose(2, 1, 0) / n  # (F, B, N) @ (F, N, K)
-    return f[idx], (2.0 / (fs_hz * np.sum(w**2))) * (beams.real**2 + beams.imag**2)
+    return np.exp(2j * np.pi * f_hz[:, None, None] * tau[None]) / n
+
+
+def _beam_psd(spec: np.ndarray, steer: np.ndarray, scale: float) -> np.ndarray:
+    """scale |B|^2 (K, B, F) of the beams steer (F, B, N) applied to the Hann spectra (K, N, F)."""
+    with one_blas_thread():
+        beams = np.matmul(steer, spec.transpose(2, 1, 0)).transpose(2, 1, 0)  # (F, B, N) @ (F, N, K)
+    return scale * (beams.real**2 + beams.imag**2)
+
+
+class LofarAccumulator:
+    """The LOFAR gram built window by window from the windows' rectangular rfft spectra, so that it comes out of
+    the front end's own transforms (acoustics/beamforming.py ``bearing_time_record``) with no pass of its own.
+
+    The Hann window is applied in frequency: the periodic Hann w_m = 1/2 - (1/2) cos(2 pi m / M) is a sum of
+    three complex exponentials, so X_w(k) = X(k) / 2 - (X(k - 1) + X(k + 1)) / 4 exactly (the DFT's shift
+    theorem; Harris 1978, "On the use of windows for harmonic analysis with the discrete Fourier transform",
+    Proc. IEEE 66(1), sec. IV); the band's bins need one rectangular bin beyond each edge (:attr:`bins`). The
+    beams, PSD scale, integration over L windows and normaliser are those of :func:`lofar_gram`, which gives the
+    same gram from the same windows (tests: to rounding in double precision)."""
+
+    def __init__(self, fs_hz: float, array: LineArray, settings: LofarSettings, n_samples: int):
+        self.settings = settings
+        idx, self.freqs_hz, w = _lofar_bins(int(n_samples), fs_hz, lofar_band(array, fs_hz, settings))
+        #: the rectangular rfft bins :meth:`add` takes: the band's and one beyond each edge (bin >= 1: low > 0), but
+        #: the last rfft bin when the band reaches it (an odd window up to fs / 2; the bin beyond it is its conjugate)
+        self.bins = slice(int(idx[0]) - 1, min(int(idx[-1]) + 2, int(n_samples) // 2 + 1))
+        self._mirror_top = int(idx[-1]) + 2 > int(n_samples) // 2 + 1
+        self._steer = _lofar_steering(self.freqs_hz, array, settings.cone_deg, array.elements)
+        self._steer64 = self._steer.astype(np.complex64)
+        self._scale = 2.0 / (fs_hz * np.sum(w**2))
+        self._sum, self._count, self._lines = 0.0, 0, []
+
+    def add(self, spectra: np.ndarray) -> None:
+        """Add K windows' rectangular spectra (K, N, bins of :attr:`bins`) in time order.
+
+        Parameters
+        ----------
+        spectra : ndarray (K, N, W)
+            rfft of each window (no window function) over :attr:`bins`; complex64 spectra are beamformed in single
+            precision (the front end's ``fft_precision``), others in double; the sums are double.
+        """
+        x = np.asarray(spectra)
+        if self._mirror_top:  # X(k + 1) = conj(X(k)) at the last bin k = (M - 1) / 2 of an odd window M
+            x = np.concatenate([x, np.conj(x[:, :, -1:])], axis=2)
+        single = x.dtype == np.complex64
+        xt = x.astype(np.complex64 if single else np.complex128, copy=False).transpose(2, 1, 0)  # (W, N, K)
+        hann = np.add(xt[:-2], xt[2:], out=np.empty((xt.shape[0] - 2,) + xt.shape[1:], dtype=xt.dtype))
+        hann *= -0.25
+        hann += 0.5 * xt[1:-1]
+        with one_blas_thread():  # a threaded BLAS spins on a loaded machine (acoustics/blas_threads.py)
+            beams = np.matmul(self._steer64 if single else self._steer, hann)  # (F, B, N) @ (F, N, K)
+        power = beams.real**2 + beams.imag**2  # (F, B, K)
+        k, length = 0, self.settings.integration
+        while k < power.shape[2]:
+            take = min(length - self._count, power.shape[2] - k)
+            self._sum = self._sum + power[:, :, k:k + take].sum(axis=2, dtype=float)
+            self._count, k = self._count + take, k + take
+            if self._count == length:
+                self._lines.append((self._scale / length) * self._sum.T)
+                self._sum, self._count = 0.0, 0
+
+    def gram(self, window_s: float) -> LofarGram | None:
+        """The gram of the complete integration periods added so far (a last incomplete one is dropped), or None
+        when there is none.
+
+        Parameters
+        ----------
+        window_s : float
+            Window length (s): period k is centred at (k + 0.5) L window_s.
+
+        Returns
+        -------
+        LofarGram or None
+            As :func:`lofar_gram`.
+        """
+        return None if not self._lines else _gram(self.power(), self.freqs_hz, self.settings, window_s)
+
+    def power(self) -> np.ndarray:
+        """The integrated spectra of the complete periods so far, in double precision.
+
+        Returns
+        -------
+        ndarray (T, B, F)
+            Mean PSD over each period's L windows per beam and bin (input units^2/Hz); T may be 0.
+        """
+        shape = (0, self.settings.beams, self.freqs_hz.size)
+        return np.stack(self._lines) if self._lines else np.zeros(shape)
+
+
+def _gram(power: np.ndarray, freqs_hz: np.ndarray, s: LofarSettings, window_s: float) -> LofarGram:
+    """The gram of integrated spectra (T, B, F): normalised along frequency, periods stamped at their centres."""
+    stat = power / np.maximum(background(power, s), np.finfo(float).tiny)
+    t = (np.arange(power.shape[0]) + 0.5) * s.integration * window_s
+    return LofarGram(t, s.cone_deg, freqs_hz, power.astype(np.float32), stat.astype(np.float32))
 
 
 def _window_sums(p: np.ndarray, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
@@ -281,20 +386,21 @@ def lofar_gram(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, set
     LofarGram
         The integrated gram (float32 power and statistic).
     """
-    s, cone = settings, settings.cone_deg
+    s = settings
     band = lofar_band(array, fs_hz, s)
-    lines, group, freqs = [], [], None
+    lines, group, prep = [], [], None
     for block in blocks:
         group.append(np.asarray(block, float))
         if len(group) == s.integration:  # one batched transform and product per integration period
-            freqs, p = beam_power_spectra(np.stack(group), fs_hz, array, cone, band)
-            lines.append(p.mean(axis=0))
+            x = np.stack(group)
+            if prep is None:  # as beam_power_spectra, the bins and beams once (F B N complex exponentials)
+                idx, f, w = _lofar_bins(x.shape[2], fs_hz, band)
+                prep = idx, f, w, _lofar_steering(f, array, s.cone_deg, x.shape[1]), 2.0 / (fs_hz * np.sum(w**2))
+            idx, f, w, steer, scale = prep
+            lines.append(_beam_psd(np.fft.rfft(x * w, axis=2)[:, :, idx[0]: idx[-1] + 1], steer, scale).mean(axis=0))
             group = []
     require(bool(lines), f"the recording holds fewer windows than one LOFAR integration ({s.integration})")
-    power = np.stack(lines)
-    stat = power / np.maximum(background(power, s), np.finfo(float).tiny)
-    t = (np.arange(len(lines)) + 0.5) * s.integration * window_s
-    return LofarGram(t, cone, freqs, power.astype(np.float32), stat.astype(np.float32))
+    return _gram(np.stack(lines), prep[1], s, window_s)
 
 
 def detect_lines(gram: LofarGram, settings: LofarSettings) -> LineDetections:

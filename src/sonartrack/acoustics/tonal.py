@@ -106,8 +106,8 @@ def beam_spectra(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg, se
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Conventional beams' power spectral densities of one window (module doc).
 
-    The k beams are one batched matrix product over the band's bins (k x N steering times N x 1 spectra);
-    the steering phases are built by a recursion along the elements (:func:`_steering`).
+    The window is applied in frequency (:func:`_hann_spectra`) and the k beams are summed along the elements by
+    Horner's rule (:func:`_beams`).
 
     Parameters
     ----------
@@ -132,18 +132,48 @@ def beam_spectra(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg, se
     """
     x = np.atleast_2d(np.asarray(block, dtype=float))
     n_el, n = x.shape
-    w = _hann(n)
     f_all = np.fft.rfftfreq(n, 1.0 / fs_hz)
     lo, hi = settings.band_hz
-    band = (f_all >= lo) & (f_all <= hi)
-    spec = np.fft.rfft(x * w, axis=1)[:, band]  # (N, F)
-    f = f_all[band]
+    idx = np.flatnonzero((f_all >= lo) & (f_all <= hi))
+    f = f_all[idx]
     offsets = ((n_el - 1) / 2.0 - np.arange(n_el)) * array.spacing_m
     tau = -np.cos(np.deg2rad(np.atleast_1d(np.asarray(cone_deg, dtype=float))))[:, None] * offsets / \
         array.sound_speed_mps  # (k, N)
-    steer = _steering(f, tau)  # (F, k, N)
-    beams = np.matmul(steer, spec.T[:, :, None])[:, :, 0].T / n_el  # (k, F)
-    return f, (2.0 / (fs_hz * np.sum(w**2))) * np.abs(beams) ** 2
+    beams = _beams(_hann_spectra(x, idx), f, tau) / n_el  # (k, F)
+    return f, (2.0 / (fs_hz * np.sum(_hann(n) ** 2))) * (beams.real**2 + beams.imag**2)
+
+
+def _hann_spectra(x: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """rfft(hann * x_n) at the bins ``idx`` (N, F) (contiguous), the window applied in frequency where the band
+    leaves a bin on each side: the periodic Hann is three complex exponentials, so X_w(k) = X(k) / 2 - (X(k - 1) +
+    X(k + 1)) / 4 (the DFT's shift theorem; Harris 1978, Proc. IEEE 66(1), sec. IV), which spares the product with
+    the window (equal to rounding)."""
+    import scipy.fft
+
+    if idx.size == 0:
+        return np.zeros((x.shape[0], 0), dtype=complex)
+    if idx[0] >= 1 and idx[-1] + 1 < x.shape[1] // 2 + 1:
+        spec = scipy.fft.rfft(x, axis=1)[:, idx[0] - 1: idx[-1] + 2]
+        return 0.5 * spec[:, 1:-1] - 0.25 * (spec[:, :-2] + spec[:, 2:])
+    return scipy.fft.rfft(x * _hann(x.shape[1]), axis=1)[:, idx[0]: idx[-1] + 1]
+
+
+def _beams(spec: np.ndarray, f_hz: np.ndarray, tau_s: np.ndarray) -> np.ndarray:
+    """sum_n exp(+2 pi i f tau_n) X_n(f) (k, F) of spectra (N, F) for delays (k, N) that step uniformly along the
+    array, by Horner's rule along the elements.
+
+    tau_n = tau_0 + n (tau_1 - tau_0), so with a = exp(2 pi i f tau_0) and q = exp(2 pi i f (tau_1 - tau_0)) the
+    sum is a (X_0 + q (X_1 + q (X_2 + ...))): two complex exponentials per (bin, beam) and N - 1 complex
+    multiply-adds, with no (F, k, N) steering array (rounding grows by ~1e-16 per element)."""
+    a = np.exp(2j * np.pi * f_hz[None, :] * tau_s[:, :1])
+    if tau_s.shape[1] == 1:
+        return a * spec[0]
+    q = np.exp(2j * np.pi * f_hz[None, :] * (tau_s[:, 1:2] - tau_s[:, :1]))
+    acc = np.broadcast_to(spec[-1], q.shape).copy()
+    for row in spec[-2::-1]:
+        acc *= q
+        acc += row
+    return a * acc
 
 
 def _median_filter(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -156,28 +186,11 @@ def _median_filter(x: np.ndarray, size: int, mode: str) -> np.ndarray:
 
 @cache
 def _hann(n: int) -> np.ndarray:
-    """The periodic Hann window of n samples (the DFT-even one: its spectrum is the three-term main lobe)."""
-    from scipy.signal import get_window  # scipy.signal takes ~0.3 s to import: only when a spectrum is computed
-
-    w = get_window("hann", n)
+    """The periodic Hann window of n samples, w_m = 1/2 - (1/2) cos(2 pi m / n) (the DFT-even one: its spectrum
+    is the three-term main lobe)."""
+    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n)
     w.flags.writeable = False
     return w
-
-
-def _steering(f_hz: np.ndarray, tau_s: np.ndarray) -> np.ndarray:
-    """exp(+2 pi i f tau_n) (F, k, N) for delays (k, N) that step uniformly along the array.
-
-    tau_n = tau_0 + n (tau_1 - tau_0), so the phase factor of element n is that of element n - 1 times one
-    step: two complex exponentials per (bin, beam) instead of N, then N - 1 complex products over all bins
-    and beams at once (complex exp costs ~10 times a product; rounding grows by ~1e-16 per element)."""
-    n_el = tau_s.shape[1]
-    out = np.empty((f_hz.size, tau_s.shape[0], n_el), dtype=complex)
-    out[:, :, 0] = np.exp(2j * np.pi * f_hz[:, None] * tau_s[None, :, 0])
-    if n_el > 1:
-        step = np.exp(2j * np.pi * f_hz[:, None] * (tau_s[None, :, 1] - tau_s[None, :, 0]))
-        for n in range(1, n_el):
-            np.multiply(out[:, :, n - 1], step, out=out[:, :, n])
-    return out
 
 
 @cache
@@ -470,8 +483,9 @@ class TonalAccumulator:
                                                   max_peaks=min(s.provisional_lines, m))[0]
         p = np.maximum(power, np.finfo(float).tiny)
         k, _ = _peak_bins(p, self._freqs_hz[1] - self._freqs_hz[0], s, s.min_window_snr_db)
-        near = [np.flatnonzero(np.abs(self._freqs_hz[k] - line) <= s.tolerance_hz)[:1] for line in self._provisional_hz]
-        reserved = list(dict.fromkeys(int(i[0]) for i in near if i.size))
+        # per provisional line, the first (strongest) peak within the tolerance: one comparison table for all lines
+        close = np.abs(self._freqs_hz[k][None, :] - self._provisional_hz[:, None]) <= s.tolerance_hz
+        reserved = list(dict.fromkeys(int(i) for i in np.argmax(close, axis=1)[np.any(close, axis=1)]))
         keep = reserved + [i for i in range(min(k.size, m + len(reserved))) if i not in reserved][: m - len(reserved)]
         out = np.full(m, np.nan)
         out[: len(keep)] = _refined_hz(p, self._freqs_hz, k[keep])

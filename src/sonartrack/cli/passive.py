@@ -3,10 +3,11 @@
 Parses the options and calls the passive system: :func:`sonartrack.systems.passive.files.run_passive_recording`
 reads the recording in blocks (one file, or a folder or glob of consecutive files as one recording, gaps left
 blank), its calibration and its navigation (CSV, NMEA 0183 or GPX) and runs the chain (front end, JPDA_A
-bearing tracks, side decision, batch ML and IMM-MGEKF TMA per confirmed track);
-:func:`~sonartrack.systems.passive.write_passive_tables` writes peaks.csv, bearing_tracks.csv, targets.csv and
-levels.csv (dB re 1 uPa) atomically into ``--out``, and the report writes bearing_time.png and tactical.png
-(report/figures/passive.py) and index.html (report/passive_page.py); one summary line per target on stdout.
+bearing tracks, narrowband lines, side decision, batch ML and IMM-MGEKF TMA per confirmed track and per line
+source no track explains); :func:`~sonartrack.systems.passive.write_passive_tables` writes peaks.csv,
+bearing_tracks.csv, targets.csv, levels.csv (dB re 1 uPa) and lines.csv atomically into ``--out``, and the report
+writes bearing_time.png, tactical.png and lofar.png (report/figures/passive.py) and index.html
+(report/passive_page.py); one summary line per target on stdout (a narrowband target marked with its line).
 
 Settings: :class:`sonartrack.systems.passive.settings.PassiveSettings`, from its defaults, then a ``--config``
 TOML file, then the options; ``--print-config`` prints the resolved settings.
@@ -68,8 +69,7 @@ def passive_cmd(
     from sonartrack.io.run_outputs import check_out_path, discard_on_failure
     from sonartrack.report.figures.passive import write_passive_figures
     from sonartrack.report.passive_page import write_passive_page
-    from sonartrack.systems.passive.files import run_passive_recording, write_passive_tables
-    from sonartrack.systems.passive.tables import summary_lines
+    from sonartrack.systems.passive.files import passive_summary, run_passive_recording, write_passive_tables
 
     require(wav is not None and nav is not None, "give the inputs: --wav RECORDING.wav --nav NAV.csv")
     folder = check_out_path(out)
@@ -79,7 +79,7 @@ def passive_cmd(
                 run = run_passive_recording(wav, nav, settings, calibration=calibration, tow_length_m=tow_length,
                                             progress=TrialProgress(bar))
             result = run.result
-            lines = summary_lines(result)
+            lines = passive_summary(result)
             tables = write_passive_tables(result, folder, run.level_db)
             figures = write_passive_figures(result, folder)
             page = write_passive_page(folder / "index.html", result, lines, figures,

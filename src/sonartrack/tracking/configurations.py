@@ -24,6 +24,8 @@ from sonartrack.tracking.initiators import OnePointInitiator, PeakInitiator, bea
 from sonartrack.tracking.measurements import BearingMeasurements, PositionMeasurements
 from sonartrack.tracking.motion import ImmConstantVelocity
 from sonartrack.tracking.multi_target import MultiTargetTracker
+from sonartrack.tracking.own_motion import ArrayTurnPrediction
+from sonartrack.tracking.resolution import UnresolvedPairs
 from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
 from sonartrack.tracking.tracks import TrackArrays
 
@@ -62,7 +64,8 @@ def position_tracker(settings: PositionTrackerSettings | None = None, *, associa
 
 def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude_aided: bool = True,
                     adaptive_strength: bool = True, initial: TrackArrays | None = None,
-                    time_s: float | None = None, associator=None) -> MultiTargetTracker:
+                    time_s: float | None = None, associator=None, array_turn: bool = False,
+                    resolution_deg: float | None = None) -> MultiTargetTracker:
     """JPDA (``amplitude_aided=False``) / JPDA_A bearing tracker of paper P0 (Park, Ryu, Lee 1994).
 
     With ``initial`` tracks (:func:`bearing_tracks`, starting at ``time_s``) it follows exactly those, as the
@@ -82,6 +85,12 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
         Time of ``initial`` (s).
     associator : optional
         Replaces JPDA (e.g. ``PDA()``, each track on its own).
+    array_turn : bool, default False
+        Predict the array's heading change (given to each ``step`` as ``array_turn_deg``) with each track's side
+        as a hypothesis (tracking/own_motion.py); off: the turn is left to the process noise (paper P0).
+    resolution_deg : float, optional
+        Two confirmed tracks closer than this (deg) share one peak and are updated as a group
+        (tracking/resolution.py); None: the settings' ``resolution_deg`` (0: off, paper P0).
 
     Returns
     -------
@@ -91,6 +100,7 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
     """
     s = settings or BearingTrackerSettings()
     auto = initial is None
+    res = s.resolution_deg if resolution_deg is None else resolution_deg
     return MultiTargetTracker(
         ImmConstantVelocity((s.q,), dims=1),
         BearingMeasurements(s.p_detect, s.gate_deg, s.clutter_density_per_deg, s.amplitude_threshold,
@@ -99,7 +109,9 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
         initiator=(PeakInitiator(s.init_amplitude, s.init_sigma_p_deg, s.init_amplitude_sd, s.gate_deg)
                    if auto else None),
         deleter=MOfNDeleter(s.confirm_m, s.confirm_n, s.delete_after) if auto else None,
-        tracks=initial, time_s=time_s)
+        tracks=initial, time_s=time_s,
+        own_motion=ArrayTurnPrediction(s.p_detect, s.clutter_density_per_deg, s.gate_deg) if array_turn else None,
+        resolution=UnresolvedPairs(res, s.gate_deg) if res else None)
 
 
 def bearing_tracks(bearing_deg, rate_deg_s, sigma_p_deg, strength, sigma_a, *, adaptive_strength: bool = False,

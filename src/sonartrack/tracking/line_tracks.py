@@ -17,7 +17,8 @@ track ends after ``max_misses`` periods in a row without a detection.
 Sources: confirmed tracks whose bearing histories agree (RMS cone-angle difference over the periods both hold
 at most ``same_bearing_deg``, at least ``min_overlap`` common periods) are one source (single-linkage groups).
 Within a source, a pair of lines whose mean frequencies have a ratio within ``harmonic_tol`` (relative) of p/q,
-p, q <= ``max_harmonic``, is noted as harmonics (the lower line q times f_low / q); the family's fundamental is
+p, q <= ``max_harmonic``, p / q != 1 (two tracks of one line), is noted as harmonics (the lower line q times
+f_low / q); the family's fundamental is
 the largest of those f_low / q of which every paired line is an integer multiple (200, 300, 400 Hz: 100 Hz).
 """
 
@@ -58,7 +59,9 @@ class LineTrackerSettings(Settings):
 @dataclass(frozen=True)
 class LineTrack:
     """A tracked line: per period (n,) time (s), filtered frequency (Hz), cone angle (deg), their rates (Hz/s,
-    deg/s) and the detection's SNR (dB; NaN where the period had none); ``confirmed``."""
+    deg/s) and the detection's SNR (dB; NaN where the period had none); ``confirmed``; the detection itself,
+    ``measured_frequency_hz`` and ``measured_cone_deg`` (NaN where none: the filtered values are correlated from
+    period to period, a TMA wants the measurements)."""
 
     track_id: int
     time_s: np.ndarray
@@ -68,6 +71,13 @@ class LineTrack:
     cone_rate_deg_s: np.ndarray
     snr_db: np.ndarray
     confirmed: bool
+    measured_frequency_hz: np.ndarray | None = None
+    measured_cone_deg: np.ndarray | None = None
+
+    @property
+    def detected(self) -> np.ndarray:
+        """(n,) bool: the periods with a detection."""
+        return np.isfinite(self.snr_db)
 
     @property
     def mean_frequency_hz(self) -> float:
@@ -149,7 +159,8 @@ def _step(tracks, z, snr, time_s, s, H, R, next_id) -> tuple[list[_Track], int]:
             t.hits, t.misses = t.hits + 1, 0
         else:
             t.misses += 1
-        t.rows.append((time_s, *t.x, snr[taken[i]] if i in taken else np.nan))
+        z_row = z[taken[i]] if i in taken else (np.nan, np.nan)
+        t.rows.append((time_s, *t.x, snr[taken[i]] if i in taken else np.nan, *z_row))
         if not t.confirmed and t.hits >= s.confirm_m:
             t.confirmed = True
     alive = [t for t in tracks if t.misses < s.max_misses and (t.confirmed or t.periods - t.hits <= s.confirm_n -
@@ -159,7 +170,7 @@ def _step(tracks, z, snr, time_s, s, H, R, next_id) -> tuple[list[_Track], int]:
     for j in range(len(z)):
         if j not in used:
             t = _Track(next_id, np.array([z[j, 0], 0.0, z[j, 1], 0.0]), p0.copy(), hits=1, periods=1)
-            t.rows.append((time_s, *t.x, snr[j]))
+            t.rows.append((time_s, *t.x, snr[j], *z[j]))
             t.confirmed = s.confirm_m <= 1
             alive.append(t)
             next_id += 1
@@ -211,7 +222,7 @@ def _as_line_track(t: _Track) -> LineTrack:
     while last > 1 and np.isnan(rows[last - 1, 5]):  # the coasted periods after the last detection
         last -= 1
     r = rows[:last]
-    return LineTrack(t.track_id, r[:, 0], r[:, 1], r[:, 3], r[:, 2], r[:, 4], r[:, 5], t.confirmed)
+    return LineTrack(t.track_id, r[:, 0], r[:, 1], r[:, 3], r[:, 2], r[:, 4], r[:, 5], t.confirmed, r[:, 6], r[:, 7])
 
 
 def _same_bearing(a: LineTrack, b: LineTrack, s: LineTrackerSettings) -> bool:
@@ -296,7 +307,7 @@ def _source(source_id: int, members: list[LineTrack], s: LineTrackerSettings) ->
     for i, lo in enumerate(lines):
         for hi in lines[i + 1:]:
             qp = harmonic_ratio(lo.mean_frequency_hz, hi.mean_frequency_hz, s.max_harmonic, s.harmonic_tol)
-            if qp is not None:
+            if qp is not None and qp != (1, 1):  # 1:1 is one line tracked twice (before and after a break)
                 pairs.append((lo.track_id, hi.track_id, qp[0], qp[1]))
                 candidates.append(lo.mean_frequency_hz / qp[0])
                 in_pairs |= {lo.mean_frequency_hz, hi.mean_frequency_hz}

@@ -169,10 +169,12 @@ def track_contacts(time_s, z, R, settings: PositionTrackerSettings | None = None
 
 
 def track_peaks(time_s, bearing_deg, amplitude, settings: BearingTrackerSettings | None = None, *,
-                amplitude_aided: bool = True) -> BearingTracks:
+                amplitude_aided: bool = True, nav=None, resolution_deg: float | None = None) -> BearingTracks:
     """The bearing tracker (JPDA_A or JPDA, paper P0) with automatic initiation over a record of peaks.
 
-    Tracks start on strong peaks and are confirmed M-of-N; strengths follow paper P0 eq. 9.
+    Tracks start on strong peaks and are confirmed M-of-N; strengths follow paper P0 eq. 9. With ``nav`` the
+    array's heading change between scans is predicted in each track's cone angle, its side a hypothesis
+    (tracking/own_motion.py); without, the tracker is paper P0's (the turn left to the process noise).
 
     Parameters
     ----------
@@ -186,18 +188,28 @@ def track_peaks(time_s, bearing_deg, amplitude, settings: BearingTrackerSettings
         Tracker settings (default: the paper's).
     amplitude_aided : bool
         JPDA_A (amplitude ratio in the association) when true, plain JPDA when false.
+    nav : Navigation, optional
+        The array's heading over the record (io/navigation.py ``array_at``); None: not used.
+    resolution_deg : float, optional
+        Two confirmed tracks closer than this (deg, about a beamwidth) are updated as one group
+        (tracking/resolution.py); None: the settings' ``resolution_deg``.
 
     Returns
     -------
     BearingTracks
         One row per live track per scan.
     """
-    trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True)
+    trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True,
+                          array_turn=nav is not None, resolution_deg=resolution_deg)
     fold = settings is not None and settings.endfire_fold
     b, a = np.asarray(bearing_deg, float), np.asarray(amplitude, float)
+    scans = scan_slices(time_s)
+    turn = np.zeros(len(scans))
+    if nav is not None and scans:
+        turn[1:] = np.diff(np.rad2deg(nav.array_at(np.array([t for t, _ in scans]))[1]))
     cols: dict[str, list] = {c: [] for c in [*PEAK_TRACK_COLUMNS, "unfolded_deg"]}
-    for t, rows in scan_slices(time_s):
-        snap = trk.step(t, b[rows], amplitude=a[rows])
+    for (t, rows), dh in zip(scans, turn, strict=True):
+        snap = trk.step(t, b[rows], amplitude=a[rows], array_turn_deg=dh)
         x = fold_cone_state(snap.x)[0] if fold else snap.x
         for c, v in (("time_s", np.full(len(snap.x), t)), ("track_id", snap.track_id),
                      ("bearing_deg", x[:, 0]), ("bearing_rate_deg_s", x[:, 1]),

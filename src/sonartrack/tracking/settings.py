@@ -121,6 +121,10 @@ class BearingTrackerSettings(Settings):
     endfire_fold: bool = setting(False, "the state is the unfolded cone angle phi, measured as its reflection into "
                                         "0..180 deg, so a track runs on through endfire (the array's axis) instead "
                                         "of ending there (P0: off)", unit="")
+    resolution_deg: float = setting(0.0, "two confirmed tracks whose predicted cone angles lie closer than this share "
+                                         "one peak and are associated and updated as one merged track, so they do "
+                                         "not coalesce (tracking/resolution.py; about a beamwidth); 0: off (P0)",
+                                    unit="deg", ge=0, le=90)
 
     @model_validator(mode="after")
     def _consistent(self):

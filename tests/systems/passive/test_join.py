@@ -36,3 +36,60 @@ def test_fragments_of_one_target_are_joined_and_of_two_are_not():
     assert [m.track_id for m in out] == [1, 7]
     assert out[0].joined_track_ids == (5,) and out[0].time_s[-1] == later.time_s[-1]
     assert out[1].joined_track_ids == ()
+
+
+def _line(t0, t1, f_hz, seed):
+    """A tonal line seen every 2 s over [t0, t1) (0.05 Hz noise), as acoustics/tonal.py's TonalTrack holds it."""
+    from sonartrack.acoustics.tonal import TonalTrack
+
+    t = np.arange(t0, t1, 2.0)
+    f = f_hz + np.random.default_rng(seed).normal(0.0, 0.05, len(t))
+    f[::7] = np.nan  # windows where the line was not seen
+    return TonalTrack(float(f_hz), 10.0, t, f, 0.05)
+
+
+def test_the_tonal_line_vetoes_a_join_of_two_ships_and_allows_one_ship():
+    nav = _nav()
+    ship_a = [4000.0, 3000.0, -3.0, 1.0]
+    first = _fragment(1, ship_a, 0.0, 600.0, nav, 1)
+    later = _fragment(5, ship_a, 680.0, 1200.0, nav, 2)
+    # the bearings alone join them (test above); a line 55 Hz away on the later one says another ship
+    apart = join_fragments([first, later], nav, tonals={1: _line(0.0, 600.0, 120.0, 1), 5: _line(680.0, 1200.0,
+                                                                                                 175.0, 2)})
+    assert [m.track_id for m in apart] == [1, 5] and apart[0].joined_track_ids == ()
+    # the same line, Doppler-shifted by a range-rate change of 2 m/s (0.16 Hz at 120 Hz): one ship
+    same = join_fragments([first, later], nav, tonals={1: _line(0.0, 600.0, 120.0, 1), 5: _line(680.0, 1200.0,
+                                                                                                120.16, 2)})
+    assert [m.track_id for m in same] == [1] and same[0].joined_track_ids == (5,)
+    # a line on one fragment only: judged on the bearings
+    one = join_fragments([first, later], nav, tonals={1: _line(0.0, 600.0, 120.0, 1), 5: None})
+    assert one[0].joined_track_ids == (5,)
+
+
+def test_tonals_agree_by_hand():
+    from sonartrack.systems.passive.measurements import tonals_agree
+
+    t = np.arange(0.0, 100.0, 2.0)
+    a = (t, np.full(len(t), 100.0), 0.1)
+    # tolerance 3 sqrt(0.1^2 + 0.1^2) + f_max 5 / 1500 = 0.424 + 0.336 = 0.760 Hz (f_max = 100.75 or 100.77)
+    assert tonals_agree(a, (t + 200.0, np.full(len(t), 100.75), 0.1))
+    assert not tonals_agree(a, (t + 200.0, np.full(len(t), 100.77), 0.1))
+    assert tonals_agree(a, None) and tonals_agree(None, a)
+
+
+def test_a_joined_targets_tonal_is_its_fragments_lines():
+    from sonartrack.systems.passive.measurements import joined_tonal
+
+    nav = _nav()
+    ship_a = [4000.0, 3000.0, -3.0, 1.0]
+    first = _fragment(1, ship_a, 0.0, 600.0, nav, 1)
+    later = _fragment(5, ship_a, 680.0, 1200.0, nav, 2)
+    lines = {1: _line(0.0, 600.0, 120.0, 1), 5: _line(680.0, 1200.0, 120.1, 2)}
+    target = join_fragments([first, later], nav, tonals=lines)[0]
+    line = joined_tonal(target, lines)
+    assert line.line_hz == 120.0 and len(line.time_s) == len(lines[1].time_s) + len(lines[5].time_s)
+    assert np.all(np.diff(line.time_s) > 0)
+    assert np.array_equal(line.frequency_hz[line.time_s >= 680.0], lines[5].frequency_hz, equal_nan=True)
+    assert joined_tonal(target, {1: None, 5: None}) is None
+    only_later = joined_tonal(target, {5: lines[5]})
+    assert only_later.line_hz == 120.1 and np.array_equal(only_later.time_s, lines[5].time_s)

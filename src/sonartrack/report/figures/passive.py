@@ -1,5 +1,6 @@
 """Pictures of the passive chain (``sonartrack passive``): the bearing-time record with the tracks on it,
-and the tactical picture (ownship, array, every target with its 95 % ellipses, rejected mirrors faint)."""
+the tactical picture (ownship, array, every target with its 95 % ellipses, rejected mirrors faint) and the LOFAR
+gram on each tracked line source's beam (frequency against time, as an operator's LOFAR display)."""
 
 from __future__ import annotations
 
@@ -22,8 +23,8 @@ def bearing_time_picture(result):
     Returns
     -------
     matplotlib.figure.Figure
-        Normalised beam level over cone angle (x) and time (y, downwards), the targets' tracks on top, the other
-        tracks faint.
+        Normalised beam level over cone angle (x) and time (y, downwards), the targets' tracks on top (a narrowband
+        target's line bearings dashed), the other tracks faint.
     """
     import matplotlib.pyplot as plt
 
@@ -35,9 +36,12 @@ def bearing_time_picture(result):
     top = 2.0 * result.settings.threshold
     ax.imshow(level, aspect="auto", cmap="Greys", origin="upper", vmin=0.0, vmax=top, interpolation="nearest",
               extent=(float(rec.cone_deg[0]), float(rec.cone_deg[-1]), t_end, 0.0))
+    nb = set(getattr(result, "narrowband_target_ids", None) or ())
     for tg in result.targets:
         m = tg.track
-        ax.plot(m.track_cone_deg, m.track_time_s, lw=1.6, label=f"target {tg.target_id} ({tg.side.side})")
+        kind = ", narrowband" if tg.target_id in nb else ""
+        ax.plot(m.track_cone_deg, m.track_time_s, lw=1.6, ls="--" if kind else "-",
+                label=f"target {tg.target_id} ({tg.side.side}{kind})")
     trk = result.tracks
     tid = np.asarray(trk.track_id)
     for other in np.setdiff1d(tid, [tg.track.track_id for tg in result.targets]):
@@ -100,6 +104,73 @@ def tactical_picture(result):
     return fig
 
 
+#: most LOFAR panels drawn (one per target a line source feeds or became)
+MAX_LOFAR_PANELS = 6
+#: frequency span drawn each side of a source's line (Hz)
+LOFAR_HALF_SPAN_HZ = 25.0
+
+
+def _lofar_panels(result) -> list[tuple[str, np.ndarray, float | None]]:
+    """(title, beam index per period, line frequency Hz or None) per panel: one per target a line source feeds or
+    became (the beam nearest the target's cone angle, held before and after its track; its source's strongest
+    line's frequency), else the broadside beam over the whole band."""
+    gram = result.lofar
+    lines = {ln.track_id: ln for ln in result.line_tracks}
+    nb = set(result.narrowband_target_ids or ())
+    by_id = {tg.target_id: tg for tg in result.targets}
+    panels, seen = [], set()
+    for src in result.line_sources:
+        target = (result.source_targets or {}).get(src.source_id)
+        if target is None or target in seen or target not in by_id or len(panels) >= MAX_LOFAR_PANELS:
+            continue
+        seen.add(target)
+        top = max((lines[i] for i in src.track_ids), key=lambda ln: float(np.nanmean(ln.snr_db)))
+        m = by_id[target].track
+        cone = np.interp(gram.time_s, np.asarray(m.track_time_s, float), np.asarray(m.track_cone_deg, float))
+        beams = np.argmin(np.abs(cone[:, None] - np.asarray(gram.cone_deg)[None, :]), axis=1)
+        kind = "narrowband" if target in nb else "broadband"
+        panels.append((f"target {target} ({kind}): line source {src.source_id}, {top.mean_frequency_hz:.1f} Hz",
+                       beams, top.mean_frequency_hz))
+    if not panels:
+        mid = int(np.argmin(np.abs(np.asarray(gram.cone_deg) - 90.0)))
+        panels.append(("no tracked line source: broadside beam", np.full(len(gram.time_s), mid), None))
+    return panels
+
+
+def lofar_picture(result):
+    """The LOFAR gram on each tracked source's beam.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The passive chain's result with its gram (``lofar``) and line sources.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Per panel: the normalised statistic z (dB) over frequency (x) and time (y, downwards) on the beam that
+        follows the target, +-``LOFAR_HALF_SPAN_HZ`` around its source's line.
+    """
+    import matplotlib.pyplot as plt
+
+    gram = result.lofar
+    panels = _lofar_panels(result)
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 6), squeeze=False)
+    f = np.asarray(gram.freqs_hz, float)
+    period = float(gram.time_s[1] - gram.time_s[0]) if len(gram.time_s) > 1 else 2.0 * float(gram.time_s[0])
+    for ax, (title, beams, line_hz) in zip(axes[0], panels, strict=True):
+        keep = np.ones(len(f), bool) if line_hz is None else np.abs(f - line_hz) <= LOFAR_HALF_SPAN_HZ
+        z = np.asarray(gram.statistic, float)[np.arange(len(beams)), beams][:, keep]
+        ax.imshow(10.0 * np.log10(np.maximum(z, 1e-3)), aspect="auto", cmap="viridis", origin="upper", vmin=0.0,
+                  vmax=12.0, interpolation="nearest",
+                  extent=(float(f[keep][0]), float(f[keep][-1]), float(gram.time_s[-1]) + period / 2, 0.0))
+        ax.set(xlabel="frequency (Hz)", title=title)
+        ax.title.set_fontsize(9)
+    axes[0, 0].set_ylabel("time (s)")
+    fig.suptitle("LOFAR: line over background, 10 log10 z (0-12 dB), on the target's beam", fontsize=10)
+    return fig
+
+
 def write_passive_figures(result, out) -> list[Path]:
     """Draw and save the chain's pictures.
 
@@ -113,7 +184,8 @@ def write_passive_figures(result, out) -> list[Path]:
     Returns
     -------
     list of Path
-        bearing_time.png and tactical.png in ``out``, saved atomically.
+        bearing_time.png, tactical.png and, when the narrowband pass made a gram, lofar.png in ``out``, saved
+        atomically.
     """
     import matplotlib
 
@@ -122,7 +194,11 @@ def write_passive_figures(result, out) -> list[Path]:
 
     out = Path(out)
     paths = []
-    for name, fig in (("bearing_time.png", bearing_time_picture(result)), ("tactical.png", tactical_picture(result))):
+    figures = [("bearing_time.png", bearing_time_picture), ("tactical.png", tactical_picture)]
+    if getattr(result, "lofar", None) is not None:
+        figures.append(("lofar.png", lofar_picture))
+    for name, draw in figures:
+        fig = draw(result)
         paths.append(save_figure(fig, out / name, dpi=110, bbox_inches="tight"))
         plt.close(fig)
     return paths

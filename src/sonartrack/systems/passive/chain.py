@@ -12,13 +12,15 @@ from the system's one settings tree (:meth:`~sonartrack.systems.passive.settings
    scans where two targets share a beam left out, fragments of one target -- a track that broke at a crossing
    or a turn -- joined when one constant-velocity target explains them) and, in a second pass over the
    recording, its tonal line on its own beam (systems/passive/tonal_pass.py);
-4. per track: the array side from the two mirror hypotheses, batch ML and IMM-MGEKF TMA
-   (systems/passive/targets.py).
+4. narrowband (``[narrowband]``, on by default; systems/passive/narrowband.py): the LOFAR gram per beam (from the
+   front end's own pass, acoustics/beamforming.py; else one more pass), its lines tracked in frequency and bearing and
+   grouped into sources; a source that follows a track gives it its tonal where its own beam showed none, a
+   source that no track explains becomes a narrowband target (the quiet ship with a tonal);
+5. per target: the array side from the two mirror hypotheses, batch ML and IMM-MGEKF TMA
+   (systems/passive/targets.py), the same for bearing tracks and narrowband sources.
 
-Options, off by default: ``[btr_mftd]`` runs paper P1's MFTD over the bearing-time record between 1 and 2 and adds
-its detections that no peak lies near to the tracker's peaks (detection/btr_mftd.py); ``[narrowband]`` makes one
-more pass for the LOFAR gram per beam, its tonal lines, their tracks in frequency and bearing and the sources
-they group into (acoustics/lofar.py, tracking/line_tracks.py), reported beside the bearing tracks.
+Option, off by default: ``[btr_mftd]`` runs paper P1's MFTD over the bearing-time record between 1 and 2 and adds
+its detections that no peak lies near to the tracker's peaks (detection/btr_mftd.py).
 
 The recording arrives as blocks of ``window_s`` (``blocks()`` is called once per pass, and must give the
 same blocks each time), so memory does not grow with the recording's length.
@@ -32,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.acoustics.beamforming import BearingTimeRecord, bearing_time_record
+from sonartrack.acoustics.lofar import LofarGram
 from sonartrack.acoustics.xcorr_bearing import PeakRecord
 from sonartrack.detection.btr_mftd import BtrDetections
 from sonartrack.io.navigation import Navigation
@@ -41,6 +44,7 @@ from sonartrack.systems.passive.measurements import (
     merge_duplicates,
     track_measurements,
 )
+from sonartrack.systems.passive.narrowband import NarrowbandLines
 from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
 from sonartrack.systems.passive.targets import UNSUPPORTED_RANGE, Target, solve_target
 from sonartrack.systems.passive.tonal_pass import measure_tonals
@@ -53,10 +57,10 @@ class PassiveResult:
     """Everything the chain produced (the faces write and draw it).
 
     ``record``: the bearing-time record and its peaks; ``tracks``: the tracker's rows; ``targets``: one per
-    confirmed track long enough for TMA; ``short_tracks``: ids of the confirmed tracks too short for TMA;
-    ``duration_s``: the recording processed (s); ``stages``: the settings as run (``stages.settings`` the tree);
-    ``nav``: the navigation; ``plain_jpda_tracks``: the same peaks tracked with plain JPDA, when asked for;
-    ``warnings``: one line per warning about the inputs (the faces print them)."""
+    confirmed track long enough for TMA, then one per narrowband target; ``short_tracks``: ids of the confirmed
+    tracks too short for TMA; ``duration_s``: the recording processed (s); ``stages``: the settings as run
+    (``stages.settings`` the tree); ``nav``: the navigation; ``plain_jpda_tracks``: the same peaks tracked with
+    plain JPDA, when asked for; ``warnings``: one line per warning about the inputs (the faces print them)."""
 
     record: BearingTimeRecord
     tracks: BearingTracks
@@ -73,6 +77,12 @@ class PassiveResult:
     #: narrowband line tracks and the sources they group into (``[narrowband] enabled``)
     line_tracks: tuple[LineTrack, ...] = ()
     line_sources: tuple[LineSource, ...] = ()
+    #: the targets found by their lines alone (ids into ``targets``); None when the narrowband pass did not run
+    narrowband_target_ids: tuple[int, ...] | None = None
+    #: the LOFAR gram the lines came from (None: the narrowband pass did not run or the recording is too short)
+    lofar: LofarGram | None = None
+    #: line source id -> the target it feeds or became (a source that is neither is absent)
+    source_targets: dict[int, int] | None = None
 
     @property
     def settings(self) -> PassiveSettings:
@@ -120,11 +130,15 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     """
     s, settings = stages, stages.settings
     btr = bearing_time_record(blocks(), s.fs_hz, s.array, s.front_end, band=s.band,
-                              progress=_Stage(progress, "beamforming", n_windows), mvdr=settings.mvdr)
+                              progress=_Stage(progress, "beamforming", n_windows), mvdr=settings.mvdr,
+                              narrowband=settings.narrowband if settings.narrowband.enabled else None)
     pk, mftd = btr.peaks, None
     if settings.btr_mftd.enabled:
         pk, mftd = _with_mftd_peaks(btr, s)
-    tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker)
+    # the array's turns predicted from the navigation, and two ships within a beam seen as one merged peak
+    # (tracking/own_motion.py, tracking/resolution.py): identities kept through crossings and turns
+    tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, nav=nav,
+                         resolution_deg=s.min_separation_deg)
     meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
     meas = join_fragments(drop_unresolved(meas, s.min_separation_deg), nav, min_fragment_s=settings.min_track_s)
     long_enough = [m for m in meas if m.duration_s >= settings.min_track_s and len(m.time_s) >= 10]
@@ -133,15 +147,40 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     if long_enough:
         tonals = measure_tonals(blocks(), s.fs_hz, s.array, long_enough, s.tonal, n_windows,
                                 progress=_Stage(progress, "tonal lines", n_windows))
-    targets = [solve_target(i + 1, m, tonal, nav, s) for i, (m, tonal) in enumerate(zip(long_enough, tonals,
-                                                                                       strict=True))]
+    nb = _narrowband(blocks, btr, s, n_windows, progress) if settings.narrowband.enabled else None
+    records, nb_records, roles = _with_lines(nb, long_enough, tonals, nav, s)
+    targets = [solve_target(i + 1, m, tonal, nav, s, neighbours=meas)
+               for i, (m, tonal) in enumerate(records + nb_records)]
     jpda = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, amplitude_aided=False) if plain_jpda \
         else None
     notes = tuple(f"warning: target {tg.target_id}: {w}" for tg in targets for w in tg.ml.warnings
                   if w.startswith(UNSUPPORTED_RANGE))
-    lines, sources = _narrowband(blocks, s, n_windows, progress) if settings.narrowband.enabled else ((), ())
-    return PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes, mftd,
-                         lines, sources)
+    result = PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes, mftd)
+    return result if nb is None else _with_narrowband(result, nb, roles, len(records))
+
+
+def _with_lines(nb: NarrowbandLines | None, tracks: list, tonals: list, nav: Navigation, s: PassiveStages):
+    """(the bearing tracks with their tonals, a line source's where their own beams showed none; the narrowband
+    targets' records; the sources' roles) -- systems/passive/narrowband.py; without lines, the tracks as they are."""
+    if nb is None:
+        return list(zip(tracks, tonals, strict=True)), [], None
+    from sonartrack.systems.passive.narrowband import narrowband_records, source_roles, tonals_from_lines
+
+    roles = source_roles(nb, tracks, tonals, s)
+    records = list(zip(tracks, tonals_from_lines(nb, roles, tracks, tonals, s), strict=True))
+    return records, narrowband_records(nb, roles, nav, s), roles
+
+
+def _with_narrowband(result: PassiveResult, nb: NarrowbandLines, roles, n_broadband: int) -> PassiveResult:
+    """The result with the narrowband lines, gram and targets (ids after the bearing tracks' targets)."""
+    from dataclasses import replace
+
+    ids = tuple(tg.target_id for tg in result.targets[n_broadband:])
+    feeds = {src: i + 1 for src, i in roles.track.items()}
+    feeds |= {sid: tg.target_id for tg in result.targets[n_broadband:] for sid in (tg.track.track_id,
+                                                                                    *tg.track.joined_track_ids)}
+    return replace(result, line_tracks=nb.lines, line_sources=nb.sources, narrowband_target_ids=ids,
+                   lofar=nb.gram, source_targets=feeds)
 
 
 def _with_mftd_peaks(btr: BearingTimeRecord, s: PassiveStages) -> tuple[PeakRecord, BtrDetections]:
@@ -161,17 +200,16 @@ def _with_mftd_peaks(btr: BearingTimeRecord, s: PassiveStages) -> tuple[PeakReco
     return PeakRecord(t[order], b[order], a[order]), det
 
 
-def _narrowband(blocks, s: PassiveStages, n_windows: int, progress) -> tuple[tuple, tuple]:
-    """The narrowband pass (acoustics/lofar.py) over the recording, its lines tracked and grouped into sources."""
-    from sonartrack.acoustics.lofar import detect_lines, lofar_gram
-    from sonartrack.tracking.line_tracks import group_sources, track_lines
+def _narrowband(blocks, btr: BearingTimeRecord, s: PassiveStages, n_windows: int, progress) -> NarrowbandLines:
+    """The narrowband stage's lines (systems/passive/narrowband.py), on the front end's gram (made in its pass), else
+    -- a front end that makes none -- on a pass of its own over the recording (acoustics/lofar.py)."""
+    from sonartrack.acoustics.lofar import lofar_gram
+    from sonartrack.systems.passive.narrowband import narrowband_lines
 
     cfg = s.settings.narrowband
-    if n_windows < cfg.integration:  # not one integration period: no lines
-        return (), ()
-    stage = _Stage(progress, "narrowband", n_windows)
-    counted = (stage(k) or b for k, b in enumerate(blocks()))  # stage() returns None: the block passes through
-    gram = lofar_gram(counted, s.fs_hz, s.array, cfg, s.settings.window_s)
-    d = detect_lines(gram, cfg)
-    lines = track_lines(d.time_s, d.frequency_hz, d.cone_deg, d.snr_db, cfg.line_tracker)
-    return tuple(lines), tuple(group_sources(lines, cfg.line_tracker))
+    gram = getattr(btr, "lofar", None)
+    if gram is None and n_windows >= cfg.integration:  # else not one integration period: no lines
+        stage = _Stage(progress, "narrowband", n_windows)
+        counted = (stage(k) or b for k, b in enumerate(blocks()))  # stage() returns None: the block passes through
+        gram = lofar_gram(counted, s.fs_hz, s.array, cfg, s.settings.window_s)
+    return narrowband_lines(gram, s)

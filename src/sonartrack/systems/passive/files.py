@@ -1,6 +1,8 @@
-"""The chain on files: a recording and its navigation in; peaks.csv, bearing_tracks.csv, targets.csv and
-levels.csv out (systems/passive/tables.py, written atomically). ``sonartrack passive`` and every recording of
-``sonartrack survey`` run through :func:`run_passive_recording`, so the two read their inputs the same way.
+"""The chain on files: a recording and its navigation in; peaks.csv, bearing_tracks.csv, targets.csv, levels.csv and
+lines.csv out (systems/passive/tables.py and :func:`lines_table`, written atomically; targets.csv with an ``origin``
+column: ``broadband`` for a bearing track's target, ``narrowband`` for a target found by its tonal lines).
+``sonartrack passive`` and every recording of ``sonartrack survey`` run through :func:`run_passive_recording`, so
+the two read their inputs the same way.
 
 Recording: one file or a sequence of consecutive files -- a folder, or a glob pattern -- read as one recording
 on one time axis from its first sample (io/recording_sequence.py: start times from the file names or Broadcast
@@ -302,6 +304,107 @@ def levels_table(level_db: np.ndarray, window_s: float):
     return pd.DataFrame({"time_s": (np.arange(level.size) + 0.5) * window_s, "level_db_re_1upa": level})
 
 
+def origin_column(result: PassiveResult, target_id) -> np.ndarray:
+    """``narrowband`` for the rows of targets found by their lines alone, ``broadband`` for the others.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result (``narrowband_target_ids``).
+    target_id : array_like (n,)
+        The rows' target ids.
+
+    Returns
+    -------
+    ndarray of str (n,)
+        The origin of each row.
+    """
+    nb = np.isin(np.asarray(target_id), list(result.narrowband_target_ids or ()))
+    return np.where(nb, "narrowband", "broadband")
+
+
+#: lines.csv's columns (:func:`lines_table`)
+LINE_COLUMNS = ["line_id", "source_id", "target_id", "time_s", "frequency_hz", "cone_deg", "frequency_rate_hz_s",
+                "cone_rate_deg_s", "snr_db", "measured_frequency_hz", "measured_cone_deg", "harmonic"]
+
+
+def _harmonic_notes(source) -> dict[int, str]:
+    """line id -> its harmonic note within its source (``n x f0`` of the family's fundamental, or the ratio)."""
+    notes: dict[int, list[str]] = {}
+    for lo, hi, q, p in source.harmonics:
+        notes.setdefault(lo, []).append(f"{q}:{p} with line {hi}")
+        notes.setdefault(hi, []).append(f"{p}:{q} with line {lo}")
+    f0 = f"; family of {source.fundamental_hz:.2f} Hz" if np.isfinite(source.fundamental_hz) else ""
+    return {k: ", ".join(v) + f0 for k, v in notes.items()}
+
+
+def lines_table(result: PassiveResult):
+    """lines.csv: one row per line track per period: line and source ids, the target the source feeds or became
+    (empty: none), the period centre (s), the filtered frequency (Hz) and cone angle (deg) and their rates (Hz/s,
+    deg/s), the detection's SNR (dB) and its refined frequency and cone angle (empty where the period had no
+    detection), and the line's harmonic relations within its source.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows (:data:`LINE_COLUMNS`); no rows when the narrowband pass did not run or found no line.
+    """
+    import pandas as pd
+
+    source_of = {i: src for src in result.line_sources for i in src.track_ids}
+    feeds = result.source_targets or {}
+    parts = []
+    for ln in result.line_tracks:
+        src = source_of.get(ln.track_id)
+        n = len(ln.time_s)
+        sid = src.source_id if src is not None else -1
+        note = _harmonic_notes(src).get(ln.track_id, "") if src is not None else ""
+        nan = np.full(n, np.nan)
+        parts.append(pd.DataFrame({
+            "line_id": np.full(n, ln.track_id), "source_id": np.full(n, sid),
+            "target_id": pd.array([feeds.get(sid)] * n, dtype="Int64"), "time_s": ln.time_s,
+            "frequency_hz": ln.frequency_hz, "cone_deg": ln.cone_deg, "frequency_rate_hz_s": ln.frequency_rate_hz_s,
+            "cone_rate_deg_s": ln.cone_rate_deg_s, "snr_db": ln.snr_db,
+            "measured_frequency_hz": nan if ln.measured_frequency_hz is None else ln.measured_frequency_hz,
+            "measured_cone_deg": nan if ln.measured_cone_deg is None else ln.measured_cone_deg,
+            "harmonic": np.full(n, note)}))
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=LINE_COLUMNS)
+
+
+def passive_summary(result: PassiveResult) -> list[str]:
+    """The summary lines (systems/passive/tables.py), a narrowband target's marked as such with its line.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+
+    Returns
+    -------
+    list of str
+        One line per target; a narrowband target's begins ``target k (narrowband, f Hz; line source s, ...``.
+    """
+    from sonartrack.systems.passive.tables import summary_lines
+
+    lines = summary_lines(result)
+    nb = set(result.narrowband_target_ids or ())
+    if not nb or len(lines) != len(result.targets):
+        return lines
+    out = []
+    for tg, line in zip(result.targets, lines, strict=True):
+        if tg.target_id in nb:
+            head = f"target {tg.target_id} (track {tg.track.track_id}, "
+            mark = f"target {tg.target_id} (narrowband, {tg.tonal.line_hz:.1f} Hz; line source {tg.track.track_id}, "
+            line = line.replace(head, mark, 1) if line.startswith(head) else f"{mark.rstrip(', ')}): {line}"
+        out.append(line)
+    return out
+
+
 def write_passive_tables(result: PassiveResult, out: Path, level_db: np.ndarray | None = None) -> list[Path]:
     """Write the chain's tables.
 
@@ -317,13 +420,18 @@ def write_passive_tables(result: PassiveResult, out: Path, level_db: np.ndarray 
     Returns
     -------
     list of Path
-        peaks.csv, bearing_tracks.csv (tracking/run.py PEAK_TRACK_COLUMNS), targets.csv[, levels.csv] in ``out``.
+        peaks.csv, bearing_tracks.csv (tracking/run.py PEAK_TRACK_COLUMNS), targets.csv (with ``origin``)[,
+        levels.csv][, lines.csv when the narrowband pass ran] in ``out``.
     """
     out = Path(out)
+    targets = targets_table(result)
+    targets.insert(1, "origin", origin_column(result, targets["target_id"]))
     paths = [write_csv(peaks_table(result.record), out / "peaks.csv"),
              write_csv(result.tracks.to_frame(), out / "bearing_tracks.csv"),
-             write_csv(targets_table(result), out / "targets.csv")]
+             write_csv(targets, out / "targets.csv")]
     if level_db is not None:
         paths.append(write_csv(levels_table(level_db, result.settings.window_s), out / "levels.csv",
                                float_format="%.2f"))
+    if result.narrowband_target_ids is not None:
+        paths.append(write_csv(lines_table(result), out / "lines.csv"))
     return paths

@@ -289,14 +289,17 @@ def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav) -> float:
 
 
 def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_JOIN_GAP_S,
-                   max_ratio: float = MAX_JOIN_VARIANCE_RATIO, min_fragment_s: float = 120.0
-                   ) -> list[TrackMeasurements]:
+                   max_ratio: float = MAX_JOIN_VARIANCE_RATIO, min_fragment_s: float = 120.0, *,
+                   tonals: dict | None = None) -> list[TrackMeasurements]:
     """Track-to-track association: join a confirmed track that starts after another ended (within ``max_gap_s``)
     into it when one constant-velocity target explains both bearing histories (the variance ratio of
     :func:`_join_statistic` at most ``max_ratio``; track-to-track association as a test of one target against two,
     Bar-Shalom, Willett & Tian, Tracking and Data Fusion, sec. 7.2, with an F ratio in place of its chi-square:
     DEVIATION, see ``MAX_JOIN_VARIANCE_RATIO``); of several candidates the lowest ratio wins.
     A ship whose track broke at a crossing or turn becomes one target, its fragments' ids in ``joined_track_ids``.
+    Where both fragments carry a tonal line (``tonals``), the line must also agree across the junction
+    (:func:`tonals_agree`): a ship keeps its line, so two ships' fragments with lines apart are not joined however
+    well one constant-velocity track explains their bearings.
 
     Parameters
     ----------
@@ -312,6 +315,9 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
         Both fragments must span at least this (s): a shorter one's own CV fit explains almost any bearings, so the
         test cannot tell (measured: a 90 s fragment before a turn joined to its ship's later track gave an ML range
         off by 10 km that its covariance did not cover).
+    tonals : dict, optional
+        track id -> its tonal line (``time_s``, ``frequency_hz`` with NaN where not seen, ``sigma_hz``; e.g.
+        acoustics/tonal.py ``TonalTrack``) or None; tracks without one are judged on their bearings alone.
 
     Returns
     -------
@@ -319,12 +325,14 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
         The tracks, fragments joined into the earlier one, in order of first scan.
     """
     out = sorted(tracks, key=lambda m: (m.time_s[0] if len(m.time_s) else np.inf, m.track_id))
+    lines = {k: _line(v) for k, v in (tonals or {}).items() if v is not None}
     i = 0
     while i < len(out):
         b = out[i]
         cands = [(j, _join_statistic(a, b, nav)) for j, a in enumerate(out[:i])
                  if min(a.duration_s, b.duration_s) >= min_fragment_s
-                 and a.time_s[-1] < b.time_s[0] + 30.0 and b.time_s[0] - a.time_s[-1] <= max_gap_s]
+                 and a.time_s[-1] < b.time_s[0] + 30.0 and b.time_s[0] - a.time_s[-1] <= max_gap_s
+                 and tonals_agree(lines.get(a.track_id), lines.get(b.track_id))]
         cands = [(j, g) for j, g in cands if g <= max_ratio]
         if not cands:
             i += 1
@@ -335,5 +343,79 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
         out[j] = TrackMeasurements(joined.track_id, joined.time_s, joined.cone_deg, joined.amplitude,
                                    joined.track_time_s, joined.track_cone_deg, joined.unfolded_deg,
                                    a.joined_track_ids + (b.track_id,) + b.joined_track_ids)
+        if b.track_id in lines:  # the joined target's line runs on with the later fragment's
+            lines[a.track_id] = _joined_line(lines.get(a.track_id), lines[b.track_id])
         del out[i]
     return out
+
+
+#: a ship's received line moves with its range rate, f_r = f (1 - rdot / c): across a junction (up to
+#: ``MAX_JOIN_GAP_S`` plus the two end spans) the range rate of a ship is taken to change by at most this (m/s)
+MAX_RANGE_RATE_CHANGE_MPS = 5.0
+#: the span (s) at each fragment's end over which its line's frequency is taken (median)
+TONAL_END_SPAN_S = 60.0
+SOUND_SPEED_MPS = 1500.0
+
+
+def _joined_line(la, lb):
+    return lb if la is None else (np.concatenate([la[0], lb[0]]), np.concatenate([la[1], lb[1]]), max(la[2], lb[2]))
+
+
+def _line(tonal) -> tuple[np.ndarray, np.ndarray, float]:
+    t, f = np.asarray(tonal.time_s, float), np.asarray(tonal.frequency_hz, float)
+    ok = np.isfinite(f)
+    return t[ok], f[ok], float(tonal.sigma_hz)
+
+
+def tonals_agree(a, b) -> bool:
+    """Whether fragment a's tonal line at its end and fragment b's at its start can be one ship's line: the medians
+    over ``TONAL_END_SPAN_S`` differ by at most 3 sqrt(sigma_a^2 + sigma_b^2) + f rdot_max / c (the measurement
+    noise, and the Doppler shift a change of range rate of ``MAX_RANGE_RATE_CHANGE_MPS`` makes; received frequency
+    f_r = f (1 - rdot / c), paper P2 eq. 3). True when either has no line (nothing to say).
+
+    Parameters
+    ----------
+    a, b : (ndarray, ndarray, float) or None
+        Each fragment's line: times (s), frequencies (Hz) where seen, and its frequency noise sigma (Hz).
+
+    Returns
+    -------
+    bool
+        False only when both have a line and the lines differ by more than the tolerance.
+    """
+    if a is None or b is None or not len(a[0]) or not len(b[0]):
+        return True
+    fa = float(np.median(a[1][a[0] >= a[0][-1] - TONAL_END_SPAN_S]))
+    fb = float(np.median(b[1][b[0] <= b[0][0] + TONAL_END_SPAN_S]))
+    tol = 3.0 * float(np.hypot(a[2], b[2])) + max(fa, fb) * MAX_RANGE_RATE_CHANGE_MPS / SOUND_SPEED_MPS
+    return abs(fa - fb) <= tol
+
+
+def joined_tonal(track: TrackMeasurements, tonals: dict):
+    """The tonal line of a target joined from fragments: the fragments' lines, in time order, as one line.
+
+    Parameters
+    ----------
+    track : TrackMeasurements
+        The target (its ``track_id`` and ``joined_track_ids``).
+    tonals : dict
+        track id -> the fragment's line (acoustics/tonal.py ``TonalTrack``) or None.
+
+    Returns
+    -------
+    TonalTrack or None
+        The first fragment's line and SNR with every fragment's per-window frequencies (the earliest fragment's
+        where two overlap) and the largest of their sigma_hz; None when no fragment carries a line.
+    """
+    from dataclasses import replace
+
+    parts = [tonals.get(i) for i in (track.track_id, *track.joined_track_ids)]
+    parts = [p for p in parts if p is not None]
+    if not parts:
+        return None
+    t, f = np.asarray(parts[0].time_s, float), np.asarray(parts[0].frequency_hz, float)
+    for p in parts[1:]:
+        extra = ~np.isin(p.time_s, t)
+        t, f = np.concatenate([t, np.asarray(p.time_s, float)[extra]]), np.concatenate([f, p.frequency_hz[extra]])
+    order = np.argsort(t, kind="stable")
+    return replace(parts[0], time_s=t[order], frequency_hz=f[order], sigma_hz=max(p.sigma_hz for p in parts))

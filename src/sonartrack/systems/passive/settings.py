@@ -6,9 +6,10 @@ one tracker scan) and the detection statistic's threshold (``threshold`` on z: t
 tracker's amplitude threshold tau), plus the chain's own choices. Each stage's group keeps only its own
 fields (``core.settings.derived_settings``): ``[front_end]`` (acoustics/beamforming.py), ``[tracker]``
 (tracking/settings.py, with the chain's defaults for the z statistic declared here, with docs for those
-values), ``[tonal]`` (acoustics/tonal.py), ``[imm]`` and ``[sequential]`` (tma/settings.py); the quiet-target
-options, off by default: ``[mvdr]`` (acoustics/mvdr.py, with ``[front_end] method = "mvdr"``), ``[narrowband]``
-(acoustics/lofar.py, tracking/line_tracks.py) and ``[btr_mftd]`` (detection/btr_mftd.py).
+values), ``[tonal]`` (acoustics/tonal.py), ``[imm]`` and ``[sequential]`` (tma/settings.py), ``[narrowband]``
+(acoustics/lofar.py, tracking/line_tracks.py, systems/passive/narrowband.py; on by default); the quiet-target
+options, off by default: ``[mvdr]`` (acoustics/mvdr.py, with ``[front_end] method = "mvdr"``) and ``[btr_mftd]``
+(detection/btr_mftd.py).
 
 :meth:`PassiveSettings.stages` builds the stages' library settings from the tree, once per run, with the
 array as one object (:class:`~sonartrack.acoustics.line_array.LineArray`) and its processing band resolved
@@ -46,15 +47,41 @@ PassiveSequentialSettings = derived_settings(
     SequentialSettings, "PassiveSequentialSettings", "Initialisation of the sequential TMA (tma/settings.py); the "
     "Doppler model's sound speed is the root's.", drop=("sound_speed_mps",))
 
-class NarrowbandSettings(LofarSettings):
-    """Narrowband (LOFAR) pass per beam (acoustics/lofar.py) and its line tracks (tracking/line_tracks.py); off by
-    default (a third pass over the recording). Default scene, first 300 s, integration 32: the four ships' tonals
-    tracked at their cone angles (the submarine's 200 Hz line too, which the broadband front end never detects),
-    one false line track (a sidelobe of the trawler's line)."""
+PassiveLineTrackerSettings = derived_settings(
+    LineTrackerSettings, "PassiveLineTrackerSettings", "Tracking of the narrowband lines in frequency and bearing "
+    "(tracking/line_tracks.py), with the chain's process noise of the cone angle.",
+    defaults={"q_bearing": (3e-3, "white-noise intensity of the cone-angle rate: the line must follow the ownship's "
+                                  "turn, through which a target's cone angle changes by up to 0.5 deg/s (the "
+                                  "library's 1e-5 loses the line there: a 360 s default scene with the turn at "
+                                  "120 s gave the submarine no side; 3e-3 holds it 40..344 s, side port)")})
 
-    enabled: bool = setting(False, "run the narrowband pass", unit="")
-    line_tracker: LineTrackerSettings = setting(default_factory=LineTrackerSettings,
-                                                doc="tracking of the lines in frequency and bearing")
+
+class NarrowbandSettings(LofarSettings):
+    """Narrowband (LOFAR) pass per beam (acoustics/lofar.py), its line tracks (tracking/line_tracks.py) and what the
+    chain makes of them (systems/passive/narrowband.py): a track's tonal where its own beam shows none, and targets
+    of their own for the lines no bearing track explains. On by default: it is how a quiet ship with a tonal is
+    found at all (the default scene's submarine, 8 dB below the broadband threshold, is reported by its 200 Hz
+    line), and it costs about a tenth of the chain's time (processor time of ``sonartrack passive``: the default
+    scene for an hour, 16 channels at 4 kHz, 18.4 s against 16.4 s without, two runs each; 10 minutes of 32 channels
+    at 8 kHz, 8.3 s against 7.6 s). An hour of noise alone gave one 32 s line track and no narrowband target."""
+
+    enabled: bool = setting(True, "run the narrowband pass (lines, tonals, narrowband targets)", unit="")
+    match_beamwidths: float = setting(0.5, "a line source follows a bearing track when their cone angles differ by "
+                                           "at most this many broadside beamwidths at the line's frequency (RMS over "
+                                           "the common periods; 0.5: 4.8 deg at 200 Hz, 10.7 deg at 90 Hz on 16 x "
+                                           "2.5 m, where a low line's wide beam errs by several degrees)", unit="1",
+                                      gt=0, le=5)
+    same_line_hz: float = setting(1.0, "lines within this of each other are one line: an unexplained source on the "
+                                       "frequency of a tracked ship's line is that line leaking into other beams, "
+                                       "and fragments of one line are joined (one bin of a 1 s window)", unit="Hz",
+                                  gt=0, le=100)
+    min_target_snr_db: float = setting(3.0, "a narrowband target's bearings and frequencies are its line's "
+                                            "detections at least this far over the background (a detection near the "
+                                            "threshold, 0-2 dB, is as often a noise cell the line's gate took: on "
+                                            "the default scene one such at 1 dB lay 21 deg off the submarine)",
+                                       unit="dB", ge=-10, le=60)
+    line_tracker: PassiveLineTrackerSettings = setting(default_factory=PassiveLineTrackerSettings,
+                                                       doc="tracking of the lines in frequency and bearing")
 
 
 class PassiveBtrMftdSettings(BtrMftdSettings):
