@@ -181,3 +181,18 @@ def test_lofar_accumulator_up_to_half_the_sample_rate(m):
     acc.add(np.fft.rfft(x, axis=2)[:, :, acc.bins])
     _, want = beam_power_spectra(x, FS, ARRAY, s.cone_deg, s.band_hz)
     np.testing.assert_allclose(acc.power(), want.mean(axis=0, keepdims=True), rtol=1e-9)
+
+
+@pytest.mark.parametrize("bin_index,found", [(0, False), (4, False), (5, True), (34, True), (35, False), (39, False)])
+def test_lines_at_the_band_edges_are_not_searched(bin_index, found):
+    """A strong line in one beam: detected at bins edge_bins .. F - 1 - edge_bins (5 .. 34 of 40), not nearer the
+    band's ends, where the background's reference is one-sided."""
+    from sonartrack.acoustics.lofar import LofarGram
+
+    power = np.ones((1, 3, 40))
+    power[0, 1, bin_index] = 1000.0
+    gram = LofarGram(np.array([8.0]), np.array([0.0, 90.0, 180.0]), np.arange(40.0), power, power.copy())
+    lines = detect_lines(gram, LofarSettings(integration=16, edge_bins=5))
+    assert len(lines) == int(found)
+    if found:
+        assert lines.frequency_hz[0] == bin_index and lines.beam[0] == 1

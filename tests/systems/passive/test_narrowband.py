@@ -1,5 +1,7 @@
 """The passive chain's narrowband stage (systems/passive/narrowband.py): the refinement of a line's cone angle and
-frequency against a closed form, the roles of line sources against bearing tracks, the tonal of a line, and end to
+frequency against a closed form, the roles of line sources against bearing tracks, the tonal of a line, the joining of
+a line's fragments across the array's turn (hand-built: one ship's fragments joined; another ship's on the same line,
+another frequency, or without the turn's shift not joined) and its outliers left out, and end to
 end on a short simulated default scene: the quiet submarine, which the broadband front end never detects, reported
 as a narrowband target on its true side, bearing and tonal; no narrowband target on a noise-only recording; the
 outputs written (lines.csv, lofar.png, targets.csv's origin) and none left behind by a run that fails."""
@@ -8,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -15,10 +18,15 @@ import pytest
 
 from sonartrack.acoustics.lofar import LineDetections, LofarGram
 from sonartrack.cli import main
+from sonartrack.core.angles import bearing_rad, wrap_angle
+from sonartrack.io.navigation import Navigation
+from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.systems.passive import PassiveSettings
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.narrowband import (
     NarrowbandLines,
+    SourceRoles,
+    narrowband_records,
     refined_detections,
     source_roles,
     tonal_at,
@@ -84,6 +92,95 @@ def test_tonal_has_one_frequency_per_period_at_the_nearest_record_time():
     assert np.all(np.abs(tonal.time_s - period) <= 0.5)
     assert tonal.line_hz == pytest.approx(200.02)
     assert tonal.line_snr_db == pytest.approx(6.0)
+
+
+#: the narrowband periods (s) and the array: 3 m/s north, turning 45 deg to port at 0.5 deg/s from 600 s (no tow)
+PERIODS = (np.arange(75) + 0.5) * 16.0
+
+
+def _turning_nav() -> Navigation:
+    t = np.arange(0.0, 1201.0, 1.0)
+    own, _, heading = ManeuveringTrack(0.0, 0.0, 3.0, 0.0, ((600.0, 690.0, -np.deg2rad(0.5)),)).state(t)
+    return Navigation(t, own[:, 0], own[:, 1], heading, own[:, 0], own[:, 1], heading)
+
+
+def _cone_deg(x0, t, nav, sd_deg=1.0, seed=0):
+    """Cone angles (deg, ``sd_deg`` Gaussian noise) of a CV target [x, y, vx, vy] (m, m/s at t = 0) at times t."""
+    xy, heading = nav.array_at(t)
+    tgt = np.asarray(x0[:2]) + t[:, None] * np.asarray(x0[2:])
+    rel = wrap_angle(bearing_rad(tgt[:, 0] - xy[:, 0], tgt[:, 1] - xy[:, 1]) - heading)
+    return np.clip(np.rad2deg(np.abs(rel)) + np.random.default_rng(seed).normal(0.0, sd_deg, len(t)), 0.0, 180.0)
+
+
+#: the submarine-like target (port, about 4.6 km, moving slowly) and another ship on the same side whose cone angle
+#: after the array's turn lies about 10 deg from the first's (a beam away at 200 Hz)
+PORT_SHIP = [-4000.0, 2500.0, 1.5, 1.0]
+OTHER_SHIP = [-3000.0, 5500.0, 1.0, -2.0]
+
+
+def _sources(spans, ships, freqs, nav):
+    """Line tracks (one per source) over the given spans (s) of the given ships at the given frequencies."""
+    lines, sources = [], []
+    for i, ((t0, t1), ship, f) in enumerate(zip(spans, ships, freqs, strict=True)):
+        t = PERIODS[(t0 <= PERIODS) & (t1 >= PERIODS)]
+        lines.append(_line(i + 1, t, f, _cone_deg(ship, t, nav, seed=i + 1), snr=4.0))
+        sources.append(LineSource(i + 1, (i + 1,), (), np.nan))
+    return NarrowbandLines(None, tuple(lines), tuple(sources))
+
+
+def _records(nb, nav):
+    return narrowband_records(nb, SourceRoles({}, {}), nav, _stages())
+
+
+def test_fragments_of_one_line_on_either_side_of_the_turn_are_joined():
+    nav = _turning_nav()
+    nb = _sources([(72.0, 600.0), (790.0, 1020.0), (1080.0, 1180.0)], [PORT_SHIP] * 3, [200.1, 200.0, 199.9], nav)
+    out = _records(nb, nav)
+    assert len(out) == 1
+    m, tonal = out[0]
+    assert m.track_id == 1 and m.joined_track_ids == (2, 3)
+    assert m.time_s[0] == pytest.approx(72.0, abs=16.0) and m.time_s[-1] == pytest.approx(1180.0, abs=16.0)
+    assert tonal.line_hz == pytest.approx(200.0, abs=0.1)
+
+
+def test_a_later_fragment_of_another_ship_on_the_same_line_is_not_joined():
+    nav = _turning_nav()
+    late = (PERIODS >= 790.0) & (PERIODS <= 1020.0)
+    sep = np.abs(_cone_deg(PORT_SHIP, PERIODS[late], nav, 0.0) - _cone_deg(OTHER_SHIP, PERIODS[late], nav, 0.0))
+    assert sep.min() > 6.0  # the geometry is as stated: the two ships a beam apart after the turn
+    nb = _sources([(72.0, 600.0), (790.0, 1020.0)], [PORT_SHIP, OTHER_SHIP], [200.0, 200.0], nav)
+    out = _records(nb, nav)
+    assert [m.track_id for m, _ in out] == [1, 2] and all(m.joined_track_ids == () for m, _ in out)
+
+
+def test_fragments_on_different_frequencies_are_not_joined():
+    nav = _turning_nav()
+    nb = _sources([(72.0, 600.0), (790.0, 1020.0)], [PORT_SHIP] * 2, [200.0, 230.0], nav)
+    out = _records(nb, nav)
+    assert [m.track_id for m, _ in out] == [1, 2] and all(m.joined_track_ids == () for m, _ in out)
+
+
+def test_a_later_fragment_that_ignores_the_turn_is_not_joined():
+    """The later fragment's cone angles are the target's through the array's 45 deg turn to port (a port target's
+    cone angle falls by the turn). Moved back by the turn, as if the array had held its heading, they are not
+    joined: only the navigation's turn ties the fragments."""
+    nav = _turning_nav()
+    nb = _sources([(72.0, 600.0), (790.0, 1020.0)], [PORT_SHIP] * 2, [200.0, 200.0], nav)
+    late = nb.lines[1]
+    unturned = replace(late, measured_cone_deg=late.measured_cone_deg + 45.0, cone_deg=late.cone_deg + 45.0)
+    assert [m.joined_track_ids for m, _ in _records(nb, nav)] == [(2,)]
+    out = _records(replace(nb, lines=(nb.lines[0], unturned)), nav)
+    assert [m.joined_track_ids for m, _ in out] == [(), ()]
+
+
+def test_outliers_off_the_constant_velocity_fit_are_left_out():
+    nav = _turning_nav()
+    t = PERIODS[(PERIODS >= 72.0) & (PERIODS <= 1000.0)]
+    cone = _cone_deg(PORT_SHIP, t, nav, seed=5)
+    cone[[10, 30]] += [21.0, -15.0]
+    nb = NarrowbandLines(None, (_line(1, t, 200.0, cone),), (LineSource(1, (1,), (), np.nan),))
+    (m, _), = _records(nb, nav)
+    assert len(m.time_s) == len(t) - 2 and not np.isin(t[[10, 30]], m.time_s).any()
 
 
 @pytest.fixture(scope="module")
