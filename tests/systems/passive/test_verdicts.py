@@ -177,13 +177,14 @@ def test_the_summary_line_prints_no_number_for_an_undetermined_range():
 def test_a_filter_that_fails_numerically_gives_a_diverged_answer(monkeypatch):
     from sonartrack.core.errors import InputError
     from sonartrack.systems.passive import targets as tg
-    from sonartrack.tma.settings import ImmSettings, SequentialSettings
+    from sonartrack.tma.settings import ImmSettings, SequentialSettings, VerdictSettings
 
     def failing(record, sensor, settings, **kw):
         raise InputError("the imm-mgekf filter failed numerically at t = 30 s")
 
     monkeypatch.setattr(tg, "solve_tma", failing)
-    stages = SimpleNamespace(settings=SimpleNamespace(ml_correlation_inflation=True, sigma_freq_floor_hz=0.02),
+    stages = SimpleNamespace(settings=SimpleNamespace(ml_correlation_inflation=True, sigma_freq_floor_hz=0.02,
+                                                      verdict=VerdictSettings()),
                              imm=ImmSettings(), sequential=SequentialSettings())
     t = np.arange(0.0, 100.0, 10.0)
     sensor = OwnshipTrack(time_s=t, x_m=np.zeros(10), y_m=np.zeros(10))
@@ -191,3 +192,16 @@ def test_a_filter_that_fails_numerically_gives_a_diverged_answer(monkeypatch):
     assert list(res.solution.reasons()) == [DIVERGED] * 10 and res.warnings[0].endswith("at t = 30 s")
     line = target_line(target(result_of(method="ml"), res))
     assert line.endswith("; IMM-MGEKF range NOT DETERMINED (diverged)")
+
+
+def test_the_chains_verdict_settings_reach_the_tma():
+    """[verdict] of the passive settings tree is the one the targets' TMA runs with (declared once, handed down)."""
+    from sonartrack.systems.passive import targets as tg
+    from sonartrack.tma.settings import ImmSettings, SequentialSettings, VerdictSettings
+
+    verdict = VerdictSettings(max_range_m=12_345.0, nis_window=7)
+    stages = SimpleNamespace(settings=SimpleNamespace(ml_correlation_inflation=True, sigma_freq_floor_hz=0.02,
+                                                      verdict=verdict),
+                             imm=ImmSettings(), sequential=SequentialSettings())
+    tma = tg._tma_settings("imm-mgekf", np.deg2rad(0.5), stages, None)
+    assert tma.verdict.max_range_m == 12_345.0 and tma.verdict.nis_window == 7

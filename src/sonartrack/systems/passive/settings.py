@@ -31,7 +31,7 @@ from sonartrack.acoustics.tonal import TonalSettings
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, derived_settings, setting
 from sonartrack.detection.btr_mftd import BtrMftdSettings
-from sonartrack.tma.settings import ImmSettings, SequentialSettings
+from sonartrack.tma.settings import ImmSettings, SequentialSettings, VerdictSettings
 from sonartrack.tracking.line_tracks import LineTrackerSettings
 from sonartrack.tracking.settings import BearingTrackerSettings
 
@@ -221,6 +221,8 @@ class PassiveSettings(Settings):
                                              doc="narrowband (LOFAR) pass and line tracks")
     btr_mftd: PassiveBtrMftdSettings = setting(default_factory=PassiveBtrMftdSettings,
                                                doc="track-before-detect (P1's MFTD) on the bearing-time record")
+    verdict: VerdictSettings = setting(default_factory=VerdictSettings,
+                                       doc="when a target's range is reported as NOT DETERMINED (tma/verdict.py)")
 
     @model_validator(mode="before")
     @classmethod

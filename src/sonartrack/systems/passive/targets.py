@@ -122,7 +122,7 @@ def _tma_settings(method: str, sigma_bearing_rad: float, stages: PassiveStages, 
     return TmaSettings(method=method, frequency=use_f, sigma_bearing_deg=float(np.clip(np.rad2deg(sigma_bearing_rad),
                                                                                        1e-3, 30.0)),
                        sigma_freq_hz=max(tonal.sigma_hz, s.sigma_freq_floor_hz) if use_f else 0.1,
-                       imm=stages.imm, sequential=stages.sequential,
+                       imm=stages.imm, sequential=stages.sequential, verdict=s.verdict,
                        batch=BatchSettings(correlation_inflation=s.ml_correlation_inflation))
 
 
