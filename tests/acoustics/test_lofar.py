@@ -196,3 +196,24 @@ def test_lines_at_the_band_edges_are_not_searched(bin_index, found):
     assert len(lines) == int(found)
     if found:
         assert lines.frequency_hz[0] == bin_index and lines.beam[0] == 1
+
+
+def test_line_detection_in_chunks_of_periods_is_the_whole_gram_at_once(monkeypatch):
+    """detect_lines searches a long gram in chunks of periods (memory); every test it makes is within one period,
+    so 150 periods in chunks of 64 give exactly the detections of one chunk of all 150."""
+    import sonartrack.acoustics.lofar as lofar
+
+    rng = np.random.default_rng(5)
+    T, B, F = 150, 9, 80
+    stat = rng.gamma(16, 1 / 16, size=(T, B, F)).astype(np.float32)
+    stat[:, 4, 30] += 3.0  # a line on beam 4
+    stat[100:, 2, 55] += 4.0  # another from period 100
+    gram = lofar.LofarGram((np.arange(T) + 0.5) * 16.0, np.linspace(0, 180, B), np.arange(F) + 100.0,
+                           (stat * 1e-3).astype(np.float32), stat)
+    s = lofar.LofarSettings()
+    chunked = lofar.detect_lines(gram, s)
+    monkeypatch.setattr(lofar, "PERIODS_PER_CHUNK", 10_000)
+    whole = lofar.detect_lines(gram, s)
+    assert len(chunked) > T  # the two lines (and some noise) are found
+    for f in ("time_s", "cone_deg", "frequency_hz", "statistic", "snr_db", "beam"):
+        np.testing.assert_array_equal(getattr(chunked, f), getattr(whole, f))

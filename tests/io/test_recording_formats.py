@@ -190,3 +190,19 @@ def test_front_end_sees_the_same_peaks_in_wav_and_rf64(tmp_path):
     np.testing.assert_array_equal(a.level, b.level)
     strongest = [bearings[np.argmax(amps)] for _, bearings, amps in a.peaks.by_scan()]
     assert len(strongest) == 4 and np.all(np.abs(np.array(strongest) - cone) < 1.0), strongest
+
+
+@pytest.mark.parametrize(("name", "fmt", "compact_type"), [
+    ("f.wav", "float32", np.float32), ("p24.wav", "int24", np.float32), ("p16.flac", "int16", np.float32),
+    ("p32.wav", "int32", np.float64), ("d.wav", "float64", np.float64)])
+def test_compact_blocks_hold_the_float64_values_exactly(tmp_path, name, fmt, compact_type):
+    """float32 blocks only where every sample is a float32 (24 significant bits at most): the same values to the
+    last bit, and the same (channels, frames) view of a frames x channels layout."""
+    x = _signal()
+    _write(tmp_path / name, x, fmt, expected_frames=x.shape[1])
+    wide = list(iter_wav_blocks(tmp_path / name, 500))
+    compact = list(iter_wav_blocks(tmp_path / name, 500, compact=True))
+    assert len(compact) == len(wide) == 6
+    for c, w in zip(compact, wide, strict=True):
+        assert c.dtype == compact_type and w.dtype == np.float64 and c.T.flags.c_contiguous
+        np.testing.assert_array_equal(c.astype(np.float64), w)

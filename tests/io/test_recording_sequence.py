@@ -211,3 +211,22 @@ def test_one_file_gives_the_single_file_readers_blocks_and_layout(tmp_path):
     part = list(iter_sequence_blocks(seq, W, start_frame=W + 1, stop_frame=5 * W))  # windows 2, 3, 4
     assert [t for t, _ in part] == [2 * W / FS, 3 * W / FS, 4 * W / FS]
     np.testing.assert_array_equal(part[0][1], ref[2])
+
+
+@pytest.mark.parametrize(("formats", "compact_type"), [(("int24", "float32"), np.float32),
+                                                       (("int24", "int32"), np.float64)])
+def test_compact_windows_stitched_across_formats_keep_every_value(tmp_path, formats, compact_type):
+    """Windows spanning a 24-bit file and the next are float32 only when every file of the run is exact in
+    float32 (a 32-bit PCM file keeps them float64); the values are the float64 windows' to the last bit."""
+    x = _signal(4.0)
+    # 1.8 s then 2.2 s: the second file's name (1 s resolution) lies within the join tolerance of the first's end
+    _write(tmp_path / "r_20240101_000000.wav", x[:, :1800], formats[0])
+    _write(tmp_path / "r_20240101_000002.wav", x[:, 1800:], formats[1])
+    seq = open_sequence(tmp_path)
+    assert not seq.gaps and len(seq.files) == 2
+    wide = [b for _, b in iter_sequence_blocks(seq, W)]
+    compact = [b for _, b in iter_sequence_blocks(seq, W, compact=True)]
+    assert len(compact) == len(wide) == 10  # window 4 (frames 1600..2000) lies across the join
+    for c, w in zip(compact, wide, strict=True):
+        assert c.dtype == compact_type and c.T.flags.c_contiguous
+        np.testing.assert_array_equal(c.astype(np.float64), w)

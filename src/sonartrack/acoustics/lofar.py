@@ -239,8 +239,10 @@ class LofarAccumulator:
             take = min(length - self._count, power.shape[2] - k)
             self._sum = self._sum + power[:, :, k:k + take].sum(axis=2, dtype=float)
             self._count, k = self._count + take, k + take
-            if self._count == length:
-                self._lines.append((self._scale / length) * self._sum.T)
+            if self._count == length:  # a period complete: normalised now (along frequency only, so period by
+                # period gives the same numbers): 12 bytes a cell kept, not the ~90 of normalising the whole
+                # recording's gram at once
+                self._lines.append(_normalised((self._scale / length) * self._sum.T, self.settings))
                 self._sum, self._count = 0.0, 0
 
     def gram(self, window_s: float) -> LofarGram | None:
@@ -257,7 +259,11 @@ class LofarAccumulator:
         LofarGram or None
             As :func:`lofar_gram`.
         """
-        return None if not self._lines else _gram(self.power(), self.freqs_hz, self.settings, window_s)
+        if not self._lines:
+            return None
+        t = (np.arange(len(self._lines)) + 0.5) * self.settings.integration * window_s
+        power = np.stack([p.astype(np.float32) for p, _ in self._lines])
+        return LofarGram(t, self.settings.cone_deg, self.freqs_hz, power, np.stack([z for _, z in self._lines]))
 
     def power(self) -> np.ndarray:
         """The integrated spectra of the complete periods so far, in double precision.
@@ -268,7 +274,13 @@ class LofarAccumulator:
             Mean PSD over each period's L windows per beam and bin (input units^2/Hz); T may be 0.
         """
         shape = (0, self.settings.beams, self.freqs_hz.size)
-        return np.stack(self._lines) if self._lines else np.zeros(shape)
+        return np.stack([p for p, _ in self._lines]) if self._lines else np.zeros(shape)
+
+
+def _normalised(power: np.ndarray, s: LofarSettings) -> tuple[np.ndarray, np.ndarray]:
+    """One period's integrated spectra (B, F) as they are and their statistic (power over its background, float32)."""
+    stat = power / np.maximum(background(power, s), np.finfo(float).tiny)
+    return power, stat.astype(np.float32)
 
 
 def _gram(power: np.ndarray, freqs_hz: np.ndarray, s: LofarSettings, window_s: float) -> LofarGram:
@@ -427,15 +439,27 @@ def detect_lines(gram: LofarGram, settings: LofarSettings) -> LineDetections:
     LineDetections
         One row per line and period, SNR = 10 log10(z - 1) dB.
     """
-    z = np.asarray(gram.statistic, dtype=float)
+    parts = [_detect_periods(gram, settings, slice(i, i + PERIODS_PER_CHUNK))
+             for i in range(0, max(len(gram.time_s), 1), PERIODS_PER_CHUNK)]
+    t, b, k, zz = (np.concatenate([p[j] for p in parts]) for j in range(4))
+    return LineDetections(gram.time_s[t], gram.cone_deg[b], gram.freqs_hz[k], zz,
+                          10.0 * np.log10(np.maximum(zz - 1.0, 1e-6)), b.astype(np.int64))
+
+
+#: periods searched at once by :func:`detect_lines` (every test is within one period, so chunks change nothing
+#: but the memory: the working arrays of a whole long recording's gram would be tens of bytes a cell)
+PERIODS_PER_CHUNK = 64
+
+
+def _detect_periods(gram: LofarGram, settings: LofarSettings, periods: slice):
+    """(period, beam, bin indices, z) of the detections among ``periods`` of the gram (:func:`detect_lines`)."""
+    z = np.asarray(gram.statistic[periods], dtype=float)
     pad_f = np.pad(z, ((0, 0), (0, 0), (1, 1)), constant_values=-np.inf)
     pad_b = np.pad(z, ((0, 0), (1, 1), (0, 0)), constant_values=-np.inf)
     peak = (z > pad_f[..., :-2]) & (z >= pad_f[..., 2:]) & (z > pad_b[:, :-2]) & (z >= pad_b[:, 2:])
-    excess = np.asarray(gram.power, float) * (1.0 - 1.0 / np.maximum(z, 1e-12))  # P - mu, mu = P / z
+    excess = np.asarray(gram.power[periods], float) * (1.0 - 1.0 / np.maximum(z, 1e-12))  # P - mu, mu = P / z
     main = excess >= np.max(excess, axis=1, keepdims=True) * 10.0 ** (-settings.sidelobe_guard_db / 10.0)
     inner = np.zeros(z.shape[2], bool)
     inner[settings.edge_bins: z.shape[2] - settings.edge_bins] = True
     t, b, k = np.nonzero(peak & main & inner & (z >= line_threshold(settings)))
-    zz = z[t, b, k]
-    return LineDetections(gram.time_s[t], gram.cone_deg[b], gram.freqs_hz[k], zz,
-                          10.0 * np.log10(np.maximum(zz - 1.0, 1e-6)), b.astype(np.int64))
+    return t + (periods.start or 0), b, k, z[t, b, k]

@@ -40,6 +40,7 @@ from sonartrack.core.errors import InputError, require
 from sonartrack.io.wav_blocks import (
     RECORDING_SUFFIXES,
     WavInfo,
+    block_dtype,
     check_block,
     native_buffer,
     read_frames_into,
@@ -320,9 +321,11 @@ def present_windows(seq: RecordingSequence, block_frames: int) -> np.ndarray:
     return mask
 
 
-def _run_blocks(run, lo: int, hi: int, w: int, fs: float) -> Iterator[tuple[float, np.ndarray]]:
-    """Windows of frames lo..hi (multiples of w) of one run, stitched across its files."""
+def _run_blocks(run, lo: int, hi: int, w: int, fs: float, compact: bool) -> Iterator[tuple[float, np.ndarray]]:
+    """Windows of frames lo..hi (multiples of w) of one run, stitched across its files (float32 only where every
+    file of the run allows it: io/wav_blocks.py ``block_dtype``)."""
     raws: dict[str, np.ndarray] = {}
+    dtype = np.result_type(*(block_dtype(item.info, compact) for item in run))
     block, fill, block_start, where = None, 0, lo, (None, 0.0)
     for item in run:
         a, b = max(lo, item.first_frame), min(hi, item.end_frame)
@@ -338,7 +341,7 @@ def _run_blocks(run, lo: int, hi: int, w: int, fs: float) -> Iterator[tuple[floa
                 if block is None:
                     # (channels, w) view of a frames x channels array: the layout io/wav_blocks.py yields, so
                     # that the front end's sums run in the same order (the same digits) for one file or many
-                    block, block_start, where = np.empty((w, info.channels)).T, pos, (info.path, in_file_s)
+                    block, block_start, where = np.empty((w, info.channels), dtype).T, pos, (info.path, in_file_s)
                 take = min(w - fill, b - pos)
                 read_frames_into(f, raw, block[:, fill: fill + take], info, in_file_s)
                 fill, pos = fill + take, pos + take
@@ -349,7 +352,7 @@ def _run_blocks(run, lo: int, hi: int, w: int, fs: float) -> Iterator[tuple[floa
 
 
 def iter_sequence_blocks(seq: RecordingSequence, block_frames: int, *, start_frame: int = 0,
-                         stop_frame: int | None = None) -> Iterator[tuple[float, np.ndarray]]:
+                         stop_frame: int | None = None, compact: bool = False) -> Iterator[tuple[float, np.ndarray]]:
     """The recorded windows of the sequence, in time order, as (start time (s) on the recording's axis, block).
 
     Parameters
@@ -361,13 +364,16 @@ def iter_sequence_blocks(seq: RecordingSequence, block_frames: int, *, start_fra
     start_frame, stop_frame : int
         Only the windows wholly inside frames ``start_frame`` .. ``stop_frame`` (default: the end) of the
         recording's axis are read (an excerpt: the files before it are not decoded).
+    compact : bool
+        float32 blocks where every file's samples are exactly float32 (io/wav_blocks.py ``block_dtype``): the same
+        values at half the memory.
 
     Returns
     -------
     Iterator of (float, ndarray)
-        Each block a new (channels, block_frames) float64 array, stitched across file boundaries; windows a gap
-        touches are skipped (:func:`present_windows`, ``seq.gaps``). NaN/inf or absurd samples raise InputError
-        naming the time.
+        Each block a new (channels, block_frames) float64 (or compact) array, stitched across file boundaries;
+        windows a gap touches are skipped (:func:`present_windows`, ``seq.gaps``). NaN/inf or absurd samples raise
+        InputError naming the time.
     """
     w = int(block_frames)
     require(w >= 1, f"block_frames must be >= 1, got {w}")
@@ -376,7 +382,7 @@ def iter_sequence_blocks(seq: RecordingSequence, block_frames: int, *, start_fra
         lo = max(-(-run[0].first_frame // w) * w, first)
         hi = min(run[-1].end_frame // w * w, last)
         if hi > lo:
-            yield from _run_blocks(run, lo, hi, w, seq.sample_rate_hz)
+            yield from _run_blocks(run, lo, hi, w, seq.sample_rate_hz, compact)
 
 
 def check_no_gaps(seq: RecordingSequence) -> None:

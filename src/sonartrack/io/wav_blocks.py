@@ -10,6 +10,11 @@ blocks in memory. (Asking libsndfile for float64 directly is 2-3 times slower: i
 small pieces.) One reader serves every format: it reads a 16-channel float32 WAV as fast as a plain RIFF
 ``readinto`` reader giving the same C-ordered blocks (benchmarks/bench_readers.py).
 
+``compact`` blocks (:func:`block_dtype`) are float32 where every sample of the file is exactly a float32 --
+float32 files, and 16- and 24-bit PCM (k / 2^15 and k / 2^23 need at most 24 significant bits) -- so the values
+are the float64 blocks' to the last bit at half the memory and copying; a float32 file is then decoded straight
+into the block (no buffer, no copy). 32-bit PCM and float64 files stay float64.
+
 libsndfile quietly shortens a WAV-family file whose data ends before its header says; this module walks the
 RIFF / RF64 / W64 chunks itself to read the stated data size and refuses such a file. A truncated FLAC is
 caught up front by seeking to its last frame (the decoder loses sync there). The walk also reads the
@@ -280,10 +285,32 @@ def native_buffer(info: WavInfo, frames: int) -> np.ndarray:
     return np.empty((int(frames), info.channels), dtype=_NATIVE[info.sample_format][0])
 
 
+def block_dtype(info: WavInfo, compact: bool = False) -> type:
+    """The blocks' sample type for ``info``'s recording: float64, or with ``compact`` float32 where each sample is
+    exactly a float32 (module doc).
+
+    Parameters
+    ----------
+    info : WavInfo
+        The recording's header (its sample format).
+    compact : bool
+        Ask for float32 where that changes no value.
+
+    Returns
+    -------
+    type
+        ``numpy.float32`` (compact, and a float32, 16-bit or 24-bit file) or ``numpy.float64``.
+    """
+    exact32 = info.sample_format in ("float32", "int16", "int24")
+    return np.float32 if compact and exact32 else np.float64
+
+
 def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s: float) -> None:
     """Decode ``out.shape[1]`` frames from an open SoundFile into ``out``, through ``raw``.
 
-    Integers arrive as int32 k 2^(32 - bits) and are scaled by 2^-31 (exact in float64).
+    Integers arrive as int32 k 2^(32 - bits) and are scaled by 2^-31 (exact in float64, and in float32 for 16 and
+    24 bits). A float ``out`` of the file's own type whose transpose is C-contiguous (a slice of the blocks'
+    frames x channels layout) is decoded into directly, without ``raw``.
 
     Parameters
     ----------
@@ -291,8 +318,8 @@ def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s
         The open recording, positioned at the first frame wanted.
     raw : ndarray
         Buffer from :func:`native_buffer` with at least m rows.
-    out : ndarray of float64, shape (channels, m)
-        Destination, written in place.
+    out : ndarray of float64 or float32, shape (channels, m)
+        Destination, written in place (float32 only for formats :func:`block_dtype` allows).
     info : WavInfo
         The recording's header.
     start_s : float
@@ -303,8 +330,9 @@ def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s
     InputError
         On a short read or a decoder error (the data ends early).
     """
-    part = raw[: out.shape[1]]
     dtype, scale = _NATIVE[info.sample_format]
+    direct = scale == 1.0 and out.dtype == np.dtype(dtype) and out.T.flags.c_contiguous
+    part = out.T if direct else raw[: out.shape[1]]
     try:
         got = f.buffer_read_into(part, dtype)
     except (sf.LibsndfileError, RuntimeError) as e:
@@ -312,14 +340,16 @@ def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s
                          "damaged; copy it again") from None
     if got != part.shape[0]:
         raise InputError(f"{info.path} was truncated while being read (at {start_s:.1f} s): copy the file again")
+    if direct:
+        return
     if scale == 1.0:
         np.copyto(out, part.T)
     else:
-        np.multiply(part.T, scale, out=out)
+        np.multiply(part.T, scale, out=out, dtype=out.dtype)
 
 
 def iter_wav_blocks(info_or_path, block_frames: int, *, start_frame: int = 0,
-                    stop_frame: int | None = None) -> Iterator[np.ndarray]:
+                    stop_frame: int | None = None, compact: bool = False) -> Iterator[np.ndarray]:
     """Blocks of ``block_frames`` frames as float64 arrays (channels, block_frames), integers scaled to [-1, 1).
 
     Parameters
@@ -331,6 +361,8 @@ def iter_wav_blocks(info_or_path, block_frames: int, *, start_frame: int = 0,
     start_frame, stop_frame : int
         Frames ``start_frame`` .. ``stop_frame`` (default: the end) are read; a partial last block (fewer than
         ``block_frames`` frames left) is dropped, as the bearing estimator drops a partial last window.
+    compact : bool
+        float32 blocks where that changes no sample (:func:`block_dtype`): the same values, half the memory.
 
     Returns
     -------
@@ -352,7 +384,7 @@ def iter_wav_blocks(info_or_path, block_frames: int, *, start_frame: int = 0,
             start_s = first / info.sample_rate_hz
             # frames x channels transposed: the layout of the interleaved file, which the front end's FFTs have
             # always been given (a C-ordered block changes their last digits)
-            block = np.empty((block_frames, info.channels)).T
+            block = np.empty((block_frames, info.channels), dtype=block_dtype(info, compact)).T
             read_frames_into(f, raw, block, info, start_s)
             if info.sample_format.startswith("float"):
                 check_block(block, info.path, start_s)

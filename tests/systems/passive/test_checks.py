@@ -295,3 +295,47 @@ def test_a_far_target_the_turn_barely_touches_is_not_determined(seed):
     checked = determination_checked(far)
     assert not checked.solution.range_flags().any()
     assert checked.warnings[-1].startswith(UNSUPPORTED_RANGE)
+
+
+@pytest.mark.parametrize("elements", [16, 64])
+def test_memory_estimate_matches_the_front_ends_arrays(elements):
+    """The steering matrix's estimate is the bytes of the matrix the front end builds, and a batch's the peak
+    tracemalloc sees while one batch of band spectra is beamformed (within 30 %)."""
+    import tracemalloc
+
+    from sonartrack.acoustics.beamforming import BATCH_WINDOWS, _band_steering, _cbf_from_spectra
+    from sonartrack.systems.passive.settings import PassiveSettings
+
+    st = PassiveSettings(spacing_m=1.25).stages(8000.0, channels=elements)
+    steering_need, batch_need = (need for need, _, _ in checks.memory_needs(st, 600)[:2])
+    idx, steer = _band_steering(elements, 8000, 8000.0, st.array, st.front_end, st.band)
+    assert steering_need == pytest.approx(steer[0].nbytes + steer[1].nbytes, rel=0.01)
+    rng = np.random.default_rng(0)
+    shape = (BATCH_WINDOWS, elements, idx.size)
+    tracemalloc.start()
+    try:
+        spectra = (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(np.complex64)
+        tracemalloc.reset_peak()
+        _cbf_from_spectra(spectra, steer, True)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert 0.7 < peak / batch_need < 1.3
+
+
+def test_a_three_day_recording_is_refused_for_its_lofar_gram_and_not_without_the_narrowband_pass():
+    from sonartrack.systems.passive.settings import PassiveSettings
+
+    days = 3 * 86400  # the gram: about 1.5 GB a day at 16 x 4 kHz (20 bytes a cell), over the 2 GB limit
+    with pytest.raises(InputError, match="LOFAR gram"):
+        checks.check_memory(PassiveSettings(spacing_m=2.5).stages(4000.0, channels=16), days)
+    quiet = PassiveSettings.model_validate({"spacing_m": 2.5, "narrowband": {"enabled": False}})
+    checks.check_memory(quiet.stages(4000.0, channels=16), days)
+
+
+def test_chi_square_quantile_is_scipy_stats_to_the_bit():
+    from scipy.stats import chi2
+
+    for q in (0.95, 0.99, 0.9973):
+        for dof in (1, 2, 7, 40, 999):
+            assert checks._chi2_ppf(q, dof) == float(chi2.ppf(q, dof))

@@ -93,3 +93,28 @@ def test_a_gpx_track_of_the_ship_runs_the_chain(scenes, tmp_path):
     np.testing.assert_allclose(g.result.nav.x_m, n.result.nav.x_m, atol=0.01)
     np.testing.assert_allclose(g.result.nav.y_m, n.result.nav.y_m, atol=0.01)
     assert len(g.result.targets) >= 1
+
+
+def test_span_blocks_are_the_recordings_values_in_float32_and_calibrated_in_float64(tmp_path):
+    """A float32 recording's windows come as float32 holding the float64 reader's values; scaled to pascals they are
+    the float64 product; the level is 10 log10(mean p^2 / (1 uPa)^2) summed in float64 (hand formula)."""
+    from sonartrack.io.recording_sequence import open_sequence
+    from sonartrack.io.recording_writer import recording_writer
+    from sonartrack.io.wav_blocks import iter_wav_blocks
+    from sonartrack.systems.passive.files import SpanBlocks
+
+    x = np.random.default_rng(1).uniform(-0.5, 0.5, (4, 3000))
+    with recording_writer(tmp_path / "r.wav", 4, 1000.0, "float32") as w:
+        w.write(x)
+    want = list(iter_wav_blocks(tmp_path / "r.wav", 1000))
+    seq = open_sequence(tmp_path / "r.wav")
+    plain = SpanBlocks(seq, 1000, 3, None)
+    scale = np.array([1.0, 2.0, 0.5, 3e-3])
+    scaled = SpanBlocks(seq, 1000, 3, scale)
+    for a, b, ref in zip(plain(), scaled(), want, strict=True):
+        assert a.dtype == np.float32 and b.dtype == np.float64
+        np.testing.assert_array_equal(a.astype(float), ref)
+        np.testing.assert_array_equal(b, ref * scale[:, None])
+    for run, s in ((plain, np.ones(4)), (scaled, scale)):
+        hand = [10.0 * np.log10(np.mean((r * s[:, None]) ** 2) / 1e-12) for r in want]
+        np.testing.assert_allclose(run.level_db, hand, rtol=0, atol=1e-9)

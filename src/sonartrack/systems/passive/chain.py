@@ -10,8 +10,9 @@ from the system's one settings tree (:meth:`~sonartrack.systems.passive.settings
    on strong peaks and confirmed M-of-N, dropped after a run of empty gates -> :class:`BearingTracks`;
 3. each confirmed track's raw peaks (systems/passive/measurements.py; two tracks on the same peaks joined,
    scans where two targets share a beam left out, fragments of one target -- a track that broke at a crossing
-   or a turn -- joined when one constant-velocity target explains them) and, in a second pass over the
-   recording, its tonal line on its own beam (systems/passive/tonal_pass.py);
+   or a turn -- joined when one constant-velocity target explains them and their tonal lines agree) with, from a
+   second pass over the recording before the join, each fragment's tonal line on its own beam
+   (systems/passive/tonal_pass.py; a joined target's line is its fragments');
 4. narrowband (``[narrowband]``, on by default; systems/passive/narrowband.py): the LOFAR gram per beam (from the
    front end's own pass, acoustics/beamforming.py; else one more pass), its lines tracked in frequency and bearing and
    grouped into sources; a source that follows a track gives it its tonal where its own beam showed none, a
@@ -39,8 +40,10 @@ from sonartrack.acoustics.xcorr_bearing import PeakRecord
 from sonartrack.detection.btr_mftd import BtrDetections
 from sonartrack.io.navigation import Navigation
 from sonartrack.systems.passive.measurements import (
+    TrackMeasurements,
     drop_unresolved,
     join_fragments,
+    joined_tonal,
     merge_duplicates,
     track_measurements,
 )
@@ -140,16 +143,17 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, nav=nav,
                          resolution_deg=s.min_separation_deg)
     meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
-    meas = join_fragments(drop_unresolved(meas, s.min_separation_deg), nav, min_fragment_s=settings.min_track_s)
-    long_enough = [m for m in meas if m.duration_s >= settings.min_track_s and len(m.time_s) >= 10]
+    meas = drop_unresolved(meas, s.min_separation_deg)
+    # the tonal pass runs on the fragments, so that their lines take part in the join (two ships' fragments
+    # with lines apart are not joined); a joined target's line is its fragments' lines
+    tonal_of = _fragment_tonals(blocks, [m for m in meas if _long_enough(m, settings)], s, n_windows, progress)
+    meas = join_fragments(meas, nav, min_fragment_s=settings.min_track_s, tonals=tonal_of)
+    long_enough = [m for m in meas if _long_enough(m, settings)]
     short = [m.track_id for m in meas if m not in long_enough]
-    tonals = [None] * len(long_enough)
-    if long_enough:
-        tonals = measure_tonals(blocks(), s.fs_hz, s.array, long_enough, s.tonal, n_windows,
-                                progress=_Stage(progress, "tonal lines", n_windows))
+    tonals = [joined_tonal(m, tonal_of) if m.joined_track_ids else tonal_of.get(m.track_id) for m in long_enough]
     nb = _narrowband(blocks, btr, s, n_windows, progress) if settings.narrowband.enabled else None
     records, nb_records, roles = _with_lines(nb, long_enough, tonals, nav, s)
-    targets = [solve_target(i + 1, m, tonal, nav, s, neighbours=meas)
+    targets = [solve_target(i + 1, m, tonal, nav, s, neighbours=meas, use_frequency_ml=i >= len(records))
                for i, (m, tonal) in enumerate(records + nb_records)]
     jpda = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, amplitude_aided=False) if plain_jpda \
         else None
@@ -157,6 +161,23 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
                   if w.startswith(UNSUPPORTED_RANGE))
     result = PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes, mftd)
     return result if nb is None else _with_narrowband(result, nb, roles, len(records))
+
+
+def _long_enough(m: TrackMeasurements, settings: PassiveSettings) -> bool:
+    """A track (or fragment) long enough for TMA: ``min_track_s`` and at least 10 scans (the only fragments
+    :func:`join_fragments` may join, as it asks both to span ``min_track_s``)."""
+    return m.duration_s >= settings.min_track_s and len(m.time_s) >= 10
+
+
+def _fragment_tonals(blocks, frags: list[TrackMeasurements], s: PassiveStages, n_windows: int,
+                     progress) -> dict:
+    """track id -> its tonal line on its own beam (systems/passive/tonal_pass.py, one pass over the recording)
+    or None; no pass when there is no fragment."""
+    if not frags:
+        return {}
+    tonals = measure_tonals(blocks(), s.fs_hz, s.array, frags, s.tonal, n_windows,
+                            progress=_Stage(progress, "tonal lines", n_windows))
+    return {m.track_id: t for m, t in zip(frags, tonals, strict=True)}
 
 
 def _with_lines(nb: NarrowbandLines | None, tracks: list, tonals: list, nav: Navigation, s: PassiveStages):

@@ -380,14 +380,21 @@ MEMORY_LIMIT_BYTES = 2 * 1024**3
 def memory_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
     """The chain's largest working arrays for a recording: bytes, what sizes them, and the fix.
 
-    With N elements, B beams, F band bins of a window of m samples and K = 32 windows a batch
-    (acoustics/beamforming.py): the CBF steering matrix B x (1 + 2 (N - 1) F) float64 (and its phase temporaries),
-    a batch's windows K x N x m and their spectra and lag vectors, and the bearing-time record T x B for T windows.
+    With N elements, B beams, F band bins of a window of m samples, K = 32 windows a batch and c bytes a complex
+    spectrum value (8 for ``fft_precision`` single, 16 for double) (acoustics/beamforming.py): the CBF steering
+    matrix, cosine and sine halves of ceil(B / 2) x (N - 1) F float64 each; a batch's band spectra with their
+    working copies (whitened, the 2N-point transform along the elements, its power, the lags) and lag vectors,
+    (5 c + 16) N F + 40 c F bytes a window (the peak measured with tracemalloc, within 30 % for 16 to 64
+    elements); the bearing-time record T x B (float32, and the picture's float64 copy); with
+    the narrowband pass (acoustics/lofar.py), its steering F_l x B_l x N (complex128 and a complex64 copy) and
+    the gram of T / L periods x B_l beams x F_l bins at 20 bytes a cell: each period is normalised as it completes
+    and kept as float64 power and float32 statistic (12 bytes), and the float32 gram stacked from them at the end
+    (8 more; the line search then works through the gram in chunks of periods).
 
     Parameters
     ----------
     stages : PassiveStages
-        The chain's built settings (array, band, window, beams).
+        The chain's built settings (array, band, window, beams, narrowband).
     n_windows : int
         Windows T of the recording.
 
@@ -400,18 +407,36 @@ def memory_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
 
     n, b = stages.array.elements, stages.front_end.beams
     window_s = stages.settings.window_s
-    m = round(window_s * stages.fs_hz)
     f = max(int((stages.band.high_hz - stages.band.low_hz) * window_s) + 1, 1)
-    lags = 1 + 2 * (n - 1) * f
-    return [
-        (8.0 * b * lags * 2.5, f"the beams' steering matrix ({b} [front_end] beams x {n} elements x {f} bins of "
-         f"band_hz in a {window_s:g} s window)", "fewer [front_end] beams, a narrower band_hz or a shorter window_s"),
-        (BATCH_WINDOWS * (8.0 * n * m + 16.0 * n * (m // 2 + 1) + 24.0 * lags),
-         f"a batch of {BATCH_WINDOWS} windows ({n} channels x {m} samples of window_s {window_s:g} s)",
-         "a shorter window_s"),
-        (8.0 * 2 * n_windows * b, f"the bearing-time record ({n_windows} windows x {b} [front_end] beams)",
+    c = 8.0 if stages.front_end.fft_precision == "single" else 16.0
+    needs = [
+        (16.0 * ((b + 1) // 2) * (n - 1) * f, f"the beams' steering matrix ({b} [front_end] beams x {n} elements x "
+         f"{f} bins of band_hz in a {window_s:g} s window)", "fewer [front_end] beams, a narrower band_hz or a "
+                                                              "shorter window_s"),
+        (BATCH_WINDOWS * ((5.0 * c + 16.0) * n + 40.0 * c) * f, f"a batch of {BATCH_WINDOWS} windows' band spectra "
+         f"({n} channels x {f} bins of window_s {window_s:g} s)", "a narrower band_hz or a shorter window_s"),
+        (12.0 * n_windows * b, f"the bearing-time record ({n_windows} windows x {b} [front_end] beams)",
          "fewer [front_end] beams, or a longer window_s"),
     ]
+    nb = stages.settings.narrowband
+    if nb.enabled:
+        needs += _lofar_needs(stages, n_windows)
+    return needs
+
+
+def _lofar_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
+    """The narrowband pass's steering and gram (:func:`memory_needs`)."""
+    from sonartrack.acoustics.lofar import lofar_band
+
+    nb, n, window_s = stages.settings.narrowband, stages.array.elements, stages.settings.window_s
+    lo, hi = lofar_band(stages.array, stages.fs_hz, nb)
+    f = max(int((hi - lo) * window_s) + 1, 1)
+    periods = n_windows // nb.integration
+    return [(24.0 * f * nb.beams * n, f"the narrowband beams' steering ({nb.beams} [narrowband] beams x {n} elements "
+             f"x {f} bins)", "fewer [narrowband] beams or a narrower [narrowband] band_hz"),
+            (20.0 * periods * nb.beams * f, f"the LOFAR gram ({periods} periods of {nb.integration} windows x "
+             f"{nb.beams} [narrowband] beams x {f} bins)", "a shorter recording (split it), a longer [narrowband] "
+                                                           "integration, fewer beams or a narrower band_hz")]
 
 
 def check_memory(stages, n_windows: int) -> None:
@@ -484,7 +509,7 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     kappa = (1 + rho) / (1 - rho) the covariance inflation the solution states (AR(1) errors; Bretherton et al.
     1999, J. Climate 12, eq. 31). A fit that left a slow structure in its residuals (a wrong track absorbing part of
     the data) fails the block test although its chi2 fits. Upper-tail limits at RESIDUAL_ALPHA
-    (scipy.stats.chi2).
+    (:func:`_chi2_ppf`).
 
     Parameters
     ----------
@@ -504,8 +529,6 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     ResidualCheck
         The statistics and their limits.
     """
-    from scipy.stats import chi2 as chi2_dist
-
     t = np.asarray(time_s, float)
     w = np.asarray(residual_rad, float) / float(sigma_rad)
     dof = max(len(w) - n_params, 1)
@@ -516,7 +539,15 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     block_chi2 = float(np.sum(sums[full] ** 2 / counts[full]) / inflation)
     b = max(int(full.sum()), 1)
     q = 1.0 - RESIDUAL_ALPHA
-    return ResidualCheck(float(w @ w), dof, float(chi2_dist.ppf(q, dof)), block_chi2, b, float(chi2_dist.ppf(q, b)))
+    return ResidualCheck(float(w @ w), dof, _chi2_ppf(q, dof), block_chi2, b, _chi2_ppf(q, b))
+
+
+def _chi2_ppf(q: float, dof: int) -> float:
+    """The chi-square(dof) quantile q: 2 P^-1(dof / 2, q), P the regularised lower incomplete gamma function (the
+    formula scipy.stats.chi2.ppf evaluates, the same value without importing scipy.stats, 0.2 s)."""
+    from scipy.special import gammaincinv
+
+    return float(2.0 * gammaincinv(dof / 2.0, q))
 
 
 #: residuals whose measured variance exceeds the stated noise's (and its correlation inflation) this many times are

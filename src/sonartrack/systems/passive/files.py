@@ -183,7 +183,12 @@ def check_sequence(seq: RecordingSequence, stages: PassiveStages, n_windows: int
 class SpanBlocks:
     """The chain's blocks (``blocks()`` once per pass): every window 0..n_windows - 1 of the recording's span,
     zeros where a gap touches it, scaled to pascals by ``pa_per_unit`` (channels,) unless None; the first pass
-    also measures each window's broadband level (:attr:`level_db`, module doc)."""
+    also measures each window's broadband level (:attr:`level_db`, module doc).
+
+    The blocks are float32 where the file's samples are exactly float32 (float32, 16- and 24-bit PCM:
+    io/wav_blocks.py ``block_dtype``), the values the float64 blocks held, at half the copying; every stage casts
+    them to its own precision. Scaled to pascals they are float64 (the product of the float64 calibration), and the
+    level's mean square is summed in float64 (the same value to rounding)."""
 
     def __init__(self, seq: RecordingSequence, window: int, n_windows: int, pa_per_unit: np.ndarray | None):
         self.seq, self.window, self.n_windows, self.scale = seq, int(window), int(n_windows), pa_per_unit
@@ -194,19 +199,28 @@ class SpanBlocks:
         measure = self._passes == 0
         self._passes += 1
         zeros = np.zeros((self.seq.channels, self.window))
-        present = iter_sequence_blocks(self.seq, self.window, stop_frame=self.n_windows * self.window)
+        present = iter_sequence_blocks(self.seq, self.window, stop_frame=self.n_windows * self.window, compact=True)
         nxt = next(present, None)
         for k in range(self.n_windows):
             if nxt is not None and int(round(nxt[0] * self.seq.sample_rate_hz)) == k * self.window:
                 block, nxt = nxt[1], next(present, None)
-                if self.scale is not None:
+                if self.scale is not None and block.dtype == np.float64:
                     block *= self.scale[:, None]
+                elif self.scale is not None:
+                    block = block * self.scale[:, None]  # float64, as the calibration: the same product
                 if measure:
-                    ms = float(np.mean(block * block))
-                    self.level_db[k] = 10.0 * np.log10(ms / P_REF_PA**2) if ms > 0 else -np.inf
+                    self.level_db[k] = _level_db(block)
                 yield block
             else:
                 yield zeros
+
+
+def _level_db(block: np.ndarray) -> float:
+    """10 log10(mean p^2 / p_ref^2) of a block (dB re 1 uPa; -inf for silence): the sum of squares in float64 over
+    the block's own memory order (one pass, no squared copy)."""
+    x = block.T if block.T.flags.c_contiguous else block
+    ms = float(np.einsum("ij,ij->", x, x, dtype=np.float64)) / x.size
+    return 10.0 * np.log10(ms / P_REF_PA**2) if ms > 0 else -np.inf
 
 
 def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, calibration=None,

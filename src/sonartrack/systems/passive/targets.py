@@ -25,6 +25,10 @@ Per track (its raw peaks, systems/passive/measurements.py):
    than that stated noise inflate the covariance by their measured scale (reported), or, far larger, leave the
    range not determined, as does a likelihood flatter than the stated covariance claims
    (:func:`determination_checked`).
+   A target found through its tonal line (a narrowband target, ``use_frequency_ml``), whose bearings alone rarely
+   determine its range, is solved by the batch ML on bearings + the line's frequency instead (tma/batch_bf.py: the
+   Doppler f = f0 (1 - rdot / c) of paper P2, eq. 3, gives the range rate; :func:`frequency_ml`), with the same
+   residual and profile-likelihood checks on its own likelihood (f0 free).
 3. Verdict (tma/verdict.py). Every row of both solutions says whether its range is determined and why not: the
    ML's (unobservable, inconsistent residuals, flat likelihood), the IMM-MGEKF's own (diverged, inconsistent
    innovations, unobservable), and for both the side: every row when the side was never decided, and for the
@@ -40,7 +44,7 @@ import numpy as np
 
 from sonartrack.acoustics.tonal import TonalTrack
 from sonartrack.core.angles import wrap_angle
-from sonartrack.core.errors import InputError
+from sonartrack.core.errors import InputError, require
 from sonartrack.io.navigation import Navigation
 from sonartrack.systems.passive.checks import (
     MAX_RESIDUAL_SCALE,
@@ -165,6 +169,32 @@ def usable_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack 
     """
     s = stages.settings
     if tonal is None or tonal.sigma_hz > s.max_sigma_freq_hz or tonal.line_snr_db < s.tma_min_tonal_snr_db:
+        return None
+    return tonal
+
+
+def line_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
+    """The tonal of a target found through its line (a narrowband target) if its frequency is clean enough for the
+    bearings + frequency ML.
+
+    Only the frequency noise gate of :func:`usable_tonal` (``max_sigma_freq_hz``) applies: its line-strength gate
+    (``tma_min_tonal_snr_db``) keeps a broadband track from taking a weak line that may be another source's, but a
+    narrowband target's bearings are its line's own, and a quiet target's line is weak by nature (the default
+    scene's submarine: 3 dB over its beam's background).
+
+    Parameters
+    ----------
+    tonal : TonalTrack or None
+        The target's line.
+    stages : PassiveStages
+        Its settings' ``max_sigma_freq_hz``.
+
+    Returns
+    -------
+    TonalTrack or None
+        ``tonal``, or None when there is none or its frequency noise exceeds the gate.
+    """
+    if tonal is None or tonal.sigma_hz > stages.settings.max_sigma_freq_hz:
         return None
     return tonal
 
@@ -336,7 +366,7 @@ def without_neighbour_scans(m: TrackMeasurements, neighbours, min_separation_deg
 
 
 def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None, nav: Navigation,
-                 stages: PassiveStages, neighbours=()) -> Target:
+                 stages: PassiveStages, neighbours=(), *, use_frequency_ml: bool = False) -> Target:
     """Side, true bearings and TMA of one track (module docstring).
 
     Parameters
@@ -354,6 +384,10 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     neighbours : sequence of TrackMeasurements
         The other confirmed tracks: the scans at which one lies within ``stages.min_separation_deg`` of this
         track are left out (:func:`without_neighbour_scans`; reported among the ML's warnings).
+    use_frequency_ml : bool
+        The ML on bearings + the tonal's frequency (:func:`frequency_ml`) when its frequency is clean enough
+        (:func:`line_tonal`): for a target
+        found through its line (a narrowband target), whose bearings alone rarely determine the range.
 
     Returns
     -------
@@ -378,6 +412,8 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
     ml = determination_checked(solve_tma(rec, sensor, ml_settings, ml_fit=fit, unobservable="flag"))
+    if use_frequency_ml and line_tonal(tonal, stages) is not None:
+        ml = frequency_ml(ml, t, chosen, tonal, stages)
     ml = side_checked(ml, side, since, causal=False)
     if left_out is not None:
         ml = replace(ml, warnings=ml.warnings + (left_out,))
@@ -406,3 +442,144 @@ def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: 
                                range_determined=np.zeros(n, bool), undetermined_reason=np.full(n, DIVERGED, object))
         return TmaResult(solution=solution, record=record, ownship=sensor, settings=seq_settings,
                          warnings=(str(failure),))
+
+
+#: fewest bearings with a frequency for the bearings + frequency ML (as for the sequential filter's frequency)
+MIN_FREQUENCY_POINTS = 10
+#: first-time ranges (m) to which the bearings-only track is scaled about the sensor's first leg to start the
+#: bearings + frequency ML (besides the track itself): the bearings alone may leave the scale anywhere along a
+#: flat valley (on the default scene the submarine's bearings-only fit lands as far as 1e9 km)
+BF_START_RANGES_M = (1_000.0, 2_000.0, 4_000.0, 8_000.0, 16_000.0, 32_000.0)
+
+
+def frequency_ml(bearings_ml: TmaResult, t, chosen, tonal: TonalTrack, stages: PassiveStages) -> TmaResult:
+    """The batch ML on bearings + the tonal's frequency (tma/batch_bf.py; measurement model of paper P2, eq. 3),
+    with its own determination check, in place of the bearings-only ML.
+
+    The tonal's received frequency f = f0 (1 - rdot / c) carries the range rate, which fixes the scale of the
+    relative track that the bearings leave open (tma/batch_bf.py). Started from the bearings-only solution, as it
+    is and scaled about the sensor to each range of :data:`BF_START_RANGES_M`, and the mean frequency; the lowest
+    cost wins. Each channel's noise
+    is the one it states (bearing: the side fit's residuals; frequency: the tonal's ``sigma_hz``, floored at
+    ``sigma_freq_floor_hz``), scaled as in :func:`determination_checked` by the correlation inflation of its
+    residuals (``ml_correlation_inflation``) and its measured residual scale, and the fit repeated with those
+    noises; beyond :data:`~sonartrack.systems.passive.checks.MAX_RESIDUAL_SCALE` the range is not determined
+    ("inconsistent residuals"). Then the range must be determined by the first-order covariance (sd < range) and
+    by the profile likelihood with f0 free (:func:`~sonartrack.tma.batch_bf.bf_profile_rise` at twice the range or
+    the range + 3 sd; "flat likelihood").
+
+    Parameters
+    ----------
+    bearings_ml : TmaResult
+        The bearings-only ML of the chosen side's bearings (its state starts the search; returned, with a warning,
+        when the frequency fit fails).
+    t, chosen : ndarray (n,)
+        The bearings' times (s) and the chosen side's true bearings (rad).
+    tonal : TonalTrack
+        The target's line (:func:`line_tonal`).
+    stages : PassiveStages
+        The sound speed (``sequential.sound_speed_mps``), ``sigma_freq_floor_hz``, ``ml_correlation_inflation``.
+
+    Returns
+    -------
+    TmaResult
+        Method "ml" on the bearings + frequency record (``settings.frequency`` True, ``f0_hz``), rows at its times.
+    """
+    record = frequency_record(t, chosen, tonal)
+    if len(record.time_s) < MIN_FREQUENCY_POINTS:
+        return bearings_ml
+    s = stages.settings
+    sigma = np.array([np.deg2rad(bearings_ml.settings.sigma_bearing_deg), max(tonal.sigma_hz, s.sigma_freq_floor_hz)])
+    settings = bearings_ml.settings.model_copy(update={"frequency": True, "sigma_freq_hz": float(sigma[1])})
+    try:
+        with np.errstate(all="ignore"):
+            est = _bf_fit(record, bearings_ml, sigma, stages.sequential.sound_speed_mps, None)
+            scale, notes = _bf_noise_scale(record, bearings_ml.ownship, est, sigma, s.ml_correlation_inflation,
+                                           stages.sequential.sound_speed_mps)
+            if np.any(scale > 1.0):
+                est = _bf_fit(record, bearings_ml, sigma * np.sqrt(scale), stages.sequential.sound_speed_mps, est.x0)
+    except (InputError, np.linalg.LinAlgError, ValueError) as failure:
+        return replace(bearings_ml, warnings=bearings_ml.warnings + (f"bearings + frequency ML failed ({failure}): "
+                                                                      "the bearings-only ML is reported",))
+    from sonartrack.tma.batch import estimate_to_solution
+
+    result = TmaResult(solution=estimate_to_solution(est.track(), record.time_s), record=record,
+                       ownship=bearings_ml.ownship, settings=settings, f0_hz=float(est.x0[4]),
+                       f0_std_hz=float(np.sqrt(est.covariance[4, 4])), warnings=notes)
+    return _bf_verdict(result, est, sigma * np.sqrt(scale), stages.sequential.sound_speed_mps, float(scale.max()))
+
+
+def _bf_fit(record: BearingRecord, bearings_ml: TmaResult, sigma, c_mps: float, x_init):
+    """The bearings + frequency ML estimate of ``record`` with noises ``sigma`` (rad, Hz): from ``x_init``, or from
+    the bearings-only solution at the first time as it is and scaled to each of :data:`BF_START_RANGES_M` (the
+    lowest cost wins)."""
+    from sonartrack.tma.batch_bf import bf_start, ml_bearings_frequency
+    from sonartrack.tma.sequential_bf import observer_kinematics
+
+    tf = np.asarray(record.time_s, float)
+    own, ov = observer_kinematics(bearings_ml.ownship, tf)
+    f = np.asarray(record.frequency_hz, float)
+    if x_init is not None:
+        starts = [np.asarray(x_init, float)]
+    else:
+        ts, state = np.asarray(bearings_ml.solution.time_s, float), np.asarray(bearings_ml.solution.state, float)
+        x4 = np.array([np.interp(tf[0], ts, state[:, k]) for k in range(4)])
+        require(bool(np.all(np.isfinite(x4))), "the bearings-only solution is not finite")
+        r0 = float(np.hypot(*(x4[:2] - own[0])))
+        starts = [bf_start(x4, f, own[0], ov[0], scale=k) for k in (1.0, *(np.array(BF_START_RANGES_M) / r0))]
+    fits = [ml_bearings_frequency(record.bearing_rad, f, tf, own, ov, sigma[0], sigma[1], x, c_mps=c_mps)
+            for x in starts]
+    fits = [e for e in fits if np.isfinite(e.objective) and np.all(np.isfinite(e.x0))]
+    require(len(fits) > 0, "no start converged to a finite solution")
+    return min(fits, key=lambda e: e.objective)
+
+
+def _bf_noise_scale(record: BearingRecord, ownship, est, sigma, inflate: bool, c_mps: float):
+    """Per channel (bearing, frequency) the variance factor kappa s2 its residuals measure beyond the stated noise
+    (as :func:`determination_checked` does for the bearings), and the notes of the ones inflated."""
+    from sonartrack.tma.batch_bf import bf_model
+    from sonartrack.tma.sequential_bf import observer_kinematics
+
+    tf = np.asarray(record.time_s, float)
+    own, ov = observer_kinematics(ownship, tf)
+    h_b, h_f, _, _ = bf_model(est.x0, tf - tf[0], own, ov, c_mps)
+    residuals = (wrap_angle(np.asarray(record.bearing_rad) - h_b), np.asarray(record.frequency_hz) - h_f)
+    scale, notes = np.ones(2), []
+    for k, (e, name) in enumerate(zip(residuals, ("bearing", "frequency"), strict=True)):
+        kappa = correlation_inflation(e) if inflate else 1.0
+        check = residual_check(tf, e, float(sigma[k]), inflation=kappa, n_params=5)
+        scale[k] = kappa * (1.0 if check.consistent else residual_scale(check))
+        if scale[k] > 1.0:
+            notes.append(f"bearings + frequency ML: {name} noise variance scaled by {scale[k]:.3g} (correlation "
+                         f"{kappa:.3g} x residual scale {scale[k] / kappa:.3g})")
+    return scale, tuple(notes)
+
+
+def _bf_verdict(result: TmaResult, est, sigma, c_mps: float, max_scale: float) -> TmaResult:
+    """The bearings + frequency ML's rows with their verdict: residuals no noise, covariance not finite, range sd
+    at least the range, or a likelihood flat towards twice the range (:func:`frequency_ml`)."""
+    from sonartrack.tma.batch_bf import bf_profile_rise
+    from sonartrack.tma.sequential_bf import observer_kinematics
+    from sonartrack.tma.verdict import UNOBSERVABLE
+
+    if max_scale > MAX_RESIDUAL_SCALE:
+        return _undetermined(result, INCONSISTENT_RESIDUALS, f"bearings + frequency residuals {max_scale:.3g} times "
+                             f"the stated noise (more than {MAX_RESIDUAL_SCALE:g} times)")
+    P = np.asarray(result.solution.covariance, float)
+    if not np.all(np.isfinite(P)) or not np.all(np.isfinite(est.covariance)):
+        return _undetermined(result, DIVERGED, "bearings + frequency ML covariance not finite")
+    cols = solution_columns(result.solution, result.ownship)
+    r, sd = float(cols["range_m"][-1]), float(cols["range_std_m"][-1])
+    if not sd < r:
+        return _undetermined(result, UNOBSERVABLE, f"bearings + frequency ML range {r / 1e3:.2f} ± {sd / 1e3:.2f} km")
+    tf = np.asarray(result.record.time_s, float)
+    own, ov = observer_kinematics(result.ownship, tf)
+    end = np.concatenate([result.solution.state[-1], [est.x0[4]]])
+    far = max(PROFILE_FAR_FACTOR * r, r + PROFILE_SIGMAS * sd)
+    rise = bf_profile_rise(tf, result.record.bearing_rad, result.record.frequency_hz, own, ov, float(sigma[0]),
+                           float(sigma[1]), end, far, c_mps)
+    if rise >= PROFILE_MIN_RISE:
+        return result
+    return _undetermined(result, FLAT_LIKELIHOOD, f"bearings + frequencies fit a target at {far / 1e3:.1f} km almost "
+                         f"as well as at {r / 1e3:.2f} km (likelihood rise {rise:.1f} < {PROFILE_MIN_RISE:g}, the 95 % "
+                         f"point of chi-square(1)): the record does not support ± {sd / 1e3:.2f} km")
