@@ -38,6 +38,8 @@ TARGET_REALTIME = 100.0
 TARGET_MB = 1024.0
 #: the narrowband pass on, whatever the chain's default (the stage shares are measured with it)
 NARROWBAND_TOML = "[narrowband]\nenabled = true\n"
+#: and the bearing-time MFTD on as well (an option, off by default): the quiet-target front ends all at once
+MFTD_TOML = NARROWBAND_TOML + "[btr_mftd]\nenabled = true\n"
 
 
 def _scene_toml(elements: int, spacing_m: float, fs_hz: float, duration_s: float = DURATION_S) -> str:
@@ -122,6 +124,7 @@ def stage_shares(scene: Path, spacing_m: float, config: Path, size: str = "16 ch
                                 (lofar.LofarAccumulator, ("add", "gram"), "narrowband"),
                                 (narrowband, ("narrowband_lines", "source_roles", "tonals_from_lines",
                                               "narrowband_records"), "narrowband"),
+                                (chain, ("_with_mftd_peaks",), "btr mftd"),
                                 (chain, ("track_peaks",), "tracking"), (chain, ("measure_tonals",), "tonal pass"),
                                 (chain, ("solve_target",), "TMA")):
         for name in names:
@@ -133,7 +136,8 @@ def stage_shares(scene: Path, spacing_m: float, config: Path, size: str = "16 ch
     shares = dict(clock.cpu, other=total - sum(clock.cpu.values()))
     parts = ", ".join(f"{k} {v:.2f} s ({100 * v / total:.0f} %)" for k, v in shares.items())
     n_lines = len(getattr(run.result, "line_tracks", ()))
-    return (f"passive chain stages, {size}, {duration_s / 60:g} min, narrowband on ({n_lines} line tracks): CPU "
+    mftd = ", bearing-time MFTD on" if settings.btr_mftd.enabled else ""
+    return (f"passive chain stages, {size}, {duration_s / 60:g} min, narrowband on ({n_lines} line tracks){mftd}: CPU "
             f"{total:.1f} s = {duration_s / total:.0f}x real time (wall {wall:.1f} s): {parts}")
 
 
@@ -165,6 +169,17 @@ def main() -> None:
             print(_throughput_line(n, d, fs, wall, cpu, peak_mb, duration), flush=True)  # with the narrowband pass
             if n <= 32:
                 print(stage_shares(scene, d, config, f"{n} ch x {fs / 1000:g} kHz", duration), flush=True)
+            if n == 16:  # every quiet-target front end on: narrowband and the bearing-time MFTD
+                mftd = Path(tmp) / "mftd.toml"
+                mftd.write_text(MFTD_TOML)
+                wall, cpu, _ = run_measured(exe + ["passive", "--wav", str(scene / "recording.wav"), "--nav",
+                                                   str(scene / "nav.csv"), "--spacing", str(d), "--config", str(mftd),
+                                                   "--out", str(Path(tmp) / f"mftd{n}")])
+                ok = _verdict(duration / wall >= TARGET_REALTIME, duration / cpu >= TARGET_REALTIME)
+                print(f"passive with narrowband + bearing-time MFTD, {n} ch x {fs / 1000:g} kHz: "
+                      f"{duration / wall:.0f}x real time (wall {wall:.1f} s; CPU {cpu:.1f} s = {duration / cpu:.0f}x; "
+                      f"target >= {TARGET_REALTIME:.0f}x: {ok})", flush=True)
+                print(stage_shares(scene, d, mftd, f"{n} ch x {fs / 1000:g} kHz", duration), flush=True)
             (scene / "recording.wav").unlink()
 
 
