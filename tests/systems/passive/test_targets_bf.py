@@ -77,3 +77,29 @@ def test_a_weak_line_is_used_but_a_noisy_one_is_not():
     assert line_tonal(weak, STAGES) is weak
     assert line_tonal(noisy, STAGES) is None
     assert line_tonal(None, STAGES) is None
+
+
+def test_a_covariance_that_is_not_positive_definite_is_a_diverged_answer(monkeypatch):
+    """A fit whose information matrix is singular (a negative eigenvalue in its covariance) says "diverged" and
+    gives no range, where the same fit with its own covariance is determined."""
+    import dataclasses
+
+    from sonartrack.systems.passive import targets as tg
+    from sonartrack.tma.verdict import DIVERGED
+
+    x0, v = np.array([3000.0, 4000.0]), np.array([1.5, -1.0])
+    t, own, z, tonal = _scene(x0, v, 0)
+    bo = _ml(t, z, own, 1.0)
+    real = tg._bf_fit
+
+    def broken(*args):
+        est = real(*args)
+        cov = est.covariance.copy()
+        cov[4, 4] = -abs(cov[4, 4])
+        return dataclasses.replace(est, covariance=cov)
+
+    assert frequency_ml(bo, t, z, tonal, STAGES).solution.range_flags().all()
+    monkeypatch.setattr(tg, "_bf_fit", broken)
+    bf = frequency_ml(bo, t, z, tonal, STAGES)
+    assert not bf.solution.range_flags().any() and set(bf.solution.reasons()) == {DIVERGED}
+    assert np.isnan(bf.f0_std_hz)

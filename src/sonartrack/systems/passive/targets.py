@@ -505,7 +505,8 @@ def frequency_ml(bearings_ml: TmaResult, t, chosen, tonal: TonalTrack, stages: P
 
     result = TmaResult(solution=estimate_to_solution(est.track(), record.time_s), record=record,
                        ownship=bearings_ml.ownship, settings=settings, f0_hz=float(est.x0[4]),
-                       f0_std_hz=float(np.sqrt(est.covariance[4, 4])), warnings=notes)
+                       f0_std_hz=float(np.sqrt(est.covariance[4, 4])) if est.covariance[4, 4] >= 0 else np.nan,
+                       warnings=notes)
     return _bf_verdict(result, est, sigma * np.sqrt(scale), stages.sequential.sound_speed_mps, float(scale.max()))
 
 
@@ -568,6 +569,9 @@ def _bf_verdict(result: TmaResult, est, sigma, c_mps: float, max_scale: float) -
     P = np.asarray(result.solution.covariance, float)
     if not np.all(np.isfinite(P)) or not np.all(np.isfinite(est.covariance)):
         return _undetermined(result, DIVERGED, "bearings + frequency ML covariance not finite")
+    if not np.all(np.linalg.eigvalsh(0.5 * (est.covariance + est.covariance.T)) > 0):
+        return _undetermined(result, DIVERGED, "bearings + frequency ML covariance not positive definite (the "
+                             "information matrix is singular at the solution)")
     cols = solution_columns(result.solution, result.ownship)
     r, sd = float(cols["range_m"][-1]), float(cols["range_std_m"][-1])
     if not sd < r:
