@@ -448,9 +448,9 @@ class PingMftd:
         Detections
             As :meth:`push_array`.
         """
-        return self.push_array(cells.ping, cells.time_s, cells.statistic)
+        return self.push_array(cells.ping, cells.time_s, cells.statistic, level=cells.level)
 
-    def push_array(self, ping: int, time_s: float, cells) -> Detections:
+    def push_array(self, ping: int, time_s: float, cells, level=None) -> Detections:
         """Add one ping's cells and return the detections decided at it.
 
         Parameters
@@ -461,6 +461,9 @@ class PingMftd:
             The ping's transmit time (s).
         cells : array (beams, travel-time, Doppler)
             The normalised square-law statistic of the ping (noise mean ``noise_mean``).
+        level : array (beams, travel-time, Doppler), optional
+            The CFAR's noise estimate mu of each cell: the cone angle of a detection then comes from the beams'
+            power s mu (detection/cells.py :func:`~sonartrack.detection.cells.power_cone_deg`), else from s.
 
         Returns
         -------
@@ -487,14 +490,20 @@ class PingMftd:
         bb = (b[:, None] * pb + np.arange(pb)[None, :])[:, :, None]
         dd = (i[:, None] * pc + np.arange(pc)[None, :])[:, None, :]
         flat = np.argmax(y[bb, dd, j[:, None, None]].reshape(len(b), -1), axis=1) if len(b) else np.zeros(0, np.int64)
-        return self._detections(ping, time_s, b * pb + flat // pc, i * pc + flat % pc, j, st, y)
+        return self._detections(ping, time_s, b * pb + flat // pc, i * pc + flat % pc, j, st, y, level)
 
-    def _detections(self, ping: int, time_s: float, b, d, j, st, y: np.ndarray) -> Detections:
-        """The detections at input cells (b, d, j) of this ping, cone angle and delay refined by a parabola through
-        the log statistic of the cell's neighbours (:func:`parabola_offset`), as the single-ping detections are."""
+    def _detections(self, ping: int, time_s: float, b, d, j, st, y: np.ndarray, level=None) -> Detections:
+        """The detections at input cells (b, d, j) of this ping, the delay refined by a parabola through the log
+        statistic of the cell's neighbours (:func:`parabola_offset`), the cone angle from the beams' power as the
+        single-ping detections' (detection/cells.py :func:`~sonartrack.detection.cells.power_cone_deg`)."""
+        from sonartrack.detection.cells import power_cone_deg
+
         a, n = self.axes, len(b)
         log_y = np.log(np.maximum(y, 1e-30))
-        cone = np.interp(b + parabola_offset(log_y, b, d, j, 0), np.arange(len(a.cone_deg)), a.cone_deg)
+        cells = PingCells(int(ping), float(time_s), np.asarray(a.cone_deg, float), np.asarray(a.travel_time_s, float),
+                          np.asarray(a.doppler_hz, float), np.asarray(a.range_rate_mps, float), y,
+                          bool(a.doppler_measured), level)
+        cone = power_cone_deg(cells, b, d, j)
         delay = np.interp(d + parabola_offset(log_y, b, d, j, 1), np.arange(len(a.travel_time_s)), a.travel_time_s)
         return Detections(np.full(n, ping, np.int64), np.full(n, float(time_s)), cone, delay,
                           np.asarray(a.doppler_hz, float)[j], np.asarray(a.range_rate_mps, float)[j],

@@ -56,6 +56,35 @@ def test_strong_target_confirmed_on_its_true_side_after_the_turn(result, scene_f
         assert not np.any(d_mirror < 1000.0), (t, d_mirror)  # the mirror track has died
 
 
+def _contacts(t, xy, sigma=40.0):
+    from sonartrack.systems.active.contacts import Contacts
+
+    n = len(xy)
+    return Contacts(np.zeros(n, np.int64), np.full(n, t), np.arange(n), np.ones(n, np.int8), np.asarray(xy, float),
+                    np.broadcast_to(np.eye(2) * sigma**2, (n, 2, 2)).copy(), np.full(n, np.nan), np.full(n, 5000.0),
+                    np.ones(n))
+
+
+@pytest.mark.parametrize("merge", [None, 0.99])
+def test_the_chains_tracker_merges_duplicate_tracks(merge):
+    # a stray contact 60 m off the target's first contact starts a second track that then sees the same contacts:
+    # without merging both are confirmed (one target, two tracks), with it one is
+    from sonartrack.systems.active.contacts import ActiveGeometry
+    from sonartrack.systems.active.run import ContactTracker
+
+    geo = ActiveGeometry(np.array([-100.0, 1e4]), np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
+    trk = ContactTracker(ActiveSettings().tracker_settings(), geo, None, 1.0, None, merge)
+    rng = np.random.default_rng(1)
+    truth = np.array([[1000.0 + 90.0 * k, 8000.0 - 60.0 * k] for k in range(30)])
+    trk.step(0.0, _contacts(0.0, [truth[0], truth[0] + [60.0, 0.0]]))
+    for k in range(1, 30):
+        trk.step(30.0 * k, _contacts(30.0 * k, truth[k][None] + rng.normal(0, 40.0, (1, 2))))
+    tr = trk.result().tracks
+    last = (tr.time_s == tr.time_s.max()) & tr.confirmed
+    assert last.sum() == (2 if merge is None else 1)
+    assert ActiveSettings().merge_probability == 0.99
+
+
 def test_records_are_consistent(result):
     d, c = result.detections, result.contacts
     assert len(result.ping_time_s) == 40 and result.bscan.level.shape[0] == 40

@@ -56,7 +56,7 @@ def test_mirror_pair_symmetric_about_the_axis(heading_deg):
 
 
 def test_covariance_is_j_sigma_jt_at_the_measured_inputs():
-    s = ContactSettings(sigma_cone_deg=1.0)
+    s = ContactSettings(sigma_cone_deg=1.0, endfire_limit_deg=None)
     c = form_contacts(_det(12.0, 60.0), [0.0], _still(), 1500.0, s)
     var = s.variances(np.deg2rad(1.0))
     want = bistatic_covariance(12.0, np.deg2rad(60.0), 0.0, 1500.0, np.array([0.0, 2400.0]), np.zeros(2), var)
@@ -79,6 +79,22 @@ def test_cone_error_default_is_beam_step_or_p4_floor():
     assert s.cone_sigma_rad(None) == pytest.approx(np.deg2rad(0.5))
     assert s.cone_sigma_rad(6.0) == pytest.approx(np.deg2rad(6.0 / np.sqrt(12.0)))
     assert ContactSettings(sigma_cone_deg=2.0).cone_sigma_rad(6.0) == pytest.approx(np.deg2rad(2.0))
+
+
+def test_cone_error_grows_as_one_over_sine_off_broadside():
+    s = ContactSettings(sigma_cone_deg=1.0, endfire_limit_deg=10.0)
+    cone = np.deg2rad([90.0, 30.0, 150.0, 5.0, 178.0])
+    want = np.deg2rad(1.0) / np.array([1.0, 0.5, 0.5, np.sin(np.deg2rad(10.0)), np.sin(np.deg2rad(10.0))])
+    np.testing.assert_allclose(s.cone_sigmas_rad(cone, None), want, rtol=1e-12)
+    # independent: a direction cosine measured with a constant error, turned into an angle (Monte Carlo)
+    rng = np.random.default_rng(0)
+    u = np.cos(np.deg2rad(40.0)) + np.deg2rad(1.0) * rng.standard_normal(200_000)
+    assert np.std(np.arccos(u)) == pytest.approx(s.cone_sigmas_rad(np.deg2rad([40.0]), None)[0], rel=0.02)
+    # the contacts carry it: at 30 deg the covariance is the constant model's with sigma / sin 30 = 2 deg
+    c = form_contacts(_det(12.0, 30.0), [0.0], _still(), 1500.0, s)
+    const = form_contacts(_det(12.0, 30.0), [0.0], _still(), 1500.0,
+                          ContactSettings(sigma_cone_deg=2.0, endfire_limit_deg=None))
+    np.testing.assert_allclose(c.R, const.R, rtol=1e-12)
 
 
 def test_direct_blast_detection_is_dropped_and_counted():
