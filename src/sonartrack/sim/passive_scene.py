@@ -3,10 +3,11 @@
 Platforms (x east, y north; bearings clockwise from north):
 
 * the ownship is a :class:`~sonartrack.sim.platforms.ManeuveringTrack` (a straight leg, one turn, a
-  straight leg); the array centre is towed ``tow_length_m`` behind it along its own track, so it sits
-  where the ship was L / v seconds earlier and its axis heading is the ship's heading then (the
-  array heading lags the ship's through the turn);
-* each ship moves at constant velocity from its position at t = 0.
+  straight leg; or a zig-zag of turns alternating in direction); the array centre is towed ``tow_length_m``
+  behind it along its own track, so it sits where the ship was L / v seconds earlier and its axis heading is
+  the ship's heading then (the array heading lags the ship's through the turn);
+* each ship moves at constant velocity from its position at t = 0 (given, or from its place relative to the
+  array at a time: :func:`place_ship`).
 
 Seen from the array centre (what the array measures; the ship itself is ``tow_length_m`` ahead):
 
@@ -90,8 +91,45 @@ def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
     if o.turn_deg != 0:
         t0 = scene.turn_start_s
         rate = np.sign(o.turn_deg) * np.deg2rad(o.turn_rate_deg_s)
-        turns = ((t0, t0 + abs(o.turn_deg) / o.turn_rate_deg_s, float(rate)),)
+        turn_s = abs(o.turn_deg) / o.turn_rate_deg_s
+        # a zig-zag: the turns alternate in direction, so the legs alternate between two courses
+        turns = tuple((t0 + k * o.leg_s, t0 + k * o.leg_s + turn_s, float(rate) * (-1.0) ** k)
+                      for k in range(o.zigzag_turns))
     return ManeuveringTrack(o.x_m, o.y_m, o.speed_kn * KNOT_MPS, float(np.deg2rad(o.course_deg)), turns)
+
+
+def place_ship(scene: PassiveSceneSettings, ship: ShipSettings) -> ShipSettings:
+    """A ship placed relative to the array as the same ship with its position at t = 0 (x_m, y_m).
+
+    At ``at_time_s`` = t_c the ship is at range r = ``at_range_m`` and relative bearing beta =
+    ``at_relative_bearing_deg`` (clockwise from the array's axis heading h) from the array centre::
+
+        p(t_c) = p_array(t_c) + r [sin(h + beta), cos(h + beta)],   p(0) = p(t_c) - v t_c
+
+    with v the ship's constant velocity (course, speed).
+
+    Parameters
+    ----------
+    scene : PassiveSceneSettings
+        The scene (ownship, array's tow length).
+    ship : ShipSettings
+        The ship; returned unchanged when given by x_m, y_m.
+
+    Returns
+    -------
+    ShipSettings
+        The ship with ``x_m``, ``y_m`` (m) set and the placement fields cleared.
+    """
+    if not ship.placed:
+        return ship
+    track = ownship_track(scene)
+    xy, _, h = track.state(np.array([ship.at_time_s - scene.array.tow_length_m / track.speed_mps]))
+    a = float(h[0]) + np.deg2rad(ship.at_relative_bearing_deg)
+    course = np.deg2rad(ship.course_deg)
+    v = ship.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
+    p0 = xy[0] + ship.at_range_m * np.array([np.sin(a), np.cos(a)]) - v * ship.at_time_s
+    return ship.model_copy(update={"x_m": float(p0[0]), "y_m": float(p0[1]), "at_time_s": None, "at_range_m": None,
+                                   "at_relative_bearing_deg": None})
 
 
 def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -100,7 +138,8 @@ def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.nda
     Parameters
     ----------
     ship : ShipSettings
-        The ship (position at t = 0 in m, course in deg clockwise from north, speed in kn).
+        The ship (position at t = 0 in m, course in deg clockwise from north, speed in kn); a ship placed
+        relative to the array goes through :func:`place_ship` first.
     t_s : array_like, shape (T,)
         Times (s).
 
@@ -141,7 +180,7 @@ def scene_geometry(scene: PassiveSceneSettings, t_s) -> SceneGeometry:
     own_xy, _, own_h = track.state(t)
     lag_s = scene.array.tow_length_m / track.speed_mps
     array_xy, array_v, array_h = track.state(t - lag_s)
-    motion = [ship_motion(s, t) for s in scene.ships]
+    motion = [ship_motion(place_ship(scene, s), t) for s in scene.ships]
     ship_xy = np.stack([m[0] for m in motion]) if motion else np.zeros((0, t.size, 2))
     ship_v = np.stack([m[1] for m in motion]) if motion else np.zeros((0, t.size, 2))
     d = ship_xy - array_xy[None]

@@ -29,7 +29,7 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.models.bistatic import BistaticErrors, bistatic_covariance, bistatic_inputs, bistatic_position
 from sonartrack.models.clutter import Region, poisson_clutter
 from sonartrack.models.range_doppler import CwPlaneSettings
-from sonartrack.sim.passive_scene import ownship_track, received_levels, scene_geometry, ship_motion
+from sonartrack.sim.passive_scene import ownship_track, place_ship, received_levels, scene_geometry, ship_motion
 from sonartrack.sim.range_doppler import simulate_frames, simulate_target
 from sonartrack.sim.scene import PassiveSceneSettings
 
@@ -75,7 +75,7 @@ def _ping(rng, scene: PassiveSceneSettings, t: float, errors: BistaticErrors, re
     tx_m = tx + rng.normal(0.0, errors.sigma_position_m, 2)
     rx_m = rx + rng.normal(0.0, errors.sigma_position_m, 2)
     c_water = c + rng.normal(0.0, errors.sigma_sound_speed_mps)
-    ships = np.array([ship_motion(sh, np.array([t]))[0][0] for sh in scene.ships]).reshape(-1, 2)
+    ships = np.array([ship_motion(place_ship(scene, sh), np.array([t]))[0][0] for sh in scene.ships]).reshape(-1, 2)
     seen = ships[rng.random(len(ships)) < s.pd]
     tt, th = bistatic_inputs(seen, tx, rx, phi, c_water)
     tt = tt + rng.normal(0.0, errors.sigma_time_s, tt.shape)

@@ -12,6 +12,14 @@ half-way through. A merchant and a trawler on the starboard side cross in bearin
 at t = 360 s (the P0 situation); a quiet submarine to port is the weak target; a tanker far to port
 is a loud distant contact. Ambient noise 73 dB re 1 uPa^2/Hz (heavy shipping), band 50-1000 Hz.
 
+Beyond the default: the ownship can zig-zag (``ownship.zigzag_turns`` course changes ``ownship.leg_s`` apart,
+alternating in direction), and a ship can be placed relative to the array instead of by its position at t = 0
+(``at_time_s``, ``at_range_m``, ``at_relative_bearing_deg``; sim/passive_scene.py :func:`place_ship`): at range r
+and bearing beta clockwise from the array's axis heading h at time t_c, so that its position at t = 0 is
+p(t_c) - v t_c with p(t_c) = p_array(t_c) + r [sin(h + beta), cos(h + beta)]. A ship placed on the axis
+(beta = 0 or 180 deg) with a course across it crosses endfire at t_c; two ships placed at the same t_c and beta at
+different ranges cross there in bearing and cone angle.
+
 Every field is bounded to what a sea and a recorder can be (positions within 1000 km, levels within -100..220 dB,
 at most 1024 elements and 1 MHz); across fields, the scene must give a WAV header's whole sample rate, an array
 whose delays stay within a tenth of the synthesis block (the circular delay of sim/array_signals.py), a RAM field
@@ -56,7 +64,8 @@ MEMORY_LIMIT_BYTES = 2 * 1024**3
 
 
 class OwnshipSettings(Settings):
-    """The ownship: a straight leg, one course change, a straight leg (sim/platforms.py ManeuveringTrack)."""
+    """The ownship: a straight leg, one course change, a straight leg (sim/platforms.py ManeuveringTrack); or, with
+    ``zigzag_turns`` > 1, a zig-zag of legs ``leg_s`` apart alternating between two courses."""
 
     x_m: float = setting(0.0, "start position east", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
     y_m: float = setting(0.0, "start position north", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
@@ -65,8 +74,28 @@ class OwnshipSettings(Settings):
     turn_deg: float = setting(-45.0, "course change (negative: to port); 0 for none; it makes range and the "
                                      "left/right side observable", unit="deg", ge=-180, le=180)
     turn_rate_deg_s: float = setting(0.5, "rate of turn", unit="deg/s", gt=0, le=10)
-    turn_start_s: float | None = setting(None, "time the turn starts (not set: the turn is centred on the middle "
-                                               "of the recording)", unit="s", ge=0, le=MAX_DURATION_S)
+    turn_start_s: float | None = setting(None, "time the (first) turn starts (not set: the turns are centred on the "
+                                               "middle of the recording)", unit="s", ge=0, le=MAX_DURATION_S)
+    zigzag_turns: int = setting(1, "number of course changes: 1 is the one turn; more make a zig-zag, the turns "
+                                   "alternating in direction (turn_deg, -turn_deg, turn_deg, ...) so that the legs "
+                                   "alternate between course_deg and course_deg + turn_deg", unit="1", ge=1, le=100)
+    leg_s: float = setting(300.0, "zig-zag: time from the start of one turn to the start of the next (longer than "
+                                  "a turn, |turn_deg| / turn_rate_deg_s)", unit="s", gt=0, le=MAX_DURATION_S)
+
+    @model_validator(mode="after")
+    def _legs_longer_than_turns(self):
+        turn_s = abs(self.turn_deg) / self.turn_rate_deg_s
+        if self.zigzag_turns > 1 and self.leg_s <= turn_s:
+            raise ValueError(f"ownship.leg_s {self.leg_s:g} s is not longer than a turn ({turn_s:g} s = |turn_deg| / "
+                             "turn_rate_deg_s): lengthen leg_s or turn less or faster")
+        return self
+
+    @property
+    def maneuver_s(self) -> float:
+        """Time from the first turn's start to the last turn's end (s; 0 without a turn)."""
+        if self.turn_deg == 0:
+            return 0.0
+        return (self.zigzag_turns - 1) * self.leg_s + abs(self.turn_deg) / self.turn_rate_deg_s
 
 
 class ArraySettings(Settings):
@@ -88,8 +117,20 @@ class ShipSettings(Settings):
     """A ship at constant velocity radiating broadband noise (flat over the scene's band) and one tonal line."""
 
     name: str = setting(..., "name (the ship column of truth.csv)", unit="")
-    x_m: float = setting(..., "position east at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
-    y_m: float = setting(..., "position north at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    x_m: float | None = setting(None, "position east at t = 0 (not set: placed by at_time_s, at_range_m and "
+                                      "at_relative_bearing_deg)", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    y_m: float | None = setting(None, "position north at t = 0 (with x_m)", unit="m", ge=-MAX_POSITION_M,
+                                le=MAX_POSITION_M)
+    at_time_s: float | None = setting(None, "placed relative to the array instead of x_m, y_m: the time at which the "
+                                            "ship is at at_range_m and at_relative_bearing_deg from the array centre",
+                                      unit="s", ge=-MAX_DURATION_S, le=MAX_DURATION_S)
+    at_range_m: float | None = setting(None, "placed: range from the array centre at at_time_s", unit="m", gt=0,
+                                       le=MAX_POSITION_M)
+    at_relative_bearing_deg: float | None = setting(
+        None, "placed: bearing from the array centre at at_time_s, clockwise from the array's axis heading (0 ahead "
+              "and 180 astern are on the axis, endfire: a ship crossing it there changes side; 90 the starboard "
+              "beam, -90 port); two ships placed at the same time and relative bearing at different ranges cross "
+              "there in bearing and cone angle", unit="deg", ge=-360, le=360)
     course_deg: float = setting(..., "course, clockwise from north", unit="deg", ge=-360, le=360)
     speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
     depth_m: float = setting(5.0, "source depth (of the transmission loss)", unit="m", gt=0, le=MAX_DEPTH_M)
@@ -99,6 +140,20 @@ class ShipSettings(Settings):
                                      le=MAX_SAMPLE_RATE_HZ / 2)
     tonal_level_db: float = setting(0.0, "source level of the tonal line at 1 m", unit="dB re 1 uPa^2",
                                    ge=MIN_LEVEL_DB, le=MAX_SOURCE_LEVEL_DB)
+
+    @model_validator(mode="after")
+    def _placed_once(self):
+        absolute = (self.x_m is not None, self.y_m is not None)
+        placed = (self.at_time_s is not None, self.at_range_m is not None, self.at_relative_bearing_deg is not None)
+        if not ((all(absolute) and not any(placed)) or (all(placed) and not any(absolute))):
+            raise ValueError(f"ship {self.name}: give either x_m and y_m, or at_time_s, at_range_m and "
+                             "at_relative_bearing_deg (placed relative to the array)")
+        return self
+
+    @property
+    def placed(self) -> bool:
+        """Whether the ship is placed relative to the array (at_time_s, at_range_m, at_relative_bearing_deg)."""
+        return self.x_m is None
 
 
 class SampleSettings(Settings):
@@ -233,7 +288,12 @@ class PassiveSceneSettings(Settings):
         from sonartrack.core.units import KNOT_MPS
 
         o = self.ownship
-        reach = max(math.hypot(s.x_m - o.x_m, s.y_m - o.y_m) + (s.speed_kn + o.speed_kn) * KNOT_MPS * self.duration_s
+        def start_distance(s: ShipSettings) -> float:  # a placed ship: at most this far at t = 0
+            if not s.placed:
+                return math.hypot(s.x_m - o.x_m, s.y_m - o.y_m)
+            return s.at_range_m + self.array.tow_length_m + (s.speed_kn + o.speed_kn) * KNOT_MPS * abs(s.at_time_s)
+
+        reach = max(start_distance(s) + (s.speed_kn + o.speed_kn) * KNOT_MPS * self.duration_s
                     for s in self.ships) + self.array.tow_length_m
         if reach > MAX_RAM_RANGE_M:
             raise ValueError(f"propagation = ram would compute the field out to {reach / 1e3:.0f} km (the farthest "
@@ -283,7 +343,7 @@ class PassiveSceneSettings(Settings):
         o = self.ownship
         if o.turn_start_s is not None:
             return o.turn_start_s
-        return max(0.5 * self.duration_s - 0.5 * abs(o.turn_deg) / o.turn_rate_deg_s, 0.0)
+        return max(0.5 * self.duration_s - 0.5 * o.maneuver_s, 0.0)
 
     def tma_ship_name(self) -> str | None:
         """The ship of the TMA sample (brg.csv): the named one, else the quietest by broadband source level.
