@@ -452,7 +452,7 @@ def join_statistic(a: _Fragment, b: _Fragment, nav) -> tuple[float, float]:
     (float, float)
         F and its critical value at ``1 - JOIN_ALPHA`` (F > critical: not one target; inf, 0 when a is too short).
     """
-    from scipy.stats import f as f_dist
+    from scipy.special import fdtri  # the F quantile (f.ppf's own formula) without scipy.stats' 0.3 s import
 
     n_a = len(a.time_s)
     if n_a < MIN_FIT_POINTS or len(b.time_s) < 2:
@@ -470,7 +470,7 @@ def join_statistic(a: _Fragment, b: _Fragment, nav) -> tuple[float, float]:
     keep = np.concatenate([np.ones(n_a, bool), ~far])
     j_ab, _ = cv_fit_residuals_deg(ab.time_s, ab.cone_deg, nav, keep)
     n_b = int((~far).sum())
-    return float(max(j_ab - j_a, 0.0) / n_b / var_a), float(f_dist.ppf(1.0 - JOIN_ALPHA, n_b, n_a - 4))
+    return float(max(j_ab - j_a, 0.0) / n_b / var_a), float(fdtri(n_b, n_a - 4, 1.0 - JOIN_ALPHA))
 
 
 def _after(a: _Fragment, b: _Fragment) -> _Fragment:
