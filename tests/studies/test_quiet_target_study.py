@@ -214,7 +214,35 @@ def test_cell_claims_read_the_summary(cells):
     _, s = cells
     cl = {c.id: c for c in study._cell_claims(s)}
     assert set(cl) == {"cells-mftd-gain-gaussian", "cells-mftd-gain-exponential", "cells-mftd-false-rate-gaussian",
-                       "cells-mftd-false-rate-exponential", "cells-lofar-integration-gain"}
+                       "cells-mftd-false-rate-exponential", "cells-lofar-integration-gain", "cells-line-mftd-gain"}
     g = s["gaussian"]["gain50_db"]
     assert cl["cells-mftd-gain-gaussian"].holds == (g[0] >= study.MFTD_GAIN_REQUIRED_DB)
     assert g[1] <= g[0] <= g[2]
+
+
+def test_line_cells_single_level_matches_the_f_law(cells):
+    """Single period on LOFAR cells at pfa: z = (1 + s) F(2L, 2LR) on the line, so Pd = 0.5 where
+    (1 + s) = t / median(F), t the F quantile at 1 - pfa."""
+    from scipy.optimize import brentq
+    from scipy.stats import f as f_law
+
+    from sonartrack.acoustics.lofar import LofarSettings
+
+    cfg, s = cells
+    d1 = 2 * cfg.integration
+    d2 = d1 * 2 * LofarSettings().reference_bins
+    t = f_law.isf(cfg.pfa, d1, d2)
+    closed_form_db = 10 * np.log10(brentq(lambda x: f_law.sf(t / (1 + x), d1, d2) - 0.5, 1e-3, 100.0))
+    _, lo, hi = s["line"]["level50_single"]
+    assert lo - 0.5 <= closed_form_db <= hi + 0.5, (closed_form_db, lo, hi)  # +- half a 1 dB grid step
+
+
+def test_line_mftd_gain_claim(cells):
+    _, s = cells
+    g = s["line"]["gain50_db"]
+    assert g[1] <= g[0] <= g[2]
+    assert g[0] > 0  # the MFTD per line detects weaker lines than the single period at the same pfa
+    claim = {c.id: c for c in study._cell_claims(s)}["cells-line-mftd-gain"]
+    assert claim.holds == (g[0] >= study.MFTD_GAIN_REQUIRED_DB)
+    worse = {**s, "line": {**s["line"], "gain50_db": [1.0, 0.0, 2.0]}}
+    assert not {c.id: c for c in study._cell_claims(worse)}["cells-line-mftd-gain"].holds

@@ -15,6 +15,8 @@
    Gasior & Gonzalez, "Improving FFT frequency measurement resolution by parabolic and Gaussian spectrum
    interpolation", AIP Conf. Proc. 732, 2004, sec. 3; applied across beams too, where the main lobe is close to a
    Gaussian).
+   With ``[narrowband] mftd`` (off by default), paper P1's MFTD over each line's bearing-time record adds the
+   periods the single-period threshold missed (systems/passive/line_mftd.py) before the refinement.
    Then tracked in frequency and bearing and grouped into sources (tracking/line_tracks.py).
 2. Sources and bearing tracks. A source whose bearing history follows a confirmed bearing track (RMS cone-angle
    difference over their common periods within ``match_beamwidths`` broadside beamwidths at the source's
@@ -152,7 +154,13 @@ def narrowband_lines(gram: LofarGram | None, stages: PassiveStages) -> Narrowban
     if gram is None:
         return NarrowbandLines(None, (), ())
     cfg = stages.settings.narrowband
-    d = refined_detections(gram, detect_lines(gram, cfg))
+    d = detect_lines(gram, cfg)
+    if cfg.mftd:  # track-before-detect per line: the periods the single-period threshold missed
+        from sonartrack.systems.passive.line_mftd import with_line_mftd
+
+        m = cfg.line_mftd
+        d, _ = with_line_mftd(gram, d, cfg, m.pfa, m, m.band_bins, m.near_beams, m.min_detections)
+    d = refined_detections(gram, d)
     tracker = cfg.line_tracker.build()
     lines = track_lines(d.time_s, d.frequency_hz, d.cone_deg, d.snr_db, tracker)
     return NarrowbandLines(gram, tuple(lines), tuple(group_sources(lines, tracker)))

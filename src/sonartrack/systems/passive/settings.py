@@ -56,6 +56,30 @@ PassiveLineTrackerSettings = derived_settings(
                                   "120 s gave the submarine no side; 3e-3 holds it 40..344 s, side port)")})
 
 
+class LineMftdSettings(BtrMftdSettings):
+    """Paper P1's MFTD per narrowband line (systems/passive/line_mftd.py): over each bin's bearing-time record
+    (periods x beams) of the bins near a single-period line detection, the LOFAR statistic mapped to N(0, 1) through
+    its F law. Off by default (``[narrowband] mftd``): on synthetic F cells it gains ~4 dB over the single period at
+    equal false-alarm rate (study quiet-target, row cells-line-mftd-gain), and an hour of noise (16 x 2.5 m, 4 kHz)
+    gave no line track and no target with it on; but it costs too much for what it adds on the default scene (1200 s,
+    16 channels at 4 kHz: processor time 10.9 s against 7.9 s without, the same four targets, the submarine's line
+    held to 1192 s instead of 1144 s)."""
+
+    pfa: float = setting(1e-4, "false detections per beam, bin and period its threshold is calibrated for (the line "
+                               "threshold's)", unit="1", gt=0, lt=0.1)
+    max_rate_deg_s: float = setting(0.25, "largest cone-angle rate of a line (a 16 s period: 4 deg a period)",
+                                    unit="deg/s", gt=0, le=30)
+    tile_beams: int = setting(16, "beams a tile owns (one P1 test per tile and period: two lines on one bin 48 deg "
+                                  "apart are both found)", unit="1", ge=1)
+    band_bins: int = setting(1, "bins searched either side of each single-period line detection's bin", unit="1",
+                             ge=0, le=16)
+    min_detections: int = setting(3, "a bin is searched when at least this many single-period detections of the "
+                                     "recording lie within band_bins of it, and more than noise alone puts there "
+                                     "(systems/passive/line_mftd.py, BIN_ALPHA)", unit="1", ge=1)
+    near_beams: int = setting(2, "an MFTD detection within this many beams and one bin of a single-period detection "
+                                 "of its period is that detection", unit="1", ge=0, le=16)
+
+
 class NarrowbandSettings(LofarSettings):
     """Narrowband (LOFAR) pass per beam (acoustics/lofar.py), its line tracks (tracking/line_tracks.py) and what the
     chain makes of them (systems/passive/narrowband.py): a track's tonal where its own beam shows none, and targets
@@ -88,6 +112,10 @@ class NarrowbandSettings(LofarSettings):
                                     gt=0, le=3600)
     line_tracker: PassiveLineTrackerSettings = setting(default_factory=PassiveLineTrackerSettings,
                                                        doc="tracking of the lines in frequency and bearing")
+    mftd: bool = setting(False, "run P1's MFTD over each line's bearing-time record (systems/passive/line_mftd.py) "
+                                "and add its detections to the line detections", unit="")
+    line_mftd: LineMftdSettings = setting(default_factory=LineMftdSettings,
+                                          doc="the MFTD per narrowband line (with ``mftd = true``)")
 
 
 class PassiveBtrMftdSettings(BtrMftdSettings):
