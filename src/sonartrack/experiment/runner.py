@@ -278,6 +278,9 @@ def _stop_pool(pool) -> None:
     """Cancel queued chunks and kill the running ones (an interrupt: their results would be dropped anyway)."""
     # taken before shutdown(), which drops the pool's table of processes (Python >= 3.14: pool.kill_workers())
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    # and its manager thread: shutdown(wait=False) forgets it, and if it is still closing its wake-up pipe when the
+    # interpreter exits, concurrent.futures' exit hook writes to the closed pipe and prints a traceback
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in procs:
         with contextlib.suppress(OSError, ValueError, AttributeError):
@@ -286,6 +289,8 @@ def _stop_pool(pool) -> None:
         with contextlib.suppress(OSError, ValueError, AttributeError, AssertionError):
             proc.join(5)
     pool.shutdown(wait=True)
+    if manager is not None:
+        manager.join(5)
 
 
 class WorkerPool:
