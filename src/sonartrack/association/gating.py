@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+from sonartrack.core.gaussian import chi2_quantile
+
 
 def gate_threshold(gate_probability: float, dim: int = 2) -> float:
     """Chi-square gate size gamma with ``F_chi2(gamma; dim) = gate_probability`` (Bar-Shalom et al. 2001, sec. 2.6).
@@ -37,9 +39,7 @@ def gate_threshold(gate_probability: float, dim: int = 2) -> float:
         raise ValueError("gate probability must be in (0, 1)")
     if dim == 2:
         return -2.0 * math.log1p(-gate_probability)
-    from scipy.special import gammaincinv  # chi2.ppf's own formula, without scipy.stats' 0.3 s import
-
-    return float(2.0 * gammaincinv(dim / 2.0, gate_probability))
+    return chi2_quantile(gate_probability, dim)
 
 
 def gate_probability(gamma: float, dim: int = 2) -> float:

@@ -135,3 +135,27 @@ def logsumexp(a, axis=-1):
     with np.errstate(divide="ignore"):  # an all -inf row is log(0) = -inf, by design
         out = np.log(np.sum(np.exp(a - amax), axis=axis, keepdims=True)) + amax
     return np.squeeze(out, axis=axis)
+
+
+def chi2_quantile(q, dof):
+    """The chi-square(dof) quantile q: 2 P^-1(dof / 2, q), P the regularised lower incomplete gamma function.
+
+    The formula ``scipy.stats.chi2.ppf`` evaluates (equal to the bit; tests), without importing scipy.stats, which
+    costs about 0.3 s of every command line that reaches it.
+
+    Parameters
+    ----------
+    q : float or array_like
+        Probability, 0 < q < 1.
+    dof : float or array_like
+        Degrees of freedom (> 0); broadcasts with ``q``.
+
+    Returns
+    -------
+    float or ndarray
+        The quantile(s).
+    """
+    from scipy.special import gammaincinv
+
+    out = 2.0 * gammaincinv(np.asarray(dof, float) / 2.0, q)
+    return float(out) if np.ndim(out) == 0 else out

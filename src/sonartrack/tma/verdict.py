@@ -34,6 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.tma.records import OwnshipTrack, TmaSolution
 from sonartrack.tma.settings import VerdictSettings
 
@@ -145,7 +146,6 @@ def running_nis_outside(nis, dof, window: int, alpha: float) -> np.ndarray:
     ndarray of bool (n,)
         True where the running sum is above the interval (False where no innovation has been seen yet).
     """
-    from scipy.special import gammaincinv  # chi-square quantile 2 P^-1(k/2, q); scipy.stats is slow to import
 
     e = np.nan_to_num(np.asarray(nis, float), nan=0.0)
     m = np.asarray(dof, int)
@@ -155,7 +155,7 @@ def running_nis_outside(nis, dof, window: int, alpha: float) -> np.ndarray:
     s, n_dof = ce[k] - ce[lo_i], cm[k] - cm[lo_i]
     out = np.zeros(len(e), bool)
     has = n_dof > 0
-    out[has] = s[has] > 2.0 * gammaincinv(n_dof[has] / 2.0, 1 - alpha / 2)
+    out[has] = s[has] > chi2_quantile(1 - alpha / 2, n_dof[has])
     return out
 
 

@@ -336,6 +336,8 @@ def test_a_three_day_recording_is_refused_for_its_lofar_gram_and_not_without_the
 def test_chi_square_quantile_is_scipy_stats_to_the_bit():
     from scipy.stats import chi2
 
+    from sonartrack.core.gaussian import chi2_quantile
+
     for q in (0.95, 0.99, 0.9973):
         for dof in (1, 2, 7, 40, 999):
-            assert checks._chi2_ppf(q, dof) == float(chi2.ppf(q, dof))
+            assert chi2_quantile(q, dof) == float(chi2.ppf(q, dof))

@@ -39,6 +39,7 @@ import numpy as np
 
 from sonartrack.acoustics.line_array import Band, LineArray
 from sonartrack.core.errors import InputError
+from sonartrack.core.gaussian import chi2_quantile
 
 #: the first pass reads this many excerpts, spread from the file's start to its end ...
 EXCERPTS = 3
@@ -509,7 +510,7 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     kappa = (1 + rho) / (1 - rho) the covariance inflation the solution states (AR(1) errors; Bretherton et al.
     1999, J. Climate 12, eq. 31). A fit that left a slow structure in its residuals (a wrong track absorbing part of
     the data) fails the block test although its chi2 fits. Upper-tail limits at RESIDUAL_ALPHA
-    (:func:`_chi2_ppf`).
+    (:func:`~sonartrack.core.gaussian.chi2_quantile`).
 
     Parameters
     ----------
@@ -539,15 +540,7 @@ def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float =
     block_chi2 = float(np.sum(sums[full] ** 2 / counts[full]) / inflation)
     b = max(int(full.sum()), 1)
     q = 1.0 - RESIDUAL_ALPHA
-    return ResidualCheck(float(w @ w), dof, _chi2_ppf(q, dof), block_chi2, b, _chi2_ppf(q, b))
-
-
-def _chi2_ppf(q: float, dof: int) -> float:
-    """The chi-square(dof) quantile q: 2 P^-1(dof / 2, q), P the regularised lower incomplete gamma function (the
-    formula scipy.stats.chi2.ppf evaluates, the same value without importing scipy.stats, 0.2 s)."""
-    from scipy.special import gammaincinv
-
-    return float(2.0 * gammaincinv(dof / 2.0, q))
+    return ResidualCheck(float(w @ w), dof, chi2_quantile(q, dof), block_chi2, b, chi2_quantile(q, b))
 
 
 #: residuals whose measured variance exceeds the stated noise's (and its correlation inflation) this many times are
