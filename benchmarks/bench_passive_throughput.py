@@ -18,7 +18,9 @@ Stage shares (at 16 x 4 kHz, and at 32 x 8 kHz, the target's size): the chain ru
 front end's pass, less its LOFAR accumulation), narrowband (the LOFAR gram accumulated in the front end's pass,
 then lines, line tracks, sources), tracking, tonal pass (the second pass over the recording, on the bearing-track
 fragments before they are joined), TMA (sides and solutions); the rest (reading the navigation, checks) is
-"other".
+"other". And at 32 x 8 kHz the whole process by phase (``sonartrack passive`` in a child process with a CPU clock
+around each phase): the start (interpreter and the command line's imports), reading and the chain, tables, figures,
+page, the rest.
 """
 
 from __future__ import annotations
@@ -141,6 +143,54 @@ def stage_shares(scene: Path, spacing_m: float, config: Path, size: str = "16 ch
             f"{total:.1f} s = {duration_s / total:.0f}x real time (wall {wall:.1f} s): {parts}")
 
 
+#: run in a child process: ``sonartrack passive`` as the command line runs it, with a CPU clock around its phases
+_PHASES_CHILD = """
+import functools, importlib, sys, time
+marks = {}
+def clocked(module, name, label):
+    m = importlib.import_module(module)
+    f = getattr(m, name)
+    @functools.wraps(f)
+    def timed(*a, **k):
+        t = time.process_time()
+        try:
+            return f(*a, **k)
+        finally:
+            marks[label] = marks.get(label, 0.0) + time.process_time() - t
+    setattr(m, name, timed)
+t0 = time.process_time()
+import sonartrack.cli.passive
+for module, name, label in PHASES:
+    clocked(module, name, label)
+marks["start"] = time.process_time()
+from sonartrack.cli import main
+code = main(sys.argv[1:])
+total = time.process_time()
+marks["rest"] = total - sum(marks.values())
+print(repr((code, total, marks)))
+"""
+#: (module, function, label) of the phases of ``sonartrack passive`` (cli/passive.py) the phase line reports
+PHASES = (("sonartrack.systems.passive.files", "run_passive_recording", "reading + chain"),
+          ("sonartrack.systems.passive.files", "write_passive_tables", "tables"),
+          ("sonartrack.report.figures.passive", "write_passive_figures", "figures"),
+          ("sonartrack.report.passive_page", "write_passive_page", "page"))
+
+
+def process_phases(passive_args: list[str], size: str) -> str:
+    """One line: the CPU time of ``sonartrack passive`` (a child process) by phase: the interpreter's start and
+    the command line's imports ("start"), reading and the chain (with the heavy imports made on first use:
+    pandas-free navigation, scipy, numba), tables, figures (with matplotlib's import), page, the rest."""
+    import ast
+
+    code = f"PHASES = {PHASES!r}\n" + _PHASES_CHILD
+    out = subprocess.run([sys.executable, "-c", code, *passive_args], capture_output=True, text=True, check=True)
+    status, total, marks = ast.literal_eval(out.stdout.strip().splitlines()[-1])
+    if status:
+        raise SystemExit(f"passive failed: {out.stderr[-500:]}")
+    parts = ", ".join(f"{k} {v:.2f} s ({100 * v / total:.0f} %)" for k, v in marks.items())
+    return f"passive process phases, {size}, CPU {total:.1f} s: {parts}"
+
+
 def _options() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     names = [f"{n}x{fs / 1000:g}" for n, _, fs in ARRAYS]
@@ -163,10 +213,12 @@ def main() -> None:
             toml.write_text(_scene_toml(n, d, fs, duration))
             subprocess.run(exe + ["simulate", "--scene", str(toml), "--only", "passive", "--out", str(scene)],
                            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-            wall, cpu, peak_mb = run_measured(exe + ["passive", "--wav", str(scene / "recording.wav"), "--nav",
-                                                     str(scene / "nav.csv"), "--spacing", str(d), "--config",
-                                                     str(config), "--out", str(Path(tmp) / f"out{n}")])
+            passive = ["passive", "--wav", str(scene / "recording.wav"), "--nav", str(scene / "nav.csv"),
+                       "--spacing", str(d), "--config", str(config), "--out", str(Path(tmp) / f"out{n}")]
+            wall, cpu, peak_mb = run_measured(exe + passive)
             print(_throughput_line(n, d, fs, wall, cpu, peak_mb, duration), flush=True)  # with the narrowband pass
+            if (n, fs) == (32, 8000.0):  # where the whole process's time goes at the target's size
+                print(process_phases(passive, f"{n} ch x {fs / 1000:g} kHz"), flush=True)
             if n <= 32:
                 print(stage_shares(scene, d, config, f"{n} ch x {fs / 1000:g} kHz", duration), flush=True)
             if n == 16:  # every quiet-target front end on: narrowband and the bearing-time MFTD

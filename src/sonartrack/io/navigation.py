@@ -26,7 +26,7 @@ from sonartrack.io.tables import (
     check_platform_speed,
     check_sorted,
     numeric_column,
-    read_table,
+    read_numeric_table,
 )
 from sonartrack.tma.records import OwnshipTrack
 
@@ -174,7 +174,7 @@ def read_navigation(path) -> Navigation:
         On any failed check (unsorted times, one row, radians, implausible speed, partial array columns).
     """
     what = "navigation"
-    df = read_table(path, what)
+    df = read_numeric_table(path, what)
     check_columns(df, NAV_COLUMNS, what, path)
     t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S)
     check_sorted(t, what, path, strict=True)

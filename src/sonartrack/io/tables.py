@@ -15,6 +15,8 @@ first offending value and its data row, and the fix:
 
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -134,12 +136,90 @@ def read_table(path: str | Path, what: str):
     return df
 
 
+#: the largest CSV read without pandas (bytes, about 50 000 rows of a navigation table): a plain table of numbers
+#: this small parses in Python in less time than pandas takes to import; larger or other files go through pandas
+PLAIN_CSV_MAX_BYTES = 4_000_000
+#: a cell of a plain CSV: a decimal number (no NaN, infinity, spaces, quotes, thousands separators)
+_PLAIN_CELL = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+#: an integer cell that pandas would read as an integer column's 0 where float() gives -0.0, or beyond float's
+#: exact integers: left to pandas
+_AWKWARD_INTEGER = re.compile(r"(?:^|,)(?:-0+|[+-]?\d{16,})(?=,|$)")
+
+
+@dataclass(frozen=True, slots=True)
+class NumericTable:
+    """A plain CSV of numbers read without pandas (:func:`read_numeric_table`): its column names (stripped of
+    spaces, in file order) and each column's float64 values; ``table[name]`` is a column, as a DataFrame's."""
+
+    columns: list[str]
+    values: dict[str, np.ndarray]
+
+    def __getitem__(self, col: str) -> np.ndarray:
+        return self.values[col]
+
+    def __len__(self) -> int:
+        return len(self.values[self.columns[0]])
+
+
+def _plain_numeric_csv(p: Path) -> NumericTable | None:
+    """The table when the file is a plain CSV of numbers -- ASCII, a header line of distinct names, then rows of
+    decimal numbers all of the header's width, blank lines skipped, no comment, quote, NaN or infinity -- with the
+    values pandas' ``read_csv`` gives it (both round the decimal text to the nearest float); None for any other
+    file, which :func:`read_table` then reads (and refuses with its own messages)."""
+    try:
+        text = p.read_bytes().decode("ascii")
+    except UnicodeDecodeError:
+        return None
+    text = text.replace("\r\n", "\n")
+    if "\r" in text or '"' in text or "#" in text:
+        return None
+    head, _, body = text.partition("\n")
+    names = [c.strip() for c in head.split(",")]
+    rows = [line for line in body.split("\n") if line]
+    if not rows or "" in names or len(set(names)) != len(names):
+        return None
+    row = re.compile(",".join([_PLAIN_CELL] * len(names)))
+    if not all(row.fullmatch(line) for line in rows) or any(_AWKWARD_INTEGER.search(line) for line in rows):
+        return None
+    values = np.array([[float(c) for c in line.split(",")] for line in rows], dtype=float).reshape(len(rows), -1)
+    if not np.isfinite(values).all():
+        return None
+    return NumericTable(names, {c: values[:, k].copy() for k, c in enumerate(names)})
+
+
+def read_numeric_table(path: str | Path, what: str):
+    """:func:`read_table` for a table of numbers: a small plain CSV (:data:`PLAIN_CSV_MAX_BYTES`,
+    :func:`_plain_numeric_csv`) is read without importing pandas, to the same values; any other file through
+    :func:`read_table`, with its checks and messages.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    what : str
+        What the file is, for the messages.
+
+    Returns
+    -------
+    NumericTable or pandas.DataFrame
+        The table (column names stripped of spaces); either gives its columns by name to :func:`check_columns`
+        and :func:`numeric_column`.
+    """
+    p = check_file(path, what)
+    if (p.suffix.lower() not in (".parquet", ".pq") and 0 < p.stat().st_size <= PLAIN_CSV_MAX_BYTES
+            and sniff_file_type(p) is None):
+        table = _plain_numeric_csv(p)
+        if table is not None:
+            return table
+    return read_table(path, what)
+
+
 def check_columns(df, required: list[str], what: str, path) -> None:
     """Fail on columns in a unit we do not take (naming the fix), then on missing required columns.
 
     Parameters
     ----------
-    df : pandas.DataFrame
+    df : pandas.DataFrame or NumericTable
         The table.
     required : list of str
         Required column names.
@@ -186,7 +266,7 @@ def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: fl
 
     Parameters
     ----------
-    df : pandas.DataFrame
+    df : pandas.DataFrame or NumericTable
         The table.
     col : str
         Column name.
@@ -211,15 +291,19 @@ def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: fl
     InputError
         Naming the first offending data row and value.
     """
-    import pandas as pd
-
     raw = df[col]
-    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+    if isinstance(raw, np.ndarray):  # a NumericTable's column: numbers already
+        values = np.array(raw, dtype=float)
+    else:
+        import pandas as pd
+
+        values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(values)
     if bad.any():
         row = int(np.argmax(bad))
+        cell = raw[row] if isinstance(raw, np.ndarray) else raw.iloc[row]
         raise InputError(f"{what} file {path}: column '{col}' has {int(bad.sum())} missing, NaN, infinite or "
-                         f"non-numeric value(s), first at data row {row + 1} ({cell_text(raw.iloc[row])}): fix or "
+                         f"non-numeric value(s), first at data row {row + 1} ({cell_text(cell)}): fix or "
                          "remove those rows")
     check_range(values, col, what, path, lo=lo, hi=hi, lo_open=lo_open, fix=fix)
     return values

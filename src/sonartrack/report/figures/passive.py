@@ -8,8 +8,57 @@ from pathlib import Path
 
 import numpy as np
 
-from sonartrack.io.atomic import save_figure
 from sonartrack.report.figures.tma import ellipses
+
+#: the pictures' resolution (dots per inch)
+DPI = 110
+#: zlib level of the PNG files (1: fastest; lossless at any level)
+PNG_COMPRESS_LEVEL = 1
+#: white margin kept around the drawing when the picture is cropped to it (inches)
+PAD_IN = 0.1
+
+
+def _figure(size_in: tuple[float, float]):
+    """A figure of ``size_in`` inches at :data:`DPI` on its own Agg canvas: no pyplot, so no figure manager to open
+    and close and nothing kept after the picture is saved."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size_in, dpi=DPI)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save_png(fig, path: Path) -> Path:
+    """Draw ``fig`` once and write it as a PNG cropped to its drawing plus :data:`PAD_IN` of white (what a tight
+    bounding box gives, which matplotlib gets by drawing the figure twice), atomically.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure of :func:`_figure` (an Agg canvas), on a white background.
+    path : path
+        The PNG file.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    from PIL import Image
+
+    from sonartrack.io.atomic import atomic_path
+
+    fig.canvas.draw()
+    rgba = np.asarray(fig.canvas.buffer_rgba())
+    ink = np.any(rgba[..., :3] != 255, axis=2)
+    rows, cols = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    if rows.size:
+        pad = int(round(PAD_IN * fig.dpi))
+        rgba = rgba[max(rows[0] - pad, 0): rows[-1] + pad + 1, max(cols[0] - pad, 0): cols[-1] + pad + 1]
+    with atomic_path(path) as tmp:
+        Image.fromarray(np.ascontiguousarray(rgba), "RGBA").save(tmp, format="png", compress_level=PNG_COMPRESS_LEVEL)
+    return Path(path)
 
 
 def bearing_time_picture(result):
@@ -26,10 +75,9 @@ def bearing_time_picture(result):
         Normalised beam level over cone angle (x) and time (y, downwards), the targets' tracks on top (a narrowband
         target's line bearings dashed), the other tracks faint.
     """
-    import matplotlib.pyplot as plt
-
     rec = result.record
-    fig, ax = plt.subplots(figsize=(8, 7))
+    fig = _figure((8, 7))
+    ax = fig.subplots()
     level = np.asarray(rec.level, float)
     t_end = float(rec.time_s[-1]) if len(rec.time_s) else 1.0
     # saturate at twice the detection threshold: a loud ship would otherwise wash out the weak ones
@@ -77,10 +125,9 @@ def tactical_picture(result):
     matplotlib.figure.Figure
         Ownship and array tracks, each target's ML track with 95 % ellipses, its rejected mirror faint.
     """
-    import matplotlib.pyplot as plt
-
     nav = result.nav
-    fig, ax = plt.subplots(figsize=(8, 8))
+    fig = _figure((8, 8))
+    ax = fig.subplots()
     ax.plot(nav.x_m / 1e3, nav.y_m / 1e3, "b-", lw=1.5, label="ownship")
     ax.plot(nav.array_x_m / 1e3, nav.array_y_m / 1e3, "c--", lw=1.0, label="array centre")
     for k, tg in enumerate(result.targets):
@@ -151,11 +198,10 @@ def lofar_picture(result):
         Per panel: the normalised statistic z (dB) over frequency (x) and time (y, downwards) on the beam that
         follows the target, +-``LOFAR_HALF_SPAN_HZ`` around its source's line.
     """
-    import matplotlib.pyplot as plt
-
     gram = result.lofar
     panels = _lofar_panels(result)
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 6), squeeze=False)
+    fig = _figure((4.2 * len(panels), 6))
+    axes = fig.subplots(1, len(panels), squeeze=False)
     f = np.asarray(gram.freqs_hz, float)
     period = float(gram.time_s[1] - gram.time_s[0]) if len(gram.time_s) > 1 else 2.0 * float(gram.time_s[0])
     for ax, (title, beams, line_hz) in zip(axes[0], panels, strict=True):
@@ -187,18 +233,8 @@ def write_passive_figures(result, out) -> list[Path]:
         bearing_time.png, tactical.png and, when the narrowband pass made a gram, lofar.png in ``out``, saved
         atomically.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out = Path(out)
-    paths = []
     figures = [("bearing_time.png", bearing_time_picture), ("tactical.png", tactical_picture)]
     if getattr(result, "lofar", None) is not None:
         figures.append(("lofar.png", lofar_picture))
-    for name, draw in figures:
-        fig = draw(result)
-        paths.append(save_figure(fig, out / name, dpi=110, bbox_inches="tight"))
-        plt.close(fig)
-    return paths
+    return [_save_png(draw(result), out / name) for name, draw in figures]

@@ -32,7 +32,6 @@ from pathlib import Path
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.io.atomic import write_csv
 from sonartrack.io.navigation import Navigation, check_array_fallback, check_navigation_covers, read_navigation
 from sonartrack.io.recording_sequence import RecordingSequence, iter_sequence_blocks, open_sequence
 from sonartrack.systems.passive.chain import PassiveResult, run_passive
@@ -45,7 +44,7 @@ from sonartrack.systems.passive.checks import (
     first_pass,
 )
 from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
-from sonartrack.systems.passive.tables import peaks_table, targets_table
+from sonartrack.systems.passive.tables import peaks_columns, targets_columns, write_columns_csv
 
 #: navigation suffixes read as a table in seconds from the recording's start (io/navigation.py)
 NAV_TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
@@ -297,8 +296,9 @@ def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress
     return run_passive_recording(wav_path, nav_path, settings, progress=progress, **options).result
 
 
-def levels_table(level_db: np.ndarray, window_s: float):
-    """levels.csv: time_s (window centre, s) and level_db_re_1upa (broadband, mean over elements; empty in a gap).
+def levels_columns(level_db: np.ndarray, window_s: float) -> dict[str, np.ndarray]:
+    """levels.csv's columns: time_s (window centre, s) and level_db_re_1upa (broadband, mean over elements; NaN,
+    an empty cell, in a gap).
 
     Parameters
     ----------
@@ -309,13 +309,31 @@ def levels_table(level_db: np.ndarray, window_s: float):
 
     Returns
     -------
+    dict of str to ndarray
+        time_s (s) and level_db_re_1upa, one row per window.
+    """
+    level = np.asarray(level_db, float)
+    return {"time_s": (np.arange(level.size) + 0.5) * window_s, "level_db_re_1upa": level}
+
+
+def levels_table(level_db: np.ndarray, window_s: float):
+    """levels.csv as a table (:func:`levels_columns`).
+
+    Parameters
+    ----------
+    level_db : numpy.ndarray
+        (windows,) broadband level of each window (dB re 1 uPa; NaN in a gap).
+    window_s : float
+        Window length (s).
+
+    Returns
+    -------
     pandas.DataFrame
         Columns time_s (s) and level_db_re_1upa, one row per window.
     """
     import pandas as pd
 
-    level = np.asarray(level_db, float)
-    return pd.DataFrame({"time_s": (np.arange(level.size) + 0.5) * window_s, "level_db_re_1upa": level})
+    return pd.DataFrame(levels_columns(level_db, window_s))
 
 
 def origin_column(result: PassiveResult, target_id) -> np.ndarray:
@@ -352,11 +370,49 @@ def _harmonic_notes(source) -> dict[int, str]:
     return {k: ", ".join(v) + f0 for k, v in notes.items()}
 
 
+def lines_columns(result: PassiveResult) -> dict[str, np.ndarray]:
+    """lines.csv's columns: one row per line track per period: line and source ids, the target the source feeds
+    or became (None, an empty cell: none), the period centre (s), the filtered frequency (Hz) and cone angle (deg)
+    and their rates (Hz/s, deg/s), the detection's SNR (dB) and its refined frequency and cone angle (NaN where the
+    period had no detection), and the line's harmonic relations within its source.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns :data:`LINE_COLUMNS`; no rows when the narrowband pass did not run or found no line.
+    """
+    from sonartrack.systems.passive.tables import stack_column
+
+    source_of = {i: src for src in result.line_sources for i in src.track_ids}
+    feeds = result.source_targets or {}
+    parts = []
+    for ln in result.line_tracks:
+        src = source_of.get(ln.track_id)
+        n = len(ln.time_s)
+        sid = src.source_id if src is not None else -1
+        note = _harmonic_notes(src).get(ln.track_id, "") if src is not None else ""
+        nan = np.full(n, np.nan)
+        target = feeds.get(sid)
+        parts.append({
+            "line_id": np.full(n, ln.track_id), "source_id": np.full(n, sid),
+            "target_id": np.full(n, None if target is None else int(target), dtype=object), "time_s": ln.time_s,
+            "frequency_hz": ln.frequency_hz, "cone_deg": ln.cone_deg, "frequency_rate_hz_s": ln.frequency_rate_hz_s,
+            "cone_rate_deg_s": ln.cone_rate_deg_s, "snr_db": ln.snr_db,
+            "measured_frequency_hz": nan if ln.measured_frequency_hz is None else ln.measured_frequency_hz,
+            "measured_cone_deg": nan if ln.measured_cone_deg is None else ln.measured_cone_deg,
+            "harmonic": np.full(n, note)})
+    if not parts:
+        return {c: np.array([], dtype=object) for c in LINE_COLUMNS}
+    return {c: stack_column([np.asarray(p[c]) for p in parts]) for c in LINE_COLUMNS}
+
+
 def lines_table(result: PassiveResult):
-    """lines.csv: one row per line track per period: line and source ids, the target the source feeds or became
-    (empty: none), the period centre (s), the filtered frequency (Hz) and cone angle (deg) and their rates (Hz/s,
-    deg/s), the detection's SNR (dB) and its refined frequency and cone angle (empty where the period had no
-    detection), and the line's harmonic relations within its source.
+    """lines.csv as a table (:func:`lines_columns`; target_id a nullable integer column).
 
     Parameters
     ----------
@@ -370,24 +426,10 @@ def lines_table(result: PassiveResult):
     """
     import pandas as pd
 
-    source_of = {i: src for src in result.line_sources for i in src.track_ids}
-    feeds = result.source_targets or {}
-    parts = []
-    for ln in result.line_tracks:
-        src = source_of.get(ln.track_id)
-        n = len(ln.time_s)
-        sid = src.source_id if src is not None else -1
-        note = _harmonic_notes(src).get(ln.track_id, "") if src is not None else ""
-        nan = np.full(n, np.nan)
-        parts.append(pd.DataFrame({
-            "line_id": np.full(n, ln.track_id), "source_id": np.full(n, sid),
-            "target_id": pd.array([feeds.get(sid)] * n, dtype="Int64"), "time_s": ln.time_s,
-            "frequency_hz": ln.frequency_hz, "cone_deg": ln.cone_deg, "frequency_rate_hz_s": ln.frequency_rate_hz_s,
-            "cone_rate_deg_s": ln.cone_rate_deg_s, "snr_db": ln.snr_db,
-            "measured_frequency_hz": nan if ln.measured_frequency_hz is None else ln.measured_frequency_hz,
-            "measured_cone_deg": nan if ln.measured_cone_deg is None else ln.measured_cone_deg,
-            "harmonic": np.full(n, note)}))
-    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=LINE_COLUMNS)
+    cols = lines_columns(result)
+    if not len(cols["line_id"]):
+        return pd.DataFrame(columns=LINE_COLUMNS)
+    return pd.DataFrame({**cols, "target_id": pd.array(list(cols["target_id"]), dtype="Int64")})
 
 
 def passive_summary(result: PassiveResult) -> list[str]:
@@ -437,15 +479,18 @@ def write_passive_tables(result: PassiveResult, out: Path, level_db: np.ndarray 
         peaks.csv, bearing_tracks.csv (tracking/run.py PEAK_TRACK_COLUMNS), targets.csv (with ``origin``)[,
         levels.csv][, lines.csv when the narrowband pass ran] in ``out``.
     """
+    from sonartrack.tracking.run import PEAK_TRACK_COLUMNS
+
     out = Path(out)
-    targets = targets_table(result)
-    targets.insert(1, "origin", origin_column(result, targets["target_id"]))
-    paths = [write_csv(peaks_table(result.record), out / "peaks.csv"),
-             write_csv(result.tracks.to_frame(), out / "bearing_tracks.csv"),
-             write_csv(targets, out / "targets.csv")]
+    targets = targets_columns(result)
+    targets = {"target_id": targets.pop("target_id"), "origin": None, **targets}
+    targets["origin"] = origin_column(result, targets["target_id"])
+    paths = [write_columns_csv(peaks_columns(result.record), out / "peaks.csv"),
+             write_columns_csv({c: getattr(result.tracks, c) for c in PEAK_TRACK_COLUMNS}, out / "bearing_tracks.csv"),
+             write_columns_csv(targets, out / "targets.csv")]
     if level_db is not None:
-        paths.append(write_csv(levels_table(level_db, result.settings.window_s), out / "levels.csv",
-                               float_format="%.2f"))
+        paths.append(write_columns_csv(levels_columns(level_db, result.settings.window_s), out / "levels.csv",
+                                       float_format="%.2f"))
     if result.narrowband_target_ids is not None:
-        paths.append(write_csv(lines_table(result), out / "lines.csv"))
+        paths.append(write_columns_csv(lines_columns(result), out / "lines.csv"))
     return paths

@@ -13,6 +13,7 @@ the track's measured tonal frequency (NaN where none).
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -29,8 +30,25 @@ TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "side", "side_log_lr", "
                      "joined_track_ids"]
 
 
+def peaks_columns(record: BearingTimeRecord) -> dict[str, np.ndarray]:
+    """peaks.csv's columns.
+
+    Parameters
+    ----------
+    record : BearingTimeRecord
+        The front end's record.
+
+    Returns
+    -------
+    dict of str to ndarray
+        One row per peak: time_s, cone_deg (the peak's cone angle, deg), amplitude (z).
+    """
+    p = record.peaks
+    return {"time_s": np.asarray(p.time_s), "cone_deg": np.asarray(p.bearing_deg), "amplitude": np.asarray(p.amplitude)}
+
+
 def peaks_table(record: BearingTimeRecord):
-    """peaks.csv.
+    """peaks.csv as a table.
 
     Parameters
     ----------
@@ -40,12 +58,11 @@ def peaks_table(record: BearingTimeRecord):
     Returns
     -------
     pandas.DataFrame
-        One row per peak: time_s, cone_deg (the peak's cone angle, deg), amplitude (z).
+        :func:`peaks_columns`.
     """
     import pandas as pd
 
-    p = record.peaks
-    return pd.DataFrame({"time_s": p.time_s, "cone_deg": p.bearing_deg, "amplitude": p.amplitude})
+    return pd.DataFrame(peaks_columns(record))
 
 
 #: the columns that mean nothing where the range is not determined: left empty there (a bearing still means something)
@@ -70,9 +87,7 @@ def blank_undetermined(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: (np.where(det, v, np.nan) if k in RANGE_DEPENDENT_COLUMNS else v) for k, v in cols.items()}
 
 
-def _target_rows(target: Target, result_tma):
-    import pandas as pd
-
+def _target_rows(target: Target, result_tma) -> dict[str, np.ndarray]:
     sol = result_tma.solution
     cols = blank_undetermined(solution_columns(sol, result_tma.ownship))
     n = len(cols["time_s"])
@@ -84,11 +99,55 @@ def _target_rows(target: Target, result_tma):
             "side_log_lr": np.full(n, target.side.log_likelihood_ratio),
             "side_resolved_s": np.full(n, target.side_resolved_s),
             "joined_track_ids": np.full(n, " ".join(str(i) for i in target.track.joined_track_ids))}
-    return pd.DataFrame({**head, **cols, "frequency_hz": freq})
+    return {**head, **cols, "frequency_hz": freq}
+
+
+def stack_column(parts: list[np.ndarray]) -> np.ndarray:
+    """One column of stacked row blocks, of the type a table's concatenation gives it.
+
+    Parameters
+    ----------
+    parts : list of ndarray
+        The blocks' values of the column, in row order.
+
+    Returns
+    -------
+    ndarray
+        Their concatenation: numbers promoted among themselves, booleans kept, anything else (text, or text and
+        numbers mixed) as objects -- the types pandas' ``concat`` gives, so that the CSV text is the same.
+    """
+    kinds = {np.asarray(p).dtype.kind for p in parts}
+    if kinds <= set("iuf") or kinds == {"b"}:
+        return np.concatenate(parts)
+    return np.concatenate([np.asarray(p, dtype=object) for p in parts])
+
+
+#: targets.csv's columns when there is no target
+EMPTY_TARGET_COLUMNS = TARGET_ID_COLUMNS + ["time_s", "bearing_deg", "range_m", "frequency_hz"]
+
+
+def targets_columns(result: PassiveResult) -> dict[str, np.ndarray]:
+    """targets.csv's columns (module docstring).
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The rows of every target's ML and IMM-MGEKF solutions, stacked; empty columns
+        (:data:`EMPTY_TARGET_COLUMNS`) when there is no target.
+    """
+    parts = [_target_rows(tg, r) for tg in result.targets for r in (tg.ml, tg.sequential)]
+    if not parts:
+        return {c: np.array([], dtype=object) for c in EMPTY_TARGET_COLUMNS}
+    return {c: stack_column([p[c] for p in parts]) for c in parts[0]}
 
 
 def targets_table(result: PassiveResult):
-    """targets.csv (module docstring).
+    """targets.csv as a table (module docstring).
 
     Parameters
     ----------
@@ -98,15 +157,77 @@ def targets_table(result: PassiveResult):
     Returns
     -------
     pandas.DataFrame
-        The rows of every target's ML and IMM-MGEKF solutions; an empty table with the columns when there is no
-        target.
+        :func:`targets_columns`: the rows of every target's ML and IMM-MGEKF solutions; an empty table with the
+        columns when there is no target.
     """
     import pandas as pd
 
-    parts = [_target_rows(tg, r) for tg in result.targets for r in (tg.ml, tg.sequential)]
-    if parts:
-        return pd.concat(parts, ignore_index=True)
-    return pd.DataFrame(columns=TARGET_ID_COLUMNS + ["time_s", "bearing_deg", "range_m", "frequency_hz"])
+    return pd.DataFrame(targets_columns(result))
+
+
+def _cells(values, float_format: str | None) -> np.ndarray:
+    """A column's CSV cells as pandas' ``to_csv`` writes them (``index=False``, ``na_rep=""``): floats as numpy's
+    shortest round-trip text (``astype(str)``) or ``float_format % value``, NaN empty; integers and booleans as
+    ``astype(str)``; other objects as they are (the csv writer turns them into text), None and NaN empty."""
+    v = np.asarray(values)
+    if v.dtype.kind == "f":
+        text = v.astype(str) if float_format is None else np.array([float_format % x for x in v], dtype=object)
+        return np.where(np.isnan(v), "", text).astype(object)
+    if v.dtype.kind in "iub":
+        return v.astype(str).astype(object)
+    out = v.astype(object)
+    empty = np.array([x is None or (isinstance(x, float) and x != x) for x in out], dtype=bool)
+    out[empty] = ""
+    return out
+
+
+def csv_text(columns: dict[str, np.ndarray], float_format: str | None = None) -> str:
+    """A table of equal-length columns as CSV text, byte for byte what pandas' ``DataFrame(columns).to_csv(
+    index=False, float_format=...)`` writes (header line, then one line per row; the csv module's minimal
+    quoting; ``\\n`` line ends), without importing pandas.
+
+    Parameters
+    ----------
+    columns : dict of str to array_like
+        Column name -> values (n,), in column order.
+    float_format : str, optional
+        A %-format for float columns (e.g. ``"%.2f"``); None: the shortest text that reads back to the same float.
+
+    Returns
+    -------
+    str
+        The file's text.
+    """
+    import csv
+    import io
+
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(list(columns))
+    writer.writerows(zip(*(_cells(v, float_format) for v in columns.values()), strict=True))
+    return buf.getvalue()
+
+
+def write_columns_csv(columns: dict[str, np.ndarray], path, float_format: str | None = None) -> Path:
+    """Write :func:`csv_text` of ``columns`` atomically to ``path``.
+
+    Parameters
+    ----------
+    columns : dict of str to array_like
+        The table's columns.
+    path : str or path-like
+        The CSV file.
+    float_format : str, optional
+        A %-format for the float columns.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    from sonartrack.io.atomic import write_text
+
+    return write_text(path, csv_text(columns, float_format))
 
 
 def target_line(target: Target) -> str:
