@@ -93,3 +93,74 @@ def test_a_joined_targets_tonal_is_its_fragments_lines():
     assert joined_tonal(target, {1: None, 5: None}) is None
     only_later = joined_tonal(target, {5: lines[5]})
     assert only_later.line_hz == 120.1 and np.array_equal(only_later.time_s, lines[5].time_s)
+
+
+SHIP_A, SHIP_B = [4000.0, 3000.0, -3.0, 1.0], [1000.0, 5850.0, 2.0, -3.0]  # cone angles cross near 660 s
+
+
+def _record(track_id, parts, track_parts):
+    """A track's record from pieces of the ships' peaks (each (t, cone)) and of a filtered track."""
+    t, cone = (np.concatenate(v) for v in zip(*parts, strict=True))
+    tt, tc = (np.concatenate(v) for v in zip(*track_parts, strict=True))
+    return TrackMeasurements(track_id, t, cone, np.full(len(t), 8.0), tt, tc)
+
+
+def _crossing_ships():
+    """The two ships' peaks over 0..1200 s and where they lie within 4 deg (a beamwidth) of each other."""
+    nav = _nav()
+    a, b = (_fragment(0, s, 0.0, 1200.0, nav, seed) for s, seed in ((SHIP_A, 1), (SHIP_B, 2)))
+    close = np.abs(a.cone_deg - b.cone_deg) < 4.0
+    t0, t1 = a.time_s[close][0], a.time_s[close][-1]
+    assert 600.0 < t0 < t1 < 720.0  # one crossing, its ships' cone rates ~0.1 deg/s apart
+    return nav, a, b, t0, t1
+
+
+def _span(m, lo, hi):
+    keep = (m.time_s >= lo) & (m.time_s < hi)
+    return m.time_s[keep], m.cone_deg[keep]
+
+
+def test_two_tracks_on_one_ship_after_a_crossing_keep_its_peaks_in_the_one_that_followed_it():
+    from sonartrack.systems.passive.measurements import drop_unresolved
+
+    nav, a, b, t0, t1 = _crossing_ships()
+    mid = (a.time_s >= t0) & (a.time_s <= t1)
+    merged = (a.time_s[mid], 0.5 * (a.cone_deg[mid] + b.cone_deg[mid]))
+    # track 1 follows ship A up to the crossing, then takes ship B's peaks (coalesced onto B); track 2 follows B
+    one = _record(1, [_span(a, 0.0, t0), _span(b, t1 + 1.0, 1200.0)],
+                  [_span(a, 0.0, t0), merged, _span(b, t1 + 1.0, 1200.0)])
+    two = _record(2, [_span(b, 0.0, 1200.0)], [_span(b, 0.0, t0), merged, _span(b, t1 + 1.0, 1200.0)])
+    old = drop_unresolved([one, two], 4.0)
+    # without the navigation (as before): the shared peaks leave both records, ship B's target ends at the crossing
+    assert old[1].time_s[-1] < t1 + 1.0 and old[0].time_s[-1] < t1 + 1.0
+    new = drop_unresolved([one, two], 4.0, nav=nav)
+    # with it: the peaks after the crossing are B's, and only track 2's history (B's) predicts them
+    assert new[1].time_s[-1] == 1199.0 and np.all(new[1].time_s[new[1].time_s > t1] > t1)
+    assert new[0].time_s[-1] < t0 and new[0].track_time_s[-1] < t1 + 1.0  # track 1's record and track end there
+    assert np.sum(new[1].time_s > t1) == np.sum(a.time_s > t1)
+
+
+def test_two_tracks_swapped_at_a_crossing_get_their_parts_after_it_exchanged():
+    from sonartrack.systems.passive.measurements import drop_unresolved
+
+    nav, a, b, t0, t1 = _crossing_ships()
+    mid = (a.time_s >= t0) & (a.time_s <= t1)
+    merged = (a.time_s[mid], 0.5 * (a.cone_deg[mid] + b.cone_deg[mid]))
+    after = (t1 + 1.0, 1200.0)
+
+    def rec(track_id, before, later):
+        return _record(track_id, [_span(before, 0.0, t0), _span(later, *after)],
+                       [_span(before, 0.0, t0), merged, _span(later, *after)])
+
+    swapped = drop_unresolved([rec(1, a, b), rec(2, b, a)], 4.0, nav=nav)
+    for m, ship in zip(swapped, (a, b), strict=True):
+        t, cone = _span(m, *after)
+        assert len(t) == np.sum(a.time_s > t1) and np.array_equal(cone, _span(ship, *after)[1]), m.track_id
+        assert np.array_equal(m.track_cone_deg[m.track_time_s > t1], _span(ship, *after)[1])
+    # tracks that kept their ships are left as they are
+    kept = drop_unresolved([rec(1, a, a), rec(2, b, b)], 4.0, nav=nav)
+    for m, ship in zip(kept, (a, b), strict=True):
+        assert np.array_equal(_span(m, *after)[1], _span(ship, *after)[1])
+    # without the navigation nothing is exchanged (the crossing's scans are only left out)
+    plain = drop_unresolved([rec(1, a, b), rec(2, b, a)], 4.0)
+    assert np.array_equal(_span(plain[0], *after)[1], _span(b, *after)[1])

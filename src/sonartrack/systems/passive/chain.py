@@ -143,7 +143,7 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, nav=nav,
                          resolution_deg=s.min_separation_deg)
     meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
-    meas = drop_unresolved(meas, s.min_separation_deg)
+    meas = drop_unresolved(meas, s.min_separation_deg, nav=nav)
     # the tonal pass runs on the fragments, so that their lines take part in the join (two ships' fragments
     # with lines apart are not joined); a joined target's line is its fragments' lines
     tonal_of = _fragment_tonals(blocks, [m for m in meas if _long_enough(m, settings)], s, n_windows, progress)
