@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.angles import wrap_angle
-from sonartrack.core.errors import require
+from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import BatchEstimate, _damped_step, bearing_model
 
 #: speed of sound of the Doppler model (m/s) when none is given (paper P2)
@@ -294,3 +294,82 @@ def bf_profile_rise(time_s, bearing_rad, freq_hz, own_xy, own_v, sigma_b_rad: fl
     starts = ([b0, xe[2], xe[3], xe[4]], [b0, ov[-1, 0], ov[-1, 1], xe[4]])
     c_held = min(2.0 * least_squares(residual, s, args=(float(range_m),), method="lm").cost for s in starts)
     return max(c_held - c_fit, 0.0)
+
+
+def bf_jackknife(time_s, bearing_rad, freq_hz, own_xy, own_v, sigma_b_rad: float, sigma_f_hz: float,
+                 est: BfEstimate, *, c_mps: float = SOUND_SPEED_MPS, blocks: int | None = None):
+    """The bearings + frequency ML's final state recomputed with each block of the record left out: the
+    delete-a-block jackknife (Kunsch, Ann. Statist. 17(3), 1989, 1217-1241, eq. 2.2 with non-overlapping blocks;
+    Shao & Tu, The Jackknife and Bootstrap, 1995, sec. 5.2), as tma/sides.py
+    :func:`~sonartrack.tma.sides.side_jackknife` does for the bearings-only fit.
+
+    The record's span is cut into g equal stretches of time (:func:`~sonartrack.tma.sides.time_blocks`); replicate
+    j leaves block j out and refits X0 by :func:`ml_bearings_frequency` from ``est`` moved to the first kept time,
+    giving the state x_j at the last time t_n. The jackknife covariance
+
+        P_J = (g - 1) / g  sum_j (x_j - x_bar)(x_j - x_bar)^T,      x_bar = mean_j x_j
+
+    estimates the final state's covariance without assuming the errors white or the model right (a bias in the
+    bearings or the frequency over part of the record, or another source's stretch, moves the replicates as much as
+    the estimate). Each replicate also predicts the bearings it left out: their rms difference and the prediction's
+    standard deviation (H_b P_j H_b^T at the replicate's residual scale C_j / (2 n_j - 5), where C_j is its cost and
+    n_j its measurements), the predictive test of Chow (Econometrica 28(3), 1960, sec. 3).
+
+    Parameters
+    ----------
+    time_s, bearing_rad, freq_hz : ndarray (n,)
+        Times (s, increasing), bearings (rad, clockwise from north) and received frequencies (Hz).
+    own_xy, own_v : ndarray (n, 2)
+        The sensor's positions (m) and velocities (m/s) at those times.
+    sigma_b_rad, sigma_f_hz : float
+        The bearing (rad) and frequency (Hz) noise the fit was made with.
+    est : BfEstimate
+        The whole record's fit.
+    c_mps : float
+        Speed of sound (m/s).
+    blocks : int or None
+        g, the stretches of time (None: :data:`~sonartrack.tma.sides.JACKKNIFE_BLOCKS`).
+
+    Returns
+    -------
+    SideJackknife
+        ``log_lr`` NaN (no side is decided here), each replicate's final state (NaN where its fit failed) and its
+        prediction of its block's bearings, and P_J.
+    """
+    from sonartrack.tma.sides import JACKKNIFE_BLOCKS, SideJackknife, time_blocks
+
+    t, z, f = (np.asarray(a, float) for a in (time_s, bearing_rad, freq_hz))
+    own, ov = np.asarray(own_xy, float), np.asarray(own_v, float)
+    edges = time_blocks(t, JACKKNIFE_BLOCKS if blocks is None else blocks)
+    g = len(edges) - 1
+    require(g >= 2, f"bf_jackknife: {len(t)} measurements over {t[-1] - t[0]:g} s make fewer than 2 blocks")
+    i = np.arange(len(t))
+    reps = np.full((g, 6), np.nan)
+    for j in range(g):
+        keep = (i < edges[j]) | (i >= edges[j + 1])
+        if keep.sum() >= 6:
+            reps[j] = _bf_replicate(t, z, f, own, ov, (sigma_b_rad, sigma_f_hz), est, keep, c_mps)
+    state = reps[:, :4]
+    d = state - state.mean(axis=0)
+    return SideJackknife(np.full(g, np.nan), state, (g - 1) / g * d.T @ d, reps[:, 4], reps[:, 5])
+
+
+def _bf_replicate(t, z, f, own, ov, sigma, est: BfEstimate, keep, c_mps: float) -> np.ndarray:
+    """One replicate of :func:`bf_jackknife`: [final state (4), rms of its prediction of the left-out bearings,
+    the prediction's rms sd] (NaNs when the fit fails)."""
+    x_init = np.asarray(est.x0, float).copy()
+    x_init[:2] += x_init[2:4] * (t[keep][0] - est.t0_s)
+    with np.errstate(all="ignore"):
+        try:
+            fit = ml_bearings_frequency(z[keep], f[keep], t[keep], own[keep], ov[keep], sigma[0], sigma[1], x_init,
+                                        c_mps=c_mps)
+        except (InputError, np.linalg.LinAlgError, ValueError):
+            return np.full(6, np.nan)
+        if not (np.isfinite(fit.objective) and np.all(np.isfinite(fit.x0)) and np.all(np.isfinite(fit.covariance))):
+            return np.full(6, np.nan)
+        out = ~keep
+        h_b, _, H_b, _ = bf_model(fit.x0, t[out] - fit.t0_s, own[out], ov[out], c_mps)
+        s2 = fit.objective / max(2 * int(keep.sum()) - 5, 1)
+        v = np.einsum("ni,ij,nj->n", H_b, fit.covariance * s2, H_b)
+        end = fit.x0[:4] + np.r_[fit.x0[2:4], 0.0, 0.0] * (t[-1] - fit.t0_s)
+        return np.r_[end, np.sqrt(np.mean(wrap_angle(z[out] - h_b) ** 2)), np.sqrt(np.mean(v))]

@@ -24,8 +24,9 @@ A line array's target whose side of the array is not decided (its bearings may b
 their own: the ML (tma/solve.py :func:`~sonartrack.tma.solve.flag_unresolved_range`)
 :data:`DIVERGED` (a covariance that is not finite) and :data:`UNOBSERVABLE` (no maneuver, a range beyond what the
 maneuver resolves, or a range sd above the range), the passive chain's check of it (systems/passive/targets.py)
-:data:`INCONSISTENT_RESIDUALS` and :data:`FLAT_LIKELIHOOD`; em-map :data:`SNR_NOT_EXPLAINED`
-(tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
+:data:`INCONSISTENT_RESIDUALS`, :data:`FLAT_LIKELIHOOD` and :data:`NOT_ONE_TARGET` (a stretch of the record that
+the rest of it places more than a beamwidth away: another ship's bearings, or the mirror's); em-map
+:data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ INCONSISTENT = "inconsistent innovations"
 SNR_NOT_EXPLAINED = "SNR not explained by the propagation model"
 INCONSISTENT_RESIDUALS = "inconsistent residuals"
 FLAT_LIKELIHOOD = "flat likelihood"
+NOT_ONE_TARGET = "bearings of more than one target"
 
 
 def with_reasons(solution: TmaSolution, reasons) -> TmaSolution:

@@ -19,6 +19,7 @@ C = 1500.0
 F0 = 200.0
 STAGES = SimpleNamespace(settings=SimpleNamespace(sigma_freq_floor_hz=0.02, ml_correlation_inflation=True,
                                                   max_sigma_freq_hz=0.4, tma_min_tonal_snr_db=4.0),
+                         min_separation_deg=3.0,
                          sequential=SimpleNamespace(sound_speed_mps=C))
 
 
