@@ -66,14 +66,24 @@ def test_quick_family_stays_on_the_cheap_arrays():
 
 # ---- truth events ----------------------------------------------------------------------------------------------
 
-def test_crossing_events_are_runs_within_a_beamwidth():
+def test_crossing_events_are_runs_within_a_beam():
     a = np.linspace(40.0, 60.0, 21)  # 1 deg per window
     b = np.linspace(60.0, 40.0, 21)
     c = np.full(21, 120.0)
     events = pc.crossing_events(np.stack([a, b, c]), 4.0)
-    # |a - b| = |20 - 2k| < 4 for k = 9, 10, 11
-    assert events == [(0, 1, 9, 11)]
+    # about 50 deg the beam is 4 / sin(50) = 5.2 deg wide in cone angle: |cos a - cos b| (by hand) is 0.0534 at
+    # k = 8 (48 vs 52 deg), below 4 deg = 0.0698 rad, and 0.0802 at k = 7 (47 vs 53 deg), above it
+    assert events == [(0, 1, 8, 12)]
     assert pc.crossing_events(np.stack([a, b]), 0.5) == [(0, 1, 10, 10)]
+
+
+def test_ships_near_endfire_share_a_beam_that_broadside_would_split():
+    # 3 deg apart: resolved at broadside by a 2 deg beam, not at 175 deg, where the beam is 2 / sin(5) = 23 deg wide
+    broadside = np.stack([np.full(5, 90.0), np.full(5, 93.0)])
+    endfire = np.stack([np.full(5, 172.0), np.full(5, 175.0)])
+    assert pc.crossing_events(broadside, 2.0) == []
+    assert pc.crossing_events(endfire, 2.0) == [(0, 1, 0, 4)]
+    assert pc.direction_separation(90.0, 93.0) == pytest.approx(np.sin(np.deg2rad(3.0)), rel=1e-12)
 
 
 def test_axis_crossings_where_the_side_changes():

@@ -14,9 +14,10 @@ array and length.
 
 Truth per ship and window (:func:`window_levels`, :func:`window_truth`): the true cone angle, side and the
 front end's level at the ship's cone angle; a ship is *detectable* in a window when that level (running median)
-reaches the detection threshold and no other ship lies within a beamwidth. Events: a *crossing* is a maximal
-run of windows in which two ships' cone angles lie within one beamwidth (:func:`crossing_events`); an *axis
-crossing* a change of a ship's true side (:func:`axis_crossings`).
+reaches the detection threshold and no other ship lies within a beam (separation in direction cosine below the
+broadside beamwidth: :func:`direction_separation`; the beam widens in cone angle as 1 / sin(theta) towards endfire).
+Events: a *crossing* is a maximal run of windows in which two ships lie within one beam (:func:`crossing_events`);
+an *axis crossing* a change of a ship's true side (:func:`axis_crossings`).
 
 Checks (claims, each with its 95 % interval):
 
@@ -54,7 +55,7 @@ from sonartrack.systems.passive.settings import PassiveSettings
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on a family of simulated towed-array scenes (our own study)"
 PAPER = "sonartrack's own: papers P0 (JPDA_A), P2 (IMM-MGEKF) and P3 (batch ML) joined into one system"
-TRIAL_VERSION = 7
+TRIAL_VERSION = 8
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 32
@@ -327,26 +328,49 @@ def window_truth(scene: PassiveSceneSettings, result):
     """Per ship and window: the true cone angle (deg), and whether the ship is above the detection threshold.
 
     Its SNR as the detector sees it is the front end's level at its true cone angle (:func:`window_levels`); it
-    counts when that level reaches the threshold and no other ship lies within one beamwidth
-    (``PassiveStages.min_separation_deg``), where the level would be the other ship's. A noise-limited formula
-    (z = N SNR sqrt(bins)) would overrate a weak ship next to loud ones: their sidelobes, not the noise, set the
-    background spread of the normaliser. Returns (geometry, cone (S, T), detectable (S, T))."""
+    counts when that level reaches the threshold and no other ship lies within one beam (direction-cosine separation
+    below the broadside beamwidth ``PassiveStages.min_separation_deg`` in rad, :func:`direction_separation`), where
+    the level would be the other ship's. A noise-limited formula (z = N SNR sqrt(bins)) would overrate a weak ship
+    next to loud ones: their sidelobes, not the noise, set the background spread of the normaliser. Returns
+    (geometry, cone (S, T), detectable (S, T))."""
     g, cone, at_ship = window_levels(scene, result)
-    sep = np.abs(cone[:, None, :] - cone[None, :, :])
+    sep = direction_separation(cone[:, None, :], cone[None, :, :])
     sep[np.arange(len(cone)), np.arange(len(cone))] = np.inf
-    alone = sep.min(axis=1) >= result.stages.min_separation_deg if len(cone) > 1 else np.ones_like(at_ship, bool)
+    alone = sep.min(axis=1) >= np.deg2rad(result.stages.min_separation_deg) if len(cone) > 1 \
+        else np.ones_like(at_ship, bool)
     return g, cone, (at_ship >= result.settings.threshold) & alone
 
 
+def direction_separation(cone_a_deg, cone_b_deg) -> np.ndarray:
+    """|cos(a) - cos(b)|: two cone angles' separation in the direction cosine u = cos(theta), in which a line array's
+    beam has one width everywhere (about lambda / L; Van Trees 2002, sec. 2.4): two ships are resolved when this
+    reaches the broadside beamwidth in radians. In cone angle the beam widens as 1 / sin(theta) towards endfire,
+    so two ships 3 deg apart at 175 deg lie in one beam of an array that resolves 3 deg at broadside.
+
+    Parameters
+    ----------
+    cone_a_deg, cone_b_deg : array_like
+        Cone angles (deg), broadcast together.
+
+    Returns
+    -------
+    ndarray
+        The separation in u (dimensionless; compare with a beamwidth in rad).
+    """
+    return np.abs(np.cos(np.deg2rad(cone_a_deg)) - np.cos(np.deg2rad(cone_b_deg)))
+
+
 def crossing_events(cone_deg: np.ndarray, beamwidth_deg: float) -> list[tuple[int, int, int, int]]:
-    """Crossings: each maximal run of windows in which two ships' cone angles lie within one beamwidth.
+    """Crossings: each maximal run of windows in which two ships lie within one beam of the array: their
+    direction-cosine separation (:func:`direction_separation`) below the broadside beamwidth, so that the run lasts
+    as long as the array cannot tell the two apart (longer near endfire, where the beam is wider in cone angle).
 
     Parameters
     ----------
     cone_deg : ndarray (S, T)
         True cone angles (deg).
     beamwidth_deg : float
-        One beamwidth (deg).
+        One beamwidth at broadside (deg).
 
     Returns
     -------
@@ -356,7 +380,7 @@ def crossing_events(cone_deg: np.ndarray, beamwidth_deg: float) -> list[tuple[in
     out = []
     for a in range(cone_deg.shape[0]):
         for b in range(a + 1, cone_deg.shape[0]):
-            close = np.abs(cone_deg[a] - cone_deg[b]) < beamwidth_deg
+            close = direction_separation(cone_deg[a], cone_deg[b]) < np.deg2rad(beamwidth_deg)
             edges = np.diff(np.concatenate([[0], close.astype(int), [0]]))
             out += [(a, b, int(k0), int(k1) - 1) for k0, k1 in zip(np.nonzero(edges == 1)[0],
                                                                   np.nonzero(edges == -1)[0], strict=True)]
@@ -912,7 +936,7 @@ def _share_claims(summary: dict) -> list[Claim]:
     return [
         Claim(id="crossing-identities", paper=f"ours: identities kept through crossings in cone angle in >= "
                                               f"{IDENTITY_REQUIRED:.0%} of crossings",
-              text="crossings (two ships' cone angles within a beamwidth) whose two ships are followed by the same "
+              text="crossings (two ships within one beam of the array) whose two ships are followed by the same "
                    f"two targets before and after, share >= {IDENTITY_REQUIRED}",
               ours=f"{_fmt_share(i)} (of those crossing in order: {_fmt_share(summary['identity_crossed'])}); "
                    + ", ".join(f"{n} {k}" for n, k in summary["crossing_outcomes"].items()),
