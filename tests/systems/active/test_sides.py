@@ -4,7 +4,7 @@ that decides nothing, and a turning array that decides the true side (and calls 
 import numpy as np
 
 from sonartrack.systems.active.contacts import Contacts
-from sonartrack.systems.active.sides import MIN_LOG_LR, SideTracker, _CvSums
+from sonartrack.systems.active.sides import MIN_LOG_LR, SideTracker, _CvFit
 
 
 def test_cv_fit_matches_whitened_least_squares():
@@ -13,7 +13,7 @@ def test_cv_fit_matches_whitened_least_squares():
     z = np.stack([100 + 2 * t, -50 + 0.5 * t], -1) + rng.normal(0, 40, (12, 2))
     L = rng.normal(0, 1, (12, 2, 2))
     R = L @ np.swapaxes(L, 1, 2) * 900 + np.eye(2) * 400
-    sums = _CvSums()
+    sums = _CvFit()
     for k in range(12):
         sums.add(t[k], z[k], R[k])
     # independent: stack the whitened system C^-1 A x = C^-1 z (R = C C^T) and solve it with lstsq
@@ -71,3 +71,54 @@ def test_turning_array_decides_the_true_side_and_the_ghost():
     # the target (east of a receiver heading north, then north-west) is on the starboard side
     assert d.side[k1] == "starboard" and d.side[k2] == "starboard"
     assert np.isfinite(d.resolved_s[k1]) and 15 * 30.0 <= d.resolved_s[k1] <= 39 * 30.0
+
+
+def _brute_capped_chi2(t, z, sd, cap):
+    """Global minimum over the CV motion of sum_k min(r_k, cap): at it the contacts under the cap are a subset
+    whose least-squares fit scores no worse, and every subset's fit is a candidate, so the best subset is it."""
+    n = len(t)
+    A = np.stack([np.hstack([np.eye(2), tk * np.eye(2)]) for tk in t])
+    best = np.inf
+    for mask in range(1, 2**n):
+        keep = np.array([(mask >> k) & 1 for k in range(n)], bool)
+        if keep.sum() >= 2:
+            p = np.linalg.lstsq(A[keep].reshape(-1, 4), z[keep].reshape(-1), rcond=None)[0]
+            best = min(best, float(np.minimum(np.sum((z - A @ p) ** 2, axis=1) / sd**2, cap).sum()))
+    return best
+
+
+def test_capped_fit_is_near_the_best_subset_fit():
+    # ln L with each chi-square capped at gamma, minimised over the CV motion (a local search, taken within 1 of
+    # the global minimum) against the brute-force global minimum, on 9 contacts with 0-3 strays and some contacts
+    # the track's own (live)
+    cap, sd = 9.21, 30.0
+    R = np.eye(2) * sd**2
+    logdet = np.log(np.linalg.det(2 * np.pi * R))
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        t = np.arange(9) * 30.0
+        z = np.stack([1000 + 3 * t, 2000 - 2 * t], -1) + rng.normal(0, sd, (9, 2))
+        strays = rng.choice(9, rng.integers(0, 4), replace=False)
+        z[strays] += rng.normal(0, 500, (len(strays), 2))
+        live = rng.random(9) < 0.6
+        fit = _CvFit(cap)
+        for k in range(9):
+            fit.add(t[k], z[k], R, live=bool(live[k]))
+        got = -2 * fit.log_likelihood() - 9 * logdet
+        best = _brute_capped_chi2(t, z, sd, cap)
+        assert best - 1e-6 <= got <= best + 1.0, (seed, got, best)  # ln L within half a nat
+
+
+def test_two_strays_cost_the_cap_each():
+    rng = np.random.default_rng(5)
+    t = np.arange(9) * 30.0
+    z = np.stack([1000 + 3 * t, 2000 - 2 * t], -1) + rng.normal(0, 30, (9, 2))
+    z[[2, 6]] += [[900.0, -400.0], [-300.0, 700.0]]
+    R, cap = np.eye(2) * 900.0, 9.21
+    fit, rest = _CvFit(cap), _CvFit()
+    for k in range(9):
+        fit.add(t[k], z[k], R)
+        if k not in (2, 6):
+            rest.add(t[k], z[k], R)
+    strays = 0.5 * (2 * cap + 2 * np.log(np.linalg.det(2 * np.pi * R)))
+    assert abs(fit.log_likelihood() - (rest.log_likelihood() - strays)) < 1e-6

@@ -14,12 +14,38 @@ own covariances R_k (J Sigma J^T, paper P4 eqs. 3-6), by weighted least squares:
     ln L = -(chi2_min + sum ln det(2 pi R_k)) / 2,      ln LR = ln L(track's side) - ln L(mirror side)
 
 (Gaussian likelihood maximised over the 4 CV parameters; both hypotheses have 4, so no dimension penalty).
-The sums are kept per track and updated each ping, so the ratio is known at every ping at no growing cost.
-A track confirmed after the turn has no turn in its own life, so when a track is first confirmed its contacts
-are also looked for backwards over the last ``lookback`` pings (retrodiction: its state run back with the CV
-model, x_k = F(t_k - t) x, P_k = F P F^T + Q(|t_k - t|), the nearest contact inside the chi-square(2) gate of
-P_k + R per ping): a track on its target's side finds the target's contacts from before the turn, whose
-mirrors no CV motion explains; a ghost finds little there (its past lies on the mirror of another axis).
+The ratio is computed at every ping, once the track has lived through the turn (before it, it is 0).
+Each contact's share of chi2_min is capped at c, the chi-square(2) quantile of 1 - ``STRAY_PROBABILITY`` (27.6):
+
+    r_k = (z_k - A_k p)^T R_k^-1 (z_k - A_k p),     chi2_min = min_p sum_k min(r_k, c)
+
+(a truncated quadratic: the log of a Gaussian-plus-uniform-clutter mixture taken as its larger term, the
+clutter level set at c, so a contact that far off the fit counts as a stray one; no source among the project's
+papers: the truncated-quadratic M-estimator of robust regression, Hampel et al., Robust Statistics, 1986).
+Its minimum over p is searched from the fit of the track's own contacts and from the fit of all: the kept
+contact of the largest r_k >= c is left out and the rest refitted, one at a time, then every contact under the
+cap is taken back, until the kept set repeats (a local minimum; on small sets within 1 of the brute-force global
+one, tests). Without the cap one stray contact (clutter, another target's echo) adds a chi-square of 10^3-10^5
+to either hypothesis at random, and that decides the ratio, not the turn; with it a stray contact and its mirror
+cost c each and cancel, and a contact moves ln LR by about c / 2 at most. The cap is not the 99 % gate (9.2):
+near the turn the contacts are off by more than R says (a 24-element array: the approacher's 60-140 m off, sd
+50-60 m), and at 9.2 a target's own contacts counted as strays, the turn's evidence was lost and once (seed 8) a
+true track was called a ghost for two pings.
+A track confirmed after the turn has no turn in its own life, so when a track is first confirmed the last
+``lookback`` pings are searched backwards for its target (retrodiction), under both hypotheses alike: the
+track's state x (its side) and its mirror M x about the array's axis at confirmation (the other side: M
+reflects positions about the axis through the midpoint of a mirror pair, velocities about its direction) are
+each run back ping by ping with the CV model, x_k = F(t_k - t_k+1) x_k+1, P_k = F P F^T + Q(|t_k - t_k+1|);
+per ping each takes the contact nearest it (chi-square distance with P_k + R) inside its gate, is updated
+with it (Kalman), and the two contacts of that detection enter the two sequences (the one on the track's side,
+taken by the track's hypothesis or the mirror of the one the mirror hypothesis took, and the other);
+the search stops after ``MAX_MISSES`` pings in a row with no contact in either gate. A track on its target's
+side so finds the target's contacts from before the turn, whose mirrors no CV motion explains; a ghost's
+mirror hypothesis finds them, and the ghost's own side holds only their mirrors about the old axis. Both
+hypotheses are searched alike and the chi-squares capped because a gate run back over many pings is kilometres
+wide: the nearest contact in it is often stray, chosen for lying near that hypothesis's line; a search of the
+track's side alone, uncapped, gave a ghost a made-up past that fitted its line and a ratio in the tens of
+thousands (a ghost of the approacher on a 24-element array, seed 7, called its target's side at ln LR +38807).
 The side is decided when |ln LR| >= ``min_log_lr`` (ln 100 by default, the passive chain's 100:1) once the
 track has lived through ``min_turn_rad`` of change of the array's heading: ln LR > 0 says the track is on
 its target's side; < 0 that the track is the mirror of a target on the other side (a ghost).
@@ -35,6 +61,12 @@ import numpy as np
 MIN_LOG_LR = float(np.log(100.0))
 #: fewest contacts of a track before its ratio is computed (the CV fit has 4 parameters; 2 per contact)
 MIN_CONTACTS = 3
+#: the retrodiction stops at this many pings in a row with no contact in either hypothesis's gate
+MAX_MISSES = 3
+#: a contact's chi-square in the CV fit is capped at its chi-square(2) quantile of 1 - this (27.6): a stray one
+STRAY_PROBABILITY = 1e-6
+#: refits of the capped CV fit beyond two per contact (it stops when the kept set repeats)
+MAX_REFITS = 10
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,26 +105,102 @@ class SideDecisions:
         return int(hit[0]) if len(hit) else None
 
 
-class _CvSums:
-    """Running normal equations of the weighted CV fit of one contact sequence (module doc)."""
+class _CvFit:
+    """One contact sequence and its CV fit with each contact's chi-square capped at ``cap`` (module doc)."""
 
-    __slots__ = ("info", "b", "zwz", "logdet", "n")
+    __slots__ = ("cap", "t", "z", "W", "logdet", "live")
 
-    def __init__(self):
-        self.info, self.b, self.zwz, self.logdet, self.n = np.zeros((4, 4)), np.zeros(4), 0.0, 0.0, 0
+    def __init__(self, cap: float = np.inf):
+        self.cap, self.t, self.z, self.W, self.logdet, self.live = float(cap), [], [], [], 0.0, []
 
-    def add(self, dt_s: float, z, R) -> None:
-        W = np.linalg.inv(R)
-        A = np.hstack([np.eye(2), dt_s * np.eye(2)])
-        self.info += A.T @ W @ A
-        self.b += A.T @ W @ z
-        self.zwz += float(z @ W @ z)
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+    def add(self, dt_s: float, z, R, live: bool = True) -> None:
+        self.t.append(float(dt_s))
+        self.z.append(np.asarray(z, float))
+        self.W.append(np.linalg.inv(R))
         self.logdet += float(np.log(np.linalg.det(2.0 * np.pi * R)))
-        self.n += 1
+        self.live.append(bool(live))
 
     def log_likelihood(self) -> float:
-        chi2 = self.zwz - float(self.b @ np.linalg.lstsq(self.info, self.b, rcond=None)[0])
-        return -0.5 * (max(chi2, 0.0) + self.logdet)
+        """ln L = -(sum_k min(r_k, cap) + sum ln det(2 pi R_k)) / 2 at the CV motion that minimises it (r_k the
+        contact's chi-square against it), searched from two starts, the track's own (live) contacts and all of
+        them, keeping the smaller sum (:func:`_capped_chi2`)."""
+        t, z, W = np.array(self.t), np.array(self.z), np.array(self.W)
+        A = np.zeros((len(t), 2, 4))
+        A[:, [0, 1], [0, 1]] = 1.0
+        A[:, [0, 1], [2, 3]] = t[:, None]
+        AtW = np.swapaxes(A, 1, 2) @ W
+        info, b = AtW @ A, np.einsum("kij,kj->ki", AtW, z)
+        starts = [np.ones(len(t), bool)] + ([np.array(self.live)] if 2 <= sum(self.live) < len(t) else [])
+        chi2 = min(_capped_chi2(t, z, W, info, b, keep, self.cap) for keep in starts)
+        return -0.5 * (chi2 + self.logdet)
+
+
+def _capped_chi2(t, z, W, info, b, keep, cap: float) -> float:
+    """sum_k min(r_k, cap) at a local minimum over the CV motion, from the fit of the contacts ``keep``: the kept
+    contact of the largest r_k >= cap is left out and the rest refitted, one at a time; then every contact under
+    the cap is taken back, until the kept set repeats (t (n,) s, z (n, 2), W = R^-1, info = A^T W A and
+    b = A^T W z per contact, A = [I, t I])."""
+    keep = np.array(keep, bool)
+    info_sum, b_sum = info[keep].sum(0), b[keep].sum(0)
+    for _ in range(2 * len(z) + MAX_REFITS):
+        try:  # two contacts at different times make info_sum regular
+            p = np.linalg.solve(info_sum, b_sum)
+        except np.linalg.LinAlgError:
+            p = np.linalg.lstsq(info_sum, b_sum, rcond=None)[0]
+        nu = z - p[:2] - t[:, None] * p[2:]
+        r = np.einsum("ki,kij,kj->k", nu, W, nu)
+        worst = int(np.argmax(np.where(keep, r, -np.inf)))
+        if r[worst] >= cap and keep.sum() > 2:
+            keep[worst] = False
+            info_sum, b_sum = info_sum - info[worst], b_sum - b[worst]
+        elif np.array_equal(r < cap, keep) or (r < cap).sum() < 2:
+            break
+        else:
+            keep = r < cap
+            info_sum, b_sum = info[keep].sum(0), b[keep].sum(0)
+    return float(np.minimum(r, cap).sum())
+
+
+def _mate(contacts, row: int) -> int | None:
+    """The other contact of ``row``'s detection (None: it has none)."""
+    other = np.nonzero((contacts.detection == contacts.detection[row]) & (np.arange(len(contacts)) != row))[0]
+    return int(other[0]) if len(other) else None
+
+
+def _axis_point(contacts) -> np.ndarray | None:
+    """A point of the array's axis: the midpoint of a mirror pair (its two contacts lie symmetric about the axis
+    through the receiver); None when the ping has no pair."""
+    for row in range(len(contacts)):
+        other = _mate(contacts, row)
+        if other is not None:
+            return 0.5 * (contacts.xy[row] + contacts.xy[other])
+    return None
+
+
+def _reflection(heading_rad: float) -> np.ndarray:
+    """2 x 2 reflection about an axis of heading ``heading_rad`` (clockwise from north, x east): 2 a a^T - I."""
+    a = np.array([np.sin(heading_rad), np.cos(heading_rad)])
+    return 2.0 * np.outer(a, a) - np.eye(2)
+
+
+def _predict(x, P, dt_s: float, q: float):
+    """CV prediction over ``dt_s`` (negative: backwards), white-noise acceleration q over |dt|."""
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt_s
+    a = abs(dt_s)
+    Q = q * np.kron(np.array([[a**3 / 3, a**2 / 2 * np.sign(dt_s)], [a**2 / 2 * np.sign(dt_s), a]]), np.eye(2))
+    return F @ x, F @ P @ F.T + Q
+
+
+def _kalman_update(x, P, z, R):
+    """Kalman update of a CV state with a position contact z (covariance R)."""
+    S = P[:2, :2] + R
+    K = np.linalg.solve(S, P[:2, :]).T
+    return x + K @ (z - x[:2]), P - K @ S @ K.T
 
 
 class SideTracker:
@@ -119,10 +227,11 @@ class SideTracker:
         from sonartrack.association.gating import gate_threshold
 
         self.gamma = gate_threshold(gate_probability, 2)
+        self.cap = gate_threshold(1.0 - STRAY_PROBABILITY, 2)
         self.min_turn, self.min_log_lr, self.q = float(min_turn_rad), float(min_log_lr), float(q)
         self._past = deque(maxlen=max(int(lookback), 1))
         self._lookback = int(lookback)
-        self._sums: dict[int, tuple[_CvSums, _CvSums]] = {}
+        self._sums: dict[int, tuple[_CvFit, _CvFit]] = {}
         self._t0: dict[int, float] = {}
         self._h0: dict[int, float] = {}
         self._turned: dict[int, bool] = {}
@@ -150,26 +259,55 @@ class SideTracker:
         if self._lookback:
             self._past.append((float(t_s), float(heading_rad), contacts))
 
-    def _retrodict(self, tid: int, t_s: float, x, P) -> None:
-        """Seed a newly confirmed track's sums with its contacts of the last pings (module doc)."""
-        sums = self._sums.setdefault(tid, (_CvSums(), _CvSums()))
+    def _retrodict(self, tid: int, t_s: float, heading_rad: float, contacts, x, P) -> None:
+        """Seed a newly confirmed track's contact sequences with the detections of the last pings (module doc): a
+        backward CV filter for each hypothesis, the track's state and its mirror's, takes per ping its nearest
+        contact, and that detection's two contacts go to the sequences of both."""
+        seqs = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
         self._t0[tid] = t_s
-        for tp, hp, cp in self._past if self._lookback else ():
-            dt = tp - t_s
-            F = np.eye(4)
-            F[0, 2] = F[1, 3] = dt
-            Pk = F @ P @ F.T + self.q * np.kron(np.array([[abs(dt)**3 / 3, dt**2 / 2], [dt**2 / 2, abs(dt)]]),
-                                                np.eye(2))
-            pair = self._pair(cp, F @ x, Pk)
-            if pair is not None:
-                self._h0.setdefault(tid, hp)
-                sums[0].add(dt, cp.xy[pair[0]], cp.R[pair[0]])
-                sums[1].add(dt, cp.xy[pair[1]], cp.R[pair[1]])
+        origin = _axis_point(contacts)
+        if not self._lookback or origin is None:
+            return
+        M = _reflection(heading_rad)
+        Mx = np.kron(np.eye(2), M)
+        hyps = [(np.array(x, float), np.array(P, float)),
+                (np.concatenate([origin + M @ (x[:2] - origin), M @ x[2:]]), Mx @ P @ Mx.T)]
+        t_prev, misses = t_s, 0
+        for tp, hp, cp in reversed(self._past):
+            hyps = [_predict(xh, Ph, tp - t_prev, self.q) for xh, Ph in hyps]
+            t_prev = tp
+            picks = [self._nearest(cp, *hyps[h]) for h in (0, 1)]
+            misses = 0 if any(k is not None for k in picks) else misses + 1
+            if misses >= MAX_MISSES:
+                break
+            taken = set()
+            for h, row in enumerate(picks):
+                mate = None if row is None else _mate(cp, row)
+                if mate is None:
+                    continue
+                hyps[h] = _kalman_update(*hyps[h], cp.xy[row], cp.R[row])
+                if int(cp.detection[row]) in taken:
+                    continue
+                taken.add(int(cp.detection[row]))
+                own, mirror = (row, mate) if h == 0 else (mate, row)
+                self._h0[tid] = hp
+                seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], live=False)
+                seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], live=False)
+
+    def _nearest(self, contacts, xh, Ph) -> int | None:
+        """The contact of the smallest chi-square distance to a state (x_h, P_h + R), inside the gate (None:
+        none)."""
+        if not len(contacts):
+            return None
+        nu = contacts.xy - xh[:2]
+        d2 = np.einsum("mi,mi->m", nu, np.linalg.solve(Ph[:2, :2][None] + contacts.R, nu[..., None])[..., 0])
+        k = int(np.argmin(d2))
+        return k if d2[k] < self.gamma else None
 
     def _update(self, t_s, heading_rad, contacts, track_ids, x, P, side) -> None:
         for k, tid in enumerate(np.asarray(track_ids).tolist()):
             if tid not in self._sums:
-                self._retrodict(tid, t_s, np.asarray(x[k], float), np.asarray(P[k], float))
+                self._retrodict(tid, t_s, heading_rad, contacts, np.asarray(x[k], float), np.asarray(P[k], float))
             self._h0.setdefault(tid, heading_rad)
             self._turned[tid] = self._turned.get(tid, False) or abs(heading_rad - self._h0[tid]) >= self.min_turn
             self._last_side[tid] = int(side[k])
@@ -178,12 +316,12 @@ class SideTracker:
                 continue
             own, mirror = pair
             t0 = self._t0.setdefault(tid, t_s)
-            sums = self._sums.setdefault(tid, (_CvSums(), _CvSums()))
+            sums = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
             sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own])
             sums[1].add(t_s - t0, contacts.xy[mirror], contacts.R[mirror])
-            if sums[0].n >= MIN_CONTACTS:
-                lr = sums[0].log_likelihood() - sums[1].log_likelihood()
-                self._history.setdefault(tid, []).append((t_s, lr if self._turned[tid] else 0.0))
+            if sums[0].n >= MIN_CONTACTS:  # before the turn the two fits are equal: ln LR = 0 uncomputed
+                lr = sums[0].log_likelihood() - sums[1].log_likelihood() if self._turned[tid] else 0.0
+                self._history.setdefault(tid, []).append((t_s, lr))
 
     def _pair(self, contacts, x, P) -> tuple[int, int] | None:
         """(own, mirror) rows: the contact nearest the track inside its gate, and the other of its detection."""
@@ -195,8 +333,8 @@ class SideTracker:
         best = int(np.argmin(d2))
         if d2[best] >= self.gamma:
             return None
-        other = np.nonzero((contacts.detection == contacts.detection[best]) & (np.arange(len(contacts)) != best))[0]
-        return (best, int(other[0])) if len(other) else None
+        other = _mate(contacts, best)
+        return None if other is None else (best, other)
 
     def decision(self, track_id: int) -> int:
         """+1 the track is on its target's side, -1 a ghost, 0 undecided (so far).
