@@ -164,3 +164,57 @@ def test_two_tracks_swapped_at_a_crossing_get_their_parts_after_it_exchanged():
     # without the navigation nothing is exchanged (the crossing's scans are only left out)
     plain = drop_unresolved([rec(1, a, b), rec(2, b, a)], 4.0)
     assert np.array_equal(_span(plain[0], *after)[1], _span(b, *after)[1])
+
+
+def _starboard_turn_nav() -> Navigation:
+    """Array at 3 m/s north, turning 60 deg to starboard over 400..520 s (no tow)."""
+    own, _, heading = ManeuveringTrack(0.0, 0.0, 3.0, 0.0, ((400.0, 520.0, np.deg2rad(0.5)),)).state(TIMES)
+    return Navigation(TIMES, own[:, 0], own[:, 1], heading, own[:, 0], own[:, 1], heading)
+
+
+def test_a_ships_fragments_either_side_of_the_arrays_turn_are_joined_on_the_right_fold_branch():
+    from sonartrack.systems.passive.measurements import _join_statistic
+
+    nav = _starboard_turn_nav()
+    ship = [6000.0, 2000.0, -2.0, 1.0]
+    first, later = _fragment(1, ship, 0.0, 470.0, nav, 1), _fragment(5, ship, 560.0, 1200.0, nav, 2)
+    # the turn drives the cone angle down 0.5 deg/s at the first fragment's end; carried over the 90 s gap that
+    # rate predicts the later fragment's start below 0 deg, on the mirror branch (-phi), though the turn ended at 520 s
+    rate = np.polyfit(first.time_s[-20:], first.cone_deg[-20:], 1)[0]
+    predicted = first.cone_deg[-1] + rate * (later.time_s[0] - first.time_s[-1])
+    assert abs(-later.cone_deg[0] - predicted) < abs(later.cone_deg[0] - predicted)
+    # one target on its own branch: the ratio of one ship (about 1)
+    assert _join_statistic(first, later, nav) < 1.2
+    out = join_fragments([first, later], nav)
+    assert [m.track_id for m in out] == [1] and out[0].joined_track_ids == (5,)
+    # another ship starting where the first one's fragment ended is still kept apart
+    other = _fragment(7, [3000.0, 6000.0, -1.0, -2.0], 560.0, 1200.0, nav, 3)
+    assert [m.track_id for m in join_fragments([first, other], nav)] == [1, 7]
+
+
+def test_fragments_that_are_each_others_best_match_at_a_crossing_are_joined_up_to_the_looser_ratio():
+    from dataclasses import replace
+
+    from sonartrack.systems.passive.measurements import (
+        MAX_JOIN_VARIANCE_RATIO,
+        MUTUAL_JOIN_VARIANCE_RATIO,
+        _join_statistic,
+    )
+
+    nav = _nav()
+    a1, b1 = _fragment(1, SHIP_A, 0.0, 600.0, nav, 1), _fragment(2, SHIP_B, 0.0, 600.0, nav, 2)
+    a2, b2 = _fragment(3, SHIP_A, 720.0, 1200.0, nav, 3), _fragment(4, SHIP_B, 720.0, 1200.0, nav, 4)
+    a2 = replace(a2, cone_deg=a2.cone_deg + 2.0)  # a slow bias of ship A's peaks after the crossing
+    ratio = {(x.track_id, y.track_id): _join_statistic(x, y, nav) for x in (a1, b1) for y in (a2, b2)}
+    # A's own fragments: above the plain bound, below the looser one, and far below either cross pairing
+    assert MAX_JOIN_VARIANCE_RATIO < ratio[1, 3] < MUTUAL_JOIN_VARIANCE_RATIO
+    assert min(ratio[2, 3], ratio[1, 4]) > 3.0 * MUTUAL_JOIN_VARIANCE_RATIO and ratio[2, 4] < MAX_JOIN_VARIANCE_RATIO
+    out = join_fragments([a1, b1, a2, b2], nav)
+    assert [(m.track_id, m.joined_track_ids) for m in out] == [(1, (3,)), (2, (4,))]
+    # the biased fragment alone after A's: the two are each other's only match, joined as well
+    assert join_fragments([a1, a2], nav)[0].joined_track_ids == (3,)
+    # but not when A's first fragment has a better successor (an unbiased piece of A starting later)
+    a3 = _fragment(5, SHIP_A, 760.0, 1200.0, nav, 5)
+    assert ratio[1, 3] > _join_statistic(a1, a3, nav)
+    out = join_fragments([a1, a2, a3], nav)
+    assert [(m.track_id, m.joined_track_ids) for m in out] == [(1, (5,)), (3, ())]

@@ -419,6 +419,14 @@ def swap_at_crossings(tracks: list[TrackMeasurements], nav, min_separation_deg: 
 #: times that of their separate fits (scene with a crossing: fragments of one ship 1.05, of two ships ~400; a
 #: chi-square test on ~1000 scans counts the peaks' slow biases of ~0.05 deg as evidence against the join)
 MAX_JOIN_VARIANCE_RATIO = 1.5
+#: two fragments that are each other's best match (the later one's best predecessor, the earlier one's best
+#: successor) are one target up to this ratio: where a ship's track breaks at a crossing, the one-to-one assignment
+#: of the fragments that end to those that start there with the lowest costs (global nearest neighbour
+#: track-to-track association, Blackman & Popoli, Design and Analysis of Modern Tracking Systems, 1999, sec. 6.6)
+#: keeps two ships apart when the absolute ratio alone cannot (measured on the passive-chain study's crossings with
+#: an own-ship turn in the gap: fragments of one ship 2.6 - 2.9, the other ship's fragment there 4.0 - 13; the
+#: pair's slow peak biases of ~0.1 deg through the turn are what raise the ratio of one ship)
+MUTUAL_JOIN_VARIANCE_RATIO = 3.0
 #: largest gap (s) between two fragments of one target that are tried for a join
 MAX_JOIN_GAP_S = 300.0
 
@@ -430,9 +438,16 @@ def _phi_rad(m: TrackMeasurements) -> np.ndarray:
 def _on_branch(phi_b: np.ndarray, target_rad: float) -> np.ndarray:
     """phi_b moved to the fold branch (phi + 2 pi m or -phi + 2 pi m: the same cone angles) whose first value lies
     nearest ``target_rad``."""
+    up, down = _branches(phi_b, target_rad)
+    return up if abs(up[0] - target_rad) <= abs(down[0] - target_rad) else down
+
+
+def _branches(phi_b: np.ndarray, target_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """phi_b on its two fold branches, phi + 2 pi m and -phi + 2 pi m (the same cone angles), each with the m that
+    puts its first value nearest ``target_rad``."""
     up = phi_b + 2.0 * np.pi * np.round((target_rad - phi_b[0]) / (2.0 * np.pi))
     down = -phi_b + 2.0 * np.pi * np.round((target_rad + phi_b[0]) / (2.0 * np.pi))
-    return up if abs(up[0] - target_rad) <= abs(down[0] - target_rad) else down
+    return up, down
 
 
 def _cv_fit(t, phi, nav) -> tuple[float, np.ndarray]:
@@ -458,16 +473,23 @@ def _cv_cost(t, phi, nav) -> float:
 def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav) -> float:
     """Fragments a then b as one constant-velocity target: the residual variance of one fit of both,
     J_ab / (n - 4), over that of their separate fits, (J_a + J_b) / (n - 8) (at least (0.1 deg)^2): about 1 for
-    one target (an F ratio), large for two."""
+    one target (an F ratio), large for two.
+
+    Which fold branch b continues a on (b's angles phi or their mirror -phi through the array's axis, the same cone
+    angles) is a discrete unknown of the one-target hypothesis: J_ab is the lower of the two branches' costs (the
+    generalised likelihood ratio maximises the likelihood over unknown parameters, Kay, Fundamentals of
+    Statistical Signal Processing vol. II, sec. 6.4). The branch a linear extrapolation of a's end predicts is
+    wrong when the array turns during the gap (measured: a 0.5 deg/s rate at a's end, from the array's turn,
+    carried over 70 s put b on the mirror branch and a ratio of 2000 where the true branch gives 3)."""
     ta, tb = a.time_s, b.time_s[b.time_s > a.time_s[-1]]
     if len(ta) < 10 or len(tb) < 10:
         return np.inf
     pa, pb = _phi_rad(a), _phi_rad(b)[b.time_s > a.time_s[-1]]
     rate = np.polyfit(ta[-20:] - ta[-1], pa[-20:], 1)[0] if len(ta) >= 2 else 0.0
-    pb = _on_branch(pb, pa[-1] + rate * (tb[0] - ta[-1]))
     j_a, j_b = _cv_cost(ta, pa, nav), _cv_cost(tb, pb, nav)
     n = len(ta) + len(tb)
-    j_ab = _cv_cost(np.concatenate([ta, tb]), np.concatenate([pa, pb]), nav)
+    t_ab = np.concatenate([ta, tb])
+    j_ab = min(_cv_cost(t_ab, np.concatenate([pa, p]), nav) for p in _branches(pb, pa[-1] + rate * (tb[0] - ta[-1])))
     separate = max((j_a + j_b) / (n - 8), np.deg2rad(0.1) ** 2)
     return float(j_ab / (n - 4) / separate)
 
@@ -479,7 +501,10 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
     into it when one constant-velocity target explains both bearing histories (the variance ratio of
     :func:`_join_statistic` at most ``max_ratio``; track-to-track association as a test of one target against two,
     Bar-Shalom, Willett & Tian, Tracking and Data Fusion, sec. 7.2, with an F ratio in place of its chi-square:
-    DEVIATION, see ``MAX_JOIN_VARIANCE_RATIO``); of several candidates the lowest ratio wins.
+    DEVIATION, see ``MAX_JOIN_VARIANCE_RATIO``); of several candidates the lowest ratio wins. Two fragments that
+    are each other's best match (the later one's lowest-ratio predecessor, and no other successor of the earlier one
+    lower) are joined up to ``MUTUAL_JOIN_VARIANCE_RATIO``: where two ships' tracks break at one crossing, the
+    assignment of the fragments ending there to those starting there tells them apart where the ratio alone cannot.
     A ship whose track broke at a crossing or turn becomes one target, its fragments' ids in ``joined_track_ids``.
     Where both fragments carry a tonal line (``tonals``), the line must also agree across the junction
     (:func:`tonals_agree`): a ship keeps its line, so two ships' fragments with lines apart are not joined however
@@ -494,7 +519,7 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
     max_gap_s : float
         Largest gap (s) between the end of one fragment and the start of the next.
     max_ratio : float
-        Join when the ratio is at most this.
+        Join when the ratio is at most this (or at most ``MUTUAL_JOIN_VARIANCE_RATIO`` for each other's best match).
     min_fragment_s : float
         Both fragments must span at least this (s): a shorter one's own CV fit explains almost any bearings, so the
         test cannot tell (measured: a 90 s fragment before a turn joined to its ship's later track gave an ML range
@@ -514,14 +539,12 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
     while i < len(out):
         b = out[i]
         cands = [(j, _join_statistic(a, b, nav)) for j, a in enumerate(out[:i])
-                 if min(a.duration_s, b.duration_s) >= min_fragment_s
-                 and a.time_s[-1] < b.time_s[0] + 30.0 and b.time_s[0] - a.time_s[-1] <= max_gap_s
-                 and tonals_agree(lines.get(a.track_id), lines.get(b.track_id))]
-        cands = [(j, g) for j, g in cands if g <= max_ratio]
-        if not cands:
+                 if _may_join(a, b, max_gap_s, min_fragment_s, lines)]
+        cands = [(j, g) for j, g in cands if g <= MUTUAL_JOIN_VARIANCE_RATIO]
+        j, g = min(cands, key=lambda c: c[1]) if cands else (None, np.inf)
+        if j is None or g > max_ratio and not _best_successor(out, j, i, g, nav, max_gap_s, min_fragment_s, lines):
             i += 1
             continue
-        j = min(cands, key=lambda c: c[1])[0]
         a = out[j]
         joined = _union(a, b)
         out[j] = TrackMeasurements(joined.track_id, joined.time_s, joined.cone_deg, joined.amplitude,
@@ -531,6 +554,24 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
             lines[a.track_id] = _joined_line(lines.get(a.track_id), lines[b.track_id])
         del out[i]
     return out
+
+
+def _may_join(a: TrackMeasurements, b: TrackMeasurements, max_gap_s: float, min_fragment_s: float,
+              lines: dict) -> bool:
+    """Whether b may continue a at all: both long enough, b starting after a ends (30 s of overlap allowed) and
+    within ``max_gap_s`` of it, their tonal lines not apart."""
+    return (min(a.duration_s, b.duration_s) >= min_fragment_s
+            and a.time_s[-1] < b.time_s[0] + 30.0 and b.time_s[0] - a.time_s[-1] <= max_gap_s
+            and tonals_agree(lines.get(a.track_id), lines.get(b.track_id)))
+
+
+def _best_successor(out: list[TrackMeasurements], j: int, i: int, ratio: float, nav, max_gap_s: float,
+                    min_fragment_s: float, lines: dict) -> bool:
+    """Whether fragment ``out[i]`` (whose best predecessor is ``out[j]``, at ``ratio``) is also the best of
+    ``out[j]``'s possible successors: no other fragment after it gives a lower ratio."""
+    a = out[j]
+    return all(_join_statistic(a, c, nav) >= ratio for k, c in enumerate(out)
+               if k not in (i, j) and _may_join(a, c, max_gap_s, min_fragment_s, lines))
 
 
 #: a ship's received line moves with its range rate, f_r = f (1 - rdot / c): across a junction (up to
