@@ -131,7 +131,8 @@ def _starts(z_rad, time_s, sensor_xy, initial_ranges_m) -> list[np.ndarray | Non
     return starts
 
 
-def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -> BatchEstimate | None:
+def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M, relative_sigma=1.0
+                  ) -> BatchEstimate | None:
     """The lowest-cost bearings-only ML CV fit over the starts of :func:`_starts` (objective = sum of squared
     wrapped residuals, rad^2; covariance for unit noise), or None if every start fails.
 
@@ -145,6 +146,8 @@ def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -
         Sensor positions [x east, y north] (m).
     initial_ranges_m : sequence of float
         Ranges (m) of the multi-start tracks (module doc).
+    relative_sigma : float or array (n,)
+        Each bearing's noise relative to the others (1: equal weights).
 
     Returns
     -------
@@ -154,7 +157,7 @@ def fit_cv_target(z_rad, time_s, sensor_xy, initial_ranges_m=INITIAL_RANGES_M) -
     best = None
     for x_init in _starts(z_rad, time_s, sensor_xy, initial_ranges_m):
         try:
-            est = ml_bearings_only(z_rad, time_s, sensor_xy, 1.0, x_init=x_init, check=False)
+            est = ml_bearings_only(z_rad, time_s, sensor_xy, relative_sigma, x_init=x_init, check=False)
         except (InputError, np.linalg.LinAlgError, FloatingPointError):
             continue
         if np.isfinite(est.objective) and np.all(np.isfinite(est.x0)) and (
@@ -542,3 +545,135 @@ def _replicate(t, zs, zp, xy, decision: SideDecision, keep) -> np.ndarray:
         out[1:5] = own.state_at(t[-1])[0][0]
         out[5:] = _prediction(own, z, t, xy, keep)
     return out
+
+
+def axis_end_stretches(cone_rad, near_rad: float) -> list[np.ndarray]:
+    """The scans at the record's start and at its end whose cone angle lies within ``near_rad`` of the array's axis
+    (0 or pi, also for unfolded angles), as boolean masks (one per end that lies that near; none otherwise).
+
+    Near endfire a line array's beam widens (a beam of half-power width du in u = cos(theta) steered to the axis
+    reaches theta = arccos(1 - du / 2) ~ sqrt(du) from it; Van Trees, Optimum Array Processing, 2002, sec. 2.4) and
+    the peaks of a ship crossing the axis stop short of it (clipped at the steering grid's end): a track that begins
+    or ends within that reach may have crossed the axis there unseen, so the side of those scans is not decided by
+    the record (the target's side after the crossing is only known from the motion that follows it, which a track
+    ending there does not have).
+
+    Parameters
+    ----------
+    cone_rad : array (n,)
+        Cone angles or unfolded cone angles (rad).
+    near_rad : float
+        How near the axis a scan must be (rad).
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Boolean masks (n,) of the leading and of the trailing stretch near the axis (each present only if non-empty).
+    """
+    phi = np.asarray(cone_rad, float)
+    near = np.abs(phi - np.pi * np.round(phi / np.pi)) < near_rad
+    out = []
+    for run in (near, near[::-1]):
+        k = len(run) if run.all() else int(np.argmin(run))
+        if k:
+            mask = np.zeros(len(phi), bool)
+            mask[:k] = True
+            out.append(mask if run is near else mask[::-1])
+    return out
+
+
+def near_axis_times(time_s, cone_rad, near_rad: float, per_stretch: int = 5) -> np.ndarray:
+    """Candidate times of an axis crossing the peaks did not show: in each stretch of scans whose cone angle lies
+    within ``near_rad`` of the array's axis (:func:`axis_end_stretches` for why), ``per_stretch`` scans evenly
+    spread over it, and the scan nearest the axis.
+
+    Parameters
+    ----------
+    time_s : array (n,)
+        Times (s).
+    cone_rad : array (n,)
+        Cone angles or unfolded cone angles (rad).
+    near_rad : float
+        How near the axis a scan must be (rad).
+    per_stretch : int
+        Evenly spread candidates per stretch.
+
+    Returns
+    -------
+    numpy.ndarray
+        Candidate times (s), sorted; empty when the track never comes that near the axis.
+    """
+    t, phi = np.asarray(time_s, float), np.asarray(cone_rad, float)
+    off = np.abs(phi - np.pi * np.round(phi / np.pi))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], (off < near_rad).astype(int), [0]])))
+    out = []
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        idx = np.unique(np.concatenate([np.linspace(a, b - 1, per_stretch).round().astype(int),
+                                        [a + int(np.argmin(off[a:b]))]]))
+        out += list(t[idx])
+    return np.array(sorted(out), float)
+
+
+@dataclass(frozen=True, slots=True)
+class CrossingAlternative:
+    """The best-fitting hypothesis that the target crossed the array's axis at ``time_s`` (the side switched there),
+    against the decided side: ``log_lr`` = ln L_decided - ln L_alternative (small or negative: the record does not
+    reject the crossing); ``fit``: its constant-velocity ML fit, covariance for sigma_u = 1; ``sigma_u``: the noise
+    of u = cos(theta) measured from the decided side's weighted fit (:func:`crossing_alternative`)."""
+
+    time_s: float
+    log_lr: float
+    fit: BatchEstimate
+    sigma_u: float
+
+
+def crossing_alternative(time_s, chosen_rad, other_rad, sensor_xy_m, cone_rad, candidates_s, near_rad: float
+                         ) -> CrossingAlternative | None:
+    """The likeliest hypothesis that the side switched at one of ``candidates_s``: the decided side's bearings
+    before it and the mirror's after, or the mirror's before and the decided side's after, against the decided
+    side's bearings throughout; each fitted by the constant-velocity ML (:func:`fit_cv_target`).
+
+    The noise of a line array's cone angle is white in u = cos(theta): sigma_theta = sigma_u / sin(theta) (the
+    CRB of a line array's direction in u, Van Trees, Optimum Array Processing, 2002, sec. 8.5; measured on this
+    chain's peaks, flat in u from 5 to 90 deg), so each bearing is weighted by sigma_n = sigma_u /
+    max(|sin theta_n|, sin(near_rad)): the scans near the axis, where the crossing happens, are the noisiest and
+    must not decide it alone. sigma_u^2 = J_decided / (n - 4); ln LR = (J_alt - J_decided) / (2 sigma_u^2), the
+    side decision's likelihood ratio (:func:`resolve_side`) with these weights.
+
+    Parameters
+    ----------
+    time_s : array (n,)
+        Times (s).
+    chosen_rad, other_rad : array (n,)
+        True bearings of the decided side and of its mirror (rad).
+    sensor_xy_m : array (n, 2)
+        The array centre (m).
+    cone_rad : array (n,)
+        The cone angles (or unfolded cone angles) the bearings come from (rad).
+    candidates_s : array
+        Candidate crossing times (s; :func:`near_axis_times`).
+    near_rad : float
+        The floor of the angle from the axis in the weights (rad; about the endfire beam's reach).
+
+    Returns
+    -------
+    CrossingAlternative or None
+        The alternative of lowest cost; None without candidates inside the record or when the fits fail.
+    """
+    t, xy = np.asarray(time_s, float), np.asarray(sensor_xy_m, float)
+    zc, zo = np.asarray(chosen_rad, float), np.asarray(other_rad, float)
+    rel = 1.0 / np.maximum(np.abs(np.sin(np.asarray(cone_rad, float))), np.sin(near_rad))
+    inside = [w for w in np.asarray(candidates_s, float) if t[0] <= w < t[-1]]
+    decided = fit_cv_target(zc, t, xy, relative_sigma=rel) if inside and len(t) > 4 else None
+    if decided is None:
+        return None
+    var_u = max(decided.objective / (len(t) - 4), SIGMA_FLOOR_RAD**2)
+    best = None
+    for when in inside:
+        after = t > when
+        for z in (np.where(after, zo, zc), np.where(after, zc, zo)):
+            fit = fit_cv_target(z, t, xy, relative_sigma=rel)
+            if fit is not None and (best is None or fit.objective < best.fit.objective):
+                best = CrossingAlternative(float(when), (fit.objective - decided.objective) / (2.0 * var_u), fit,
+                                           float(np.sqrt(var_u)))
+    return best

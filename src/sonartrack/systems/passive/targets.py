@@ -67,7 +67,11 @@ from sonartrack.tma.records import BearingRecord, TmaSolution
 from sonartrack.tma.settings import BatchSettings, TmaSettings
 from sonartrack.tma.sides import (
     SideDecision,
+    axis_end_stretches,
+    crossing_alternative,
+    fit_cv_target,
     mirror_bearings_rad,
+    near_axis_times,
     resolve_side,
     resolve_side_through_crossings,
     side_jackknife,
@@ -358,6 +362,99 @@ def jackknife_checked(result: TmaResult, side: SideDecision, record, min_log_lr:
     return _jackknife_widened(result, jk.covariance, len(jk.log_lr), span)
 
 
+def endfire_reach_rad(beamwidth_deg: float) -> float:
+    """How far from the array's axis (rad) its endfire beam reaches: arccos(1 - du / 2) for the broadside half-power
+    width du = ``beamwidth_deg`` in rad, the width in u = cos(theta) of every beam (Van Trees, Optimum Array
+    Processing, 2002, sec. 2.4)."""
+    return float(np.arccos(max(1.0 - 0.5 * np.deg2rad(beamwidth_deg), -1.0)))
+
+
+def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float, beamwidth_deg: float
+                 ) -> TmaResult:
+    """A determined ML solution of a track that comes within the endfire beam of the array's axis, checked against a
+    crossing of the axis there that the record does not show.
+
+    Within a beam of endfire (:func:`endfire_reach_rad`) the peaks of a ship crossing the axis stop short of it
+    (clipped at the steering grid's end), so neither the tracker nor the side decision need see the crossing
+    (tma/sides.py :func:`~sonartrack.tma.sides.axis_end_stretches`). Two tests; the range is not determined
+    (reason "side unresolved") when either finds the solution resting on a side the record does not decide:
+
+    * a track that begins or ends that near the axis: the side of those scans is decided by nothing (the motion
+      after a crossing is not in the record). They are left out and the decided side refitted
+      (:func:`~sonartrack.tma.sides.fit_cv_target`, covariance scaled by the side decision's sigma^2), what both
+      hypotheses share; the solution must agree with it;
+    * a crossing at a scan near the axis (:func:`~sonartrack.tma.sides.crossing_alternative`, the bearings weighted
+      by the line array's noise law sigma_u / sin(theta)) that the record does not reject (ln LR of the decided
+      side over it below ``min_log_lr``, the side decision's own threshold) must place the target where the
+      solution does; one that the record decides over the side taken (ln LR at or below ``-min_log_lr``) leaves
+      the range not determined wherever it places the target.
+
+    Agreement: the difference of the final positions within the 99.9 % point of chi-square(2) in the summed
+    covariance (P + P_other, which bounds the covariance of the difference of two estimates from one record).
+
+    Parameters
+    ----------
+    result : TmaResult
+        The ML solution of the decided side's bearings.
+    side : SideDecision
+        The side decision (its sigma).
+    record : tuple of ndarray
+        (times s, decided side's bearings rad, mirror's bearings rad, array centre (n, 2) m, cone angles rad).
+    min_log_lr : float
+        The side decision's threshold on |ln LR|.
+    beamwidth_deg : float
+        The array's broadside beamwidth (deg).
+
+    Returns
+    -------
+    TmaResult
+        ``result``, or every row undetermined with the reason as a warning.
+    """
+    t, chosen, other, xy, cone = record
+    if not result.solution.range_flags().any() or side.side == "unresolved":
+        return result
+    reach = endfire_reach_rad(beamwidth_deg)
+    note = _end_stretch_note(result, side, (t, chosen, xy, cone), reach)
+    if note is None:
+        alt = crossing_alternative(t, chosen, other, xy, cone, near_axis_times(t, cone, reach), reach)
+        if alt is not None and alt.log_lr < min_log_lr:
+            d, m2 = _elsewhere(result, alt.fit, t[-1], alt.sigma_u)
+            # not (m2 <= q): a crossing the record does not reject and whose place cannot be computed decides nothing
+            if not m2 <= chi2_quantile(1.0 - RESIDUAL_ALPHA, 2) or alt.log_lr <= -min_log_lr:
+                note = (f"within a beam of the array's axis at {alt.time_s - t[0]:.0f} s into the track the target may "
+                        f"have crossed it (ln LR {alt.log_lr:+.3g} of the side taken over that crossing), which places "
+                        f"it {np.hypot(*d):.0f} m elsewhere ({np.sqrt(m2):.3g} sd): the side after it is not decided")
+    return result if note is None else _undetermined(result, SIDE_UNRESOLVED, note)
+
+
+def _elsewhere(result: TmaResult, fit, t_end: float, sigma_rad: float) -> tuple[np.ndarray, float]:
+    """(position difference m, its squared Mahalanobis distance in P + P_fit) of a unit-noise CV fit scaled by
+    sigma^2 against the solution's final row (:func:`axis_checked`)."""
+    x, p = fit.state_at(t_end)
+    d = x[0, :2] - np.asarray(result.solution.state[-1, :2], float)
+    P = np.asarray(result.solution.covariance[-1, :2, :2], float) + p[0, :2, :2] * sigma_rad**2
+    return d, float(d @ np.linalg.solve(P, d))
+
+
+def _end_stretch_note(result: TmaResult, side: SideDecision, record, reach_rad: float) -> str | None:
+    """Why the solution rests on a stretch near the axis at the record's start or end, or None
+    (:func:`axis_checked`, first test)."""
+    t, chosen, xy, cone = record
+    for near in axis_end_stretches(cone, reach_rad):
+        keep = ~near
+        if keep.sum() < 2 * MIN_JACKKNIFE_BEARINGS:
+            continue
+        fit = fit_cv_target(chosen[keep], t[keep], xy[keep])
+        if fit is None:
+            continue
+        d, m2 = _elsewhere(result, fit, t[-1], side.sigma_bearing_rad)
+        if m2 > chi2_quantile(1.0 - RESIDUAL_ALPHA, 2):
+            return (f"the track {'ends' if near[-1] else 'begins'} within a beam of the array's axis "
+                    f"({int(near.sum())} scans), where it may have crossed unseen: without those scans the target "
+                    f"is {np.hypot(*d):.0f} m elsewhere ({np.sqrt(m2):.3g} sd)")
+    return None
+
+
 def _foreign_block_note(jk, beamwidth_deg: float, span: str, whose: str) -> str | None:
     """Why the block of a jackknife (tma/sides.py :class:`~sonartrack.tma.sides.SideJackknife`) that the rest of the
     record predicts worst is not this target's, or None (:meth:`~sonartrack.tma.sides.SideJackknife.foreign_block`
@@ -537,6 +634,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
         ml = frequency_ml(ml, t, chosen, tonal, stages)
     if not ml.settings.frequency:
         ml = jackknife_checked(ml, side, (t, stbd, port, xy), min_log_lr, stages.min_separation_deg)
+    ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     if left_out is not None:
         ml = replace(ml, warnings=ml.warnings + (left_out,))
