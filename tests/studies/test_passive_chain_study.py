@@ -261,3 +261,40 @@ def test_a_short_trial_fills_the_contract():
                                       "no-diverged", "false-targets"]
     assert np.nanmax(trial["hold"]) > 0.5  # some ship is held on a 16 x 2.5 m array
     assert trial["false_targets_noise"][0] == 0  # no target in 4 minutes of noise
+
+
+def test_target_errors_judge_the_scans_the_ml_was_fitted_to_at_its_last_row():
+    """A target whose ML record holds only the first half of its track's scans (as the bearings + frequency ML's
+    record does): the CRB is over those scans, with the noise of its peaks there (+-0.2 deg alternating: sd 0.2 deg
+    exactly; the second half's +-1.5 deg must not count), carried to the record's last time, and the error is
+    measured against the ship at that time (the solution is put 30 m east and 40 m north of it: 50 m)."""
+    from types import SimpleNamespace
+
+    from sonartrack.tma.batch_ml import crb_position_sd_m
+
+    scene = pc.draw_scene(pc.Config(), 3)
+    nav = pc.navigation(scene_geometry(scene, np.arange(0.0, 601.0)))
+    t = np.arange(10.0, 590.0, 2.0)  # 290 scans
+    half = len(t) // 2  # 145 scans: use an even count so that the alternating offsets have mean 0
+    half -= half % 2
+    ship = 0
+    g = scene_geometry(scene, t)
+    offset = np.where(np.arange(len(t)) % 2 == 0, 1.0, -1.0) * np.where(np.arange(len(t)) < half, 0.2, 1.5)
+    track = SimpleNamespace(time_s=t, cone_deg=np.rad2deg(g.cone_rad[ship]) + offset)
+    t_rec = t[:half]
+    end = scene_geometry(scene, t_rec[-1:])
+    state = np.zeros((half, 4))
+    state[-1, :2] = end.ship_xy[ship, 0] + np.array([30.0, 40.0])
+    solution = SimpleNamespace(time_s=t_rec, state=state, range_flags=lambda: np.ones(half, bool))
+    tg = SimpleNamespace(track=track, ml=SimpleNamespace(record=SimpleNamespace(time_s=t_rec), solution=solution))
+    err, crb_m, sigma_deg, det = pc.target_errors(tg, scene, ship, nav)
+    assert err == pytest.approx(50.0, abs=1e-6)
+    assert sigma_deg == pytest.approx(0.2, rel=1e-6)
+    x0 = np.concatenate([g.ship_xy[ship, 0], g.ship_velocity[ship, 0]])
+    xy, _ = nav.array_at(t_rec)
+    expected = crb_position_sd_m(x0, t_rec - t_rec[0], xy, np.deg2rad(0.2), t_rec[-1] - t_rec[0])
+    assert np.isfinite(expected) and crb_m == pytest.approx(expected, rel=1e-9)
+    # over the whole track at its end (the judging before): another number
+    whole = crb_position_sd_m(x0, t - t[0], nav.array_at(t)[0], np.deg2rad(np.std(offset)), t[-1] - t[0])
+    assert crb_m != pytest.approx(whole, rel=0.05)
+    assert det == 1.0

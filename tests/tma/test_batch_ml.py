@@ -72,3 +72,24 @@ def test_unsorted_times_are_refused():
     t2[[3, 4]] = t2[[4, 3]]
     with pytest.raises(InputError, match="increase strictly"):
         ml_bearings_only(h, t2, po, 0.01)
+
+
+def test_crb_position_sd_by_hand():
+    """A stationary target at the origin seen from (0, -R) and (-R, 0) at t = 0 and again at t = T: the bearings
+    from (0, -R) carry only x (H = [1, 0, tau, 0] / R), those from (-R, 0) only y (H = [0, -1, 0, -tau] / R), so
+    each axis has J = [[2, T], [T, T^2]] / (sigma R)^2, J^-1 = (sigma R)^2 [[1, -1 / T], [-1 / T, 2 / T^2]] and
+    var(x0 + tau vx) = (sigma R)^2 (1 - 2 tau / T + 2 tau^2 / T^2): sigma R per axis at 0 and T, sigma R / sqrt(2)
+    at T / 2; the position sd sqrt(2) sigma R and sigma R."""
+    from sonartrack.tma.batch_ml import crb_position_sd_m
+
+    R, T, sigma = 1000.0, 100.0, 0.01
+    tau = np.array([0.0, 0.0, T, T])
+    own = np.array([[0.0, -R], [-R, 0.0], [0.0, -R], [-R, 0.0]])
+    x0 = np.zeros(4)
+    assert crb_position_sd_m(x0, tau, own, sigma, 0.0) == pytest.approx(np.sqrt(2.0) * sigma * R, rel=1e-9)
+    assert crb_position_sd_m(x0, tau, own, sigma, T) == pytest.approx(np.sqrt(2.0) * sigma * R, rel=1e-9)
+    assert crb_position_sd_m(x0, tau, own, sigma, T / 2) == pytest.approx(sigma * R, rel=1e-9)
+    # per-bearing noise: doubling every sigma doubles the bound
+    assert crb_position_sd_m(x0, tau, own, np.full(4, 2 * sigma), T) == pytest.approx(2 * np.sqrt(2) * sigma * R)
+    # the bearings at t = 0 alone say nothing about the velocity: no bound
+    assert np.isnan(crb_position_sd_m(x0, tau[:2], own[:2], sigma, T))

@@ -30,8 +30,9 @@ Checks (claims, each with its 95 % interval):
 * true bearing after an axis crossing: the median error of the true bearings (the batch ML's record) of the
   target following the ship after the crossing within 2 beamwidths, in >= ``AXIS_REQUIRED`` of the crossings;
 * ML near the CRB: of the determined final ML solutions of targets following a ship, >= ``CRB_SHARE`` within
-  ``CRB_FACTOR`` x the bearings-only CRB position sd (computed with the bearing noise of the target's own peaks),
-  and none off by more than ``MAX_SDS`` of its own position sds (Mahalanobis distance);
+  ``CRB_FACTOR`` x the bearings-only CRB position sd (computed with the bearing noise of the target's own peaks,
+  over the scans the ML was fitted to, at its last row's time: :func:`target_errors`), and none off by more than
+  ``MAX_SDS`` of its own position sds (Mahalanobis distance);
 * no printed solution diverged (ML and IMM-MGEKF final rows printed with a range: :func:`diverged`);
 * false targets: at most ``FALSE_PER_HOUR`` confirmed targets following no ship per hour (noise-only recordings
   and the ship scenes' targets that follow no ship).
@@ -55,7 +56,7 @@ from sonartrack.systems.passive.settings import PassiveSettings
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on a family of simulated towed-array scenes (our own study)"
 PAPER = "sonartrack's own: papers P0 (JPDA_A), P2 (IMM-MGEKF) and P3 (batch ML) joined into one system"
-TRIAL_VERSION = 8
+TRIAL_VERSION = 9
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 32
@@ -592,28 +593,33 @@ def longest_per_ship(result, matches: dict[int, int], n_ships: int) -> list[int 
     return best
 
 
+def ml_scans(tg) -> np.ndarray:
+    """Which of the target's scans (``tg.track``) its ML solution was fitted to: those its record holds (the
+    bearings + frequency ML's record keeps only the scans with a tonal frequency; bool (n,))."""
+    return np.isin(np.asarray(tg.track.time_s, float), np.asarray(tg.ml.record.time_s, float))
+
+
 def target_errors(tg, scene, ship: int, nav) -> tuple[float, float, float, float]:
     """(final ML position error m, CRB position sd m at the same time, measured bearing sd deg, range determined)
-    of one target; the CRB (tma/batch_ml.py :func:`crb`) at the true constant-velocity track, with the bearing
-    noise of this track's own peaks (their offsets from the true cone angle)."""
+    of one target, judged on the data the ML was given: the scans of its record (:func:`ml_scans`) and the time of
+    its last row. The CRB (tma/batch_ml.py :func:`~sonartrack.tma.batch_ml.crb_position_sd_m`) is that of the
+    true constant-velocity track over those scans, with the bearing noise of the target's own peaks there (the sd
+    of their offsets from the true cone angle: the sensor's noise, whichever side the chain took), carried to the
+    last row's time; the error is the last row's position against the ship's at that time."""
     from sonartrack.core.angles import wrap_angle
     from sonartrack.sim.passive_scene import scene_geometry
-    from sonartrack.tma.batch_ml import crb
+    from sonartrack.tma.batch_ml import crb_position_sd_m
 
-    t = np.asarray(tg.track.time_s, float)
+    on = ml_scans(tg)
+    t = np.asarray(tg.track.time_s, float)[on]
     g = scene_geometry(scene, t)
-    sigma = float(np.std(wrap_angle(np.deg2rad(tg.track.cone_deg) - g.cone_rad[ship])))
+    sigma = float(np.std(wrap_angle(np.deg2rad(np.asarray(tg.track.cone_deg, float)[on]) - g.cone_rad[ship])))
     x0 = np.concatenate([g.ship_xy[ship, 0], g.ship_velocity[ship, 0]])
     xy, _ = nav.array_at(t)
-    try:
-        P0 = crb(x0, t - t[0], xy, max(sigma, 1e-6))
-    except np.linalg.LinAlgError:  # no range information at all in this geometry: no bound to compare with
-        P0 = np.full((4, 4), np.nan)
-    F = np.eye(4)
-    F[0, 2] = F[1, 3] = t[-1] - t[0]
-    P = F @ P0 @ F.T
-    err = float(np.hypot(*(tg.ml.solution.state[-1, :2] - g.ship_xy[ship, -1])))
-    crb_sd = float(np.sqrt(max(P[0, 0] + P[1, 1], 0.0))) if np.isfinite(P[0, 0] + P[1, 1]) else float("nan")
+    t_end = float(tg.ml.solution.time_s[-1])
+    crb_sd = crb_position_sd_m(x0, t - t[0], xy, max(sigma, 1e-6), t_end - t[0])
+    truth_end = scene_geometry(scene, np.array([t_end])).ship_xy[ship, 0]
+    err = float(np.hypot(*(np.asarray(tg.ml.solution.state[-1, :2], float) - truth_end)))
     return err, crb_sd, float(np.rad2deg(sigma)), float(tg.ml.solution.range_flags()[-1])
 
 

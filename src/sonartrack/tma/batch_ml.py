@@ -143,6 +143,41 @@ def crb(x0_true, tau_s, own_xy, sigma_rad) -> np.ndarray:
     return np.linalg.inv(fisher_information(x0_true, tau_s, own_xy, sigma_rad))
 
 
+def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float) -> float:
+    """The CRB's position standard deviation sqrt(P_xx + P_yy) at time ``tau_end_s``: the bound on X0
+    (:func:`crb`) carried to that time along the constant-velocity model, P = F J^-1 F^T with F = [[I, tau I],
+    [0, I]] (the bound on a function of X0 is the bound on X0 mapped through its Jacobian; Van Trees, Detection,
+    Estimation and Modulation Theory I, 1968, sec. 2.4.3).
+
+    Parameters
+    ----------
+    x0_true : array_like, shape (4,)
+        True [x0, y0, vx, vy] at t0 (m, m/s).
+    tau_s : array_like, shape (n,)
+        Times of the bearings since t0 (s).
+    own_xy : ndarray, shape (n, 2)
+        Ownship positions (m; x east, y north) at those times.
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise standard deviation (rad).
+    tau_end_s : float
+        The time (s since t0) of the position bounded, e.g. the solution's last row.
+
+    Returns
+    -------
+    float
+        The bound's position sd (m); NaN when the geometry carries no information on some component (J singular).
+    """
+    try:
+        P0 = crb(x0_true, tau_s, own_xy, sigma_rad)
+    except np.linalg.LinAlgError:
+        return float("nan")
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = float(tau_end_s)
+    P = F @ P0 @ F.T
+    v = P[0, 0] + P[1, 1]
+    return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("nan")
+
+
 def ownship_deviation_m(tau_s, own_xy) -> float:
     """Largest distance (m) of the ownship from its least-squares constant-velocity line.
 
