@@ -82,3 +82,17 @@ def test_print_config_and_config_file(wav, tmp_path, capsys):
     peaks = pd.read_csv(tmp_path / "o" / "peaks.csv")
     assert peaks.groupby("time_s").size().max() == 1  # the option overrode the file's max_peaks = 20
     assert out.startswith("bearings: 40 windows of 1 s at 8000 Hz")
+
+
+def test_print_config_without_the_spacing_marks_it_not_set(wav, tmp_path, capsys):
+    # the spacing has no default; the other settings still print, and the file still needs --spacing to run
+    code, out, err = run(capsys, "bearings", "--print-config", "--window", "2")
+    assert code == 0, err
+    assert "# spacing_m = (not set)  # sensor (or half-array centre) spacing d (m)" in out and "window_s = 2.0" in out
+    cfg = tmp_path / "b.toml"
+    cfg.write_text(out)
+    code, _, err = run(capsys, "bearings", "--wav", wav / "rec.wav", "--config", cfg, "--out", tmp_path / "o")
+    assert code == 2 and "spacing_m" in err and not (tmp_path / "o").exists()
+    code, _, err = run(capsys, "bearings", "--wav", wav / "rec.wav", "--config", cfg, "--spacing", "20",
+                       "--out", tmp_path / "o")
+    assert code == 0, err

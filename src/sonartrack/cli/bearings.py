@@ -31,6 +31,13 @@ def _help(name: str) -> str:
     return option_help(BearingSettings, name)
 
 
+def _config_keys(config: Path | None) -> set[str]:
+    """The top-level keys of the ``--config`` TOML file (none without one)."""
+    from sonartrack.io import toml as toml_io
+
+    return set(toml_io.load(config)) if config is not None else set()
+
+
 def bearings_cmd(
     wav: Annotated[Path | None, typer.Option(help="Two-channel WAV (one channel per sensor or half-array).")] = None,
     spacing: Annotated[float | None, typer.Option(help=_help("spacing_m"))] = None,
@@ -49,8 +56,14 @@ def bearings_cmd(
     from sonartrack.io.wav import read_two_channel_wav
     from sonartrack.report.figures.bearings import waterfall_png
 
-    s = resolve(BearingSettings, config, spacing_m=spacing, sound_speed_mps=sound_speed, window_s=window,
-                threshold=threshold, max_peaks=max_peaks)
+    options = dict(spacing_m=spacing, sound_speed_mps=sound_speed, window_s=window, threshold=threshold,
+                   max_peaks=max_peaks)
+    if print_config and spacing is None and "spacing_m" not in _config_keys(config):
+        # the spacing has no default (it is the user's array's): the other settings are printed with it marked
+        # "(not set)", as `passive --print-config` does, instead of refusing to print
+        s = resolve(BearingSettings, config, **(options | {"spacing_m": 1.0}))
+        print_config_and_exit(s.model_copy(update={"spacing_m": None}))
+    s = resolve(BearingSettings, config, **options)
     if print_config:
         print_config_and_exit(s)
     require(wav is not None, "give the recording: --wav FILE (a two-channel WAV)")

@@ -64,7 +64,10 @@ class BatchEstimate:
         t = np.atleast_1d(np.asarray(t_s, dtype=float)) - self.t0_s
         F = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
         F[:, 0, 2] = F[:, 1, 3] = t
-        return F @ self.x0, F @ self.covariance @ np.swapaxes(F, 1, 2)
+        # an unobservable fit's covariance holds inf (0 * inf = NaN in the product): its rows come out NaN, which
+        # every caller reads as 'not determined', so the warning would only be noise on stderr
+        with np.errstate(invalid="ignore"):
+            return F @ self.x0, F @ self.covariance @ np.swapaxes(F, 1, 2)
 
 
 def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
