@@ -208,3 +208,14 @@ def test_imm_nis_is_that_of_the_mixture_of_the_mode_predictions():
     nis, dof = combined_nis(t, z[:, 0], z[:, 1], u, np.array(xh), np.array(Ph), np.array(mh), model)
     np.testing.assert_allclose(nis[1:], expected[1:], rtol=1e-8)
     assert set(dof[1:]) == {2}
+
+
+def test_bearing_text_prints_no_number_once_the_sd_spans_half_the_circle():
+    from sonartrack.tma.verdict import bearing_text
+
+    assert bearing_text(260.44, 1.26) == "bearing 260.4 ± 1.3 deg"
+    assert bearing_text(260.4, 89.9) == "bearing 260.4 ± 89.9 deg"
+    # the glitch seen on a narrow band: "bearing 260.4 ± 44855.8 deg"
+    assert bearing_text(260.4, 44855.8) == "bearing NOT DETERMINED"
+    assert bearing_text(260.4, 90.0) == "bearing NOT DETERMINED"
+    assert bearing_text(float("nan"), 1.0) == bearing_text(10.0, float("inf")) == "bearing NOT DETERMINED"

@@ -71,16 +71,14 @@ class TmaResult:
             range is not determined: no number), f0 (Hz) and mode probabilities when present, and the method's notes.
         """
         from sonartrack.tma.solution_table import solution_columns
-        from sonartrack.tma.verdict import not_determined_text
+        from sonartrack.tma.verdict import bearing_text, not_determined_text
 
         cols = solution_columns(self.solution, self.ownship)
         i, s, t = len(cols["time_s"]) - 1, self.settings, self.record.time_s
         what = "bearings + frequencies" if s.frequency else "bearings"
         line = f"tma {s.method}: {len(t)} {what} over {t[0]:g}..{t[-1]:g} s; at {cols['time_s'][i]:g} s the target "
         if not cols["range_determined"][i]:
-            bearing = (f"is at bearing {cols['bearing_deg'][i]:.1f} ± {cols['bearing_std_deg'][i]:.1f} deg"
-                       if np.isfinite(cols["bearing_deg"][i]) and np.isfinite(cols["bearing_std_deg"][i])
-                       else "has no finite estimate")
+            bearing = "is at " + bearing_text(cols["bearing_deg"][i], cols["bearing_std_deg"][i])
             line += (f"{bearing}; {not_determined_text(cols['undetermined_reason'][i])} by this record, nor its "
                      "course and speed")
         else:

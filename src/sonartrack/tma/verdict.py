@@ -204,3 +204,27 @@ def not_determined_text(reason: str) -> str:
         The phrase.
     """
     return f"range NOT DETERMINED ({reason or 'not determined'})"
+
+
+#: a bearing whose standard deviation reaches this (deg) says nothing of the direction: a uniform bearing has sd
+#: 180 / sqrt(3) = 104 deg, so at 90 deg the 1-sigma interval already spans half the circle
+MAX_BEARING_SD_DEG = 90.0
+
+
+def bearing_text(bearing_deg: float, bearing_sd_deg: float) -> str:
+    """What is printed for a bearing: "bearing B ± S deg", or "bearing NOT DETERMINED" when the estimate or its
+    sd is not finite or the sd reaches :data:`MAX_BEARING_SD_DEG` (a number there would be confident noise).
+
+    Parameters
+    ----------
+    bearing_deg, bearing_sd_deg : float
+        The bearing and its standard deviation (deg).
+
+    Returns
+    -------
+    str
+        The phrase.
+    """
+    if not (np.isfinite(bearing_deg) and np.isfinite(bearing_sd_deg)) or bearing_sd_deg >= MAX_BEARING_SD_DEG:
+        return "bearing NOT DETERMINED"
+    return f"bearing {bearing_deg:.1f} ± {bearing_sd_deg:.1f} deg"

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sonartrack.tma.solution_table import solution_columns
-from sonartrack.tma.verdict import not_determined_text
+from sonartrack.tma.verdict import bearing_text, not_determined_text
 
 if TYPE_CHECKING:
     from sonartrack.acoustics.beamforming import BearingTimeRecord
@@ -251,8 +251,8 @@ def target_line(target: Target) -> str:
     side = (f"{s.side} (ln LR {s.log_likelihood_ratio:+.0f}, from {target.side_resolved_s:.0f} s{crossed})"
             if s.side != "unresolved" else f"side unresolved (ln LR {s.log_likelihood_ratio:+.1f})")
     line = (f"target {target.target_id} (track {target.track.track_id}, {target.track.time_s[0]:.0f}.."
-            f"{target.track.time_s[-1]:.0f} s): {side}; at {c['time_s']:.0f} s bearing {c['bearing_deg']:.1f} ± "
-            f"{c['bearing_std_deg']:.1f} deg, ")
+            f"{target.track.time_s[-1]:.0f} s): {side}; at {c['time_s']:.0f} s "
+            f"{bearing_text(c['bearing_deg'], c['bearing_std_deg'])}, ")
     if c["range_determined"]:
         line += (f"range {c['range_m'] / 1e3:.2f} ± {c['range_std_m'] / 1e3:.2f} km, course {c['course_deg']:.0f} ± "
                  f"{c['course_std_deg']:.0f} deg, speed {c['speed_kn']:.1f} ± {c['speed_std_kn']:.1f} kn (ML)")
