@@ -132,3 +132,21 @@ def test_em_map_says_whether_the_propagation_model_explains_the_snr(files, tmp_p
     assert "range NOT DETERMINED (SNR not explained by the propagation model)" in line and " km" not in line
     assert not sol["range_determined"].any()
     assert set(sol["undetermined_reason"]) == {"SNR not explained by the propagation model"}
+
+
+def test_em_map_level_uncertainty_widens_the_stated_range_sd(files, tmp_path, capsys):
+    # the level's uncertainty (a consider parameter) adds to the observed-information covariance: 0 dB gives the
+    # bare covariance, the default 1 dB a wider one, the same point estimate
+    d, _ = files
+    sds, ranges = {}, {}
+    for level in (0.0, 1.0):
+        cfg = tmp_path / f"l{level}.toml"
+        cfg.write_text(f"sigma_bearing_deg = 0.5\n[batch]\ndepth_m = 50.0\nsigma_level_db = {level}\n")
+        code, _, err = run(capsys, "tma", "--bearings", d / "turning_brg.csv", "--ownship", d / "turning_own.csv",
+                           "--method", "em-map", "--env", "south-summer", "--sl", "140", "--config", cfg,
+                           "--out", tmp_path / f"o{level}")
+        assert code == 0, err
+        sol = pd.read_csv(tmp_path / f"o{level}" / "tma_solution.csv")
+        sds[level], ranges[level] = sol["range_std_m"].iloc[-1], sol["range_m"].iloc[-1]
+    assert ranges[0.0] == ranges[1.0]
+    assert sds[1.0] > 1.2 * sds[0.0], sds

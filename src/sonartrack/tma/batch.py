@@ -136,8 +136,9 @@ def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_beari
     Returns
     -------
     BatchEstimate
-        X0 at the first bearing's time with the observed-information covariance (the bearings-only ML estimate
-        is one of the starts when it exists).
+        X0 at the first bearing's time with the observed-information covariance widened by the level's
+        uncertainty ``batch.sigma_level_db`` (a consider parameter: tma/em_map.py :func:`level_covariance`); the
+        bearings-only ML estimate is one of the starts when it exists.
     """
     from sonartrack.tma.em_map import make_problem, solve_em_map
 
@@ -152,7 +153,7 @@ def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_beari
     xi_bar, _, _ = snr_model(env, batch.sl_db, batch.freq_hz, batch.depth_m, em_map.r_max_m * 1.05, batch.nl_db,
                              batch.di_db, tl_store=tl_store, window_m=em_map.tl_average_m)
     prob = make_problem(record.bearing_rad, record.snr_db, t, own, sigma_bearing_rad, batch.sigma_snr_db, xi_bar,
-                        em_map.r_min_m, em_map.r_max_m, kappa=em_map.kappa)
+                        em_map.r_min_m, em_map.r_max_m, kappa=em_map.kappa, sigma_level_db=batch.sigma_level_db)
     est = solve_em_map(prob, t0_s=float(t[0]), extra_starts=[ml_start], max_iter=em_map.max_iter)
     if not np.all(np.isfinite(est.covariance)):
         raise InputError("em-map found no well-defined solution (flat likelihood): check the SL, environment and depth")

@@ -30,6 +30,24 @@ Initialisation (robust to the multimodal SNR of convergence zones): a grid searc
 through a point on the first bearing line and one on the last (ranges on a log grid), scored by the
 direct bearing + SNR log-likelihood; EM starts from the best few in distinct range basins and from
 the bearings-only ML estimate when there is one, and the highest final L wins.
+
+Covariance. The inverse observed information P of L is the covariance when the model is exact; it is
+consistent then (Monte Carlo NEES of the position ~ 2, tests/tma/test_em_map_covariance.py). But xi_bar
+rests on a level SL + DI - NL that is never known exactly (a source level from a class, a nominal DI and
+NL), and a level error b shifts every xi_bar(r) alike: the fitted range moves so that TL(r) absorbs b
+(b / (dTL/dr) in range: 0.5 dB is 6 % on 20 log r), the SNR residuals stay white (the residual check
+cannot see it), and P, built for b = 0, does not contain it. The estimator keeps b = 0 (P3 takes SL as
+known); its covariance carries b ~ N(0, sigma_level^2) as a *consider* parameter (Tapley, Schutz & Born
+2004, *Statistical Orbit Determination*, ch. 6: P_c = P + S P_bb S^T, S = dX0_hat/db). A real TL curve
+is not monotonic in range (convergence zones, the ripple left after averaging), so S varies within a dB
+and a level error can move the fit to another range basin; S sigma_level is therefore taken from the
+estimator itself at the two symmetric sigma points of b (the unscented transform of a scalar with
+n + kappa_UT = 1, weights 1/2: Julier & Uhlmann 2004, Proc. IEEE 92(3), the symmetric set):
+
+    P_c = P + 1/2 sum_{+,-} (X0_hat(+-sigma_level) - X0_hat) (X0_hat(+-sigma_level) - X0_hat)^T
+
+X0_hat(b) the solve with xi_bar + b (same starts, plus X0_hat). For a smooth TL and a small sigma_level this
+is the linear consider covariance P + sigma_level^2 s s^T, s = P d2L/dX0 db (tested).
 """
 
 from __future__ import annotations
@@ -51,6 +69,10 @@ from sonartrack.tma.batch_ml import BatchEstimate
 KAPPA = 0.01
 #: log-range grid step as a fraction of kappa (the grid must resolve the along-range kernel)
 GRID_STEP_OF_KAPPA = 0.5
+#: standard deviation (dB) of the level SL + DI - NL that xi_bar assumes, carried in the covariance (module
+#: doc, consider covariance). 1 dB: a level given as a number is rarely known better (a nominal DI alone,
+#: 10 log10 N against a design figure, differs by ~0.5 dB on a 16-element array); 0 states the level as exact.
+SIGMA_LEVEL_DB = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +105,10 @@ class EmProblem:
     log_snr_lik: np.ndarray  # (n, n_r): log p(xi_n | r_j); 0 where the SNR is missing
     sigma_rad: np.ndarray
     kappa: float
+    snr_db: np.ndarray | None = None  # (n,) measured SNR xi_n (dB), NaN where missing; None: no SNR
+    xi_bar_db: np.ndarray | None = None  # (n_r,) xi_bar(r_j) (dB)
+    sigma_snr_db: float = float("nan")
+    sigma_level_db: float = 0.0  # sd of the level SL + DI - NL (dB), a consider parameter of the covariance
     terms: FrameTerms = field(init=False, repr=False, compare=False)
     #: [(key, result)] of the last :func:`_e_step`
     memo: list = field(init=False, repr=False, compare=False)
@@ -117,7 +143,8 @@ def _frame_terms(prob: EmProblem) -> FrameTerms:
 
 
 def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, snr_of_range: Callable,
-                 r_min_m: float, r_max_m: float, kappa: float = KAPPA, n_range: int | None = None) -> EmProblem:
+                 r_min_m: float, r_max_m: float, kappa: float = KAPPA, n_range: int | None = None,
+                 sigma_level_db: float = SIGMA_LEVEL_DB) -> EmProblem:
     """Precompute the range grid and log p(xi_n | r) (``snr_of_range(r) -> dB`` is xi_bar).
 
     The grid has ``n_range`` points (default: a step of kappa / 2 in log range).
@@ -141,6 +168,9 @@ def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, 
         Relative along-range spread of the position model (:data:`KAPPA`).
     n_range : int, optional
         Grid points.
+    sigma_level_db : float
+        Standard deviation of the level SL + DI - NL of ``snr_of_range`` (dB), carried in the covariance
+        (:data:`SIGMA_LEVEL_DB`; module doc); 0: the level is exact.
 
     Returns
     -------
@@ -155,20 +185,50 @@ def make_problem(z_rad, snr_db, time_s, own_xy, sigma_rad, sigma_snr_db: float, 
     require(0 < r_min_m < r_max_m, f"range interval must satisfy 0 < r_min < r_max, got {r_min_m:g}..{r_max_m:g} m")
     require(sigma_snr_db > 0, "sigma_SNR must be positive")
     require(kappa > 0, "kappa must be positive")
+    require(sigma_level_db >= 0, "sigma_level must be >= 0")
     if n_range is None:
         n_range = int(np.ceil(np.log(r_max_m / r_min_m) / (GRID_STEP_OF_KAPPA * kappa))) + 1
     r = np.geomspace(r_min_m, r_max_m, n_range)
     xi_bar = np.asarray(snr_of_range(r), dtype=float)
     require(xi_bar.shape == r.shape and bool(np.all(np.isfinite(xi_bar))),
             "the SNR model must give finite values on the range grid")
+    xi = None
     if snr_db is None:
         ll = np.zeros((len(z), len(r)))
     else:
         xi = np.asarray(snr_db, dtype=float)
-        ll = -0.5 * ((xi[:, None] - xi_bar[None, :]) / sigma_snr_db) ** 2 - np.log(np.sqrt(2 * np.pi) * sigma_snr_db)
-        ll[~np.isfinite(xi)] = 0.0
+        ll = _snr_log_lik(xi, xi_bar, sigma_snr_db)
     sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), z.shape).copy()
-    return EmProblem(t - t[0], own, z, r, ll, sig, float(kappa))
+    return EmProblem(t - t[0], own, z, r, ll, sig, float(kappa), xi, xi_bar, float(sigma_snr_db), float(sigma_level_db))
+
+
+def _snr_log_lik(xi_db: np.ndarray, xi_bar_db: np.ndarray, sigma_snr_db: float) -> np.ndarray:
+    """log p(xi_n | r_j) (n, n_r) of eq. 30; 0 on a frame without an SNR (NaN)."""
+    ll = -0.5 * ((xi_db[:, None] - xi_bar_db[None, :]) / sigma_snr_db) ** 2 - np.log(np.sqrt(2 * np.pi) * sigma_snr_db)
+    ll[~np.isfinite(xi_db)] = 0.0
+    return ll
+
+
+def level_shifted(prob: EmProblem, shift_db: float) -> EmProblem:
+    """The same data with the SNR model raised by ``shift_db``: xi_bar(r) + shift (a level SL + DI - NL error).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`) with SNRs.
+    shift_db : float
+        Added to xi_bar (dB).
+
+    Returns
+    -------
+    EmProblem
+        The problem of xi_bar + shift, everything else as ``prob``.
+    """
+    require(prob.snr_db is not None, "a level shift needs the SNRs")
+    xi_bar = prob.xi_bar_db + float(shift_db)
+    return EmProblem(prob.tau_s, prob.own_xy, prob.theta_rad, prob.r_grid,
+                     _snr_log_lik(prob.snr_db, xi_bar, prob.sigma_snr_db), prob.sigma_rad, prob.kappa, prob.snr_db,
+                     xi_bar, prob.sigma_snr_db, prob.sigma_level_db)
 
 
 #: half-width of the range window of the E-step, in units of kappa (module doc: the along-range
@@ -477,10 +537,57 @@ def observed_information(prob: EmProblem, x0, scale=None) -> np.ndarray:
     return Hm
 
 
+def _best_run(prob: EmProblem, starts, max_iter: int):
+    """(X0, iterations, L history) of the EM run from ``starts`` that ends with the highest L."""
+    best = None
+    for s in starts:
+        x, it, hist = em_map(prob, s, max_iter=max_iter)
+        if np.all(np.isfinite(x)) and (best is None or hist[-1] > best[2][-1]):
+            best = (x, it, hist)
+    return best
+
+
+def _starts(prob: EmProblem, extra_starts) -> list[np.ndarray]:
+    """The grid search's starts and the extra ones (None skipped)."""
+    return [*grid_initialisation(prob), *[np.asarray(s, dtype=float) for s in extra_starts if s is not None]]
+
+
+def level_covariance(prob: EmProblem, x0, extra_starts=(), max_iter: int = 500) -> np.ndarray:
+    """The level's part of the consider covariance (module doc): 1/2 sum over b = +-sigma_level of
+    (X0_hat(b) - X0_hat)(X0_hat(b) - X0_hat)^T, X0_hat(b) the solve of :func:`level_shifted` (b).
+
+    Parameters
+    ----------
+    prob : EmProblem
+        The data and model (:func:`make_problem`); ``prob.sigma_level_db`` is sigma_level.
+    x0 : array_like, shape (4,)
+        X0_hat, the solution of ``prob`` (m, m/s); a start of the shifted solves too.
+    extra_starts : iterable of array_like (4,) or None
+        The other starts of the solve (as :func:`solve_em_map`).
+    max_iter : int
+        Iteration limit of each EM run.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        The term (m^2, m^2/s, m^2/s^2); zeros when sigma_level is 0 or there are no SNRs.
+    """
+    x0 = np.asarray(x0, dtype=float)
+    out = np.zeros((4, 4))
+    if prob.sigma_level_db == 0.0 or prob.snr_db is None or not np.isfinite(prob.snr_db).any():
+        return out
+    for b in (prob.sigma_level_db, -prob.sigma_level_db):
+        shifted = level_shifted(prob, b)
+        d = _best_run(shifted, [*_starts(shifted, extra_starts), x0], max_iter)[0] - x0
+        out += 0.5 * np.outer(d, d)
+    return out
+
+
 def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: int = 500,
                  covariance: bool = True) -> BatchEstimate:
-    """EM/MAP X0 with the robust initialisation (module doc) and the observed-information covariance
-    (``covariance=False`` skips it: NaN).
+    """EM/MAP X0 with the robust initialisation (module doc) and its covariance: the inverse observed
+    information plus the level's consider term (:func:`level_covariance`, module doc; ``covariance=False`` skips
+    it: NaN).
 
     Parameters
     ----------
@@ -493,26 +600,22 @@ def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: 
     max_iter : int
         Iteration limit of each EM run.
     covariance : bool
-        Compute the covariance (inverse observed information; NaN when not positive definite).
+        Compute the covariance (inverse observed information + :func:`level_covariance`; NaN when not positive
+        definite). The level's term solves the problem twice more.
 
     Returns
     -------
     BatchEstimate
         The start whose EM run ends with the highest L, method "em-map".
     """
-    starts = [*grid_initialisation(prob), *[np.asarray(s, dtype=float) for s in extra_starts if s is not None]]
-    best = None
-    for s in starts:
-        x, it, hist = em_map(prob, s, max_iter=max_iter)
-        if np.all(np.isfinite(x)) and (best is None or hist[-1] > best[2][-1]):
-            best = (x, it, hist)
-    x, it, hist = best
+    extra_starts = list(extra_starts)  # used again by the level's solves
+    x, it, hist = _best_run(prob, _starts(prob, extra_starts), max_iter)
     if not covariance:
         return BatchEstimate(x0=x, covariance=np.full((4, 4), np.nan), t0_s=float(t0_s), iterations=it,
                              converged=it < max_iter, objective=hist[-1], method="em-map")
     info = observed_information(prob, x)
     try:
-        cov = np.linalg.inv(info)
+        cov = np.linalg.inv(info) + level_covariance(prob, x, extra_starts, max_iter)
         if not np.all(np.linalg.eigvalsh(0.5 * (cov + cov.T)) > 0):
             raise np.linalg.LinAlgError
     except np.linalg.LinAlgError:

@@ -59,6 +59,10 @@ class BatchSettings(Settings):
                                     unit="m", gt=0)
     nl_db: float = setting(73.0, "noise level", unit="dB")
     di_db: float = setting(12.5, "directivity index of the array", unit="dB")
+    sigma_level_db: float = setting(1.0, "uncertainty of the level SL + DI - NL of the em-map SNR model: not "
+                                         "estimated (a constant error moves the range, not the residuals), so it "
+                                         "widens the stated covariance (tma/em_map.py, consider parameter)",
+                                    unit="dB", ge=0)
     window_s: float | None = setting(None, "solve the batch on the first window_s seconds only, then filter the "
                                            "rest with a sequential EKF (default: batch over the whole record)",
                                      unit="s", gt=0)
