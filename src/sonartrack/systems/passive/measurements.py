@@ -223,6 +223,30 @@ def _shared_runs(a: TrackMeasurements, b: TrackMeasurements) -> list[tuple[np.nd
     return [(ia[lo:hi], ib[lo:hi]) for lo, hi in zip([0, *cuts], [*cuts, len(t)], strict=True)]
 
 
+def within_one_beam(cone_a_deg, cone_b_deg, beamwidth_deg: float) -> np.ndarray:
+    """Whether two cone angles lie within one beam of a line array: |cos(a) - cos(b)| < the broadside beamwidth in
+    rad. A line array's beam has one width in the direction cosine u = cos(theta) at every steering angle (about
+    lambda / L; Van Trees, Optimum Array Processing, 2002, sec. 2.4), so in cone angle it widens as 1 / sin(theta)
+    towards endfire: 10 and 13 deg share a 2 deg beam (du = 0.010 < 0.035), 88 and 91 deg do not (du = 0.052).
+    u is the same for every image of a cone angle through the axis (cos(-theta) = cos(theta)), so folded and
+    unfolded angles compare alike.
+
+    Parameters
+    ----------
+    cone_a_deg, cone_b_deg : array_like
+        Cone angles (deg), broadcast together.
+    beamwidth_deg : float
+        The array's broadside beamwidth (deg).
+
+    Returns
+    -------
+    ndarray of bool
+        True where the two are within one beam.
+    """
+    du = np.abs(np.cos(np.deg2rad(np.asarray(cone_a_deg, float))) - np.cos(np.deg2rad(np.asarray(cone_b_deg, float))))
+    return du < np.deg2rad(beamwidth_deg)
+
+
 def _without(m: TrackMeasurements, drop: np.ndarray) -> TrackMeasurements:
     return TrackMeasurements(m.track_id, m.time_s[~drop], m.cone_deg[~drop], m.amplitude[~drop], m.track_time_s,
                              m.track_cone_deg, None if m.unfolded_deg is None else m.unfolded_deg[~drop],
@@ -231,9 +255,10 @@ def _without(m: TrackMeasurements, drop: np.ndarray) -> TrackMeasurements:
 
 def drop_unresolved(tracks: list[TrackMeasurements], min_separation_deg: float, nav=None
                     ) -> list[TrackMeasurements]:
-    """Remove the scans at which two tracks' peaks lie closer than ``min_separation_deg`` (about a beamwidth):
-    there the two targets share one beam, each peak is pulled towards the other target, and that bias — not
-    noise — would steer a batch TMA fit far off while its covariance stays small.
+    """Remove the scans at which two tracks' peaks lie within one beam (:func:`within_one_beam`: closer in
+    u = cos(theta) than the broadside beamwidth ``min_separation_deg`` in rad, so within that many degrees at
+    broadside and many more near endfire): there the two targets share one beam, each peak is pulled towards the
+    other target, and that bias — not noise — would steer a batch TMA fit far off while its covariance stays small.
 
     With the navigation, two tracks on the identical peak for ``MIN_SHARED_RUN_S`` or longer are not two ships in
     one beam but two tracks on one ship (the tracker's tracks coalesced after a crossing): those scans go to the
@@ -246,7 +271,7 @@ def drop_unresolved(tracks: list[TrackMeasurements], min_separation_deg: float, 
     tracks : list of TrackMeasurements
         The tracks' measurements.
     min_separation_deg : float
-        Scans where two tracks' peaks lie closer than this (deg) are removed from both.
+        The broadside beamwidth (deg): scans where two tracks' peaks lie within one beam are removed from both.
     nav : Navigation, optional
         The array's position and heading (io/navigation.py); None: only the scans are removed.
 
@@ -262,7 +287,7 @@ def drop_unresolved(tracks: list[TrackMeasurements], min_separation_deg: float, 
         for j in range(i + 1, len(tracks)):
             b = tracks[j]
             _, ia, ib = np.intersect1d(a.time_s, b.time_s, return_indices=True)
-            close = np.abs(a.cone_deg[ia] - b.cone_deg[ib]) < min_separation_deg
+            close = within_one_beam(a.cone_deg[ia], b.cone_deg[ib], min_separation_deg)
             drop[i][ia[close]] = True
             drop[j][ib[close]] = True
             for ra, rb in _shared_runs(a, b) if nav is not None else []:
@@ -332,10 +357,10 @@ CROSSING_SPAN_S = 200.0
 
 
 def _close_spans(a: TrackMeasurements, b: TrackMeasurements, min_separation_deg: float) -> list[tuple[float, float]]:
-    """Maximal spans (s) in which the two filtered tracks lie within ``min_separation_deg`` (gaps up to 10 s
-    bridged)."""
+    """Maximal spans (s) in which the two filtered tracks lie within one beam of width ``min_separation_deg`` at
+    broadside (:func:`within_one_beam`; gaps up to 10 s bridged)."""
     common, ia, ib = np.intersect1d(a.track_time_s, b.track_time_s, return_indices=True)
-    t = common[np.abs(a.track_cone_deg[ia] - b.track_cone_deg[ib]) < min_separation_deg]
+    t = common[within_one_beam(a.track_cone_deg[ia], b.track_cone_deg[ib], min_separation_deg)]
     if not len(t):
         return []
     cuts = np.nonzero(np.diff(t) > 10.0)[0] + 1
@@ -370,7 +395,8 @@ def _joined(a: TrackMeasurements, b: TrackMeasurements) -> TrackMeasurements:
 
 def swap_at_crossings(tracks: list[TrackMeasurements], nav, min_separation_deg: float,
                       max_ratio: float = 3.0) -> list[TrackMeasurements]:
-    """Two tracks that came within ``min_separation_deg`` of each other (a crossing in cone angle) and went on:
+    """Two tracks that came within one beam of each other (a crossing in cone angle; :func:`within_one_beam`, the
+    beam ``min_separation_deg`` wide at broadside and wider in cone angle towards endfire) and went on:
     their parts after the crossing are exchanged when each one's part before it and the other's part after it are
     one constant-velocity target each far better than the parts as the tracker left them, i.e. the sum of the two
     variance ratios of :func:`_join_statistic` is less than half as large with the exchange and both exchanged
@@ -389,7 +415,7 @@ def swap_at_crossings(tracks: list[TrackMeasurements], nav, min_separation_deg: 
     nav : Navigation
         The array's position and heading (io/navigation.py).
     min_separation_deg : float
-        About a beamwidth (deg): two filtered tracks closer than this are crossing.
+        The broadside beamwidth (deg): two filtered tracks within one beam are crossing.
     max_ratio : float
         Largest variance ratio of an exchanged pairing.
 

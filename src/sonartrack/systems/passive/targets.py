@@ -16,8 +16,12 @@ Per track (its raw peaks, systems/passive/measurements.py):
    reported as flags (``unobservable="flag"``: a track that ends before the array maneuvers still has a
    bearing, only its range is unknown); and the sequential IMM-MGEKF (paper P2), on bearings + the tonal's
    frequency when the track carries a usable tonal line.
-   Bearing noise: the standard deviation measured from the better side's ML residuals (tma/sides.py),
-   so that the solution's uncertainty reflects this recording, not a nominal value; the ML covariance is
+   Bearing noise: the line array's, white in u = cos(theta): the decided side's ML is refitted with each bearing
+   weighted by sigma_n = sigma_u / max(|sin theta_n|, 0.05) (:func:`u_weighted_fit`,
+   :func:`line_array_relative_sigma`), so the scans near endfire, noisy and biased by whatever shares the wide
+   endfire beam, weigh little without being dropped; sigma_u is measured from the weighted residuals, so that the
+   solution's uncertainty reflects this recording, not a nominal value (the side decision itself and its jackknife
+   keep equal weights, tma/sides.py). The ML covariance is
    inflated for the residuals' correlation from window to window (tma/solve.py
    :func:`~sonartrack.tma.solve.correlation_inflation`; setting ``ml_correlation_inflation``).
    Scans at which another track lies within a beam of this one are left out first (:func:`without_neighbour_scans`:
@@ -222,12 +226,12 @@ def line_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | 
     return tonal
 
 
-def _residual_inflation(result: TmaResult) -> tuple[float, float, str | None]:
+def _residual_inflation(result: TmaResult, relative_sigma=1.0) -> tuple[float, float, str | None]:
     """(kappa, s2, note) of a determined ML solution: kappa the correlation inflation it states, s2 >= 1 the
     variance factor its residuals measure beyond kappa (1 when they are consistent), and the residual test's line
-    when s2 > 1."""
+    when s2 > 1; the residuals whitened by each bearing's ``relative_sigma`` (:func:`line_array_relative_sigma`)."""
     t, z, own, at_t = _fit_at_bearings(result)
-    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1]))
+    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1])) / relative_sigma
     kappa = correlation_inflation(e) if result.settings.batch.correlation_inflation else 1.0
     check = residual_check(t, e, float(np.deg2rad(result.settings.sigma_bearing_deg)), inflation=kappa)
     if check.consistent:
@@ -244,10 +248,10 @@ def _fit_at_bearings(result: TmaResult):
     return t, z, own, np.stack([np.interp(t, ts, state[:, k]) for k in range(4)], axis=1)
 
 
-def _flat_likelihood_note(result: TmaResult, variance_factor: float) -> str | None:
+def _flat_likelihood_note(result: TmaResult, variance_factor: float, relative_sigma=1.0) -> str | None:
     """Why a determined ML range is not what its record supports by the profile test, or None."""
     t, z, own, at_t = _fit_at_bearings(result)
-    sigma = float(np.deg2rad(result.settings.sigma_bearing_deg))
+    sigma = float(np.deg2rad(result.settings.sigma_bearing_deg)) * np.broadcast_to(relative_sigma, t.shape)
     cols = solution_columns(result.solution, result.ownship)
     r, sd = float(cols["range_m"][-1]), float(cols["range_std_m"][-1])
     far = max(PROFILE_FAR_FACTOR * r, r + PROFILE_SIGMAS * sd)
@@ -259,7 +263,7 @@ def _flat_likelihood_note(result: TmaResult, variance_factor: float) -> str | No
             f"± {sd / 1e3:.2f} km")
 
 
-def determination_checked(result: TmaResult) -> TmaResult:
+def determination_checked(result: TmaResult, relative_sigma=1.0) -> TmaResult:
     """An ML range that its record does not support is reported as not determined; residuals larger than the stated
     noise widen the stated covariance.
 
@@ -281,6 +285,9 @@ def determination_checked(result: TmaResult) -> TmaResult:
     ----------
     result : TmaResult
         The batch ML solution.
+    relative_sigma : float or ndarray (n,)
+        Each bearing's noise relative to the stated one (``settings.sigma_bearing_deg``), as the fit weighted it
+        (:func:`line_array_relative_sigma`; 1: equal weights).
 
     Returns
     -------
@@ -290,7 +297,7 @@ def determination_checked(result: TmaResult) -> TmaResult:
     """
     if not result.solution.range_flags().any():
         return result
-    kappa, s2, note = _residual_inflation(result)
+    kappa, s2, note = _residual_inflation(result, relative_sigma)
     if s2 > MAX_RESIDUAL_SCALE:
         return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note} (more than {MAX_RESIDUAL_SCALE:g} times)")
     if note is not None:
@@ -301,7 +308,7 @@ def determination_checked(result: TmaResult) -> TmaResult:
         if not cols["range_std_m"][-1] < cols["range_m"][-1]:
             return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note}: inflated by {s2:.3g}, the range's standard "
                                  "deviation exceeds the range")
-    flat = _flat_likelihood_note(result, kappa * s2)
+    flat = _flat_likelihood_note(result, kappa * s2, relative_sigma)
     return result if flat is None else _undetermined(result, FLAT_LIKELIHOOD, flat)
 
 
@@ -367,6 +374,76 @@ def endfire_reach_rad(beamwidth_deg: float) -> float:
     width du = ``beamwidth_deg`` in rad, the width in u = cos(theta) of every beam (Van Trees, Optimum Array
     Processing, 2002, sec. 2.4)."""
     return float(np.arccos(max(1.0 - 0.5 * np.deg2rad(beamwidth_deg), -1.0)))
+
+
+#: |sin theta| below which the noise law sigma_theta = sigma_u / |sin theta| is not followed further
+#: (:func:`line_array_relative_sigma`; 2.9 deg from the axis). Measured on the passive-chain study's peaks (32 trials,
+#: seed 2017, every matched target's cone-angle errors against the truth, 1.4826 MAD): sd_theta |sin theta| is
+#: 0.021-0.041 deg in every band of |sin theta| from 0-0.1 to 0.95-1 (sd_theta 0.64 deg below 0.1, 0.030 deg at
+#: broadside), so the law holds to within a few degrees of the axis; a floor at the endfire beam's reach
+#: (:func:`endfire_reach_rad`, |sin| 0.18-0.32 for the study's 1.8-6 deg beams) understated the noise there ~4 times
+MIN_SIN_CONE = 0.05
+
+
+def line_array_relative_sigma(cone_rad, min_sin: float = MIN_SIN_CONE) -> np.ndarray:
+    """Each cone angle's noise relative to broadside: 1 / max(|sin theta|, ``min_sin``).
+
+    A line array measures the direction cosine u = cos(theta) with one noise sigma_u at every steering angle (its
+    beam has one width in u, Van Trees, Optimum Array Processing, 2002, sec. 2.4; the CRB of u, sec. 8.5), so
+    sigma_theta = sigma_u / |sin theta|, floored at :data:`MIN_SIN_CONE` so that a peak on the axis keeps a finite
+    weight. E.g. at 30 deg twice broadside's, at 90 deg 1, at 0 deg 20.
+
+    Parameters
+    ----------
+    cone_rad : ndarray (n,)
+        Cone angles (rad; unfolded angles alike: |sin| is the same for every image through the axis).
+    min_sin : float
+        The floor of |sin theta|.
+
+    Returns
+    -------
+    ndarray (n,)
+        sigma_theta / sigma_u (>= 1).
+    """
+    return 1.0 / np.maximum(np.abs(np.sin(np.asarray(cone_rad, float))), min_sin)
+
+
+def u_weighted_fit(chosen_rad, time_s, sensor_xy, relative_sigma, start) -> tuple[object, float] | None:
+    """The decided side's constant-velocity ML with each bearing weighted by the line array's noise law
+    (:func:`line_array_relative_sigma`): min sum_n (wrap(z_n - h_n(x)) / r_n)^2 (paper P3, eq. 4, with per-bearing
+    sigma_n = sigma_u r_n), started from the side decision's equal-weight fit. sigma_u^2 = J / (n - 4), the
+    unbiased estimate from the weighted residuals (as the side decision measures sigma, tma/sides.py), floored at
+    the side decision's floor; the covariance is (H^T W H)^-1 sigma_u^2.
+
+    Parameters
+    ----------
+    chosen_rad, time_s : ndarray (n,)
+        The decided side's true bearings (rad) and their times (s).
+    sensor_xy : ndarray (n, 2)
+        The array centre (m).
+    relative_sigma : ndarray (n,)
+        r_n, each bearing's noise relative to sigma_u.
+    start : BatchEstimate
+        The side decision's fit of the same record.
+
+    Returns
+    -------
+    (BatchEstimate, float) or None
+        The fit (covariance scaled by sigma_u^2) and sigma_u (rad); None when the fit fails.
+    """
+    from sonartrack.tma.batch_ml import ml_bearings_only
+    from sonartrack.tma.sides import SIGMA_FLOOR_RAD
+
+    t = np.asarray(time_s, float)
+    try:
+        with np.errstate(invalid="ignore", over="ignore"):
+            est = ml_bearings_only(chosen_rad, t, sensor_xy, relative_sigma, x_init=start.x0, check=False)
+    except (InputError, np.linalg.LinAlgError, FloatingPointError):
+        return None
+    if not (np.isfinite(est.objective) and np.all(np.isfinite(est.x0))):
+        return None
+    sigma_u = max(float(np.sqrt(est.objective / max(len(t) - 4, 1))), SIGMA_FLOOR_RAD)
+    return replace(est, covariance=np.asarray(est.covariance) * sigma_u**2), sigma_u
 
 
 def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float, beamwidth_deg: float
@@ -627,18 +704,26 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     chosen, other = (port, stbd) if side.side == "port" else (stbd, port)
     fit, other_fit = (side.port, side.starboard) if side.side == "port" else (side.starboard, side.port)
     sensor = nav.array_track()
-    ml_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
+    # the scans near endfire (noisy, and biased by what shares the wide endfire beam) weigh as the noise law says
+    law = line_array_relative_sigma(cone)
+    weighted = u_weighted_fit(chosen, t, xy, law, fit) if fit is not None and len(t) > 4 else None
+    rel, sigma_ml = np.ones(len(t)), side.sigma_bearing_rad
+    if weighted is not None:
+        (fit, sigma_ml), rel = weighted, law
+    side_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
-    ml = determination_checked(solve_tma(rec, sensor, ml_settings, ml_fit=fit, unobservable="flag"))
-    if use_frequency_ml and line_tonal(tonal, stages) is not None:
-        ml = frequency_ml(ml, t, chosen, tonal, stages)
+    ml = determination_checked(solve_tma(rec, sensor, _tma_settings("ml", sigma_ml, stages, None), ml_fit=fit,
+                                         unobservable="flag"), rel)
+    if use_frequency_ml and line_tonal(tonal, stages) is not None:  # its bearing channel: the side decision's noise
+        bf = frequency_ml(replace(ml, settings=side_settings), t, chosen, tonal, stages)
+        ml = bf if bf.settings.frequency else replace(ml, warnings=bf.warnings)
     if not ml.settings.frequency:
         ml = jackknife_checked(ml, side, (t, stbd, port, xy), min_log_lr, stages.min_separation_deg)
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     if left_out is not None:
         ml = replace(ml, warnings=ml.warnings + (left_out,))
-    mirror = solve_tma(rec_other, sensor, ml_settings, ml_fit=other_fit, unobservable="flag")
+    mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
     seq = side_checked(_sequential(t, chosen, tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
     return Target(target_id, m, side, since, ml, mirror, seq, tonal)
