@@ -26,7 +26,10 @@ their own: the ML (tma/solve.py :func:`~sonartrack.tma.solve.flag_unresolved_ran
 maneuver resolves, or a range sd above the range), the passive chain's check of it (systems/passive/targets.py)
 :data:`INCONSISTENT_RESIDUALS`, :data:`FLAT_LIKELIHOOD` and :data:`NOT_ONE_TARGET` (a stretch of the record that
 the rest of it places more than a beamwidth away: another ship's bearings, or the mirror's); em-map
-:data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
+:data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`). The passive chain holds
+its sequential filter to the batch ML of the same record (systems/passive/targets.py :func:`batch_held`): the ML's
+reason where the ML is not determined, else :data:`DISAGREES_WITH_BATCH` when the two final positions differ
+beyond what their covariances allow.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ SNR_NOT_EXPLAINED = "SNR not explained by the propagation model"
 INCONSISTENT_RESIDUALS = "inconsistent residuals"
 FLAT_LIKELIHOOD = "flat likelihood"
 NOT_ONE_TARGET = "bearings of more than one target"
+DISAGREES_WITH_BATCH = "disagrees with the batch ML"
 
 
 def with_reasons(solution: TmaSolution, reasons) -> TmaSolution:

@@ -205,3 +205,45 @@ def test_the_chains_verdict_settings_reach_the_tma():
                              imm=ImmSettings(), sequential=SequentialSettings())
     tma = tg._tma_settings("imm-mgekf", np.deg2rad(0.5), stages, None)
     assert tma.verdict.max_range_m == 12_345.0 and tma.verdict.nis_window == 7
+
+
+def _solution(t, xy_last, v=(0.0, 0.0), pos_sd_m=300.0):
+    n = len(t)
+    state = np.tile([xy_last[0], xy_last[1], v[0], v[1]], (n, 1))
+    cov = np.tile(np.diag([pos_sd_m**2, pos_sd_m**2, 1.0, 1.0]), (n, 1, 1))
+    own = OwnshipTrack(time_s=t, x_m=np.zeros(n), y_m=np.zeros(n))
+    return TmaResult(solution=TmaSolution(time_s=t, state=state, covariance=cov, method="ml"),
+                     record=BearingRecord(time_s=t, bearing_rad=np.zeros(n)), ownship=own,
+                     settings=TmaSettings(method="ml"))
+
+
+def test_the_filter_takes_the_batch_mls_reason_when_the_record_does_not_determine_the_range():
+    from sonartrack.systems.passive.targets import batch_held
+
+    t = np.arange(10.0) * 10.0
+    ml = _solution(t, (0.0, 10_000.0))
+    ml = TmaResult(**{**{f: getattr(ml, f) for f in ml.__slots__},
+                      "solution": with_reasons(ml.solution, np.full(10, UNOBSERVABLE, object))})
+    seq = _solution(t, (0.0, 10_000.0))
+    seq = TmaResult(**{**{f: getattr(seq, f) for f in seq.__slots__},
+                       "solution": with_reasons(seq.solution, np.array([DIVERGED] + [""] * 9, object))})
+    got = batch_held(seq, ml).solution
+    assert got.reasons().tolist() == [DIVERGED] + [UNOBSERVABLE] * 9 and not got.range_flags().any()
+
+
+def test_the_filter_agrees_with_the_batch_ml_carried_to_its_last_time_or_is_not_determined():
+    from sonartrack.systems.passive.targets import batch_held
+    from sonartrack.tma.verdict import DISAGREES_WITH_BATCH
+
+    # ML: last row at 90 s, 100 m/s east; the filter's last row at 100 s, where the ML is at x = 1000 m.
+    # Var of the x difference: 300^2 (ML, + 10^2 * 1 from its velocity) + 300^2 (filter) = 180100 m^2, sd 424.4 m;
+    # the 99.9 % point of chi-square(2) is 13.82, so up to 3.717 sd = 1577 m apart is agreement
+    ml = _solution(np.arange(10.0) * 10.0, (0.0, 10_000.0), v=(100.0, 0.0))
+    t = np.arange(11.0) * 10.0
+    # 1500 m past the carried ML agrees (without carrying it, 2500 m from the ML's last row would not)
+    assert batch_held(_solution(t, (1000.0 + 1500.0, 10_000.0)), ml).solution.range_flags().all()
+    far = batch_held(_solution(t, (1000.0 + 1650.0, 10_000.0)), ml)
+    assert far.solution.reasons().tolist() == [""] * 10 + [DISAGREES_WITH_BATCH]
+    assert "1650 m from the batch ML's" in far.warnings[-1]
+    assert not batch_held(_solution(t, (1000.0 - 1650.0, 10_000.0)), ml).solution.range_flags()[-1]
+    assert batch_held(_solution(t, (1000.0 - 1500.0, 10_000.0)), ml).solution.range_flags().all()

@@ -83,6 +83,7 @@ from sonartrack.tma.sides import (
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation, solve_tma
 from sonartrack.tma.verdict import (
+    DISAGREES_WITH_BATCH,
     DIVERGED,
     FLAT_LIKELIHOOD,
     INCONSISTENT_RESIDUALS,
@@ -726,7 +727,65 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
     seq = side_checked(_sequential(t, chosen, tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
+    seq = batch_held(seq, ml)
     return Target(target_id, m, side, since, ml, mirror, seq, tonal)
+
+
+def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> TmaResult:
+    """The sequential IMM-MGEKF's solution held to the batch ML of the same record.
+
+    Both estimate one target from one record, the batch at once with every bearing and with the record's checks
+    (side, observability, one target, residuals, jackknife) behind its verdict, so the filter cannot determine what
+    the batch does not:
+
+    * when the ML's last row is not determined, every row of the filter that has no reason yet takes the ML's
+      (the record does not determine the range, whatever the filter's own covariance says: seen as NEES of 10^2 to
+      10^6 on such rows);
+    * when it is, the filter's last position must lie within the ``1 - alpha`` point of chi-square(2) of the ML's,
+      carried to the filter's last time along the ML's constant velocity, in P_ml + P_seq (the track-to-track test
+      of Bar-Shalom & Li, Multitarget-Multisensor Tracking, 1995, sec. 8.2, with the cross-covariance dropped: the
+      two estimates share their data, so the difference's true covariance P_ml + P_seq - 2 P_cross is smaller and
+      this test keeps a filter it could reject, not the reverse); else its last row is
+      :data:`~sonartrack.tma.verdict.DISAGREES_WITH_BATCH`.
+
+    Parameters
+    ----------
+    seq : TmaResult
+        The sequential filter's solution.
+    ml : TmaResult
+        The batch ML's, on the same record (its bearings-only or bearings + frequency version).
+    alpha : float
+        False-alarm probability of the agreement test.
+
+    Returns
+    -------
+    TmaResult
+        ``seq`` with those rows undetermined (and a warning when the two disagree).
+    """
+    n = len(seq.solution.time_s)
+    ml_reason = ml.solution.reasons()[-1]
+    if ml_reason:
+        return replace(seq, solution=with_reasons(seq.solution, np.full(n, ml_reason, dtype=object)))
+    if not seq.solution.range_flags()[-1]:
+        return seq
+    dt = float(seq.solution.time_s[-1]) - float(ml.solution.time_s[-1])
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt
+    x_ml = F @ np.asarray(ml.solution.state[-1], float)
+    p_ml = F @ np.asarray(ml.solution.covariance[-1], float) @ F.T
+    d = np.asarray(seq.solution.state[-1, :2], float) - x_ml[:2]
+    P = p_ml[:2, :2] + np.asarray(seq.solution.covariance[-1, :2, :2], float)
+    try:
+        m2 = float(d @ np.linalg.solve(P, d))
+    except np.linalg.LinAlgError:
+        m2 = float("nan")
+    if m2 <= chi2_quantile(1.0 - alpha, 2):
+        return seq
+    reasons = np.full(n, "", dtype=object)
+    reasons[-1] = DISAGREES_WITH_BATCH
+    why = (f"the IMM-MGEKF's last position is {np.hypot(*d):.0f} m from the batch ML's ({np.sqrt(m2):.3g} sd of "
+           "the two together): the filter's range is not supported by the record")
+    return replace(seq, solution=with_reasons(seq.solution, reasons), warnings=seq.warnings + (why,))
 
 
 def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: float, stages: PassiveStages
