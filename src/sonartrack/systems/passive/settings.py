@@ -227,10 +227,12 @@ class PassiveSettings(Settings):
                                      le=1000)
     max_peak_offset_deg: float = setting(2.0, "a peak is a track's measurement when within this of the track's "
                                          "bearing at that time", unit="deg", gt=0, le=90)
-    min_separation_deg: float | None = setting(None, "scans where two tracks' peaks are closer than this are left "
-                                               "out of their TMA (not set: one broadside beamwidth 0.89 c / (f N d) "
-                                               "at the band's centre frequency)", unit="deg", gt=0,
-                                               le=180)
+    min_separation_deg: float | None = setting(None, "the array's resolution, one broadside beamwidth (not set: "
+                                               "0.89 c / (f N d) at the band's centre frequency): scans where two "
+                                               "tracks' peaks are closer than this are left out of their TMA, and "
+                                               "two tracks whose direction cosines differ by less than it (in rad) "
+                                               "share a beam (a beam's width is constant in cos(cone))",
+                                               unit="deg", gt=0, le=180)
     ml_correlation_inflation: bool = setting(True, "inflate the batch ML covariance by (1 + rho) / (1 - rho) for "
                                                    "the lag-1 correlation rho of its residuals (consecutive windows "
                                                    "err alike)", unit="")
