@@ -384,6 +384,12 @@ def endfire_reach_rad(beamwidth_deg: float) -> float:
 #: broadside), so the law holds to within a few degrees of the axis; a floor at the endfire beam's reach
 #: (:func:`endfire_reach_rad`, |sin| 0.18-0.32 for the study's 1.8-6 deg beams) understated the noise there ~4 times
 MIN_SIN_CONE = 0.05
+#: smallest sigma_u (rad) the weighted ML may measure (:func:`u_weighted_fit`): 0.02 deg, below every band of the
+#: table above (0.021-0.041 deg in u), so it only keeps a noise-free record finite. The side decision's 0.1 deg floor
+#: (tma/sides.py ``SIGMA_FLOOR_RAD``, a floor on sigma_theta) is 2.5-5 times the measured sigma_u: used for sigma_u it
+#: overstated the ML covariance 6-25 times (passive-chain study: median ML NEES 0.37 against chi-square(4)'s 3.36;
+#: with this floor 0.91, ML ANEES 1.5 -> 2.4, 37 % -> 64 % of the single NEES inside chi2(4) 95 %)
+SIGMA_U_FLOOR_RAD = float(np.deg2rad(0.02))
 
 
 def line_array_relative_sigma(cone_rad, min_sin: float = MIN_SIN_CONE) -> np.ndarray:
@@ -414,7 +420,8 @@ def u_weighted_fit(chosen_rad, time_s, sensor_xy, relative_sigma, start) -> tupl
     (:func:`line_array_relative_sigma`): min sum_n (wrap(z_n - h_n(x)) / r_n)^2 (paper P3, eq. 4, with per-bearing
     sigma_n = sigma_u r_n), started from the side decision's equal-weight fit. sigma_u^2 = J / (n - 4), the
     unbiased estimate from the weighted residuals (as the side decision measures sigma, tma/sides.py), floored at
-    the side decision's floor; the covariance is (H^T W H)^-1 sigma_u^2.
+    :data:`SIGMA_U_FLOOR_RAD` (a floor in u, not the side decision's floor in bearing); the covariance is
+    (H^T W H)^-1 sigma_u^2.
 
     Parameters
     ----------
@@ -433,7 +440,6 @@ def u_weighted_fit(chosen_rad, time_s, sensor_xy, relative_sigma, start) -> tupl
         The fit (covariance scaled by sigma_u^2) and sigma_u (rad); None when the fit fails.
     """
     from sonartrack.tma.batch_ml import ml_bearings_only
-    from sonartrack.tma.sides import SIGMA_FLOOR_RAD
 
     t = np.asarray(time_s, float)
     try:
@@ -443,7 +449,7 @@ def u_weighted_fit(chosen_rad, time_s, sensor_xy, relative_sigma, start) -> tupl
         return None
     if not (np.isfinite(est.objective) and np.all(np.isfinite(est.x0))):
         return None
-    sigma_u = max(float(np.sqrt(est.objective / max(len(t) - 4, 1))), SIGMA_FLOOR_RAD)
+    sigma_u = max(float(np.sqrt(est.objective / max(len(t) - 4, 1))), SIGMA_U_FLOOR_RAD)
     return replace(est, covariance=np.asarray(est.covariance) * sigma_u**2), sigma_u
 
 
