@@ -700,23 +700,13 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     min_log_lr = stages.settings.min_side_log_lr
     t = np.asarray(m.time_s, float)
     xy, heading = nav.array_at(t)
-    if m.unfolded_deg is not None:  # through endfire: the sides of every segment between axis crossings at once
-        side = resolve_side_through_crossings(t, np.deg2rad(m.unfolded_deg), heading, xy, min_log_lr=min_log_lr)
-        cone = side.unfolded_rad
-    else:
-        cone = np.deg2rad(np.asarray(m.cone_deg, float))
-        side = resolve_side(t, cone, heading, xy, min_log_lr=min_log_lr)
+    side, cone = _side_of(m, t, heading, xy, min_log_lr)
     since = side_resolved_time(t, cone, heading, xy, side, min_log_lr)
     stbd, port = mirror_bearings_rad(cone, heading)
     chosen, other = (port, stbd) if side.side == "port" else (stbd, port)
     fit, other_fit = (side.port, side.starboard) if side.side == "port" else (side.starboard, side.port)
     sensor = nav.array_track()
-    # the scans near endfire (noisy, and biased by what shares the wide endfire beam) weigh as the noise law says
-    law = line_array_relative_sigma(cone)
-    weighted = u_weighted_fit(chosen, t, xy, law, fit) if fit is not None and len(t) > 4 else None
-    rel, sigma_ml = np.ones(len(t)), side.sigma_bearing_rad
-    if weighted is not None:
-        (fit, sigma_ml), rel = weighted, law
+    fit, sigma_ml, rel = _noise_law_fit(chosen, t, xy, cone, fit, side.sigma_bearing_rad)
     side_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
     ml = determination_checked(solve_tma(rec, sensor, _tma_settings("ml", sigma_ml, stages, None), ml_fit=fit,
@@ -735,6 +725,28 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
                        causal=True)
     seq = batch_held(seq, ml)
     return Target(target_id, m, side, since, ml, mirror, seq, tonal)
+
+
+def _side_of(m: TrackMeasurements, t, heading, xy, min_log_lr: float) -> tuple[SideDecision, np.ndarray]:
+    """(side decision, cone angles rad) of a track (:func:`solve_target`): through endfire (unfolded cone angles)
+    the sides of every segment between axis crossings at once."""
+    if m.unfolded_deg is not None:
+        side = resolve_side_through_crossings(t, np.deg2rad(m.unfolded_deg), heading, xy, min_log_lr=min_log_lr)
+        return side, side.unfolded_rad
+    cone = np.deg2rad(np.asarray(m.cone_deg, float))
+    return resolve_side(t, cone, heading, xy, min_log_lr=min_log_lr), cone
+
+
+def _noise_law_fit(chosen, t, xy, cone, fit, sigma_bearing_rad: float):
+    """(ML fit, its sigma rad, per-scan relative sigma) for :func:`solve_target`: the scans near endfire (noisy, and
+    biased by what shares the wide endfire beam) weigh as the line array's noise law says (:func:`u_weighted_fit`);
+    the side decision's equal-weight fit and sigma where that fit fails."""
+    law = line_array_relative_sigma(cone)
+    weighted = u_weighted_fit(chosen, t, xy, law, fit) if fit is not None and len(t) > 4 else None
+    if weighted is None:
+        return fit, sigma_bearing_rad, np.ones(len(t))
+    (fit, sigma_ml), rel = weighted, law
+    return fit, sigma_ml, rel
 
 
 def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> TmaResult:
