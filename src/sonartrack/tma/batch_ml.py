@@ -29,6 +29,7 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
+from sonartrack.models.motion import cv_transition
 
 #: ownship must leave its best straight constant-velocity line by this much (m) for range to be observable
 MIN_MANEUVER_M = 50.0
@@ -174,8 +175,7 @@ def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float) -> fl
         P0 = crb(x0_true, tau_s, own_xy, sigma_rad)
     except np.linalg.LinAlgError:
         return float("nan")
-    F = np.eye(4)
-    F[0, 2] = F[1, 3] = float(tau_end_s)
+    F = cv_transition(float(tau_end_s))
     P = F @ P0 @ F.T
     v = P[0, 0] + P[1, 1]
     return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("nan")

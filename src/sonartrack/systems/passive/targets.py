@@ -55,6 +55,7 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.io.navigation import Navigation
+from sonartrack.models.motion import cv_transition
 from sonartrack.systems.passive.checks import (
     MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
@@ -511,13 +512,24 @@ def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: floa
     return result if note is None else _undetermined(result, SIDE_UNRESOLVED, note)
 
 
+def position_gap(x_a, p_a, x_b, p_b) -> tuple[np.ndarray, float]:
+    """(x_a - x_b in position m, its squared Mahalanobis distance in P_a + P_b) of two [x, y, vx, vy] estimates of one
+    target at one time; NaN distance when P_a + P_b is singular. P_a + P_b bounds the covariance of the difference of
+    two estimates from one record (their cross-covariance, dropped, is positive), so the test keeps rather than
+    rejects (:func:`axis_checked`, :func:`batch_held`)."""
+    d = np.asarray(x_a, float)[:2] - np.asarray(x_b, float)[:2]
+    P = np.asarray(p_a, float)[:2, :2] + np.asarray(p_b, float)[:2, :2]
+    try:
+        return d, float(d @ np.linalg.solve(P, d))
+    except np.linalg.LinAlgError:
+        return d, float("nan")
+
+
 def _elsewhere(result: TmaResult, fit, t_end: float, sigma_rad: float) -> tuple[np.ndarray, float]:
     """(position difference m, its squared Mahalanobis distance in P + P_fit) of a unit-noise CV fit scaled by
     sigma^2 against the solution's final row (:func:`axis_checked`)."""
     x, p = fit.state_at(t_end)
-    d = x[0, :2] - np.asarray(result.solution.state[-1, :2], float)
-    P = np.asarray(result.solution.covariance[-1, :2, :2], float) + p[0, :2, :2] * sigma_rad**2
-    return d, float(d @ np.linalg.solve(P, d))
+    return position_gap(x[0], p[0] * sigma_rad**2, result.solution.state[-1], result.solution.covariance[-1])
 
 
 def _end_stretch_note(result: TmaResult, side: SideDecision, record, reach_rad: float) -> str | None:
@@ -786,17 +798,9 @@ def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> 
         return replace(seq, solution=with_reasons(seq.solution, np.full(n, ml_reason, dtype=object)))
     if not seq.solution.range_flags()[-1]:
         return seq
-    dt = float(seq.solution.time_s[-1]) - float(ml.solution.time_s[-1])
-    F = np.eye(4)
-    F[0, 2] = F[1, 3] = dt
-    x_ml = F @ np.asarray(ml.solution.state[-1], float)
-    p_ml = F @ np.asarray(ml.solution.covariance[-1], float) @ F.T
-    d = np.asarray(seq.solution.state[-1, :2], float) - x_ml[:2]
-    P = p_ml[:2, :2] + np.asarray(seq.solution.covariance[-1, :2, :2], float)
-    try:
-        m2 = float(d @ np.linalg.solve(P, d))
-    except np.linalg.LinAlgError:
-        m2 = float("nan")
+    F = cv_transition(float(seq.solution.time_s[-1]) - float(ml.solution.time_s[-1]))
+    d, m2 = position_gap(seq.solution.state[-1], seq.solution.covariance[-1],
+                         F @ np.asarray(ml.solution.state[-1], float), F @ np.asarray(ml.solution.covariance[-1]) @ F.T)
     if m2 <= chi2_quantile(1.0 - alpha, 2):
         return seq
     reasons = np.full(n, "", dtype=object)
