@@ -191,6 +191,45 @@ def _beam_psd(spec: np.ndarray, steer: np.ndarray, scale: float) -> np.ndarray:
     return scale * (beams.real**2 + beams.imag**2)
 
 
+#: bins of the LOFAR accumulator's beams formed together: the chunk's Hann spectra, products and powers stay in the
+#: core's cache (measured 32 x 8 kHz, 61 beams: 15 % less time than all 450 bins at once)
+LOFAR_CHUNK_BINS = 64
+
+
+def _mirror_weights(f_hz: np.ndarray, array: LineArray, cone_deg: np.ndarray) -> np.ndarray:
+    """[C; S] (F, 2 H, N), H = ceil(B / 2): the real and imaginary parts of the steering weights
+    (:func:`_lofar_steering`) of the first H of the B beams ``cone_deg`` (cone angles up to 90 deg;
+    :func:`_mirror_beam_powers`)."""
+    steer = _lofar_steering(f_hz, array, np.asarray(cone_deg)[: (len(cone_deg) + 1) // 2], array.elements)
+    return np.ascontiguousarray(np.concatenate([steer.real, steer.imag], axis=1))
+
+
+def _mirror_beam_powers(xt: np.ndarray, weights: np.ndarray, out: np.ndarray) -> None:
+    """|B|^2 (F, B, K) into ``out`` of the Hann spectra of rectangular spectra ``xt`` (F + 2, N, K) (the band's bins
+    and one beyond each edge: class doc), with the weights [C; S] (F, 2 H, N) of :func:`_mirror_weights`.
+
+    The grid of cone angles is symmetric about 90 deg and tau_n(180 deg - theta) = -tau_n(theta), so beam B - 1 - h
+    has the conjugate weights of beam h: with U = sum_n C_n X_n and V = sum_n S_n X_n (real weights on complex
+    spectra: one real product for both), beam h is U + i V = (Re U - Im V) + i (Im U + Re V) and its mirror
+    U - i V = (Re U + Im V) + i (Im U - Re V), each summed from its parts as the complex product sums them (no
+    difference of powers, which a loud mirror beam would swamp in rounding): half the multiplications."""
+    f, n, k = xt.shape[0] - 2, xt.shape[1], xt.shape[2]
+    half, beams = weights.shape[1] // 2, out.shape[1]
+    hann = np.add(xt[:-2], xt[2:], out=np.empty((f, n, k), dtype=xt.dtype))  # C order: real view below
+    hann *= -0.25
+    hann += 0.5 * xt[1:-1]
+    with one_blas_thread():  # a threaded BLAS spins on a loaded machine (acoustics/blas_threads.py)
+        uv = np.matmul(weights, hann.view(weights.dtype)).view(hann.dtype)  # (F, 2H, 2K) real = (F, 2H, K) complex
+    u, v = uv[:, :half], uv[:, half:]
+    re, im = u.real - v.imag, u.imag + v.real
+    np.multiply(re, re, out=out[:, :half])
+    out[:, :half] += im * im
+    re, im = u.real + v.imag, u.imag - v.real
+    mirror = out[:, half:][:, ::-1]  # beams B - 1 .. H: the mirrors of beams 0 .. B - H - 1
+    np.multiply(re[:, :beams - half], re[:, :beams - half], out=mirror)
+    mirror += im[:, :beams - half] * im[:, :beams - half]
+
+
 class LofarAccumulator:
     """The LOFAR gram built window by window from the windows' rectangular rfft spectra, so that it comes out of
     the front end's own transforms (acoustics/beamforming.py ``bearing_time_record``) with no pass of its own.
@@ -200,7 +239,8 @@ class LofarAccumulator:
     theorem; Harris 1978, "On the use of windows for harmonic analysis with the discrete Fourier transform",
     Proc. IEEE 66(1), sec. IV); the band's bins need one rectangular bin beyond each edge (:attr:`bins`). The
     beams, PSD scale, integration over L windows and normaliser are those of :func:`lofar_gram`, which gives the
-    same gram from the same windows (tests: to rounding in double precision)."""
+    same gram from the same windows (tests: to rounding in double precision). The beams come in mirror pairs
+    (:func:`_mirror_beam_powers`: half the products), a few bins at a time (:data:`LOFAR_CHUNK_BINS`)."""
 
     def __init__(self, fs_hz: float, array: LineArray, settings: LofarSettings, n_samples: int):
         self.settings = settings
@@ -209,8 +249,8 @@ class LofarAccumulator:
         #: the last rfft bin when the band reaches it (an odd window up to fs / 2; the bin beyond it is its conjugate)
         self.bins = slice(int(idx[0]) - 1, min(int(idx[-1]) + 2, int(n_samples) // 2 + 1))
         self._mirror_top = int(idx[-1]) + 2 > int(n_samples) // 2 + 1
-        self._steer = _lofar_steering(self.freqs_hz, array, settings.cone_deg, array.elements)
-        self._steer64 = self._steer.astype(np.complex64)
+        self._weights = _mirror_weights(self.freqs_hz, array, settings.cone_deg)
+        self._weights32 = self._weights.astype(np.float32)
         self._scale = 2.0 / (fs_hz * np.sum(w**2))
         self._sum, self._count, self._lines = 0.0, 0, []
 
@@ -228,12 +268,11 @@ class LofarAccumulator:
             x = np.concatenate([x, np.conj(x[:, :, -1:])], axis=2)
         single = x.dtype == np.complex64
         xt = x.astype(np.complex64 if single else np.complex128, copy=False).transpose(2, 1, 0)  # (W, N, K)
-        hann = np.add(xt[:-2], xt[2:], out=np.empty((xt.shape[0] - 2,) + xt.shape[1:], dtype=xt.dtype))
-        hann *= -0.25
-        hann += 0.5 * xt[1:-1]
-        with one_blas_thread():  # a threaded BLAS spins on a loaded machine (acoustics/blas_threads.py)
-            beams = np.matmul(self._steer64 if single else self._steer, hann)  # (F, B, N) @ (F, N, K)
-        power = beams.real**2 + beams.imag**2  # (F, B, K)
+        weights = self._weights32 if single else self._weights
+        power = np.empty((weights.shape[0], self.settings.beams, xt.shape[2]), dtype=weights.dtype)  # (F, B, K)
+        for a in range(0, power.shape[0], LOFAR_CHUNK_BINS):
+            _mirror_beam_powers(xt[a: a + LOFAR_CHUNK_BINS + 2], weights[a: a + LOFAR_CHUNK_BINS],
+                                power[a: a + LOFAR_CHUNK_BINS])
         k, length = 0, self.settings.integration
         while k < power.shape[2]:
             take = min(length - self._count, power.shape[2] - k)

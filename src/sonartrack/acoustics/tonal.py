@@ -139,15 +139,24 @@ def beam_spectra(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg, se
     if x.dtype != np.float32:
         x = x.astype(float, copy=False)
     n_el, n = x.shape
-    f_all = np.fft.rfftfreq(n, 1.0 / fs_hz)
-    lo, hi = settings.band_hz
-    idx = np.flatnonzero((f_all >= lo) & (f_all <= hi))
-    f = f_all[idx]
+    idx, f, scale = _band_of_window(n, float(fs_hz), *map(float, settings.band_hz))
     offsets = ((n_el - 1) / 2.0 - np.arange(n_el)) * array.spacing_m
     tau = -np.cos(np.deg2rad(np.atleast_1d(np.asarray(cone_deg, dtype=float))))[:, None] * offsets / \
         array.sound_speed_mps  # (k, N)
     beams = _beams(_hann_spectra(x, idx), f, tau).astype(complex) / n_el  # (k, F)
-    return f, (2.0 / (fs_hz * np.sum(_hann(n) ** 2))) * (beams.real**2 + beams.imag**2)
+    return f, scale * (beams.real**2 + beams.imag**2)
+
+
+@cache
+def _band_of_window(n: int, fs_hz: float, low_hz: float, high_hz: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(rfft bins of an n-sample window in [low, high] Hz, their frequencies, the one-sided PSD scale
+    2 / (fs sum w^2) of the periodic Hann window w), the same for every window of a recording (made once)."""
+    f_all = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    idx = np.flatnonzero((f_all >= low_hz) & (f_all <= high_hz))
+    f = f_all[idx]
+    for a in (idx, f):  # shared by every call: read-only
+        a.flags.writeable = False
+    return idx, f, 2.0 / (fs_hz * np.sum(_hann(n) ** 2))
 
 
 def _hann_spectra(x: np.ndarray, idx: np.ndarray) -> np.ndarray:

@@ -381,16 +381,17 @@ MEMORY_LIMIT_BYTES = 2 * 1024**3
 def memory_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
     """The chain's largest working arrays for a recording: bytes, what sizes them, and the fix.
 
-    With N elements, B beams, F band bins of a window of m samples, K = 32 windows a batch and c bytes a complex
-    spectrum value (8 for ``fft_precision`` single, 16 for double) (acoustics/beamforming.py): the CBF steering
-    matrix, cosine and sine halves of ceil(B / 2) x (N - 1) F float64 each; a batch's band spectra with their
-    working copies (whitened, the 2N-point transform along the elements, its power, the lags) and lag vectors,
-    (5 c + 16) N F + 40 c F bytes a window (the peak measured with tracemalloc, within 30 % for 16 to 64
-    elements); the bearing-time record T x B (float32, and the picture's float64 copy); with
-    the narrowband pass (acoustics/lofar.py), its steering F_l x B_l x N (complex128 and a complex64 copy) and
-    the gram of T / L periods x B_l beams x F_l bins at 20 bytes a cell: each period is normalised as it completes
-    and kept as float64 power and float32 statistic (12 bytes), and the float32 gram stacked from them at the end
-    (8 more; the line search then works through the gram in chunks of periods).
+    With N elements, B beams, F band bins of a window of m samples, Q distinct lag-bin products of the band
+    (acoustics/beamforming.py ``lag_bin_products``: 43-50 % of (N - 1) F), K = 32 windows a batch and c bytes a
+    complex spectrum value (8 for ``fft_precision`` single, 16 for double): the CBF steering matrix, cosine and sine
+    halves of ceil(B / 2) x Q float64 each; a batch's band spectra and lag vectors, c N F + 16 Q bytes a window,
+    and the working arrays of the few windows whose lags are made together (``LAG_CHUNK_WINDOWS``: the 2N-point
+    transform along the elements, its power, the lags), 7 c N F bytes a window (the peak measured with tracemalloc,
+    within 30 % for 16 to 64 elements); the bearing-time record T x B (float32, and the picture's float64 copy); with
+    the narrowband pass (acoustics/lofar.py), its real weights F_l x (B_l + 1) x N of the beams' mirror pairs
+    (float64 and a float32 copy) and the gram of T / L periods x B_l beams x F_l bins at 20 bytes a cell: each period
+    is normalised as it completes and kept as float64 power and float32 statistic (12 bytes), and the float32 gram
+    stacked from them at the end (8 more; the line search then works through the gram in chunks of periods).
 
     Parameters
     ----------
@@ -404,18 +405,21 @@ def memory_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
     list of (float, str, str)
         Bytes (an estimate), what needs them (with the settings), how to need less.
     """
-    from sonartrack.acoustics.beamforming import BATCH_WINDOWS
+    from sonartrack.acoustics.beamforming import BATCH_WINDOWS, LAG_CHUNK_WINDOWS, lag_bin_products
 
     n, b = stages.array.elements, stages.front_end.beams
     window_s = stages.settings.window_s
     f = max(int((stages.band.high_hz - stages.band.low_hz) * window_s) + 1, 1)
+    first = max(int(np.ceil(stages.band.low_hz * window_s)), 1)
+    q = lag_bin_products(n, np.arange(first, first + f)).size
     c = 8.0 if stages.front_end.fft_precision == "single" else 16.0
     needs = [
-        (16.0 * ((b + 1) // 2) * (n - 1) * f, f"the beams' steering matrix ({b} [front_end] beams x {n} elements x "
+        (16.0 * ((b + 1) // 2) * q, f"the beams' steering matrix ({b} [front_end] beams x {n} elements x "
          f"{f} bins of band_hz in a {window_s:g} s window)", "fewer [front_end] beams, a narrower band_hz or a "
                                                               "shorter window_s"),
-        (BATCH_WINDOWS * ((5.0 * c + 16.0) * n + 40.0 * c) * f, f"a batch of {BATCH_WINDOWS} windows' band spectra "
-         f"({n} channels x {f} bins of window_s {window_s:g} s)", "a narrower band_hz or a shorter window_s"),
+        (BATCH_WINDOWS * (16.0 * q + c * n * f) + LAG_CHUNK_WINDOWS * 7.0 * c * n * f, f"a batch of {BATCH_WINDOWS} "
+         f"windows' band spectra ({n} channels x {f} bins of window_s {window_s:g} s)",
+         "a narrower band_hz or a shorter window_s"),
         (12.0 * n_windows * b, f"the bearing-time record ({n_windows} windows x {b} [front_end] beams)",
          "fewer [front_end] beams, or a longer window_s"),
     ]
@@ -433,8 +437,8 @@ def _lofar_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
     lo, hi = lofar_band(stages.array, stages.fs_hz, nb)
     f = max(int((hi - lo) * window_s) + 1, 1)
     periods = n_windows // nb.integration
-    return [(24.0 * f * nb.beams * n, f"the narrowband beams' steering ({nb.beams} [narrowband] beams x {n} elements "
-             f"x {f} bins)", "fewer [narrowband] beams or a narrower [narrowband] band_hz"),
+    return [(12.0 * f * (nb.beams + 1) * n, f"the narrowband beams' steering ({nb.beams} [narrowband] beams x {n} "
+             f"elements x {f} bins)", "fewer [narrowband] beams or a narrower [narrowband] band_hz"),
             (20.0 * periods * nb.beams * f, f"the LOFAR gram ({periods} periods of {nb.integration} windows x "
              f"{nb.beams} [narrowband] beams x {f} bins)", "a shorter recording (split it), a longer [narrowband] "
                                                            "integration, fewer beams or a narrower band_hz")]

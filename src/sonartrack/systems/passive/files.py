@@ -215,10 +215,13 @@ class SpanBlocks:
 
 
 def _level_db(block: np.ndarray) -> float:
-    """10 log10(mean p^2 / p_ref^2) of a block (dB re 1 uPa; -inf for silence): the sum of squares in float64 over
-    the block's own memory order (one pass, no squared copy)."""
+    """10 log10(mean p^2 / p_ref^2) of a block (dB re 1 uPa; -inf for silence): the sum of squares as one BLAS dot
+    in the block's own precision and memory order (no squared copy). A float32 dot's relative error, about 1e-6 for a
+    window's 10^5-10^6 samples, is four orders below the 0.01 dB that levels.csv prints; a float64 einsum on float32
+    blocks cost ten times as much (0.15 s of a 10-minute 32 x 8 kHz run)."""
     x = block.T if block.T.flags.c_contiguous else block
-    ms = float(np.einsum("ij,ij->", x, x, dtype=np.float64)) / x.size
+    v = np.ascontiguousarray(x).reshape(-1)
+    ms = float(np.dot(v, v)) / v.size
     return 10.0 * np.log10(ms / P_REF_PA**2) if ms > 0 else -np.inf
 
 
