@@ -29,6 +29,10 @@ from sonartrack.tracking.resolution import UnresolvedPairs
 from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
 from sonartrack.tracking.tracks import TrackArrays
 
+#: with the resolution model, a track's half-window is at least this many sds of its prediction
+#: (tracking/measurements.py ``widened_gates``): 3 sds hold its peak with probability 0.997
+GATE_SDS = 3.0
+
 
 def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None) -> MultiTargetTracker:
     """IPDA (one q) / IMM-IPDA (several q) position tracker of paper P4 (Park, Song, Lee 2017).
@@ -90,7 +94,9 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
         as a hypothesis (tracking/own_motion.py); off: the turn is left to the process noise (paper P0).
     resolution_deg : float, optional
         Two confirmed tracks closer than this (deg) share one peak and are updated as a group
-        (tracking/resolution.py); None: the settings' ``resolution_deg`` (0: off, paper P0).
+        (tracking/resolution.py); None: the settings' ``resolution_deg`` (0: off, paper P0). With it, two ships'
+        peaks may share a gate, and each track's strength follows its own peak and its window widens to
+        ``GATE_SDS`` sds of its prediction (tracking/measurements.py module docstring; DEVIATIONS from P0).
 
     Returns
     -------
@@ -104,7 +110,8 @@ def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude
     return MultiTargetTracker(
         ImmConstantVelocity((s.q,), dims=1),
         BearingMeasurements(s.p_detect, s.gate_deg, s.clutter_density_per_deg, s.amplitude_threshold,
-                            s.false_amplitude_rate, amplitude_aided, adaptive_strength, s.endfire_fold),
+                            s.false_amplitude_rate, amplitude_aided, adaptive_strength, s.endfire_fold,
+                            own_peak_strength=bool(res), gate_sds=GATE_SDS if res else 0.0),
         associator or JPDA(),
         initiator=(PeakInitiator(s.init_amplitude, s.init_sigma_p_deg, s.init_amplitude_sd, s.gate_deg)
                    if auto else None),

@@ -10,6 +10,12 @@
 
 Equations: association/likelihood.py. Per-track quantities (sigma_p, strength, sigma_a) are the
 tracks' ``attrs``.
+
+Where several ships' peaks share one gate (the crossing configuration of the bearing tracker, with the
+merged-measurement groups of tracking/resolution.py), two DEVIATIONS from P0 keep a quiet ship's track on its ship:
+``own_peak_strength`` (eq. 9 on the track's own peak, :func:`own_peak_amplitude`) and ``gate_sds`` (a track's
+window widened to its prediction's uncertainty, :func:`widened_gates`, only P0's window counting for its life,
+:meth:`BearingMeasurements.counted_pairs`).
 """
 
 from __future__ import annotations
@@ -60,7 +66,7 @@ class PositionMeasurements:
         return position_likelihoods(x_pred, P_pred, scan.z, scan.R, pd=self.pd, pg=self.gate_probability,
                                     gamma=self._gamma, clutter_density=self.clutter_density_per_m2)
 
-    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
+    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan, beta_pair=None) -> dict:
         """Per-track quantities after the update: unchanged for position contacts.
 
         Parameters
@@ -71,6 +77,8 @@ class PositionMeasurements:
             This scan's likelihoods.
         scan : Scan
             The scan.
+        beta_pair : ndarray, optional
+            The association probabilities (unused).
 
         Returns
         -------
@@ -139,6 +147,12 @@ class BearingMeasurements:
     adaptive_strength: bool  # eq. 9 strength update (JPDA_A only, as in the paper)
     #: a line array's cone angle: the state is the unfolded angle phi (through endfire), measured as fold(phi)
     endfire_fold: bool = False
+    #: eq. 9 on the track's own peak (its likeliest association, when more likely than not) instead of the largest
+    #: amplitude in its gate (:meth:`after_update`): where two ships' peaks share a gate
+    own_peak_strength: bool = False
+    #: 0: P0's window of width V; else each track's half-window is at least this many sds of its prediction
+    #: sqrt(S) (:func:`widened_gates`)
+    gate_sds: float = 0.0
 
     measurement_dim = 1
     scan_needs = ("amplitude",)
@@ -172,21 +186,55 @@ class BearingMeasurements:
             extra = amplitude_log_ratio(scan.amplitude, strength, sigma_a, self.false_amplitude_rate,
                                         self.amplitude_threshold)
             pd_hit = np.full(len(strength), self.p_detect)
-        if not self.endfire_fold:
-            return window_likelihoods(x_pred, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
-                                      pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
-                                      log_ratio_extra=extra)
-        folded, sign = fold_cone_state(x_pred)
-        lik = window_likelihoods(folded, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=self.gate_deg,
+        half = self.gate_deg / 2.0
+        if self.gate_sds > 0.0:
+            S = P_pred[:, :, 0, 0].max(axis=1, initial=0.0) + np.asarray(attrs["sigma_p"], float) ** 2
+            half = np.maximum(half, self.gate_sds * np.sqrt(S))
+        width = 2.0 * float(np.max(half, initial=self.gate_deg / 2.0))
+        folded, sign = fold_cone_state(x_pred) if self.endfire_fold else (x_pred, None)
+        lik = window_likelihoods(folded, P_pred, scan.z[:, 0], attrs["sigma_p"], gate_width=width,
                                  pd_hit=pd_hit, pd_miss=pd_eff, clutter_density=self.clutter_density_per_deg,
                                  log_ratio_extra=extra)
+        if self.gate_sds > 0.0:
+            lik = widened_gates(lik, half, P_pred, attrs["sigma_p"], pd_eff)
+        if sign is None:
+            return lik
         # the innovation of the unfolded state: z - fold(phi) read back through the fold's slope (+1 or -1)
         return replace(lik, nu=lik.nu * sign[lik.pair_track][:, :, None])
 
-    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan) -> dict:
+    def counted_pairs(self, lik: Likelihoods) -> np.ndarray:
+        """Which gated pairs count as a hit (a track's life, tracking/deleters.py) and use their peak (no new track
+        on it, tracking/initiators.py): those within P0's window V / 2. A gate widened by ``gate_sds``
+        (:func:`widened_gates`) lets an uncertain track take its ship's peak where it reappears, but a peak only
+        in the widened part neither keeps the track alive (else a track whose ship is hidden, its sd growing, is
+        never dropped and wanders onto another ship: study trial 1, three ships within one beam at endfire) nor
+        stops a new track from starting on it.
+
+        Parameters
+        ----------
+        lik : Likelihoods
+            The scan's likelihoods.
+
+        Returns
+        -------
+        ndarray of bool, shape (G,)
+            Per gated pair.
+        """
+        return np.abs(lik.nu[:, 0, 0]) <= self.gate_deg / 2.0
+
+    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan, beta_pair=None) -> dict:
         """Track strength update, paper P0 eq. 9: ``z_hat = 0.7 z_hat + 0.3`` (largest amplitude in the gate).
 
         Only with ``amplitude_aided`` and ``adaptive_strength``; tracks with an empty gate keep theirs.
+
+        With ``own_peak_strength`` (and the association weights ``beta_pair``) the amplitude is that of the track's
+        own peak instead: the gated peak of its largest association probability beta_tj, when beta_tj > 1/2 (more
+        likely than not the track's), else none (the strength kept, as for an empty gate). DEVIATION from P0's
+        largest amplitude in the gate, which assumes one target per gate: where a loud ship comes within half a
+        gate of a quiet ship's track, the largest amplitude is the loud ship's, the quiet track's strength rises to
+        it within a few scans, and JPDA_A's amplitude ratio then gives the quiet track the loud ship's peak and
+        calls its own peak clutter (measured: 24 x 1.5 m, a trawler's track at z 26 rose to 40, the merchant's z,
+        while the merchant passed within 3 deg; after their crossing it took the merchant's peak).
 
         Parameters
         ----------
@@ -197,6 +245,9 @@ class BearingMeasurements:
         scan : Scan
             The scan (amplitudes).
 
+        beta_pair : ndarray, shape (G, r), optional
+            The gated pairs' association probabilities (used with ``own_peak_strength``).
+
         Returns
         -------
         dict
@@ -204,5 +255,81 @@ class BearingMeasurements:
         """
         if not (self.amplitude_aided and self.adaptive_strength):
             return attrs
+        if self.own_peak_strength and beta_pair is not None:
+            return {**attrs, "strength": update_strength(attrs["strength"],
+                                                         own_peak_amplitude(lik, beta_pair, scan.amplitude))}
         amax = np.where(lik.gated, scan.amplitude[None, :], -np.inf).max(axis=1, initial=-np.inf)
         return {**attrs, "strength": update_strength(attrs["strength"], np.where(np.isfinite(amax), amax, np.nan))}
+
+
+def own_peak_amplitude(lik: Likelihoods, beta_pair, amplitude) -> np.ndarray:
+    """Each track's own peak amplitude: that of its gated peak of largest association probability, where that
+    probability exceeds 1/2; NaN elsewhere (:meth:`BearingMeasurements.after_update`).
+
+    Parameters
+    ----------
+    lik : Likelihoods
+        The scan's gated pairs (``pair_track``, ``pair_meas``).
+    beta_pair : ndarray, shape (G, r)
+        The pairs' association probabilities (the first mode's are used: the bearing tracker has one).
+    amplitude : ndarray, shape (m,)
+        The scan's peak amplitudes.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The amplitude, or NaN.
+    """
+    out = np.full(lik.gated.shape[0], np.nan)
+    beta = np.asarray(beta_pair, float)[:, 0]
+    order = np.lexsort((beta, lik.pair_track))  # by track, then by probability: each track's largest is its last
+    last = order[np.r_[lik.pair_track[order][1:] != lik.pair_track[order][:-1], True]] if len(order) else order
+    mine = last[beta[last] > 0.5]
+    out[lik.pair_track[mine]] = np.asarray(amplitude, float)[lik.pair_meas[mine]]
+    return out
+
+
+def widened_gates(lik: Likelihoods, half_deg, P_pred, sigma_p, pd_miss) -> Likelihoods:
+    """The likelihoods of a window as wide as the widest track's, each track's gate cut back to its own half-width
+    ``half_deg`` (deg, (n,)): pairs outside it dropped, and its miss weight 1 - P_D P_G with P_G = erf(h / sqrt(2 S))
+    of its own width (association/likelihood.py ``window_likelihoods``).
+
+    DEVIATION from P0's one window V for every track: a track's half-window is max(V / 2, g sqrt(S)) (S = P-[0, 0]
+    + sigma_p^2, g = ``gate_sds``). P0's tracks are all about as certain, and V covers them; a member of an
+    unresolved pair whose ship the merged peak hides (tracking/resolution.py: its update weight 1 - w is small) or a
+    track of unknown side through the array's turn (tracking/own_motion.py) has a prediction several degrees
+    uncertain, and a fixed window then loses its ship when it reappears: measured, a trawler's member at sd 2.5 deg
+    3.9 deg from its reappearing peak, outside the 3 deg half-window, coasted as a ghost and a new track took the
+    trawler (32 x 1.0 m); a track of unknown side at sd 5.8 deg in a 1 deg/s turn was dropped (study trial 1).
+    Tracks with g sqrt(S) <= V / 2 keep P0's window exactly.
+
+    Parameters
+    ----------
+    lik : Likelihoods
+        From ``window_likelihoods`` with the widest window.
+    half_deg : ndarray, shape (n,)
+        Each track's half-window (deg).
+    P_pred : ndarray, shape (n, r, 2, 2)
+        The predicted covariances.
+    sigma_p : ndarray, shape (n,)
+        Per-track peak spread (deg).
+    pd_miss : ndarray, shape (n,)
+        P_D in the miss weight.
+
+    Returns
+    -------
+    Likelihoods
+        The same likelihoods on each track's own gate.
+    """
+    from scipy.special import erf
+
+    half = np.broadcast_to(np.asarray(half_deg, float), (lik.gated.shape[0],))
+    keep = np.abs(lik.nu[:, 0, 0]) <= half[lik.pair_track]
+    gated = np.zeros_like(lik.gated)
+    gated[lik.pair_track[keep], lik.pair_meas[keep]] = True
+    S = P_pred[:, :, 0, 0] + np.asarray(sigma_p, float)[:, None] ** 2
+    miss = 1.0 - np.asarray(pd_miss, float)[:, None] * erf(half[:, None] / np.sqrt(2.0 * S))
+    dense = None if lik.dense_log_ratio is None else np.where(gated[:, None, :], lik.dense_log_ratio, -np.inf)
+    return replace(lik, pair_log_ratio=lik.pair_log_ratio[keep], gated=gated, miss=miss, dense_log_ratio=dense,
+                   pair_track=lik.pair_track[keep], pair_meas=lik.pair_meas[keep], nu=lik.nu[keep],
+                   S_inv=lik.S_inv[keep])

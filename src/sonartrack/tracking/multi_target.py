@@ -151,7 +151,12 @@ class MultiTargetTracker:
             attrs = self.own_motion.update(attrs, x_still, P_still, T.attrs["sigma_p"], scan.z[:, 0], own, turn_deg)
         T = replace(T, x=x, P=P, mu=mu, existence=existence, attrs=attrs)
         n, m = lik.gated.shape  # the gated pairs say the same as lik.gated.any(axis=1) and .any(axis=0)
-        return T, (np.bincount(lik.pair_track, minlength=n) > 0)[rows], np.bincount(lik.pair_meas, minlength=m) > 0
+        # hits (a track's life) and used peaks (no new track) count the pairs of the measurement part's own window
+        # (all gated pairs but where it widens some tracks' gates: tracking/measurements.py ``widened_gates``)
+        counts = getattr(self.measurements, "counted_pairs", None)
+        k = np.ones(len(lik.pair_track), bool) if counts is None else counts(lik)
+        return (T, (np.bincount(lik.pair_track[k], minlength=n) > 0)[rows],
+                np.bincount(lik.pair_meas[k], minlength=m) > 0)
 
     def _plain_update(self, x_pred, P_pred, scan: Scan, attrs: dict):
         """Likelihoods, association weights and the PDA update of every track (steps 2-3)."""
@@ -159,8 +164,9 @@ class MultiTargetTracker:
         w = self.associator.weights(lik)
         from sonartrack.association.pda_mixture_kernel import pda_mixture_update_pairs  # numba: loaded on first use
 
-        x, P = pda_mixture_update_pairs(x_pred, P_pred, lik, w.beta0, w.of_pairs(lik))
-        return x, P, lik, w, self.measurements.after_update(attrs, lik, scan)
+        beta_pair = w.of_pairs(lik)
+        x, P = pda_mixture_update_pairs(x_pred, P_pred, lik, w.beta0, beta_pair)
+        return x, P, lik, w, self.measurements.after_update(attrs, lik, scan, beta_pair)
 
     def _grouped_update(self, x_pred, P_pred, scan: Scan, attrs: dict, pairs):
         """Steps 2-3 with each unresolved pair as one merged track (tracking/resolution.py); the members keep
