@@ -341,3 +341,16 @@ def test_chi_square_quantile_is_scipy_stats_to_the_bit():
     for q in (0.95, 0.99, 0.9973):
         for dof in (1, 2, 7, 40, 999):
             assert chi2_quantile(q, dof) == float(chi2.ppf(q, dof))
+
+
+def test_memory_is_refused_on_the_sum_of_the_arrays_held_at_once():
+    """Two arrays each under the limit but over it together (a 100 s window at 16 x 4 kHz: the steering matrix and
+    a batch of band spectra, each about half the limit) are refused, and the message names the larger one's fix."""
+    from sonartrack.systems.passive.settings import PassiveSettings
+
+    stages = PassiveSettings(spacing_m=2.5, window_s=100.0).stages(4000.0, channels=16)
+    needs = [n for n, _, _ in checks.memory_needs(stages, 1)]
+    assert max(needs) < checks.MEMORY_LIMIT_BYTES < sum(needs)
+    with pytest.raises(InputError, match="working arrays would take .* window_s"):
+        checks.check_memory(stages, 1)
+    checks.check_memory(PassiveSettings(spacing_m=2.5, window_s=20.0).stages(4000.0, channels=16), 1)

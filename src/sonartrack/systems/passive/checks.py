@@ -445,7 +445,9 @@ def _lofar_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
 
 
 def check_memory(stages, n_windows: int) -> None:
-    """Refuse settings whose working arrays (:func:`memory_needs`) exceed :data:`MEMORY_LIMIT_BYTES`.
+    """Refuse settings whose working arrays (:func:`memory_needs`) together exceed :data:`MEMORY_LIMIT_BYTES`
+    (they are held at once: the steering matrix while a batch of spectra is beamformed, the record and the gram
+    as they grow), naming the largest and how to shrink it.
 
     Parameters
     ----------
@@ -459,10 +461,13 @@ def check_memory(stages, n_windows: int) -> None:
     InputError
         Naming the array, its size in GB and the settings that make it.
     """
-    for need, what, fix in memory_needs(stages, n_windows):
-        if need > MEMORY_LIMIT_BYTES:
-            raise InputError(f"{what} would take {need / 1e9:.3g} GB of memory, more than the "
-                             f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB the chain plans for: {fix}")
+    needs = memory_needs(stages, n_windows)
+    total = sum(need for need, _, _ in needs)
+    if total > MEMORY_LIMIT_BYTES:
+        need, what, fix = max(needs, key=lambda n: n[0])
+        raise InputError(f"the chain's working arrays would take {total / 1e9:.3g} GB of memory, more than the "
+                         f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB it plans for; the largest, {what}, {need / 1e9:.3g} GB: "
+                         f"{fix}")
 
 
 #: a determined solution's whitened residuals, averaged over blocks of this length, must fit their stated noise
