@@ -97,7 +97,9 @@ def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray
     dx = x0[0] + x0[2] * tau - own_xy[:, 0]
     dy = x0[1] + x0[3] * tau - own_xy[:, 1]
     r2 = dx * dx + dy * dy
-    H = np.stack([dy, -dx, tau * dy, -tau * dx], axis=-1) / r2[:, None]
+    H = np.empty((len(r2), 4))  # [dy, -dx, tau dy, -tau dx] / r2, filled in place (no stacked temporary)
+    H[:, 0], H[:, 1], H[:, 2], H[:, 3] = dy, -dx, tau * dy, -tau * dx
+    H /= r2[:, None]
     return np.arctan2(dx, dy), H, np.sqrt(r2)
 
 
@@ -283,9 +285,10 @@ def _damped_step(residual, x, e, J, cost: float, lam: float):
     lam tenfold until the cost does not rise (at most 30 tries). Returns ``(x, e, J, cost, lam, improved)``."""
     g = J.T @ e
     JTJ = J.T @ J
+    D = np.diag(np.diag(JTJ))
     for _ in range(30):
         try:
-            step = np.linalg.solve(JTJ + lam * np.diag(np.diag(JTJ)), g)
+            step = np.linalg.solve(JTJ + lam * D, g)
         except np.linalg.LinAlgError:
             lam *= 10.0
             continue
@@ -334,10 +337,11 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
             raise InputError(msg)
     sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), z.shape)
     x = pseudo_linear_estimate(z, tau, own) if x_init is None else np.asarray(x_init, dtype=float).copy()
+    unit = bool(np.all(sig == 1.0))  # x / 1.0 is x exactly: equal weights skip the two divisions
 
     def residual(x):
         h, H, _ = bearing_model(x, tau, own)
-        return wrap_angle(z - h) / sig, H / sig[:, None]
+        return (wrap_angle(z - h), H) if unit else (wrap_angle(z - h) / sig, H / sig[:, None])
 
     e, J = residual(x)
     cost = float(e @ e)

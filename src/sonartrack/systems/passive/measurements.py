@@ -336,8 +336,10 @@ def resolve_shared(tracks: list[TrackMeasurements], nav) -> list[TrackMeasuremen
 
 def _first_predicts(before: list[TrackMeasurements], run: TrackMeasurements, nav) -> bool:
     """Whether the first of two tracks' histories continues into ``run`` at least as well as the second's (the
-    variance ratio of :func:`_join_statistic`); the longer history where neither can be tested (under 10 peaks)."""
-    ratio = [_join_statistic(m, run, nav) if len(m.time_s) >= 10 else np.inf for m in before]
+    variance ratio of :func:`_join_statistic`, the run's own fit made once for both); the longer history where
+    neither can be tested (under 10 peaks)."""
+    costs: dict = {}
+    ratio = [_join_statistic(m, run, nav, costs) if len(m.time_s) >= 10 else np.inf for m in before]
     if not np.isfinite(min(ratio)):
         return len(before[0].time_s) >= len(before[1].time_s)
     return ratio[0] <= ratio[1]
@@ -443,12 +445,26 @@ def swap_at_crossings(tracks: list[TrackMeasurements], nav, min_separation_deg: 
                 post = [_piece(m, c1, c1 + CROSSING_SPAN_S) for m in (a, b)]
                 if min(len(m.time_s) for m in post) < 10:
                     continue
-                keep = [_join_statistic(pre[k], post[k], nav) for k in (0, 1)]
-                swap = [_join_statistic(pre[k], post[1 - k], nav) for k in (0, 1)]
-                if 2.0 * sum(swap) < sum(keep) and max(swap) <= max_ratio:
+                if _crossing_swapped(pre, post, nav, max_ratio):
                     (a0, a1), (b0, b1) = _split_at(a, c1), _split_at(b, c1)
                     out[i], out[j] = _joined(a0, b1), _joined(b0, a1)
     return out
+
+
+def _crossing_swapped(pre: list[TrackMeasurements], post: list[TrackMeasurements], nav, max_ratio: float) -> bool:
+    """The test of :func:`swap_at_crossings` on the two tracks' parts before (``pre``) and after (``post``) one
+    crossing: the exchanged pairings' variance ratios sum to less than half the kept ones' and neither exceeds
+    ``max_ratio``. The exchanged ratios come first: once one exceeds ``max_ratio`` the answer is no and the kept
+    pairings are not fitted (at most crossings the tracker kept its ships, and an exchanged ratio is hundreds). Each
+    part's own fit is made once for the (up to) four pairings (``costs``)."""
+    costs: dict = {}
+    swap = []
+    for k in (0, 1):
+        swap.append(_join_statistic(pre[k], post[1 - k], nav, costs))
+        if swap[-1] > max_ratio:  # max(swap) > max_ratio whatever the other ratio is
+            return False
+    keep = [_join_statistic(pre[k], post[k], nav, costs) for k in (0, 1)]
+    return 2.0 * sum(swap) < sum(keep) and max(swap) <= max_ratio
 
 
 #: two fragments are one target when one constant-velocity fit of both leaves a residual variance at most this many
@@ -486,27 +502,32 @@ def _branches(phi_b: np.ndarray, target_rad: float) -> tuple[np.ndarray, np.ndar
     return up, down
 
 
-def _cv_fit(t, phi, nav) -> tuple[float, np.ndarray]:
-    """(lowest bearings-only CV ML cost rad^2 over the two mirror hypotheses b = h +- phi (tma/sides.py), that fit's
-    bearing residuals rad)."""
-    from sonartrack.core.angles import bearing_rad, wrap_angle
+def _cv_cost(t, phi, nav) -> float:
+    """The lowest bearings-only CV ML cost (rad^2) over the two mirror hypotheses b = h +- phi (tma/sides.py)."""
     from sonartrack.tma.sides import fit_cv_target, mirror_bearings_rad
 
     xy, heading = nav.array_at(t)
-    best, residuals = np.inf, np.zeros(0)
+    best = np.inf
     for z in mirror_bearings_rad(phi, heading):
         f = fit_cv_target(z, t, xy)
         if f is not None and f.objective < best:
-            pos = f.state_at(t)[0][:, :2] - xy
-            best, residuals = f.objective, wrap_angle(z - bearing_rad(pos[:, 0], pos[:, 1]))
-    return best, residuals
+            best = f.objective
+    return best
 
 
-def _cv_cost(t, phi, nav) -> float:
-    return _cv_fit(t, phi, nav)[0]
+def _own_cost(m: TrackMeasurements, first: int, nav, costs: dict | None) -> float:
+    """:func:`_cv_cost` of m's measurements from index ``first`` on, looked up in ``costs`` (keyed by the fragment
+    object and ``first``; the caller keeps the fragments alive while it holds ``costs``) or fitted and stored."""
+    key = (id(m), first)
+    if costs is None or key not in costs:
+        cost = _cv_cost(m.time_s[first:], _phi_rad(m)[first:], nav)
+        if costs is None:
+            return cost
+        costs[key] = cost
+    return costs[key]
 
 
-def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav) -> float:
+def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav, costs: dict | None = None) -> float:
     """Fragments a then b as one constant-velocity target: the residual variance of one fit of both,
     J_ab / (n - 4), over that of their separate fits, (J_a + J_b) / (n - 8) (at least (0.1 deg)^2): about 1 for
     one target (an F ratio), large for two.
@@ -516,13 +537,17 @@ def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav) -> float:
     generalised likelihood ratio maximises the likelihood over unknown parameters, Kay, Fundamentals of
     Statistical Signal Processing vol. II, sec. 6.4). The branch a linear extrapolation of a's end predicts is
     wrong when the array turns during the gap (measured: a 0.5 deg/s rate at a's end, from the array's turn,
-    carried over 70 s put b on the mirror branch and a ratio of 2000 where the true branch gives 3)."""
+    carried over 70 s put b on the mirror branch and a ratio of 2000 where the true branch gives 3).
+
+    ``costs``: a dict the caller keeps across calls on the same fragments, which holds each fragment's own fit
+    (J_a, J_b) so that it is made once (None: no reuse)."""
     ta, tb = a.time_s, b.time_s[b.time_s > a.time_s[-1]]
     if len(ta) < 10 or len(tb) < 10:
         return np.inf
     pa, pb = _phi_rad(a), _phi_rad(b)[b.time_s > a.time_s[-1]]
     rate = np.polyfit(ta[-20:] - ta[-1], pa[-20:], 1)[0] if len(ta) >= 2 else 0.0
-    j_a, j_b = _cv_cost(ta, pa, nav), _cv_cost(tb, pb, nav)
+    # b's times increase: its part after a's end is its last len(tb) measurements
+    j_a, j_b = _own_cost(a, 0, nav, costs), _own_cost(b, len(b.time_s) - len(tb), nav, costs)
     n = len(ta) + len(tb)
     t_ab = np.concatenate([ta, tb])
     j_ab = min(_cv_cost(t_ab, np.concatenate([pa, p]), nav) for p in _branches(pb, pa[-1] + rate * (tb[0] - ta[-1])))
