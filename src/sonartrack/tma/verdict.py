@@ -24,8 +24,9 @@ A line array's target whose side of the array is not decided (its bearings may b
 their own: the ML (tma/solve.py :func:`~sonartrack.tma.solve.flag_unresolved_range`)
 :data:`DIVERGED` (a covariance that is not finite) and :data:`UNOBSERVABLE` (no maneuver, a range beyond what the
 maneuver resolves, or a range sd above the range), the passive chain's check of it (systems/passive/targets.py)
-:data:`INCONSISTENT_RESIDUALS`, :data:`FLAT_LIKELIHOOD` and :data:`NOT_ONE_TARGET` (a stretch of the record that
-the rest of it places more than a beamwidth away: another ship's bearings, or the mirror's); em-map
+:data:`INCONSISTENT_RESIDUALS`, :data:`FLAT_LIKELIHOOD`, :data:`NOT_ONE_TARGET` (a stretch of the record that
+the rest of it places more than a beamwidth away: another ship's bearings, or the mirror's) and :data:`FIXED_CONE`
+(bearings that one cone angle fixed in the array's frame explains as well as the CV target does); em-map
 :data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`). The passive chain holds
 its sequential filter to the batch ML of the same record (systems/passive/targets.py :func:`batch_held`): the ML's
 reason where the ML is not determined, else :data:`DISAGREES_WITH_BATCH` when the two final positions differ
@@ -51,6 +52,7 @@ INCONSISTENT_RESIDUALS = "inconsistent residuals"
 FLAT_LIKELIHOOD = "flat likelihood"
 NOT_ONE_TARGET = "bearings of more than one target"
 DISAGREES_WITH_BATCH = "disagrees with the batch ML"
+FIXED_CONE = "cone angle fixed to the array: own-ship or array noise, range unobservable"
 
 
 def with_reasons(solution: TmaSolution, reasons) -> TmaSolution:
