@@ -44,7 +44,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -294,14 +294,18 @@ def _chunk_lags(spectra: np.ndarray, whiten: bool, r0_sum: np.ndarray) -> np.nda
 
     n = spectra.shape[1]
     a = scipy.fft.fft(spectra, 2 * n, axis=1, workers=1)
-    r = scipy.fft.ihfft(a.real**2 + a.imag**2, axis=1, workers=1)  # (k, N + 1, F): lags 0..N
+    power = np.square(a.real)
+    power += np.square(a.imag)  # |A|^2, one temporary fewer than a.real**2 + a.imag**2 (the same numbers)
+    r = scipy.fft.ihfft(power, axis=1, workers=1)  # (k, N + 1, F): lags 0..N
     r0 = r[:, 0].real.astype(float)  # sum_n |X_n(f)|^2 (k, F)
     if not whiten:
         r0_sum[:] = r0.sum(axis=1)
         return r[:, 1:n]
     w = n / np.where(r0 > 0, r0, n)  # 1 / mean element power per window and bin (1 where the bin is silent)
     r0_sum[:] = np.sum(r0 * w, axis=1)
-    return r[:, 1:n] * w.astype(r.real.dtype)[:, None, :]
+    lags = r[:, 1:n]
+    lags *= w.astype(r.real.dtype)[:, None, :]  # in place: r is this call's own array
+    return lags
 
 
 def _sum_over_products(lags: np.ndarray, first_bin: int, span: np.ndarray) -> np.ndarray:
@@ -574,6 +578,46 @@ def pick_beam_peaks(z: np.ndarray, cone_deg: np.ndarray, settings: BeamformerSet
         keep = np.sort(np.argsort(-height, kind="stable")[: settings.max_peaks])
         angle, height = angle[keep], height[keep]
     return angle, height
+
+
+def pick_beam_peaks_rows(z: np.ndarray, cone_deg: np.ndarray, settings: BeamformerSettings
+                         ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`pick_beam_peaks` of each row of z (K, B), the K windows of a batch in one set of array operations:
+    the same element-wise formulas (the same numbers), the ``max_peaks`` cut made per row where a row holds more.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        (K, B) statistic of K windows.
+    cone_deg : numpy.ndarray
+        (B,) the beams' cone angles (deg), uniform in 0..180.
+    settings : BeamformerSettings
+        Its ``threshold`` and ``max_peaks``.
+
+    Returns
+    -------
+    list of (numpy.ndarray, numpy.ndarray)
+        Per row, (cone angles deg (k,), amplitudes (k,)) as :func:`pick_beam_peaks` gives them.
+    """
+    z = np.asarray(z, dtype=float).reshape(-1, np.shape(z)[-1])
+    padded = np.concatenate([z[:, 1:2], z, z[:, -2:-1]], axis=1)
+    mid = padded[:, 1:-1]
+    rows, idx = np.nonzero((mid > padded[:, :-2]) & (mid >= padded[:, 2:]) & (mid >= settings.threshold))
+    y0, y1, y2 = padded[rows, idx], padded[rows, idx + 1], padded[rows, idx + 2]
+    den = y0 - 2.0 * y1 + y2
+    delta = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+    delta = np.clip(delta, -0.5, 0.5)
+    height = y1 - 0.25 * (y0 - y2) * delta
+    angle = np.clip(cone_deg[idx] + delta * (cone_deg[1] - cone_deg[0]), 0.0, 180.0)
+    bounds = np.searchsorted(rows, np.arange(z.shape[0] + 1))
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        ang, h = angle[a:b], height[a:b]
+        if b - a > settings.max_peaks:
+            keep = np.sort(np.argsort(-h, kind="stable")[: settings.max_peaks])
+            ang, h = ang[keep], h[keep]
+        out.append((ang, h))
+    return out
 
 
 #: sampling of the tabulated beam pattern in u = cos(theta): linear interpolation between samples errs by about
@@ -882,14 +926,18 @@ def _check_block(shape: tuple[int, ...], n: int, nw: int) -> None:
     require(tuple(shape) == (n, nw), f"blocks must be (elements, window_s * fs) = ({n}, {nw}), got {tuple(shape)}")
 
 
-def _spectra_batches(blocks: Iterable[np.ndarray], n: int, nw: int, bins: slice, real_dtype: type, size: int):
+def _spectra_batches(blocks: Iterable[np.ndarray], n: int, nw: int, bins: slice, real_dtype: type, size: int,
+                     exact: list[bool] | None = None):
     """Batches (K <= size, N, bins) of the windows' rectangular rfft spectra over ``bins``, each window transformed
     as it arrives (only the band's bins are kept: a batch's samples are never held together). The batch is one
-    buffer, reused for the next: its consumer is done with it when it asks for the next."""
+    buffer, reused for the next: its consumer is done with it when it asks for the next. ``exact``: set to
+    [False] once a block arrives in another precision than ``real_dtype`` (its spectra are rounded to it)."""
     width = bins.stop - bins.start
     buf, k = np.empty((size, n, width), dtype=np.result_type(real_dtype, np.complex64)), 0
     for block in blocks:
         _check_block(np.shape(block), n, nw)
+        if exact is not None and np.asarray(block).dtype != real_dtype:
+            exact[0] = False
         buf[k] = _rfft_bins(block, bins, real_dtype)
         k += 1
         if k == size:
@@ -899,19 +947,35 @@ def _spectra_batches(blocks: Iterable[np.ndarray], n: int, nw: int, bins: slice,
         yield buf[:k]
 
 
+class SpectraSink(Protocol):
+    """Where the CBF front end hands each batch's rectangular rfft spectra over ``bins`` (:func:`bearing_time_record`).
+    ``exact`` is False once a window arrived in another precision than the front end's (its spectra were rounded)."""
+
+    bins: slice
+
+    def write(self, spectra: np.ndarray, exact: bool) -> None:
+        """Take K windows' rectangular spectra (K, N, bins of :attr:`bins`), in time order (a view of the front
+        end's buffer, reused for the next batch: copy what is kept)."""
+
+
 def _cbf_batches(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, s: BeamformerSettings, band: Band,
-                 octave: Band | None, lofar: LofarAccumulator | None):
+                 octave: Band | None, lofar: LofarAccumulator | None, sink: SpectraSink | None = None):
     """CBF beam powers (K, B) per batch of windows (the band's, or with ``octave`` the combined statistic of the
     band and that octave: :func:`combined_statistic`), each window transformed once; the same spectra feed the
-    LOFAR gram (``lofar``), so the narrowband gram costs no pass of its own."""
+    LOFAR gram (``lofar``), so the narrowband gram costs no pass of its own, and the ``sink`` (its bins added to
+    the span transformed)."""
     n, nw = array.elements, int(round(s.window_s * fs_hz))
     steering = [_band_steering(n, nw, fs_hz, array, s, b) for b in [band] + ([octave] if octave else [])]
     spans = [(int(i[0]), int(i[-1]) + 1) if i.size else (0, 0) for i, _ in steering]
     spans += [(lofar.bins.start, lofar.bins.stop)] if lofar is not None else []
+    spans += [(sink.bins.start, sink.bins.stop)] if sink is not None else []
     lo, hi = min(a for a, _ in spans), max(b for _, b in spans)
-    for spectra in _spectra_batches(blocks, n, nw, slice(lo, hi), _dtypes(s)[0], BATCH_WINDOWS):
+    exact = [True]
+    for spectra in _spectra_batches(blocks, n, nw, slice(lo, hi), _dtypes(s)[0], BATCH_WINDOWS, exact):
+        if sink is not None:
+            sink.write(spectra[:, :, sink.bins.start - lo: sink.bins.stop - lo], exact[0])
         if lofar is not None:
-            lofar.add(spectra[:, :, spans[-1][0] - lo: spans[-1][1] - lo])
+            lofar.add(spectra[:, :, lofar.bins.start - lo: lofar.bins.stop - lo])
         powers = [_cbf_from_spectra(spectra[:, :, a - lo: b - lo], st, s.whiten)  # the LOFAR's span left out
                   for (a, b), (_, st) in zip(spans, steering, strict=False)]
         yield powers[0] if octave is None else combined_statistic(normalise_across_bearing(powers[0], s),
@@ -944,7 +1008,7 @@ class _RecordBuilder:
         self.levels, self.ts, self.bs, self.amps = [], [], [], []
 
     def add(self, z: np.ndarray) -> None:
-        picked = [pick_beam_peaks(row, self.s.cone_deg, self.s) for row in z]
+        picked = pick_beam_peaks_rows(z, self.s.cone_deg, self.s)
         if self.pattern is not None:  # the batch's windows refined at once (resolve_peaks_batch)
             angles = resolve_peaks_batch(z, [a for a, _ in picked], self.pattern)
             picked = [(a, h) for a, (_, h) in zip(angles, picked, strict=True)]
@@ -969,7 +1033,8 @@ class _RecordBuilder:
 
 def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray, settings: BeamformerSettings,
                         *, band: Band | None = None, progress: Callable[[int], None] | None = None,
-                        mvdr=None, narrowband: LofarSettings | None = None) -> BearingTimeRecord:
+                        mvdr=None, narrowband: LofarSettings | None = None,
+                        spectra_sink: SpectraSink | None = None) -> BearingTimeRecord:
     """Beamform, normalise and pick peaks in every window of ``blocks``; CBF windows in batches of
     ``BATCH_WINDOWS`` (one matrix product each); with ``narrowband``, the LOFAR gram per beam from the same
     windows' spectra (acoustics/lofar.py :class:`~sonartrack.acoustics.lofar.LofarAccumulator`: no pass of its own).
@@ -995,6 +1060,9 @@ def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineA
         The narrowband settings (band, beams, integration, normaliser; any subclass, such as the passive chain's):
         when given, the record's ``lofar`` is the gram :func:`~sonartrack.acoustics.lofar.lofar_gram` makes of
         the same windows (None when they hold no whole integration period).
+    spectra_sink : SpectraSink, optional
+        Given each batch's rectangular spectra over its ``bins`` (the CBF method only), for a later pass that needs
+        them (systems/passive/tonal_pass.py ``SpectraSpill``): they cost no transform of their own.
 
     Returns
     -------
@@ -1008,7 +1076,7 @@ def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineA
     lofar = None if narrowband is None else LofarAccumulator(fs_hz, array, narrowband, nw)
     octave = alias_free_octave(array, s, fs_hz, band) if s.method == "cbf" else None
     if s.method == "cbf":
-        batches = _cbf_batches(blocks, fs_hz, array, s, band, octave, lofar)
+        batches = _cbf_batches(blocks, fs_hz, array, s, band, octave, lofar, spectra_sink)
     else:
         batches = _other_batches(blocks, fs_hz, array, s, band, mvdr, lofar)
     # the pattern is the CBF's over one band (the octave's sum of two statistics has another shape)

@@ -253,6 +253,7 @@ class LofarAccumulator:
         self._weights32 = self._weights.astype(np.float32)
         self._scale = 2.0 / (fs_hz * np.sum(w**2))
         self._sum, self._count, self._lines = 0.0, 0, []
+        self._power: np.ndarray | None = None  # the beam powers' buffer of :meth:`add` (F, B, K)
 
     def add(self, spectra: np.ndarray) -> None:
         """Add K windows' rectangular spectra (K, N, bins of :attr:`bins`) in time order.
@@ -269,7 +270,10 @@ class LofarAccumulator:
         single = x.dtype == np.complex64
         xt = x.astype(np.complex64 if single else np.complex128, copy=False).transpose(2, 1, 0)  # (W, N, K)
         weights = self._weights32 if single else self._weights
-        power = np.empty((weights.shape[0], self.settings.beams, xt.shape[2]), dtype=weights.dtype)  # (F, B, K)
+        shape = (weights.shape[0], self.settings.beams, xt.shape[2])  # (F, B, K)
+        if self._power is None or self._power.shape != shape or self._power.dtype != weights.dtype:
+            self._power = np.empty(shape, dtype=weights.dtype)  # reused by the next batch: no fresh pages per batch
+        power = self._power
         for a in range(0, power.shape[0], LOFAR_CHUNK_BINS):
             _mirror_beam_powers(xt[a: a + LOFAR_CHUNK_BINS + 2], weights[a: a + LOFAR_CHUNK_BINS],
                                 power[a: a + LOFAR_CHUNK_BINS])

@@ -138,13 +138,75 @@ def beam_spectra(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg, se
     x = np.atleast_2d(np.asarray(block))
     if x.dtype != np.float32:
         x = x.astype(float, copy=False)
-    n_el, n = x.shape
-    idx, f, scale = _band_of_window(n, float(fs_hz), *map(float, settings.band_hz))
+    idx, f, scale = _band_of_window(x.shape[1], float(fs_hz), *map(float, settings.band_hz))
+    return f, _beam_psd(_hann_spectra(x, idx), f, scale, array, cone_deg)
+
+
+def beam_spectra_of_rect(rect: np.ndarray, n_samples: int, fs_hz: float, array: LineArray, cone_deg,
+                         settings: TonalSettings) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`beam_spectra` of a window given by its rectangular rfft spectra instead of its samples: the same
+    numbers when they are the rfft of the same samples in the same precision (complex64 for a float32 block).
+
+    Parameters
+    ----------
+    rect : ndarray (N, F + 2)
+        rfft (no window function) of the N elements over :func:`tonal_rect_bins`: the band's F bins and one beyond
+        each edge.
+    n_samples : int
+        The window's length (samples).
+    fs_hz : float
+        Sample rate (Hz).
+    array : LineArray
+        The array (steering delays).
+    cone_deg : array_like (k,)
+        Cone angles of the beams (deg).
+    settings : TonalSettings
+        ``band_hz``.
+
+    Returns
+    -------
+    freqs_hz : ndarray (F,)
+        The band's rfft frequencies (Hz).
+    power : ndarray (k, F)
+        One-sided power spectral density of each beam (input units^2 / Hz).
+    """
+    _, f, scale = _band_of_window(int(n_samples), float(fs_hz), *map(float, settings.band_hz))
+    require(rect.shape[1] == f.size + 2, f"tonal: {rect.shape[1]} rectangular bins, expected {f.size + 2}")
+    return f, _beam_psd(_hann_from_rect(rect), f, scale, array, cone_deg)
+
+
+def tonal_rect_bins(n_samples: int, fs_hz: float, settings: TonalSettings) -> slice | None:
+    """The rectangular rfft bins of an n-sample window :func:`beam_spectra_of_rect` takes (the band's and one beyond
+    each edge), or None where the band has no bin or reaches bin 0 or the last rfft bin (no bin beyond it).
+
+    Parameters
+    ----------
+    n_samples : int
+        The window's length (samples).
+    fs_hz : float
+        Sample rate (Hz).
+    settings : TonalSettings
+        ``band_hz``.
+
+    Returns
+    -------
+    slice or None
+        The bins.
+    """
+    idx = _band_of_window(int(n_samples), float(fs_hz), *map(float, settings.band_hz))[0]
+    if idx.size == 0 or idx[0] < 1 or idx[-1] + 1 >= int(n_samples) // 2 + 1:
+        return None
+    return slice(int(idx[0]) - 1, int(idx[-1]) + 2)
+
+
+def _beam_psd(spec: np.ndarray, f_hz: np.ndarray, scale: float, array: LineArray, cone_deg) -> np.ndarray:
+    """scale |beam|^2 (k, F) in double of Hann spectra (N, F) steered to the cone angles (:func:`beam_spectra`)."""
+    n_el = spec.shape[0]
     offsets = ((n_el - 1) / 2.0 - np.arange(n_el)) * array.spacing_m
     tau = -np.cos(np.deg2rad(np.atleast_1d(np.asarray(cone_deg, dtype=float))))[:, None] * offsets / \
         array.sound_speed_mps  # (k, N)
-    beams = _beams(_hann_spectra(x, idx), f, tau).astype(complex) / n_el  # (k, F)
-    return f, scale * (beams.real**2 + beams.imag**2)
+    beams = _beams(spec, f_hz, tau).astype(complex) / n_el  # (k, F)
+    return scale * (beams.real**2 + beams.imag**2)
 
 
 @cache
@@ -169,9 +231,18 @@ def _hann_spectra(x: np.ndarray, idx: np.ndarray) -> np.ndarray:
     if idx.size == 0:
         return np.zeros((x.shape[0], 0), dtype=complex)
     if idx[0] >= 1 and idx[-1] + 1 < x.shape[1] // 2 + 1:
-        spec = scipy.fft.rfft(x, axis=1, workers=1)[:, idx[0] - 1: idx[-1] + 2]
-        return 0.5 * spec[:, 1:-1] - 0.25 * (spec[:, :-2] + spec[:, 2:])
+        return _hann_from_rect(scipy.fft.rfft(x, axis=1, workers=1)[:, idx[0] - 1: idx[-1] + 2])
     return scipy.fft.rfft(x * _hann(x.shape[1]).astype(x.dtype), axis=1, workers=1)[:, idx[0]: idx[-1] + 1]
+
+
+def _hann_from_rect(spec: np.ndarray) -> np.ndarray:
+    """X(k) / 2 - (X(k - 1) + X(k + 1)) / 4 (N, F) of rectangular spectra (N, F + 2) (:func:`_hann_spectra`), in one
+    new array: -(X(k - 1) + X(k + 1)) / 4 + X(k) / 2, the scalings by powers of two exact and adding the negation
+    subtracting, so the same bits as the formula written out."""
+    out = np.add(spec[:, :-2], spec[:, 2:])
+    out *= -0.25
+    out += 0.5 * spec[:, 1:-1]
+    return out
 
 
 def _beams(spec: np.ndarray, f_hz: np.ndarray, tau_s: np.ndarray) -> np.ndarray:
@@ -307,15 +378,18 @@ def window_snr_db(power: np.ndarray, df_hz: float, settings: TonalSettings) -> n
     """
     tiny = np.finfo(float).tiny
     p = np.maximum(np.atleast_2d(np.asarray(power, dtype=float)), tiny)
-    width = _background_bins(settings, df_hz)
+    return 10.0 * np.log10(p / np.maximum(_row_medians(p, _background_bins(settings, df_hz)), tiny))
+
+
+def _row_medians(p: np.ndarray, width: int) -> np.ndarray:
+    """The running median of ``width`` bins (odd) along each row of p (k, F), each row mirrored at its ends
+    (:func:`window_snr_db`)."""
     half = width // 2
     n_rows, n = p.shape
     if half > n:  # a mirror longer than the row: scipy repeats the reflection, one row at a time does the same
-        med = np.array([_median_filter(row, size=width, mode="reflect") for row in p]).reshape(p.shape)
-    else:
-        padded = np.concatenate((p[:, :half][:, ::-1], p, p[:, ::-1][:, :half]), axis=1)
-        med = _median_filter(padded.ravel(), size=width, mode="reflect").reshape(n_rows, -1)[:, half: half + n]
-    return 10.0 * np.log10(p / np.maximum(med, tiny))
+        return np.array([_median_filter(row, size=width, mode="reflect") for row in p]).reshape(p.shape)
+    padded = np.concatenate((p[:, :half][:, ::-1], p, p[:, ::-1][:, :half]), axis=1)
+    return _median_filter(padded.ravel(), size=width, mode="reflect").reshape(n_rows, -1)[:, half: half + n]
 
 
 def window_peak_bins(power: np.ndarray, df_hz: float, settings: TonalSettings,
@@ -344,13 +418,18 @@ def window_peak_bins(power: np.ndarray, df_hz: float, settings: TonalSettings,
     n_rows, n = p.shape
     if n < 3:
         return [np.empty(0, np.int64) for _ in range(n_rows)]
-    snr = window_snr_db(p, df_hz, settings)
     threshold = settings.min_window_snr_db if min_snr_db is None else min_snr_db
     mid = p[:, 1:-1]
-    rows, cols = np.nonzero((mid > p[:, :-2]) & (mid >= p[:, 2:]) & (snr[:, 1:-1] >= threshold))
+    rows, cols = np.nonzero((mid > p[:, :-2]) & (mid >= p[:, 2:]))  # the local maxima: the only bins tested
     cols = cols + 1
+    # window_snr_db's formula at those bins only (the same numbers; a log per local maximum, not per bin)
+    tiny = np.finfo(float).tiny
+    med = _row_medians(p, _background_bins(settings, df_hz))[rows, cols]
+    snr = 10.0 * np.log10(p[rows, cols] / np.maximum(med, tiny))
+    loud = snr >= threshold
+    rows, cols, snr = rows[loud], cols[loud], snr[loud]
     # by row, then strongest first; lexsort is stable, so equal SNRs keep their bin order (argsort "stable" per row)
-    order = np.lexsort((-snr[rows, cols], rows))
+    order = np.lexsort((-snr, rows))
     rows, cols = rows[order], cols[order]
     bounds = np.searchsorted(rows, np.arange(n_rows + 1))
     return [cols[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]

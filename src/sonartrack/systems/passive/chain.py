@@ -50,7 +50,7 @@ from sonartrack.systems.passive.measurements import (
 from sonartrack.systems.passive.narrowband import NarrowbandLines
 from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
 from sonartrack.systems.passive.targets import UNSUPPORTED_RANGE, Target, solve_target
-from sonartrack.systems.passive.tonal_pass import measure_tonals
+from sonartrack.systems.passive.tonal_pass import SpectraSpill, measure_tonals
 from sonartrack.tracking.line_tracks import LineSource, LineTrack
 from sonartrack.tracking.run import BearingTracks, track_peaks
 
@@ -132,9 +132,12 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
         The record, the tracks and the targets.
     """
     s, settings = stages, stages.settings
+    # the tonal band's spectra kept from the front end's transforms (systems/passive/tonal_pass.py SpectraSpill)
+    spill = SpectraSpill(int(round(settings.window_s * s.fs_hz)), s.fs_hz, s.tonal)
     btr = bearing_time_record(blocks(), s.fs_hz, s.array, s.front_end, band=s.band,
                               progress=_Stage(progress, "beamforming", n_windows), mvdr=settings.mvdr,
-                              narrowband=settings.narrowband if settings.narrowband.enabled else None)
+                              narrowband=settings.narrowband if settings.narrowband.enabled else None,
+                              spectra_sink=spill if spill.bins is not None else None)
     pk, mftd = btr.peaks, None
     if settings.btr_mftd.enabled:
         pk, mftd = _with_mftd_peaks(btr, s)
@@ -146,7 +149,9 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     meas = drop_unresolved(meas, s.min_separation_deg, nav=nav)
     # the tonal pass runs on the fragments, so that their lines take part in the join (two ships' fragments
     # with lines apart are not joined); a joined target's line is its fragments' lines
-    tonal_of = _fragment_tonals(blocks, [m for m in meas if _long_enough(m, settings)], s, n_windows, progress)
+    tonal_of = _fragment_tonals(spill.windows if spill.usable(n_windows) else blocks,
+                                [m for m in meas if _long_enough(m, settings)], s, n_windows, progress)
+    spill.close()
     meas = join_fragments(meas, nav, min_fragment_s=settings.min_track_s, tonals=tonal_of)
     long_enough = [m for m in meas if _long_enough(m, settings)]
     short = [m.track_id for m in meas if m not in long_enough]

@@ -7,26 +7,37 @@ track's :class:`~sonartrack.acoustics.tonal.TonalAccumulator`, which keeps the m
 line) and a few candidate frequencies per window (to follow it). The chain runs it on the track fragments
 before they are joined (systems/passive/chain.py), so that the lines can take part in the join.
 
-Why a second read rather than keeping the first pass's spectra: the beams need each window's spectra of the
-tonal band (at 32 channels x 8 kHz, 32 x 953 bins x 8 bytes in single precision = 0.24 MB a window, 0.15 GB per
-10 minutes: a temporary file), which would cost the first pass the very transform this pass makes; the second read
-adds only the decoding of the file (~0.2 ms a window of a float32 file, 0.1 s per 10 minutes at 32 x 8 kHz), less
-than writing and reading back 0.15 GB.
+The windows' spectra of the tonal band come from the front end's own transforms when the chain keeps them
+(:class:`SpectraSpill`: acoustics/beamforming.py hands each batch's rectangular spectra to it, a slice of the
+transforms it makes anyway): at 32 channels x 8 kHz, 32 x 955 bins x 8 bytes = 0.24 MB a window, 0.15 GB per 10
+minutes in a temporary file (memory flat), written and read back for ~0.1 s of CPU against the 0.35 s transform and
+0.15 s decoding of a second read. Without them (another front end method, or blocks of another precision than
+the front end's, whose spectra it rounds) the recording is read and transformed a second time.
 
-Cost per window (32 x 8 kHz, 4 live tracks): the transform of every channel in the blocks' own precision
-(float32 for float32 and PCM files: 0.4 ms, less than half a double copy's, with a rounding far below a
+Cost per window (32 x 8 kHz, 4 live tracks): without a spill, the transform of every channel in the blocks' own
+precision (float32 for float32 and PCM files: 0.4 ms, less than half a double copy's, with a rounding far below a
 periodogram's noise: acoustics/tonal.py :func:`beam_spectra`), the live tracks' beams (0.2 ms), and their peaks
 found together (:func:`~sonartrack.acoustics.tonal.window_peak_bins`: one running median for all beams).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import tempfile
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 
 import numpy as np
 
 from sonartrack.acoustics.line_array import LineArray
-from sonartrack.acoustics.tonal import TonalAccumulator, TonalSettings, TonalTrack, beam_spectra, window_peak_bins
+from sonartrack.acoustics.tonal import (
+    TonalAccumulator,
+    TonalSettings,
+    TonalTrack,
+    beam_spectra,
+    beam_spectra_of_rect,
+    tonal_rect_bins,
+    window_peak_bins,
+)
 from sonartrack.systems.passive.measurements import TrackMeasurements
 
 
@@ -63,6 +74,91 @@ def live_cones(measurements: list[TrackMeasurements], window_s: float,
     return [(id_sorted[a:b], cone_sorted[a:b]) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
+@dataclass(frozen=True)
+class RectWindow:
+    """One window given by its rectangular rfft spectra (N, F + 2) over the tonal band's bins and one beyond each
+    edge (acoustics/tonal.py ``tonal_rect_bins``), and its length in samples."""
+
+    spectra: np.ndarray
+    n_samples: int
+
+
+#: largest temporary spill of the tonal band's spectra (bytes; about 147 MB per 10 minutes at 32 channels x 8 kHz,
+#: so 2 GB holds 2 hours at 32 channels, 1 hour at 64): a longer recording's tonal pass reads it again instead
+SPILL_LIMIT_BYTES = 2 * 1024**3
+
+
+class SpectraSpill:
+    """The front end's rectangular spectra of every window over the tonal band (acoustics/tonal.py
+    ``tonal_rect_bins``), kept in a temporary file for the tonal pass (module doc): the front end's
+    ``spectra_sink`` (acoustics/beamforming.py ``bearing_time_record``), read back by :meth:`windows`.
+
+    Parameters
+    ----------
+    n_samples : int
+        The windows' length (samples).
+    fs_hz : float
+        Sample rate (Hz).
+    settings : TonalSettings
+        ``band_hz``.
+    """
+
+    def __init__(self, n_samples: int, fs_hz: float, settings: TonalSettings):
+        self.n_samples = int(n_samples)
+        #: the bins kept (None: the band has none to keep, and nothing is written)
+        self.bins = tonal_rect_bins(self.n_samples, fs_hz, settings)
+        self.count, self.exact = 0, True
+        self._shape: tuple[int, ...] | None = None
+        self._dtype: np.dtype | None = None
+        self._file = tempfile.TemporaryFile()  # noqa: SIM115 - open across the two passes; close() removes it
+
+    def write(self, spectra: np.ndarray, exact: bool) -> None:
+        """Append K windows' spectra (K, N, bins) (``exact``: False once a window was rounded to the front end's
+        precision; the spill then stands for no second read). Past :data:`SPILL_LIMIT_BYTES`, or when the disk
+        refuses the bytes (full, quota), spilling stops and the tonal pass reads the recording again: the spill
+        saves time, never a run."""
+        if not self.exact:
+            return
+        spectra = np.ascontiguousarray(spectra)
+        if self._file.tell() + spectra.nbytes > SPILL_LIMIT_BYTES:
+            self._give_up()
+            return
+        self._shape, self._dtype = spectra.shape[1:], spectra.dtype
+        try:
+            self._file.write(spectra.tobytes())
+        except OSError:
+            self._give_up()
+            return
+        self.count += spectra.shape[0]
+        self.exact = bool(exact)
+
+    def _give_up(self) -> None:
+        """No spill: free its disk at once (the second read makes the tonal spectra)."""
+        self.exact = False
+        self._file.close()
+        self._file = tempfile.TemporaryFile()  # noqa: SIM115 - an empty stand-in, closed by close()
+
+    def usable(self, n_windows: int) -> bool:
+        """Whether the spill holds the first ``n_windows`` windows exactly as a second read would transform them."""
+        return self.bins is not None and self.exact and self.count >= n_windows > 0
+
+    def windows(self) -> Iterator[RectWindow]:
+        """The windows in order, through one reused buffer (each is done with when the next is asked for)."""
+        if self._shape is None:
+            return
+        self._file.seek(0)
+        buf = np.empty(self._shape, dtype=self._dtype)
+        view = memoryview(buf).cast("B")
+        for _ in range(self.count):
+            if self._file.readinto(view) != buf.nbytes:
+                raise OSError("tonal spill: the temporary file ended early")
+            yield RectWindow(buf, self.n_samples)
+
+    def close(self) -> None:
+        """Remove the temporary file."""
+        self._file.close()
+
+
 def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
                    measurements: list[TrackMeasurements], settings: TonalSettings, n_windows: int,
                    progress: Callable[[int], None] | None = None) -> list[TonalTrack | None]:
@@ -70,8 +166,9 @@ def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
 
     Parameters
     ----------
-    blocks : iterable of ndarray (N, window_s fs)
-        The recording's windows, the same as the front end's.
+    blocks : iterable of ndarray (N, window_s fs) or of RectWindow
+        The recording's windows, the same as the front end's, or their rectangular spectra
+        (:meth:`SpectraSpill.windows`).
     fs_hz : float
         Sample rate (Hz).
     array : LineArray
@@ -100,7 +197,8 @@ def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
         if len(idx):
             # the block as read: a float32 block is transformed in single precision (acoustics/tonal.py
             # beam_spectra), five times faster than a double copy, on the file's layout as it comes
-            freqs, power = beam_spectra(block, fs_hz, array, cones, settings)
+            freqs, power = (beam_spectra_of_rect(block.spectra, block.n_samples, fs_hz, array, cones, settings)
+                            if isinstance(block, RectWindow) else beam_spectra(block, fs_hz, array, cones, settings))
             # every live beam's peaks at once (one running-median call): those each beam's accumulator would find
             peaks = window_peak_bins(power, freqs[1] - freqs[0], settings) if freqs.size >= 3 else [None] * len(idx)
             for row, i in enumerate(idx):
