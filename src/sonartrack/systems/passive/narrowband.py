@@ -17,6 +17,9 @@
    Gaussian).
    With ``[narrowband] mftd`` (off by default), paper P1's MFTD over each line's bearing-time record adds the
    periods the single-period threshold missed (systems/passive/line_mftd.py) before the refinement.
+   A detection whose background window reaches past the recording's own band (a recording band-limited inside the
+   LOFAR band: empty bins, which halve the background) is tested again on its live reference bins
+   (:func:`off_band_edges`).
    Then tracked in frequency and bearing and grouped into sources (tracking/line_tracks.py).
 2. Sources and bearing tracks. A source whose bearing history follows a confirmed bearing track (RMS cone-angle
    difference over their common periods within ``match_beamwidths`` broadside beamwidths at the source's
@@ -42,7 +45,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sonartrack.acoustics.lofar import LineDetections, LofarGram
+from sonartrack.acoustics.lofar import LineDetections, LofarGram, LofarSettings
 from sonartrack.acoustics.tonal import TonalTrack, frequency_sigma_hz
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
@@ -133,6 +136,69 @@ def refined_detections(gram: LofarGram, d: LineDetections) -> LineDetections:
                    cone_deg=np.clip(gram.cone_deg[b] + db * step_deg, 0.0, 180.0))
 
 
+#: a reference bin this far below the background is outside the recording's band (its empty bins read ~1e-21 of
+#: the noise on a 64 x 0.5 m array recorded to 1000 Hz), not background: integrated noise never falls 30 dB below its mean
+#: (Gamma(16, 1/16) < 1e-3 with probability ~1e-60)
+DEAD_BIN_DB = -30.0
+
+
+def _live_background(power: np.ndarray, ti: np.ndarray, b: np.ndarray, k: np.ndarray, mu: np.ndarray,
+                     settings: LofarSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Background of the gram's cells (``ti``, ``b``, ``k``) over their split-window reference bins in the band, left
+    out the dead ones (below ``DEAD_BIN_DB`` of ``mu``) and, as the two-pass normaliser does, those over ``censor``
+    x ``mu``: (mean, count, whether any was dead)."""
+    reach = np.arange(settings.gap_bins + 1, settings.gap_bins + 1 + settings.reference_bins)
+    idx = k[:, None] + np.concatenate([-reach, reach])[None, :]
+    inside = (idx >= 0) & (idx < power.shape[2])
+    p = np.asarray(power[ti[:, None], b[:, None], np.clip(idx, 0, power.shape[2] - 1)], float)  # (n, 2 R)
+    dead = inside & (p < 10.0 ** (DEAD_BIN_DB / 10.0) * mu[:, None])
+    use = inside & ~dead & (p <= settings.censor * mu[:, None])
+    n = use.sum(axis=1)
+    return np.where(use, p, 0.0).sum(axis=1) / np.maximum(n, 1), n, dead.any(axis=1)
+
+
+def off_band_edges(gram: LofarGram, d: LineDetections, settings: LofarSettings) -> LineDetections:
+    """The detections less those the edge of the recording's band made (module doc, item 1).
+
+    The split-window background mu is the mean of the reference bins on both sides of the bin tested. A recording
+    band-limited inside the LOFAR band (64 x 0.5 m: noise to 1000 Hz in a 375-1500 Hz band; 8 x 5 m: from
+    50 Hz in a 37.5-150 Hz band) leaves empty bins on one side of the cells near the band's edge, which lower mu
+    and raise z = P / mu: within 18 bins of the edge, 0.3-30 % of the cells crossed the threshold instead of pfa,
+    and the lines there became narrowband targets following no ship. Such a cell is tested again against the mean
+    of its live reference bins, n of them, at the threshold for n (the F(2 L, 2 L n) quantile at pfa, acoustics/
+    lofar.py :func:`line_threshold`); a cell with no dead reference bin is left as it is.
+
+    Parameters
+    ----------
+    gram : LofarGram
+        The integrated gram.
+    d : LineDetections
+        Its line detections (on the gram's cells).
+    settings : LofarSettings
+        Integration L, gap and reference bins, censoring, pfa.
+
+    Returns
+    -------
+    LineDetections
+        The detections kept.
+    """
+    from scipy.special import fdtri
+
+    if not len(d):
+        return d
+    ti = np.searchsorted(gram.time_s, d.time_s)
+    k = np.clip(np.searchsorted(gram.freqs_hz, np.asarray(d.frequency_hz, float) - 1e-9), 0, len(gram.freqs_hz) - 1)
+    b = np.asarray(d.beam, np.int64)
+    p = np.asarray(gram.power[ti, b, k], float)
+    mu, n, dead = _live_background(gram.power, ti, b, k, p / np.maximum(np.asarray(d.statistic, float), 1e-12),
+                                   settings)
+    dof = 2 * settings.integration
+    threshold = fdtri(dof, dof * np.maximum(n, 1), 1.0 - settings.pfa)
+    keep = ~dead | ((n > 0) & (p >= threshold * mu))
+    return LineDetections(*(np.asarray(a)[keep] for a in (d.time_s, d.cone_deg, d.frequency_hz, d.statistic,
+                                                            d.snr_db, d.beam)))
+
+
 def narrowband_lines(gram: LofarGram | None, stages: PassiveStages) -> NarrowbandLines:
     """Lines of the gram, refined, tracked and grouped into sources (module doc, item 1).
 
@@ -160,7 +226,7 @@ def narrowband_lines(gram: LofarGram | None, stages: PassiveStages) -> Narrowban
 
         m = cfg.line_mftd
         d, _ = with_line_mftd(gram, d, cfg, m.pfa, m, m.band_bins, m.near_beams, m.min_detections)
-    d = refined_detections(gram, d)
+    d = refined_detections(gram, off_band_edges(gram, d, cfg))
     tracker = cfg.line_tracker.build()
     lines = track_lines(d.time_s, d.frequency_hz, d.cone_deg, d.snr_db, tracker)
     return NarrowbandLines(gram, tuple(lines), tuple(group_sources(lines, tracker)))
