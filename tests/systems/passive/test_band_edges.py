@@ -1,5 +1,5 @@
 """Detections made by the edge of the recording's band (systems/passive/narrowband.py :func:`off_band_edges`): a
-recording band-limited inside the LOFAR band (helper N's 64 x 0.5 m, 16 kHz sweep scene: noise to 1000 Hz in a
+recording band-limited inside the LOFAR band (a 64 x 0.5 m, 16 kHz recording: noise to 1000 Hz in a
 375-1500 Hz band, the bins above reading ~1e-21 of it) halves the split-window background just below the edge, and
 z = P / mu doubles there. Hand-worked cells against their live reference bins and the F threshold for their number,
 cells away from the edge left alone, and the line detector on a noisy band-limited gram."""

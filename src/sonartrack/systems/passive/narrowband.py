@@ -137,8 +137,8 @@ def refined_detections(gram: LofarGram, d: LineDetections) -> LineDetections:
 
 
 #: a reference bin this far below the background is outside the recording's band (its empty bins read ~1e-21 of
-#: the noise on a 64 x 0.5 m array recorded to 1000 Hz), not background: integrated noise never falls 30 dB below its mean
-#: (Gamma(16, 1/16) < 1e-3 with probability ~1e-60)
+#: the noise on a 64 x 0.5 m array recorded to 1000 Hz), not background: integrated noise never falls 30 dB below
+#: its mean (Gamma(16, 1/16) < 1e-3 with probability ~1e-60)
 DEAD_BIN_DB = -30.0
 
 
