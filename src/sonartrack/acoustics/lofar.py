@@ -21,8 +21,9 @@ systems", JASA 76(6)): for bin k, the reference bins are ``reference_bins`` on e
                 line does not raise the background);
     median:     mu_k = median of the reference bins / m_L, m_L the median of Gamma(L, 1/L) (unbiased in noise).
 
-Statistic z_k = Pbar_k / mu_k. The band (not set) is the two octaves below the array's aliasing frequency: above
-it a loud ship's grating lobe meets each beam at one frequency and draws a false line.
+Statistic z_k = Pbar_k / mu_k. The band (not set) runs from where the aperture spans k wavelengths up to the
+array's aliasing frequency (:func:`lofar_band`): above it a loud ship's grating lobe meets each beam at one
+frequency and draws a false line.
 
 Threshold for a false-alarm probability ``pfa`` per bin and integration period:
 with the mean normaliser over R independent reference bins, z is the ratio of a Gamma(L) to the mean of R
@@ -50,11 +51,15 @@ from sonartrack.core.settings import Settings, setting
 class LofarSettings(Settings):
     """Narrowband processing per beam (module doc)."""
 
-    band_hz: list[float] | None = setting(None, "frequencies searched for tonal lines [low, high) (not set: two "
-                                                "octaves below the array's aliasing frequency f_a, [f_a / 4, f_a]: "
-                                                "above f_a a loud ship's grating lobe sweeps through the beams one "
-                                                "frequency at a time and looks like a line)", unit="Hz", min_length=2,
-                                          max_length=2)
+    band_hz: list[float] | None = setting(None, "frequencies searched for tonal lines [low, high) (not set: from "
+                                                "where the aperture spans aperture_wavelengths wavelengths up to the "
+                                                "array's aliasing frequency f_a: above f_a a loud ship's grating lobe "
+                                                "sweeps through the beams one frequency at a time and looks like a "
+                                                "line)", unit="Hz", min_length=2, max_length=2)
+    aperture_wavelengths: float = setting(2.0, "band_hz not set: the band starts where the aperture (N - 1) d "
+                                               "spans this many wavelengths, low = max(floor_hz, k c / L) "
+                                               "(lofar_band)", unit="1", gt=0)
+    floor_hz: float = setting(50.0, "band_hz not set: the lowest frequency searched", unit="Hz", gt=0)
     beams: int = setting(61, "cone-angle grid of the narrowband beams, uniform in 0..180 deg (61 = 3 deg steps; the "
                              "16 x 2.5 m array's beam is ~9.5 deg wide at 200 Hz)", unit="1", ge=3)
     integration: int = setting(16, "windows L averaged into one LOFAR line (long integration)", unit="1", ge=1)
@@ -71,8 +76,9 @@ class LofarSettings(Settings):
                                              "(uniform weighting: first sidelobe -13.3 dB)", unit="dB", ge=0)
     edge_bins: int = setting(5, "bins at each end of the band not searched for lines: there the background has "
                                 "reference bins on one side only and a sloping spectrum biases it (default scene, "
-                                "16 x 2.5 m, 1200 s, seeds 1-8: mean z 1.08-1.13 in the lowest 5 bins, 75-79 Hz, "
-                                "against 1.00 inside, and 13 of 26 line tracks that followed no ship lay there; at "
+                                "16 x 2.5 m, 1200 s, seeds 1-8, band then 75-300 Hz: mean z 1.08-1.13 in the lowest "
+                                "5 bins, 75-79 Hz, against 1.00 inside, and 13 of 26 line tracks that followed no "
+                                "ship lay there; at "
                                 "the top, c / (2 d), the endfire beams are one another's grating lobe)", unit="1",
                              ge=0)
 
@@ -95,16 +101,24 @@ class LofarGram:
 
 
 def lofar_band(array: LineArray, fs_hz: float, settings: LofarSettings) -> tuple[float, float]:
-    """The narrowband band: ``band_hz``, or [f_a / 4, f_a] with f_a = min(c / (2 d), fs / 2).
+    """The narrowband band: ``band_hz``, or [max(floor, k c / L), f_a] with L = (N - 1) d the aperture,
+    k = ``aperture_wavelengths`` and f_a = min(c / (2 d), fs / 2).
+
+    Why tied to the aperture: the beam is ~lambda / L rad wide, so below k c / L the aperture spans fewer than k
+    wavelengths and the narrowband beams no longer resolve a bearing; the old [f_a / 4, f_a] ignored N, so on
+    64 x 0.5 m at 16 kHz it searched 375-1500 Hz and never saw ships' tonals at 90-200 Hz, while on 8 x 5 m it
+    went down to 37.5 Hz where the 35 m aperture is about one wavelength. ``floor_hz`` bounds long arrays (the
+    chain was not measured below 50 Hz). The top stays f_a (grating lobes above it, module doc). If the rule
+    gives low >= high (a short array), the band falls back to [f_a / 4, f_a].
 
     Parameters
     ----------
     array : LineArray
-        The array (its aliasing frequency).
+        The array (its aperture and aliasing frequency).
     fs_hz : float
         Sample rate (Hz).
     settings : LofarSettings
-        ``band_hz``.
+        ``band_hz``, ``aperture_wavelengths``, ``floor_hz``.
 
     Returns
     -------
@@ -115,7 +129,11 @@ def lofar_band(array: LineArray, fs_hz: float, settings: LofarSettings) -> tuple
         lo, hi = settings.band_hz
     else:
         hi = array.aliasing_hz(fs_hz)
+        aperture_m = (array.elements - 1) * array.spacing_m
         lo = hi / 4.0
+        if aperture_m > 0:
+            lo_aperture = max(settings.floor_hz, settings.aperture_wavelengths * array.sound_speed_mps / aperture_m)
+            lo = lo_aperture if lo_aperture < hi else lo
     require(0 < lo < hi <= fs_hz / 2, f"LOFAR band {[lo, hi]} Hz must satisfy 0 < low < high <= fs / 2")
     return float(lo), float(hi)
 
