@@ -56,7 +56,7 @@ class LofarSettings(Settings):
                                                 "array's aliasing frequency f_a: above f_a a loud ship's grating lobe "
                                                 "sweeps through the beams one frequency at a time and looks like a "
                                                 "line)", unit="Hz", min_length=2, max_length=2)
-    aperture_wavelengths: float = setting(2.0, "band_hz not set: the band starts where the aperture (N - 1) d "
+    aperture_wavelengths: float = setting(1.5, "band_hz not set: the band starts where the aperture (N - 1) d "
                                                "spans this many wavelengths, low = max(floor_hz, k c / L) "
                                                "(lofar_band)", unit="1", gt=0)
     floor_hz: float = setting(50.0, "band_hz not set: the lowest frequency searched", unit="Hz", gt=0)
