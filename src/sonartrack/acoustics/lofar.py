@@ -404,23 +404,28 @@ def background(power: np.ndarray, settings: LofarSettings) -> np.ndarray:
     return mu
 
 
-def line_threshold(settings: LofarSettings) -> float:
-    """Threshold t on z with P(z >= t | noise) = pfa: F(2L, 2LR) quantile, R = 2 ``reference_bins`` (module doc).
+def line_threshold(settings: LofarSettings, reference_count=None):
+    """Threshold t on z with P(z >= t | noise) = pfa: F(2L, 2LR) quantile, R = 2 ``reference_bins`` (module doc), or
+    R = ``reference_count`` where fewer reference bins make the background.
 
     Parameters
     ----------
     settings : LofarSettings
         pfa, integration L and reference bins.
+    reference_count : int or ndarray of int, optional
+        The reference bins R of each cell (at least 1; not given: 2 ``reference_bins``).
 
     Returns
     -------
-    float
-        t (ratio to the background).
+    float or ndarray
+        t (ratio to the background), per cell where ``reference_count`` is given.
     """
     from scipy.special import fdtri  # the F quantile itself: scipy.stats costs a third of a second to import
 
     dof = 2 * settings.integration
-    return float(fdtri(dof, dof * 2 * settings.reference_bins, 1.0 - settings.pfa))
+    if reference_count is None:
+        return float(fdtri(dof, dof * 2 * settings.reference_bins, 1.0 - settings.pfa))
+    return fdtri(dof, dof * np.asarray(reference_count), 1.0 - settings.pfa)
 
 
 def integrate(power: np.ndarray, n: int) -> np.ndarray:

@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sonartrack.acoustics.lofar import LineDetections, LofarGram, LofarSettings
+from sonartrack.acoustics.lofar import LineDetections, LofarGram, LofarSettings, line_threshold
 from sonartrack.acoustics.tonal import TonalTrack, frequency_sigma_hz
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
@@ -182,8 +182,6 @@ def off_band_edges(gram: LofarGram, d: LineDetections, settings: LofarSettings) 
     LineDetections
         The detections kept.
     """
-    from scipy.special import fdtri
-
     if not len(d):
         return d
     ti = np.searchsorted(gram.time_s, d.time_s)
@@ -192,8 +190,7 @@ def off_band_edges(gram: LofarGram, d: LineDetections, settings: LofarSettings) 
     p = np.asarray(gram.power[ti, b, k], float)
     mu, n, dead = _live_background(gram.power, ti, b, k, p / np.maximum(np.asarray(d.statistic, float), 1e-12),
                                    settings)
-    dof = 2 * settings.integration
-    threshold = fdtri(dof, dof * np.maximum(n, 1), 1.0 - settings.pfa)
+    threshold = line_threshold(settings, np.maximum(n, 1))
     keep = ~dead | ((n > 0) & (p >= threshold * mu))
     return LineDetections(*(np.asarray(a)[keep] for a in (d.time_s, d.cone_deg, d.frequency_hz, d.statistic,
                                                             d.snr_db, d.beam)))
