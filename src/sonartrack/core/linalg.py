@@ -65,3 +65,33 @@ def block_diag2(a: float, b: float, n: int = 2):
         The diagonal matrix.
     """
     return np.diag(np.r_[np.full(n, a), np.full(n, b)])
+
+
+def covariance_max(P, Q) -> np.ndarray:
+    """The smallest covariance at least ``P`` and at least ``Q`` along each axis of their joint eigenbasis.
+
+    With P = L L^T (Cholesky) and L^-1 Q L^-T = V diag(w) V^T, the pair is diagonalised at once by L V (Muirhead,
+    Aspects of Multivariate Statistical Theory, 1982, Theorem A9.9): P = (L V) I (L V)^T, Q = (L V) diag(w) (L V)^T.
+    The result (L V) diag(max(w, 1)) (L V)^T exceeds each in the Loewner order (R - P and R - Q positive
+    semi-definite), is P itself when P >= Q and Q itself when Q >= P, and for commuting (e.g. diagonal) matrices is
+    their element-wise maximum. Used to keep an estimate from claiming less uncertainty than another one of the same
+    quantity that is known to be at least as informed.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        A symmetric positive definite matrix.
+    Q : array_like, shape (n, n)
+        A symmetric positive semi-definite matrix.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        The symmetric matrix R described above.
+    """
+    P, Q = symmetrize(np.asarray(P, float)), symmetrize(np.asarray(Q, float))
+    L = np.linalg.cholesky(P)
+    Li = np.linalg.inv(L)
+    w, V = np.linalg.eigh(symmetrize(Li @ Q @ Li.T))
+    B = L @ V
+    return symmetrize((B * np.maximum(w, 1.0)) @ B.T)

@@ -44,6 +44,11 @@ Per track (its raw peaks, systems/passive/measurements.py):
    (diverged, inconsistent innovations, unobservable), and for both the side: every row when the side was never
    decided, and for the sequential filter, whose row at a time uses only the bearings up to then, the rows before
    it was decided (:func:`side_checked`).
+4. The IMM-MGEKF held to the batch ML of its own record (:func:`batch_reference`: the bearings + frequency ML when
+   the filter runs with the tonal's frequency): it takes the batch's reason when the batch does not determine the
+   range, is not determined when its last position disagrees with the batch's, and otherwise claims no less
+   uncertainty at its last row than the batch, whose covariance the record's residuals and block jackknife have
+   checked (:func:`batch_held`).
 """
 
 from __future__ import annotations
@@ -56,6 +61,7 @@ from sonartrack.acoustics.tonal import TonalTrack
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.core.gaussian import chi2_quantile
+from sonartrack.core.linalg import covariance_max
 from sonartrack.io.navigation import Navigation
 from sonartrack.models.motion import cv_transition
 from sonartrack.systems.passive.checks import (
@@ -738,9 +744,10 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     if left_out is not None:
         ml = replace(ml, warnings=ml.warnings + (left_out,))
     mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
-    seq = side_checked(_sequential(t, chosen, tonal, sensor, side.sigma_bearing_rad, stages), side, since,
+    imm_tonal = _imm_tonal(t, chosen, tonal, stages)
+    seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
-    seq = batch_held(seq, ml)
+    seq = batch_held(seq, batch_reference(ml, t, chosen, imm_tonal, side.sigma_bearing_rad, stages))
     return Target(target_id, m, side, since, ml, mirror, seq, tonal)
 
 
@@ -861,7 +868,13 @@ def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> 
       of Bar-Shalom & Li, Multitarget-Multisensor Tracking, 1995, sec. 8.2, with the cross-covariance dropped: the
       two estimates share their data, so the difference's true covariance P_ml + P_seq - 2 P_cross is smaller and
       this test keeps a filter it could reject, not the reverse); else its last row is
-      :data:`~sonartrack.tma.verdict.DISAGREES_WITH_BATCH`.
+      :data:`~sonartrack.tma.verdict.DISAGREES_WITH_BATCH`;
+    * when they agree, the filter's last covariance is raised to the ML's (carried as above) along every direction
+      in which it claims less (:func:`~sonartrack.core.linalg.covariance_max`): the batch has every measurement of
+      the record and no process noise, so to first order it is the better informed of the two, and its covariance
+      has been checked against the record (residual scale, block jackknife), which the filter's has not. Seen on
+      the passive-chain study: the filter's last bearing follows a slow bias of the last minute's bearings with a
+      cross-range sd of 4 m at 7 km (NEES 82); the ML's block jackknife widens its own covariance to cover it.
 
     Parameters
     ----------
@@ -875,7 +888,8 @@ def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> 
     Returns
     -------
     TmaResult
-        ``seq`` with those rows undetermined (and a warning when the two disagree).
+        ``seq`` with those rows undetermined (and a warning when the two disagree), or with its last covariance
+        raised (and a warning when by more than 1 % in sd).
     """
     n = len(seq.solution.time_s)
     ml_reason = ml.solution.reasons()[-1]
@@ -884,10 +898,11 @@ def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> 
     if not seq.solution.range_flags()[-1]:
         return seq
     F = cv_transition(float(seq.solution.time_s[-1]) - float(ml.solution.time_s[-1]))
+    P_ml = F @ np.asarray(ml.solution.covariance[-1], float) @ F.T
     d, m2 = position_gap(seq.solution.state[-1], seq.solution.covariance[-1],
-                         F @ np.asarray(ml.solution.state[-1], float), F @ np.asarray(ml.solution.covariance[-1]) @ F.T)
+                         F @ np.asarray(ml.solution.state[-1], float), P_ml)
     if m2 <= chi2_quantile(1.0 - alpha, 2):
-        return seq
+        return _covariance_floored(seq, P_ml)
     reasons = np.full(n, "", dtype=object)
     reasons[-1] = DISAGREES_WITH_BATCH
     why = (f"the IMM-MGEKF's last position is {np.hypot(*d):.0f} m from the batch ML's ({np.sqrt(m2):.3g} sd of "
@@ -895,16 +910,39 @@ def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> 
     return replace(seq, solution=with_reasons(seq.solution, reasons), warnings=seq.warnings + (why,))
 
 
+def _imm_tonal(t, chosen, tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
+    """The tonal the IMM-MGEKF runs with: a usable one (:func:`usable_tonal`) with a frequency at
+    :data:`MIN_FREQUENCY_POINTS` of the bearings at least, else None (bearings only)."""
+    tonal = usable_tonal(tonal, stages)
+    if tonal is None or len(frequency_record(t, chosen, tonal).time_s) < MIN_FREQUENCY_POINTS:
+        return None
+    return tonal
+
+
+def _covariance_floored(seq: TmaResult, P_ml) -> TmaResult:
+    """``seq`` with its last covariance at least ``P_ml`` (:func:`batch_held`); the batch's where the filter's is
+    not positive definite."""
+    P = np.array(seq.solution.covariance, float)
+    try:
+        P[-1] = covariance_max(P[-1], P_ml)
+    except np.linalg.LinAlgError:
+        P[-1] = P_ml
+    ratio = np.sqrt(np.diag(P[-1])[:2] / np.diag(np.asarray(seq.solution.covariance[-1], float))[:2])
+    with np.errstate(invalid="ignore"):
+        widest = float(np.nanmax(np.where(np.isfinite(ratio), ratio, np.inf)))
+    warnings = seq.warnings
+    if widest > 1.01:
+        warnings += (f"the IMM-MGEKF's last covariance claimed less than the batch ML's on the same record: raised to "
+                     f"it (position sd x {widest:.3g})",)
+    return replace(seq, solution=replace(seq.solution, covariance=P), warnings=warnings)
+
+
 def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: float, stages: PassiveStages
                 ) -> TmaResult:
-    """The IMM-MGEKF on the chosen bearings, with the tonal's frequency when usable on at least 10 of them; a filter
-    that fails numerically gives a solution of NaN rows, each "diverged", with the failure as a warning."""
-    seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, usable_tonal(tonal, stages))
-    record = frequency_record(t, chosen, tonal) if seq_settings.frequency else BearingRecord(time_s=t,
-                                                                                              bearing_rad=chosen)
-    if seq_settings.frequency and len(record.time_s) < 10:
-        seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, None)
-        record = BearingRecord(time_s=t, bearing_rad=chosen)
+    """The IMM-MGEKF on the chosen bearings, with ``tonal``'s frequency when given (:func:`_imm_tonal`); a filter that
+    fails numerically gives a solution of NaN rows, each "diverged", with the failure as a warning."""
+    seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, tonal)
+    record = frequency_record(t, chosen, tonal) if tonal is not None else BearingRecord(time_s=t, bearing_rad=chosen)
     try:
         return solve_tma(record, sensor, seq_settings)
     except InputError as failure:  # the filter failed numerically on this track: a diverged answer, not a failed run
@@ -914,6 +952,42 @@ def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: 
                                range_determined=np.zeros(n, bool), undetermined_reason=np.full(n, DIVERGED, object))
         return TmaResult(solution=solution, record=record, ownship=sensor, settings=seq_settings,
                          warnings=(str(failure),))
+
+
+def batch_reference(ml: TmaResult, t, chosen, imm_tonal: TonalTrack | None, sigma_bearing_rad: float,
+                    stages: PassiveStages) -> TmaResult:
+    """The batch ML that the IMM-MGEKF is held to (:func:`batch_held`): the one of the filter's own record.
+
+    That is the target's ML when the filter runs on bearings only or the ML is already the bearings + frequency one
+    (a narrowband target), and otherwise, when the filter runs with the tonal's frequency, the bearings + frequency
+    ML of the same bearings and tonal (:func:`frequency_ml`, with all its checks), whose range the frequency fixes
+    more tightly than the bearings alone do: held to the bearings-only ML's wide covariance, a filter whose range
+    rests on the frequency was never tested (passive-chain study: NEES 99 and 288 on two such rows).
+
+    Parameters
+    ----------
+    ml : TmaResult
+        The target's ML (bearings only, or bearings + frequency for a narrowband target).
+    t, chosen : ndarray (n,)
+        The bearings' times (s) and the chosen side's true bearings (rad).
+    imm_tonal : TonalTrack or None
+        The tonal the filter runs with (:func:`_imm_tonal`).
+    sigma_bearing_rad : float
+        The side fit's bearing noise sd (rad), which the filter and the bearings + frequency ML state.
+    stages : PassiveStages
+        What :func:`frequency_ml` needs.
+
+    Returns
+    -------
+    TmaResult
+        The reference; ``ml`` itself when its range is not determined (the filter then takes its reason) or the
+        bearings + frequency fit fails.
+    """
+    if imm_tonal is None or ml.settings.frequency or not ml.solution.range_flags()[-1]:
+        return ml
+    bf = frequency_ml(replace(ml, settings=_tma_settings("ml", sigma_bearing_rad, stages, None)), t, chosen,
+                      imm_tonal, stages)
+    return bf if bf.settings.frequency else ml
 
 
 #: fewest bearings with a frequency for the bearings + frequency ML (as for the sequential filter's frequency)
