@@ -292,8 +292,10 @@ def _damped_step(residual, x, e, J, cost: float, lam: float):
         except np.linalg.LinAlgError:
             lam *= 10.0
             continue
-        e_new, J_new = residual(x + step)
-        c_new = float(e_new @ e_new)
+        # a trial step may land on the sensor (0 / 0) or overflow: its cost is not finite and the test below rejects it
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            e_new, J_new = residual(x + step)
+            c_new = float(e_new @ e_new)
         if np.isfinite(c_new) and c_new <= cost:
             return x + step, e_new, J_new, c_new, max(lam / 10.0, 1e-12), True
         lam *= 10.0
