@@ -741,8 +741,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
         ml = jackknife_checked(ml, side, (t, stbd, port, xy), min_log_lr, stages.min_separation_deg)
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
-    if left_out is not None:
-        ml = replace(ml, warnings=ml.warnings + (left_out,))
+    ml = ml if left_out is None else replace(ml, warnings=ml.warnings + (left_out,))
     mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
     imm_tonal = _imm_tonal(t, chosen, tonal, stages)
     seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
