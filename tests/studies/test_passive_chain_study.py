@@ -298,3 +298,31 @@ def test_target_errors_judge_the_scans_the_ml_was_fitted_to_at_its_last_row():
     whole = crb_position_sd_m(x0, t - t[0], nav.array_at(t)[0], np.deg2rad(np.std(offset)), t[-1] - t[0])
     assert crb_m != pytest.approx(whole, rel=0.05)
     assert det == 1.0
+    # alternating offsets are anti-correlated: rho is clipped to 0 and the correlated reading is the white CRB
+    assert pc.correlated_crb_sd_m(tg, scene, ship, nav) == pytest.approx(crb_m, rel=1e-9)
+
+
+def test_the_correlated_crb_reading_widens_the_bound_for_slow_errors():
+    """Offsets that drift slowly (a sine of period 200 s, sd 0.2 deg, as a second ship in the beam makes them) have a
+    lag-1 correlation near 1 (clipped at 0.95): the reading is the AR(1) bound at that rho, more than twice the
+    white one of the same sd (sqrt((1 + rho) / (1 - rho)) = 6.2 times where the geometry varies slowly against the
+    errors)."""
+    from types import SimpleNamespace
+
+    from sonartrack.tma.batch_ml import crb_position_sd_m
+
+    scene = pc.draw_scene(pc.Config(), 3)
+    nav = pc.navigation(scene_geometry(scene, np.arange(0.0, 601.0)))
+    t = np.arange(10.0, 590.0, 2.0)
+    ship = 0
+    g = scene_geometry(scene, t)
+    offset = 0.2 * np.sqrt(2.0) * np.sin(2 * np.pi * t / 200.0)
+    track = SimpleNamespace(time_s=t, cone_deg=np.rad2deg(g.cone_rad[ship]) + offset)
+    solution = SimpleNamespace(time_s=t, state=np.zeros((len(t), 4)), range_flags=lambda: np.ones(len(t), bool))
+    tg = SimpleNamespace(track=track, ml=SimpleNamespace(record=SimpleNamespace(time_s=t), solution=solution))
+    _, white, _, _ = pc.target_errors(tg, scene, ship, nav)
+    got = pc.correlated_crb_sd_m(tg, scene, ship, nav)
+    x0 = np.concatenate([g.ship_xy[ship, 0], g.ship_velocity[ship, 0]])
+    sigma = np.std(np.deg2rad(offset))
+    want = crb_position_sd_m(x0, t - t[0], nav.array_at(t)[0], sigma, t[-1] - t[0], rho=0.95)
+    assert got == pytest.approx(want, rel=1e-9) and got > 2.0 * white

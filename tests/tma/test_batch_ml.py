@@ -93,3 +93,17 @@ def test_crb_position_sd_by_hand():
     assert crb_position_sd_m(x0, tau, own, np.full(4, 2 * sigma), T) == pytest.approx(2 * np.sqrt(2) * sigma * R)
     # the bearings at t = 0 alone say nothing about the velocity: no bound
     assert np.isnan(crb_position_sd_m(x0, tau[:2], own[:2], sigma, T))
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
+def test_fisher_information_of_ar1_errors_is_h_r_inverse_h(rho):
+    """With AR(1) errors, R_ij = sigma_i sigma_j rho^|i - j|, the information is H^T R^-1 H (R inverted by numpy, not
+    whitened); rho = 0 gives the white sum, and a larger rho less information about the position."""
+    t, po, x0 = scenario()
+    sigma = np.deg2rad(np.linspace(0.5, 1.5, len(t)))
+    _, H, _ = bearing_model(x0, t, po)
+    lag = np.abs(np.subtract.outer(np.arange(len(t)), np.arange(len(t))))
+    R = np.outer(sigma, sigma) * rho**lag
+    np.testing.assert_allclose(fisher_information(x0, t, po, sigma, rho), H.T @ np.linalg.solve(R, H), rtol=1e-9)
+    if rho > 0:
+        assert np.trace(crb(x0, t, po, sigma, rho)[:2, :2]) > np.trace(crb(x0, t, po, sigma)[:2, :2])

@@ -103,8 +103,12 @@ def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return np.arctan2(dx, dy), H, np.sqrt(r2)
 
 
-def fisher_information(x0, tau_s, own_xy, sigma_rad) -> np.ndarray:
-    """J = sum_n H_n^T H_n / sigma_n^2: the bearings' Fisher information about X0.
+def fisher_information(x0, tau_s, own_xy, sigma_rad, rho: float = 0.0) -> np.ndarray:
+    """J = sum_n H_n^T H_n / sigma_n^2: the bearings' Fisher information about X0; with ``rho`` > 0, that of
+    errors e_n / sigma_n that are AR(1) in bearing order with lag-1 correlation rho, J = sum_n g_n^T g_n with the
+    whitened rows g_1 = H_1 / sigma_1, g_n = (H_n / sigma_n - rho H_n-1 / sigma_n-1) / sqrt(1 - rho^2) (the
+    Prais-Winsten transform, whose rows are independent with unit variance: J = H^T R^-1 H for the AR(1)
+    covariance R; Prais & Winsten 1954, Cowles Commission Discussion Paper 383).
 
     Parameters
     ----------
@@ -116,6 +120,8 @@ def fisher_information(x0, tau_s, own_xy, sigma_rad) -> np.ndarray:
         Ownship positions (m; x east, y north) at those times.
     sigma_rad : float or array_like, shape (n,)
         Bearing noise standard deviation (rad).
+    rho : float
+        Lag-1 correlation of the normalised errors, 0 <= rho < 1 (0: white).
 
     Returns
     -------
@@ -123,11 +129,13 @@ def fisher_information(x0, tau_s, own_xy, sigma_rad) -> np.ndarray:
         J.
     """
     _, H, _ = bearing_model(x0, tau_s, own_xy)
-    w = 1.0 / np.broadcast_to(np.asarray(sigma_rad, dtype=float), (len(H),)) ** 2
-    return (H * w[:, None]).T @ H
+    G = H / np.broadcast_to(np.asarray(sigma_rad, dtype=float), (len(H),))[:, None]
+    if rho > 0.0:
+        G = np.concatenate([G[:1], (G[1:] - rho * G[:-1]) / np.sqrt(1.0 - rho * rho)])
+    return G.T @ G
 
 
-def crb(x0_true, tau_s, own_xy, sigma_rad) -> np.ndarray:
+def crb(x0_true, tau_s, own_xy, sigma_rad, rho: float = 0.0) -> np.ndarray:
     """Cramer-Rao bound on X0 for this geometry: the inverse Fisher information at the true state.
 
     Parameters
@@ -140,16 +148,18 @@ def crb(x0_true, tau_s, own_xy, sigma_rad) -> np.ndarray:
         Ownship positions (m; x east, y north) at those times.
     sigma_rad : float or array_like, shape (n,)
         Bearing noise standard deviation (rad).
+    rho : float
+        Lag-1 correlation of the errors in bearing order (:func:`fisher_information`; 0: white).
 
     Returns
     -------
     ndarray, shape (4, 4)
         J^-1 at the true state (m^2, m^2/s, m^2/s^2).
     """
-    return np.linalg.inv(fisher_information(x0_true, tau_s, own_xy, sigma_rad))
+    return np.linalg.inv(fisher_information(x0_true, tau_s, own_xy, sigma_rad, rho))
 
 
-def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float) -> float:
+def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float, rho: float = 0.0) -> float:
     """The CRB's position standard deviation sqrt(P_xx + P_yy) at time ``tau_end_s``: the bound on X0
     (:func:`crb`) carried to that time along the constant-velocity model, P = F J^-1 F^T with F = [[I, tau I],
     [0, I]] (the bound on a function of X0 is the bound on X0 mapped through its Jacobian; Van Trees, Detection,
@@ -167,6 +177,8 @@ def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float) -> fl
         Bearing noise standard deviation (rad).
     tau_end_s : float
         The time (s since t0) of the position bounded, e.g. the solution's last row.
+    rho : float
+        Lag-1 correlation of the errors in bearing order (:func:`fisher_information`; 0: white).
 
     Returns
     -------
@@ -174,7 +186,7 @@ def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float) -> fl
         The bound's position sd (m); NaN when the geometry carries no information on some component (J singular).
     """
     try:
-        P0 = crb(x0_true, tau_s, own_xy, sigma_rad)
+        P0 = crb(x0_true, tau_s, own_xy, sigma_rad, rho)
     except np.linalg.LinAlgError:
         return float("nan")
     F = cv_transition(float(tau_end_s))

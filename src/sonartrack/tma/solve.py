@@ -237,13 +237,30 @@ def correlation_inflation(residuals_rad) -> float:
     float
         The factor (1 + rho) / (1 - rho) (1 for fewer than 3 residuals or zero spread).
     """
-    r = np.asarray(residuals_rad, float)
+    rho = lag1_correlation(residuals_rad)
+    return (1.0 + rho) / (1.0 - rho)
+
+
+def lag1_correlation(residuals) -> float:
+    """The sample lag-1 autocorrelation of de-meaned residuals in time order, clipped to 0..0.95 (0 for fewer than 3
+    residuals or zero spread): the rho of :func:`correlation_inflation`.
+
+    Parameters
+    ----------
+    residuals : array_like (n,)
+        Residuals in time order.
+
+    Returns
+    -------
+    float
+        rho.
+    """
+    r = np.asarray(residuals, float)
     r = r - r.mean()
     den = float(np.dot(r, r))
     if len(r) < 3 or den <= 0:
-        return 1.0
-    rho = float(np.clip(np.dot(r[:-1], r[1:]) / den, 0.0, 0.95))
-    return (1.0 + rho) / (1.0 - rho)
+        return 0.0
+    return float(np.clip(np.dot(r[:-1], r[1:]) / den, 0.0, 0.95))
 
 
 def _inflated(est, record: BearingRecord, own_xy):
