@@ -5,7 +5,7 @@ import numpy as np
 from sonartrack.core.angles import bearing_rad, wrap_angle
 from sonartrack.io.navigation import Navigation
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.systems.passive.measurements import TrackMeasurements, join_fragments
+from sonartrack.systems.passive.measurements import TrackMeasurements, _fragments_joined, join_fragments
 
 TIMES = np.arange(0.0, 1201.0, 1.0)
 
@@ -218,3 +218,17 @@ def test_fragments_that_are_each_others_best_match_at_a_crossing_are_joined_up_t
     assert ratio[1, 3] > _join_statistic(a1, a3, nav)
     out = join_fragments([a1, a2, a3], nav)
     assert [(m.track_id, m.joined_track_ids) for m in out] == [(1, (5,)), (3, ())]
+
+
+def test_a_joined_targets_filtered_track_is_the_later_fragments_from_its_start():
+    # the earlier fragment's filtered track runs on after its last peak (here onto another ship at 130 deg) while the
+    # later fragment follows the target: from the later one's start the joined track is the later one's
+    ta, tb = np.arange(0.0, 200.0, 1.0), np.arange(120.0, 200.0, 1.0)
+    cone_a = np.where(ta < 110.0, 150.0, 130.0)
+    a = TrackMeasurements(3, ta[:100], cone_a[:100], np.ones(100), ta, cone_a)
+    b = TrackMeasurements(7, tb, np.full(80, 152.0), np.ones(80), tb, np.full(80, 152.0))
+    j = _fragments_joined(a, b)
+    np.testing.assert_array_equal(j.time_s, np.concatenate([ta[:100], tb]))
+    np.testing.assert_array_equal(j.track_time_s, ta)
+    np.testing.assert_array_equal(j.track_cone_deg, np.where(ta < 110.0, 150.0, np.where(ta < 120.0, 130.0, 152.0)))
+    assert j.track_id == 3

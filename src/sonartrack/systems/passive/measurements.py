@@ -169,6 +169,20 @@ def _union(a: TrackMeasurements, b: TrackMeasurements) -> TrackMeasurements:
     return TrackMeasurements(a.track_id, t, cone, amp, tt, tc, phi if a.unfolded_deg is not None else None)
 
 
+def _fragments_joined(a: TrackMeasurements, b: TrackMeasurements) -> TrackMeasurements:
+    """``a`` continued by the later fragment ``b`` (:func:`join_fragments`): the peaks of both (:func:`_union`), and
+    the filtered track a's before b's begins and b's from then on. Not a's filtered track wherever a has one, as for
+    two tracks on the same peaks (:func:`_union`): after its last peak the earlier fragment's track coasts or follows
+    another ship (passive-chain study trial 1: the pair-near ship's joined target read the pair-far ship's cone
+    angle, 25 deg away, from 505 s on, so the crosser's TMA kept the scans that the pair-near ship shared its beam
+    with)."""
+    joined = _union(a, b)
+    t0 = float(b.track_time_s[0]) if len(b.track_time_s) else np.inf
+    before = np.asarray(a.track_time_s, float) < t0
+    return replace(joined, track_time_s=np.concatenate([a.track_time_s[before], b.track_time_s]),
+                   track_cone_deg=np.concatenate([a.track_cone_deg[before], b.track_cone_deg]))
+
+
 def merge_duplicates(tracks: list[TrackMeasurements], max_offset_deg: float,
                      min_scans: int = 5) -> list[TrackMeasurements]:
     """Join confirmed tracks that follow the same target: when a later track runs within ``max_offset_deg`` of an
@@ -609,7 +623,7 @@ def join_fragments(tracks: list[TrackMeasurements], nav, max_gap_s: float = MAX_
             i += 1
             continue
         a, b = out[j], out[i]
-        joined = _union(a, b)
+        joined = _fragments_joined(a, b)
         out[j] = replace(joined, joined_track_ids=a.joined_track_ids + (b.track_id,) + b.joined_track_ids)
         if b.track_id in lines:  # the joined target's line runs on with the later fragment's
             lines[a.track_id] = _joined_line(lines.get(a.track_id), lines[b.track_id])
