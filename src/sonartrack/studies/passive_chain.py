@@ -58,7 +58,7 @@ from sonartrack.systems.passive.settings import PassiveSettings
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on a family of simulated towed-array scenes (our own study)"
 PAPER = "sonartrack's own: papers P0 (JPDA_A), P2 (IMM-MGEKF) and P3 (batch ML) joined into one system"
-TRIAL_VERSION = 13
+TRIAL_VERSION = 14
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 32

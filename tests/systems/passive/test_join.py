@@ -232,3 +232,25 @@ def test_a_joined_targets_filtered_track_is_the_later_fragments_from_its_start()
     np.testing.assert_array_equal(j.track_time_s, ta)
     np.testing.assert_array_equal(j.track_cone_deg, np.where(ta < 110.0, 150.0, np.where(ta < 120.0, 130.0, 152.0)))
     assert j.track_id == 3
+
+
+def test_a_ship_that_crosses_the_arrays_axis_in_the_gap_is_joined_on_the_mirror_branch():
+    from dataclasses import replace
+
+    # array north at 3 m/s; the ship passes ahead of it through endfire (relative bearing 0) at 500 s, between
+    # the fragments: its cone angle comes back up (4 -> 0 -> 4 deg) but on the other side of the axis, so the
+    # later fragment's unfolded angles continue the first's on the mirror branch (-phi)
+    nav = Navigation(TIMES, np.zeros_like(TIMES), 3.0 * TIMES, np.zeros_like(TIMES), np.zeros_like(TIMES),
+                     3.0 * TIMES, np.zeros_like(TIMES))
+    ship = [2000.0, 6000.0, -4.0, 0.0]
+    first, later = (replace(m, unfolded_deg=m.cone_deg) for m in (_fragment(1, ship, 0.0, 430.0, nav, 1),
+                                                                   _fragment(5, ship, 570.0, 1200.0, nav, 2)))
+    out = join_fragments([first, later], nav)
+    assert [(m.track_id, m.joined_track_ids) for m in out] == [(1, (5,))]
+    t = out[0].time_s
+    xy, heading = nav.array_at(t)
+    truth = np.rad2deg(wrap_angle(bearing_rad(ship[0] + ship[2] * t - xy[:, 0], ship[1] + ship[3] * t - xy[:, 1])
+                                  - heading))  # signed: + starboard before 500 s, - port after
+    # each part on the truth's branch (0.2 deg noise); imaging the later peaks nearest the first fragment's last
+    # unfolded angle put them at +4..+49 deg: back on the first fragment's side
+    assert np.max(np.abs(out[0].unfolded_deg - truth)) < 1.5
