@@ -564,15 +564,29 @@ def _join_statistic(a: TrackMeasurements, b: TrackMeasurements, nav, costs: dict
     ta, tb = a.time_s, b.time_s[b.time_s > a.time_s[-1]]
     if len(ta) < 10 or len(tb) < 10:
         return np.inf
-    pa, pb = _phi_rad(a), _phi_rad(b)[b.time_s > a.time_s[-1]]
-    rate = np.polyfit(ta[-20:] - ta[-1], pa[-20:], 1)[0] if len(ta) >= 2 else 0.0
     # b's times increase: its part after a's end is its last len(tb) measurements
     j_a, j_b = _own_cost(a, 0, nav, costs), _own_cost(b, len(b.time_s) - len(tb), nav, costs)
     n = len(ta) + len(tb)
-    t_ab = np.concatenate([ta, tb])
-    j_ab = min(_cv_cost(t_ab, np.concatenate([pa, p]), nav) for p in _branches(pb, pa[-1] + rate * (tb[0] - ta[-1])))
+    j_up, j_down, _, _ = _branch_costs(a, b, nav)
     separate = max((j_a + j_b) / (n - 8), np.deg2rad(0.1) ** 2)
-    return float(j_ab / (n - 4) / separate)
+    return float(min(j_up, j_down) / (n - 4) / separate)
+
+
+def _continuing_branches(a: TrackMeasurements, b: TrackMeasurements) -> tuple[np.ndarray, np.ndarray]:
+    """b's part after a's end on its phi and on its -phi fold branch (:func:`_branches`), each with the 2 pi m that
+    puts it nearest a linear extrapolation of a's end."""
+    ta, pa = a.time_s, _phi_rad(a)
+    after = b.time_s > ta[-1]
+    rate = np.polyfit(ta[-20:] - ta[-1], pa[-20:], 1)[0] if len(ta) >= 2 else 0.0
+    return _branches(_phi_rad(b)[after], pa[-1] + rate * (b.time_s[after][0] - ta[-1]))
+
+
+def _branch_costs(a: TrackMeasurements, b: TrackMeasurements, nav) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """(one-target cost of a then b's part after a's end on its phi branch, the same on its -phi branch, that part
+    on each branch: :func:`_continuing_branches`) (:func:`_join_statistic`, :func:`_join_branch`)."""
+    up, down = _continuing_branches(a, b)
+    t_ab, pa = np.concatenate([a.time_s, b.time_s[b.time_s > a.time_s[-1]]]), _phi_rad(a)
+    return _cv_cost(t_ab, np.concatenate([pa, up]), nav), _cv_cost(t_ab, np.concatenate([pa, down]), nav), up, down
 
 
 def _join_branch(a: TrackMeasurements, b: TrackMeasurements, nav) -> TrackMeasurements:
@@ -587,14 +601,12 @@ def _join_branch(a: TrackMeasurements, b: TrackMeasurements, nav) -> TrackMeasur
     after = b.time_s > a.time_s[-1]
     if not after.any():
         return b
-    ta, pa, pb = a.time_s, _phi_rad(a), _phi_rad(b)
-    rate = np.polyfit(ta[-20:] - ta[-1], pa[-20:], 1)[0] if len(ta) >= 2 else 0.0
-    tb = b.time_s[after]
-    up, down = _branches(pb[after], pa[-1] + rate * (tb[0] - ta[-1]))
-    if len(ta) >= 10 and len(tb) >= 10:
-        t_ab = np.concatenate([ta, tb])
-        use_up = _cv_cost(t_ab, np.concatenate([pa, up]), nav) <= _cv_cost(t_ab, np.concatenate([pa, down]), nav)
+    pa, pb = _phi_rad(a), _phi_rad(b)
+    if len(a.time_s) >= 10 and after.sum() >= 10:
+        j_up, j_down, up, down = _branch_costs(a, b, nav)
+        use_up = j_up <= j_down
     else:
+        up, down = _continuing_branches(a, b)
         use_up = abs(up[0] - pa[-1]) <= abs(down[0] - pa[-1])
     phi = pb + (up[0] - pb[after][0]) if use_up else -pb + (down[0] + pb[after][0])
     return replace(b, unfolded_deg=np.rad2deg(phi))
