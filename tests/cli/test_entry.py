@@ -61,6 +61,20 @@ def toy_app(monkeypatch):
     def interrupt():
         raise KeyboardInterrupt
 
+    @app.command("signal-in-compiled-code")
+    def signal_in_compiled_code():
+        # a signal whose handler raised inside compiled code (numba's dispatcher): the interrupt comes back as a
+        # SystemError that does not chain the KeyboardInterrupt
+        import os
+        import signal
+
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            signal.pthread_sigmask(signal.SIG_BLOCK, [])  # a call that lets Python run the pending handler
+        except KeyboardInterrupt:
+            pass
+        raise SystemError("CPUDispatcher(<function f>) returned a result with an exception set") from None
+
     @app.command("bug")
     def bug():
         raise ZeroDivisionError("a bug")
@@ -80,7 +94,15 @@ def test_input_error_is_one_line_and_status_2(toy_app, capsys):
 
 def test_interrupt_is_status_130_with_the_resume_note(toy_app, capsys):
     code, _, err = run(capsys, "interrupt")
-    assert code == 130 and "rerun the same command to resume" in err
+    assert code == 130 and err.startswith("interrupted:") and "rerun the same command" in err
+    assert "trials" not in err  # the generic line claims no trials: a command that keeps some says so itself
+
+
+def test_a_signal_surfacing_as_another_exception_is_the_interrupt_not_a_bug(toy_app, capsys):
+    code, out, err = run(capsys, "signal-in-compiled-code")
+    assert code == 143 and err.startswith("interrupted:") and err.count("\n") == 1
+    assert "internal error" not in err and "Traceback" not in err + out
+    assert run(capsys, "bug")[0] == 1  # the flag is per run: a later bug is a bug again
 
 
 def test_a_bug_is_not_hidden(toy_app, capsys):

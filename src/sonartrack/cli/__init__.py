@@ -137,8 +137,14 @@ def _listing_app(args: list[str]) -> typer.Typer | None:
     return listing
 
 
-#: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM)
-INTERRUPTED = "interrupted: finished trials are saved; rerun the same command to resume"
+#: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM);
+#: a command that keeps partial work (reproduce's trials, survey's recordings) says what it kept in its own words
+INTERRUPTED = "interrupted: nothing half-written was kept; rerun the same command"
+
+#: the signal that stopped the running command, once one has arrived (None before): an exception raised after it,
+#: whatever its type, is that interrupt's doing (a signal handler's exception raised inside compiled code, numba's
+#: for one, comes out as a SystemError that need not chain the KeyboardInterrupt)
+_SIGNAL_RECEIVED: int | None = None
 
 
 class Interrupted(KeyboardInterrupt):
@@ -155,8 +161,10 @@ class Interrupted(KeyboardInterrupt):
 def _raise_interrupted(signum, frame) -> None:
     """Signal handler: stop the command once; further SIGINT/SIGTERM are ignored so that the clean-up
     (stopping workers, counting what was kept) is not itself interrupted into a traceback."""
+    global _SIGNAL_RECEIVED
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
+    _SIGNAL_RECEIVED = int(signum)
     raise Interrupted(signum)
 
 
@@ -170,6 +178,8 @@ def _stop_signals_raise():
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    global _SIGNAL_RECEIVED
+    _SIGNAL_RECEIVED = None
     old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     for sig, handler in old.items():
         if handler is not signal.SIG_IGN:
@@ -196,7 +206,7 @@ def _report_interrupt(exc: BaseException | None) -> int:
     """Print the interrupted command's one line; the status is 128 + the signal number (130 for SIGINT)."""
     intr = _interrupt_of(exc)
     typer.echo(getattr(intr, "message", None) or INTERRUPTED, err=True)
-    return 128 + getattr(intr, "signum", signal.SIGINT)
+    return 128 + getattr(intr, "signum", _SIGNAL_RECEIVED or signal.SIGINT)
 
 
 def _exit_status(code) -> int:
@@ -234,6 +244,8 @@ def main(argv: list[str] | None = None) -> int:
         typer.echo(f"error: {exc}", err=True)
         return 2
     except OSError as exc:
+        if _SIGNAL_RECEIVED is not None and not debug:  # a write cut short by the interrupt
+            return _report_interrupt(exc)
         if debug:
             raise
         where = f": {exc.filename}" if exc.filename else ""
@@ -245,6 +257,8 @@ def main(argv: list[str] | None = None) -> int:
         status = _exit_status(exc.code)
         return _report_interrupt(exc) if status == 130 else status
     except Exception as exc:  # a bug: say so in one line unless asked for the traceback
+        if _SIGNAL_RECEIVED is not None and not debug:  # the interrupt, surfacing as another exception type
+            return _report_interrupt(exc)
         if debug:
             raise
         typer.echo(f"error: internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}) "
