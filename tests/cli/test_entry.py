@@ -75,6 +75,24 @@ def toy_app(monkeypatch):
             pass
         raise SystemError("CPUDispatcher(<function f>) returned a result with an exception set") from None
 
+    @app.command("signal-in-finaliser")
+    def signal_in_finaliser():
+        # the signal's handler runs inside a __del__, where Python cannot propagate its exception
+        import os
+        import signal
+        import time
+
+        class Resource:
+            def __del__(self):
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1000):  # bytecodes, so that the pending handler runs here
+                    time.monotonic()
+
+        Resource()
+        for _ in range(100):  # the rest of the work: must not run
+            time.sleep(0.01)
+        typer.echo("finished")
+
     @app.command("bug")
     def bug():
         raise ZeroDivisionError("a bug")
@@ -103,6 +121,12 @@ def test_a_signal_surfacing_as_another_exception_is_the_interrupt_not_a_bug(toy_
     assert code == 143 and err.startswith("interrupted:") and err.count("\n") == 1
     assert "internal error" not in err and "Traceback" not in err + out
     assert run(capsys, "bug")[0] == 1  # the flag is per run: a later bug is a bug again
+
+
+def test_a_signal_arriving_inside_a_finaliser_still_stops_the_command(toy_app, capsys):
+    code, out, err = run(capsys, "signal-in-finaliser")
+    assert code == 130 and "finished" not in out
+    assert err.startswith("interrupted:") and err.count("\n") == 1 and "Traceback" not in err and "ignored" not in err
 
 
 def test_a_bug_is_not_hidden(toy_app, capsys):
@@ -165,3 +189,28 @@ def test_help_lists_every_command_in_module_order_whatever_was_loaded_first(caps
     assert names.index("reproduce") < names.index("studies") < names.index("tl")  # module order
     positions = [out.index(f"\u2502 {name} ") for name in names]  # the first column of rich's command table
     assert positions == sorted(positions)
+
+
+def test_a_run_that_fails_after_its_first_output_leaves_nothing(tmp_path, monkeypatch, capsys):
+    """detect writes its table, then its picture: an interrupt in between removes the table (all or nothing),
+    while files that were in the folder before the run stay."""
+    import numpy as np
+
+    import sonartrack.report.figures.detection as figures
+
+    frames = tmp_path / "frames.npy"
+    np.save(frames, np.random.default_rng(1).normal(size=(4, 8, 16)) ** 2)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "older.txt").write_text("kept")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(figures, "detection_png", interrupted)
+    assert main(["detect", "--frames", str(frames), "--threshold", "1", "--out", str(out)]) == 130
+    assert sorted(p.name for p in out.iterdir()) == ["older.txt"]
+    monkeypatch.undo()
+    # and a clean run keeps its outputs
+    assert main(["detect", "--frames", str(frames), "--threshold", "1", "--out", str(out)]) == 0
+    assert {"detection.csv", "detection.png", "older.txt"} <= {p.name for p in out.iterdir()}

@@ -168,6 +168,24 @@ def _raise_interrupted(signum, frame) -> None:
     raise Interrupted(signum)
 
 
+def _interrupt_again_if_swallowed(unraisable) -> None:
+    """``sys.unraisablehook`` while a command runs: an :class:`Interrupted` raised inside a finaliser (``__del__``,
+    a weakref callback: Python cannot propagate it and would print its traceback and go on, the signal lost
+    and the next ones ignored) is raised again in the main flow: the handler is put back and the signal sent
+    once more from another thread a moment later, so that it arrives after the finaliser (sent from here, its
+    handler would run inside this hook, which cannot propagate it either). Anything else goes to the default
+    hook."""
+    if isinstance(unraisable.exc_value, Interrupted):
+        import os
+        import time
+
+        signum = unraisable.exc_value.signum
+        signal.signal(signum, _raise_interrupted)
+        threading.Thread(target=lambda: (time.sleep(0.01), os.kill(os.getpid(), signum)), daemon=True).start()
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 @contextlib.contextmanager
 def _stop_signals_raise():
     """SIGINT and SIGTERM raise :class:`Interrupted` while the app runs, then the old handlers return.
@@ -184,9 +202,11 @@ def _stop_signals_raise():
     for sig, handler in old.items():
         if handler is not signal.SIG_IGN:
             signal.signal(sig, _raise_interrupted)
+    old_hook, sys.unraisablehook = sys.unraisablehook, _interrupt_again_if_swallowed
     try:
         yield
     finally:
+        sys.unraisablehook = old_hook
         for sig, handler in old.items():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
 
@@ -269,4 +289,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _entry() -> None:  # pragma: no cover
-    sys.exit(main())
+    status = main()
+    # the command is over (its outputs written or removed): a signal during the interpreter's shutdown must not
+    # turn a finished run into one killed by that signal
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    sys.exit(status)

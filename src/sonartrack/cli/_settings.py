@@ -72,15 +72,18 @@ def print_config_and_exit(settings) -> None:
 @contextmanager
 def output_folder(out: Path) -> Iterator[Path]:
     """Make the ``--out`` folder before the work, so that a folder that cannot be made fails at once in one line
-    (not after minutes of computing); if the work then fails, remove the folder again when this run made it and
-    it is still empty (a failed run leaves nothing behind)."""
-    out = Path(out)
-    made = not out.exists()
-    out.mkdir(parents=True, exist_ok=True)
-    try:
-        yield out
-    except BaseException:
-        if made and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()
-        raise
+    (not after minutes of computing); if the work then fails or is interrupted, remove what this run added to it
+    (io/run_outputs.py :func:`~sonartrack.io.run_outputs.discard_on_failure`, and the folder when this run made
+    it), so that a run's outputs are all or nothing. An ``Exit`` of status 0 is a success, not a failure."""
+    from sonartrack.io.run_outputs import discard_on_failure
 
+    success_exit = None
+    with discard_on_failure(out) as folder:
+        try:
+            yield folder
+        except BaseException as exc:
+            if getattr(exc, "exit_code", getattr(exc, "code", 1)) not in (0, None):
+                raise
+            success_exit = exc  # typer.Exit(0) / SystemExit(0) ends a successful run: keep its outputs
+    if success_exit is not None:
+        raise success_exit
