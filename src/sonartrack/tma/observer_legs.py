@@ -115,15 +115,16 @@ def _cumulative(t, columns) -> np.ndarray:
     return S
 
 
-def _segment_costs(S, starts, end, n_line: int, weights) -> np.ndarray:
-    """Normalised RSS of the segments [starts, end): straight lines in t for the first ``n_line`` columns, a constant
-    for the rest, each divided by its noise variance (``weights`` = 1 / sigma^2 per column)."""
-    d = S[end] - S[starts]
-    n, st, stt = d[:, 0], d[:, 1], d[:, 2]
+def _segment_costs(S, starts, ends, n_line: int, weights) -> np.ndarray:
+    """Normalised RSS of the segments [starts, ends) (fix indices into the cumulative sums ``S``): straight lines in t
+    for the first ``n_line`` columns, a constant for the rest, each divided by its noise variance (``weights`` =
+    1 / sigma^2 per column)."""
+    d = S[ends] - S[starts]
+    n, st, stt = d[..., 0], d[..., 1], d[..., 2]
     sxx = np.maximum(stt - st * st / n, 1e-300)
-    cost = np.zeros(len(starts))
+    cost = np.zeros(np.shape(n))
     for c, wgt in enumerate(weights):
-        su, stu, suu = d[:, 3 + 3 * c], d[:, 4 + 3 * c], d[:, 5 + 3 * c]
+        su, stu, suu = d[..., 3 + 3 * c], d[..., 4 + 3 * c], d[..., 5 + 3 * c]
         rss = suu - su * su / n
         if c < n_line:
             sxu = stu - st * su / n
@@ -132,13 +133,51 @@ def _segment_costs(S, starts, end, n_line: int, weights) -> np.ndarray:
     return cost
 
 
-def change_points(time_s, columns, n_line: int, weights, penalty: float, min_size: int = 2) -> np.ndarray:
+def _partition(S, grid, n_line: int, weights, penalty: float) -> np.ndarray:
+    """Optimal partitioning with PELT pruning over the candidate boundaries ``grid`` (fix indices, from 0 to n):
+    the boundaries chosen, as fix indices."""
+    m = len(grid) - 1
+    F = np.full(m + 1, np.inf)
+    F[0] = -penalty
+    last = np.zeros(m + 1, int)
+    active = np.zeros(0, int)
+    for end in range(1, m + 1):
+        active = np.append(active, end - 1)
+        total = F[active] + _segment_costs(S, grid[active], grid[end], n_line, weights) + penalty
+        k = int(np.argmin(total))
+        F[end], last[end] = total[k], active[k]
+        # PELT: a start whose cost already exceeds the optimum by the penalty can never be best again
+        active = active[total <= F[end] + penalty]
+    bounds = [m]
+    while bounds[-1] > 0:
+        bounds.append(int(last[bounds[-1]]))
+    return grid[np.array(bounds[::-1])]
+
+
+def _refine(S, bounds, reach: int, n_line: int, weights, min_size: int) -> np.ndarray:
+    """Each inner boundary moved, within ``reach`` fixes, to where its two segments cost least (the others held)."""
+    b = bounds.copy()
+    for k in range(1, len(b) - 1):
+        cand = np.arange(max(b[k] - reach, b[k - 1] + min_size), min(b[k] + reach, b[k + 1] - min_size) + 1)
+        if len(cand):
+            cost = (_segment_costs(S, np.full(len(cand), b[k - 1]), cand, n_line, weights)
+                    + _segment_costs(S, cand, np.full(len(cand), b[k + 1]), n_line, weights))
+            b[k] = cand[int(np.argmin(cost))]
+    return b
+
+
+def change_points(time_s, columns, n_line: int, weights, penalty: float, min_size: int = 2,
+                  max_blocks: int = 800) -> np.ndarray:
     """Optimal partition of the record into segments (module doc: optimal partitioning with PELT pruning).
+
+    A long record is partitioned first on blocks of b = ceil(n / max_blocks) fixes (the sums are exact at block
+    ends, so only the boundaries are coarse), then each boundary is moved within b fixes to its best place: PELT
+    prunes little on a record without changes (its cost grows as n^2), and this keeps it near n.
 
     Parameters
     ----------
     time_s : ndarray, shape (n,)
-        Times (s), centred for the sums' precision by the caller or not (only differences matter).
+        Times (s).
     columns : list of ndarray, each shape (n,)
         The signals: the first ``n_line`` fitted by lines in t, the rest by constants.
     n_line : int
@@ -148,7 +187,9 @@ def change_points(time_s, columns, n_line: int, weights, penalty: float, min_siz
     penalty : float
         Cost of one more segment.
     min_size : int
-        Fewest fixes in a segment.
+        Fewest fixes in a segment (and in a block).
+    max_blocks : int
+        Most blocks of the first pass.
 
     Returns
     -------
@@ -158,23 +199,10 @@ def change_points(time_s, columns, n_line: int, weights, penalty: float, min_siz
     t = np.asarray(time_s, float)
     n = len(t)
     S = _cumulative(t - t.mean(), [np.asarray(c, float) - np.mean(c) for c in columns])
-    F = np.full(n + 1, np.inf)
-    F[0] = -penalty
-    last = np.zeros(n + 1, int)
-    active = np.zeros(0, int)
-    for end in range(min_size, n + 1):
-        start = end - min_size  # the newest start a segment ending here may have; F of it is known when reachable
-        if start == 0 or start >= min_size:
-            active = np.append(active, start)
-        total = F[active] + _segment_costs(S, active, end, n_line, weights) + penalty
-        k = int(np.argmin(total))
-        F[end], last[end] = total[k], active[k]
-        # PELT: a start whose cost already exceeds the optimum by the penalty can never be best again
-        active = active[total <= F[end] + penalty]
-    bounds = [n]
-    while bounds[-1] > 0:
-        bounds.append(int(last[bounds[-1]]))
-    return np.array(bounds[::-1])
+    block = max(min_size, int(np.ceil(n / max_blocks)))
+    grid = np.unique(np.r_[np.arange(0, n - block + 1, block), n])
+    bounds = _partition(S, grid, n_line, weights, penalty)
+    return _refine(S, bounds, block, n_line, weights, min_size) if block > 1 else bounds
 
 
 def _line_velocity(t, x, y):
@@ -213,17 +241,42 @@ def ownship_legs(time_s, x_m, y_m, heading_deg=None, *, min_leg_s: float = MIN_L
             "navigation times and positions must be finite numbers")
     require(bool(np.all(np.diff(t) > 0)), "navigation times must increase strictly: sort the record, drop duplicates")
     sigma = position_sd_m if position_sd_m is not None else three_point_sd(t, np.column_stack([x, y]))
-    sigma = max(float(sigma), MIN_POSITION_SD_M)
-    columns, weights = [x, y], [sigma**-2, sigma**-2]
-    sigma_h = float("nan")
+    sigmas = [max(float(sigma), MIN_POSITION_SD_M)]
+    columns = [x, y]
     if heading_deg is not None:
         h = np.unwrap(np.asarray(heading_deg, float), period=360.0)
         require(len(h) == len(t) and bool(np.all(np.isfinite(h))), "headings must be finite, one per fix")
-        sigma_h = max(float(np.median(np.abs(np.diff(h))) / MAD_NORMAL / np.sqrt(2.0)), MIN_HEADING_SD_DEG)
-        columns, weights = [x, y, h], [sigma**-2, sigma**-2, sigma_h**-2]
-    n_par = 2 * 2 + (1 if heading_deg is not None else 0)
-    bounds = change_points(t, columns, 2, weights, (n_par + 1) * np.log(len(t)))
-    return _legs_from_bounds(t, x, y, bounds, min_leg_s, sigma, sigma_h)
+        sigmas.append(max(float(np.median(np.abs(np.diff(h))) / MAD_NORMAL / np.sqrt(2.0)), MIN_HEADING_SD_DEG))
+        columns.append(h)
+    penalty = (2 * 2 + len(sigmas) - 1 + 1) * np.log(len(t))
+    for _ in range(2):
+        weights = [sigmas[0] ** -2, sigmas[0] ** -2] + [sd**-2 for sd in sigmas[1:]]
+        bounds = change_points(t, columns, 2, weights, penalty)
+        # the fixes' scatter about the legs found: larger than the neighbour-based estimate when the noise is
+        # correlated from fix to fix (GPS) or the heading quantised, and then the one to cut with
+        on_legs = _leg_residual_sds(t, columns, bounds, min_leg_s)
+        if position_sd_m is not None:
+            on_legs[0] = sigmas[0]
+        if all(r <= 1.2 * sd for r, sd in zip(on_legs, sigmas, strict=True)):
+            break
+        sigmas = [max(r, sd) for r, sd in zip(on_legs, sigmas, strict=True)]
+    return _legs_from_bounds(t, x, y, bounds, min_leg_s, sigmas[0], sigmas[1] if len(sigmas) > 1 else float("nan"))
+
+
+def _leg_residual_sds(t, columns, bounds, min_leg_s: float) -> list[float]:
+    """Residual sds about the segments at least ``min_leg_s`` long: position (x and y lines pooled), then heading
+    (constant); 0 where no segment is that long."""
+    rss, dof = np.zeros(len(columns)), np.zeros(len(columns))
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        if t[b - 1] - t[a] < min_leg_s or b - a < 3:
+            continue
+        A = np.column_stack([np.ones(b - a), t[a:b] - t[a]])
+        for c, u in enumerate(columns):
+            fit = A @ np.linalg.lstsq(A, u[a:b], rcond=None)[0] if c < 2 else np.mean(u[a:b])
+            rss[c] += float(np.sum((u[a:b] - fit) ** 2))
+            dof[c] += b - a - (2 if c < 2 else 1)
+    sd = np.sqrt(rss / np.maximum(dof, 1))
+    return [float(np.sqrt((rss[0] + rss[1]) / max(dof[0] + dof[1], 1)))] + [float(v) for v in sd[2:]]
 
 
 def _legs_from_bounds(t, x, y, bounds, min_leg_s: float, sigma: float, sigma_h: float) -> OwnshipLegs:
