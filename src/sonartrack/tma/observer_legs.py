@@ -14,7 +14,9 @@ residual sum of squares of the segment's least-squares line (constant, for the h
 segment's cost is O(1). sigma is estimated from the record itself: the residual of each fix from the straight line
 through its two neighbours, e_k = x_k - (w x_k-1 + (1 - w) x_k+1), has variance sigma^2 (1 + w^2 + (1 - w)^2) on a
 leg; its median absolute value (MAD / 0.6745) is robust to the few fixes in turns. sigma_h likewise from heading
-differences. Floors keep a noise-free or quantised record from giving sigma = 0.
+differences. Floors keep a noise-free or quantised record from giving sigma = 0. Then the scatter of the fixes
+about the legs found is measured; where it exceeds the first estimate by more than 20 % (GPS noise correlated from
+fix to fix, which the neighbour residuals do not see; a heading quantised to 1 deg) the record is cut again with it.
 
 A turn is chopped into short chords (its curvature does not fit one line), so segments shorter than
 ``min_leg_s`` are turn pieces, not legs; a turn is the interval between two consecutive legs. A leg's velocity is
