@@ -3,7 +3,9 @@
 Accepted: 2-channel PCM 16/32-bit integer or 32/64-bit float WAV, read with scipy.io.wavfile; integer
 samples are scaled to [-1, 1). Refused with a one-line reason: mono or > 2 channels, 8-bit or 24-bit
 files (scipy reads 24-bit as padded int32 on some versions; convert with sox or ffmpeg), empty or
-unreadable files, a directory, NaN/inf samples, float samples beyond +-:data:`MAX_SAMPLE`.
+unreadable files, a directory, NaN/inf samples, float samples beyond +-:data:`MAX_SAMPLE`, and a header that
+contradicts itself or the file (a block align or byte rate that does not fit the other fields, data shorter or
+longer than the header states: io/riff_header.py).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
+from sonartrack.io.riff_header import walk_riff
 
 #: largest float sample magnitude taken (floats are nominally within [-1, 1]; any gain short of overflow)
 MAX_SAMPLE = 1e15
@@ -47,12 +50,20 @@ def read_two_channel_wav(path) -> tuple[np.ndarray, float]:
     require(not p.is_dir(), f"recording {p} is a directory: give the WAV file inside it")
     require(p.is_file(), f"recording not found: {p}")
     require(p.stat().st_size > 0, f"recording {p.name} is empty (0 bytes): give a two-channel WAV file")
+    with open(p, "rb") as fh:
+        riff = fh.read(4) in (b"RIFF", b"RF64")
+    header = walk_riff(p, 1.0) if riff else None  # fmt fields and data size checked against the file
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             fs, data = wavfile.read(p)
-    except (ValueError, EOFError, OSError) as exc:
+    except (ValueError, EOFError, OSError, TypeError, ZeroDivisionError) as exc:
         raise InputError(f"cannot read {p.name} as WAV ({exc}): give a PCM or float WAV file") from None
+    if header is not None and header.block_align and data.ndim == 2:
+        stated = header.data_bytes // header.block_align
+        require(data.shape[0] >= stated, f"{p.name} is truncated: the header states {stated} frames but only "
+                                         f"{data.shape[0]} are present: copy the file again, or repair its header "
+                                         "(e.g. sox --ignore-length in.wav out.wav)")
     if data.ndim == 1:
         raise InputError(f"{p.name} is mono: the bearing estimator needs two channels (one per sensor or half-array)")
     require(data.shape[1] == 2, f"{p.name} has {data.shape[1]} channels: extract the two sensors' channels into a "
