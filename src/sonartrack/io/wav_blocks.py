@@ -15,16 +15,20 @@ float32 files, and 16- and 24-bit PCM (k / 2^15 and k / 2^23 need at most 24 sig
 are the float64 blocks' to the last bit at half the memory and copying; a float32 file is then decoded straight
 into the block (no buffer, no copy). 32-bit PCM and float64 files stay float64.
 
-libsndfile quietly shortens a WAV-family file whose data ends before its header says; this module walks the
-RIFF / RF64 / W64 chunks itself to read the stated data size and refuses such a file. A truncated FLAC is
-caught up front by seeking to its last frame (the decoder loses sync there). The walk also reads the
-Broadcast WAV ``bext`` chunk: its OriginationDate + OriginationTime (taken as UTC) is the recording's start
-time, refined to the sample by TimeReference (samples since midnight) when the two agree within a second.
+libsndfile believes a header: it quietly shortens a WAV-family file whose data ends before its header says, and
+reads only as far as a header that states less than the data. Headers are checked, not believed: io/riff_header.py
+walks the RIFF / RF64 / W64 chunks (fmt fields against each other, the stated data size against the file, the
+Broadcast WAV ``bext`` start time: OriginationDate + OriginationTime taken as UTC, refined to the sample by
+TimeReference when the two agree within a second); io/flac_header.py compares a FLAC's STREAMINFO with its first
+and last frame headers (rate, channels, bits, length; a length of 0, "unknown", is taken from the frames). A
+FLAC's last frame must decode (a file cut inside it keeps its header).
 
 Refused with a one-line :class:`InputError` naming the file and the fix: a missing file or a folder, a file
 that is none of the formats above, a truncated header, 8-bit or companded samples, lossy codecs, no frames,
-data shorter than the header states (a truncated copy: the frames present are never read silently), and a
-block holding NaN/inf or a sample beyond 1e15 (named by its start time).
+data shorter than the header states (a truncated copy: the frames present are never read silently) or longer
+(the header would cut the recording), a header that contradicts itself or its frames, data libsndfile cannot
+decode or seek in (named by where it breaks: :func:`damaged`), and a block holding NaN/inf or a sample beyond
+1e15 (named by its start time).
 """
 
 from __future__ import annotations
