@@ -21,6 +21,12 @@ channel) or a list (one per channel)::
 
 or CSV with one row per channel: ``channel, sensitivity_db, gain_db[, full_scale_v]`` (channels 0..N-1, each
 once, any order).
+
+Values are checked where physics bounds them: a sensitivity within :data:`SENSITIVITY_RANGE_DB`, a gain within
+:data:`GAIN_RANGE_DB`, a full scale within :data:`FULL_SCALE_RANGE_V` (a recorder's input range is 0.1 to 60 V;
+1e-6 V allows float files stored in microvolts; 1000 is millivolts given as volts). The levels a calibration
+gives are checked against the sea (:func:`level_warnings`): the median broadband level of a recording lies
+within :data:`PLAUSIBLE_LEVEL_DB` or the calibration (or its absence) is named as the likely cause.
 """
 
 from __future__ import annotations
@@ -39,6 +45,16 @@ P_REF_PA = 1e-6
 #: plausible hydrophone sensitivities (dB re 1 V/uPa); a value above is likely dB re 1 V/Pa (120 dB higher)
 SENSITIVITY_RANGE_DB = (-250.0, -100.0)
 GAIN_RANGE_DB = (-60.0, 100.0)
+#: plausible voltages of sample value 1.0 (V): a recorder's full scale (0.1-60 V), or 1e-3 / 1e-6 for float
+#: samples stored in mV / uV
+FULL_SCALE_RANGE_V = (1e-6, 100.0)
+#: plausible median broadband level of a recording at sea (dB re 1 uPa). Floor: the quietest sea (Wenz 1962's
+#: lower limit, thermal noise above ~50 kHz: about 20 dB re 1 uPa^2/Hz at its lowest) over the >= 100 Hz of any
+#: recording's band is above 40 dB; 20 dB leaves 20 dB for a band-limited hydrophone. Ceiling: a median of 180 dB
+#: needs the loudest ships (190 dB re 1 uPa m broadband; McKenna et al. 2012, JASA 131: 177-188 dB for container
+#: ships) within 3 m of the hydrophone for half the recording (20 log10 r spreading); pile driving and airguns
+#: are loud in pulses, not in the median window
+PLAUSIBLE_LEVEL_DB = (20.0, 180.0)
 _KEYS = ("sensitivity_db", "gain_db", "full_scale_v")
 
 
@@ -159,7 +175,11 @@ def _checked(s: np.ndarray, g: np.ndarray, v: np.ndarray, path) -> Calibration:
     bad = g[(g < glo) | (g > ghi)]
     require(bad.size == 0, f"calibration {path}: gain {bad[:1].sum():g} dB lies outside {glo:g}..{ghi:g} dB: give "
                            "the preamplifier gain in dB")
-    require((v > 0).all(), f"calibration {path}: full_scale_v must be > 0 V, got {v.min():g}")
+    vlo, vhi = FULL_SCALE_RANGE_V
+    bad = v[(v < vlo) | (v > vhi)]
+    require(bad.size == 0, f"calibration {path}: full_scale_v {bad[:1].sum():g} V lies outside {vlo:g}..{vhi:g} V "
+                           "(the voltage of sample value 1.0: a recorder's full scale is 0.1 to 60 V; a value near "
+                           "1000 is millivolts: give volts, 1000 mV = 1 V)")
     sizes = {a.size for a in (s, g, v)} - {1}
     require(len(sizes) <= 1, f"calibration {path}: lists of different lengths {sorted(sizes)}: give one value per "
                              "channel, or one number for all")
@@ -232,3 +252,42 @@ def sensitivity_db_re_v_per_upa(v_per_pa: float) -> float:
     """
     require(v_per_pa > 0, f"a sensitivity must be > 0 V/Pa, got {v_per_pa:g}")
     return 20.0 * math.log10(v_per_pa * P_REF_PA)
+
+
+def level_warnings(level_db, calibration: Calibration, name: str) -> list[str]:
+    """A warning when the median broadband level of a recording lies outside any sea (:data:`PLAUSIBLE_LEVEL_DB`),
+    naming the likely cause: the calibration, or its absence (samples taken as pascals).
+
+    Parameters
+    ----------
+    level_db : array_like
+        Broadband level of each window (dB re 1 uPa); NaN (a gap) and -inf (digital silence) are left out.
+    calibration : Calibration
+        The calibration the levels were computed with.
+    name : str
+        The recording's name in the line.
+
+    Returns
+    -------
+    list of str
+        One ``warning: ...`` line, or none when the median is plausible or no window has a finite level.
+    """
+    level = np.asarray(level_db, dtype=float)
+    level = level[np.isfinite(level)]
+    lo, hi = PLAUSIBLE_LEVEL_DB
+    if level.size == 0 or lo <= (median := float(np.median(level))) <= hi:
+        return []
+    high = median > hi
+    where = (f"above any sea (> {hi:g} dB: the loudest ship within 3 m)" if high else
+             f"below any sea (< {lo:g} dB: quieter than the quietest ocean)")
+    if calibration.is_identity:
+        cause = ("the samples are taken as pascals because no calibration was given: give the recorder's "
+                 "calibration (--calibration: sensitivity_db, gain_db, full_scale_v)")
+    elif high:
+        cause = ("check the calibration: full_scale_v in millivolts given as volts (+60 dB)? a sensitivity too low "
+                 "(more negative) or a preamplifier gain left out?")
+    else:
+        cause = ("check the calibration: a full_scale_v too small (it is the voltage at sample value 1.0)? a gain "
+                 "counted twice (in sensitivity_db and in gain_db), or a sensitivity too high?")
+    return [f"warning: {name}: the median broadband level is {median:.1f} dB re 1 uPa, {where}; the levels "
+            f"(levels.csv) are not to be believed: {cause}"]

@@ -45,6 +45,7 @@ from sonartrack.io.wav_blocks import (
     native_buffer,
     read_frames_into,
     read_wav_info,
+    seek_frame,
 )
 
 DEFAULT_NAME_PATTERNS = ("%Y%m%d_%H%M%S", "%Y%m%dT%H%M%S")
@@ -334,7 +335,7 @@ def _run_blocks(run, lo: int, hi: int, w: int, fs: float, compact: bool) -> Iter
         info = item.info
         raw = raws.setdefault(info.sample_format, native_buffer(info, w))
         with sf.SoundFile(str(info.path)) as f:
-            f.seek(item.skip_frames + a - item.first_frame)
+            seek_frame(f, info, item.skip_frames + a - item.first_frame)
             pos = a
             while pos < b:
                 in_file_s = (item.skip_frames + pos - item.first_frame) / fs

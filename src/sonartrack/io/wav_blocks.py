@@ -15,30 +15,36 @@ float32 files, and 16- and 24-bit PCM (k / 2^15 and k / 2^23 need at most 24 sig
 are the float64 blocks' to the last bit at half the memory and copying; a float32 file is then decoded straight
 into the block (no buffer, no copy). 32-bit PCM and float64 files stay float64.
 
-libsndfile quietly shortens a WAV-family file whose data ends before its header says; this module walks the
-RIFF / RF64 / W64 chunks itself to read the stated data size and refuses such a file. A truncated FLAC is
-caught up front by seeking to its last frame (the decoder loses sync there). The walk also reads the
-Broadcast WAV ``bext`` chunk: its OriginationDate + OriginationTime (taken as UTC) is the recording's start
-time, refined to the sample by TimeReference (samples since midnight) when the two agree within a second.
+libsndfile believes a header: it quietly shortens a WAV-family file whose data ends before its header says, and
+reads only as far as a header that states less than the data. Headers are checked, not believed: io/riff_header.py
+walks the RIFF / RF64 / W64 chunks (fmt fields against each other, the stated data size against the file, the
+Broadcast WAV ``bext`` start time: OriginationDate + OriginationTime taken as UTC, refined to the sample by
+TimeReference when the two agree within a second); io/flac_header.py compares a FLAC's STREAMINFO with its first
+and last frame headers (rate, channels, bits, length; a length of 0, "unknown", is taken from the frames). A
+FLAC's last frame must decode (a file cut inside it keeps its header).
 
 Refused with a one-line :class:`InputError` naming the file and the fix: a missing file or a folder, a file
 that is none of the formats above, a truncated header, 8-bit or companded samples, lossy codecs, no frames,
-data shorter than the header states (a truncated copy: the frames present are never read silently), and a
-block holding NaN/inf or a sample beyond 1e15 (named by its start time).
+data shorter than the header states (a truncated copy: the frames present are never read silently) or longer
+(the header would cut the recording), a header that contradicts itself or its frames, data libsndfile cannot
+decode or seek in (named by where it breaks: :func:`damaged`), and a block holding NaN/inf or a sample beyond
+1e15 (named by its start time).
 """
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
-from datetime import UTC, datetime, timedelta
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
 import soundfile as sf
 
 from sonartrack.core.errors import InputError, require
+from sonartrack.io.flac_header import check_flac
+from sonartrack.io.riff_header import CONVERT as _CONVERT
+from sonartrack.io.riff_header import walk_riff
 
 #: libsndfile sub-type -> (our sample format name, bytes per sample in a WAV-family data chunk)
 _SUBTYPES = {"PCM_16": ("int16", 2), "PCM_24": ("int24", 3), "PCM_32": ("int32", 4), "FLOAT": ("float32", 4),
@@ -48,9 +54,11 @@ _SUBTYPES = {"PCM_16": ("int16", 2), "PCM_24": ("int24", 3), "PCM_32": ("int32",
 _NATIVE = {"int16": ("int32", 2.0**-31), "int24": ("int32", 2.0**-31), "int32": ("int32", 2.0**-31),
            "float32": ("float32", 1.0), "float64": ("float64", 1.0)}
 _CONTAINERS = {"WAV": "WAV", "WAVEX": "WAV", "RF64": "RF64", "W64": "W64", "FLAC": "FLAC"}
-_CONVERT = "convert it to 16/24-bit PCM or 32-bit float WAV or FLAC (e.g. sox in.wav -b 24 out.wav, or ffmpeg -i " \
-           "in.wav -c:a pcm_f32le out.wav)"
-_W64_RIFF = b"riff\x2e\x91\xcf\x11\xa5\xd6\x28\xdb\x04\xc1\x00\x00"
+#: frames per read when a FLAC is decoded to count its frames or to find where it is damaged
+_SCAN_FRAMES = 4096
+#: largest number of samples decoded to find where a damaged file breaks (beyond it the message names the frame
+#: the reader stopped at, with "at or before")
+_LOCATE_SAMPLES = 50_000_000
 
 #: a float sample beyond this is no pressure in pascals nor a normalised sample (as io/wav.py)
 MAX_FLOAT_SAMPLE = 1e15
@@ -61,8 +69,9 @@ RECORDING_SUFFIXES = (".wav", ".rf64", ".w64", ".flac", ".bwf")
 @dataclass(frozen=True)
 class WavInfo:
     """What the header of a recording says: channels, sample rate (Hz), frames, sample format (int16, int24,
-    int32, float32, float64), container (WAV, RF64, W64, FLAC) and the UTC start time when a Broadcast WAV
-    ``bext`` chunk carries one (else None)."""
+    int32, float32, float64), container (WAV, RF64, W64, FLAC), the UTC start time when a Broadcast WAV
+    ``bext`` chunk carries one (else None), and whether the header left the length unstated (a FLAC stream whose
+    STREAMINFO total is 0: ``frames`` is then the frames' own count)."""
 
     path: Path
     channels: int
@@ -71,92 +80,12 @@ class WavInfo:
     sample_format: str
     container: str = "WAV"
     start_utc: datetime | None = None
+    length_unstated: bool = False
 
     @property
     def duration_s(self) -> float:
         """Length of the recording (s)."""
         return self.frames / self.sample_rate_hz
-
-
-@dataclass(frozen=True, slots=True)
-class _Header:
-    """What our own chunk walk found: the data size the header states (bytes) and the bext start time."""
-
-    data_bytes: int | None
-    start_utc: datetime | None
-
-
-def _read_exact(fh, n: int, path: Path, what: str) -> bytes:
-    data = fh.read(n)
-    if len(data) < n:
-        raise InputError(f"{path}: the WAV header is truncated ({what} cut short): the file is incomplete; copy "
-                         "or export it again")
-    return data
-
-
-def _chunks(fh, path: Path, w64: bool):
-    """(chunk id, body size, offset of its body) of each chunk after the RIFF/RF64/W64 header, in file order.
-    W64 ids are 16-byte GUIDs whose first 4 bytes spell the RIFF id; sizes are 64-bit, include the 24-byte
-    chunk header, and chunks start on 8-byte boundaries."""
-    file_size = path.stat().st_size
-    pos, head = (40, 24) if w64 else (12, 8)
-    while pos + head <= file_size:
-        fh.seek(pos)
-        raw = _read_exact(fh, head, path, "chunk header")
-        if w64:
-            cid, size = raw[:4], struct.unpack("<Q", raw[16:24])[0] - 24
-            step = 24 + size + (-(24 + size) % 8)
-        else:
-            cid, size = struct.unpack("<4sI", raw)
-            step = 8 + size + (size & 1)
-        yield cid, size, pos + head
-        if step <= 0:
-            return
-        pos += step
-
-
-def _bext_start(body: bytes) -> datetime | None:
-    """UTC start of a Broadcast WAV bext chunk (EBU Tech 3285: OriginationDate at byte 320, OriginationTime at
-    330, TimeReference (uint64, samples since midnight) at 338); None when the date is blank or malformed."""
-    if len(body) < 346:
-        return None
-    text = body[320:338].decode("ascii", "replace").replace(":", "-").replace("/", "-").replace(".", "-")
-    try:
-        return datetime.strptime(text, "%Y-%m-%d%H-%M-%S").replace(tzinfo=UTC)
-    except ValueError:
-        return None
-
-
-def _refine_start(start: datetime | None, time_ref: int, rate: float) -> datetime | None:
-    """TimeReference gives the start to the sample; it is trusted only when it agrees with OriginationTime."""
-    if start is None or time_ref <= 0:
-        return start
-    midnight = start.replace(hour=0, minute=0, second=0, microsecond=0)
-    precise = midnight + timedelta(seconds=time_ref / rate)
-    return precise if abs((precise - start).total_seconds()) < 1.0 else start
-
-
-def _walk_header(p: Path, rate: float) -> _Header:
-    """Stated data size (bytes) and bext start of a RIFF, RF64 or W64 file; a FLAC has neither here."""
-    with open(p, "rb") as fh:
-        head = fh.read(40)
-        if head[:4] == b"fLaC":
-            return _Header(None, None)
-        w64 = head[:16] == _W64_RIFF
-        require(w64 or (len(head) >= 12 and head[:4] in (b"RIFF", b"RF64") and head[8:12] == b"WAVE"),
-                f"{p} is not a RIFF/WAVE, RF64, W64 or FLAC recording (starts with {head[:4]!r}): {_CONVERT}")
-        data_bytes, ds64, start, time_ref = None, None, None, 0
-        for cid, size, _body in _chunks(fh, p, w64):
-            if cid == b"ds64":
-                ds64 = struct.unpack("<Q", _read_exact(fh, 16, p, "ds64 chunk")[8:16])[0]
-            elif cid == b"bext":
-                raw = fh.read(min(size, 346))
-                start, time_ref = _bext_start(raw), (struct.unpack("<Q", raw[338:346])[0] if len(raw) >= 346 else 0)
-            elif cid == b"data":
-                data_bytes = ds64 if (head[:4] == b"RF64" and size == 0xFFFFFFFF) else size
-                break
-    require(data_bytes is not None, f"{p}: no data chunk: the file is truncated or empty; export the recording again")
-    return _Header(int(data_bytes), _refine_start(start, time_ref, rate))
 
 
 def _check_path(path) -> Path:
@@ -193,23 +122,105 @@ def _sample_format(si, p: Path) -> str:
                      f"for array processing): {_CONVERT}")
 
 
-def _check_complete(p: Path, si, header: _Header) -> None:
-    """Refuse a file whose data ends before its header says (the frames present are never read silently)."""
-    if header.data_bytes is not None:
-        stated = header.data_bytes // (si.channels * _SUBTYPES[si.subtype][1])
-        require(si.frames >= stated, f"{p} is truncated: the header states {stated} frames "
-                                     f"({stated / si.samplerate:.1f} s) but only {si.frames} are present "
-                                     f"({si.frames / si.samplerate:.1f} s): copy the file again, or repair its "
-                                     "header (e.g. sox --ignore-length in.wav out.wav)")
-        return
+def _riff_frames(p: Path, si, data_bytes: int) -> int:
+    """Frames of a WAV-family file; refused when its data ends before its header says (the frames present are
+    never read silently; a header stating less than the data is refused by io/riff_header.py)."""
+    stated = data_bytes // (si.channels * _SUBTYPES[si.subtype][1])
+    rate = si.samplerate
+    require(si.frames >= stated, f"{p} is truncated: the header states {stated} frames ({stated / rate:.1f} s) but "
+                                 f"only {si.frames} are present ({si.frames / rate:.1f} s): copy the file again, or "
+                                 "repair its header (e.g. sox --ignore-length in.wav out.wav)")
+    return int(si.frames)
+
+
+def _read_native(f, part: np.ndarray, dtype: str, unseeking: bool) -> int:
+    """Frames decoded from ``f`` into the C-ordered ``part``. ``unseeking``: through libsndfile's own read call,
+    without the seek to the new position that soundfile makes after every read: libFLAC cannot seek to the end of a
+    stream whose STREAMINFO leaves the length unstated, so soundfile's read of the last frames fails after reading
+    them."""
+    if not unseeking:
+        return f.buffer_read_into(part, dtype)
+    ctype = {"int32": "int", "float32": "float", "float64": "double"}[dtype]
+    got = getattr(sf._snd, f"sf_readf_{ctype}")(f._file, sf._ffi.cast(ctype + "*", part.ctypes.data), part.shape[0])
+    sf._error_check(f._errorcode)
+    return int(got)
+
+
+def _decoded_frames(p: Path, si, limit: int | None = None) -> tuple[int, str | None]:
+    """Frames decoded from the start until the end, the first error or ``limit``; and libsndfile's error (or None)."""
+    buf = np.empty((_SCAN_FRAMES, si.channels), dtype=np.int32 if si.subtype.startswith("PCM") else np.float64)
+    n = 0
     try:
         with sf.SoundFile(str(p)) as f:
-            f.seek(si.frames - 1)
-            complete = f.read(1, dtype="float64").shape[0] == 1
+            while limit is None or n < limit:
+                got = _read_native(f, buf, buf.dtype.name, True)
+                n += got
+                if got < _SCAN_FRAMES:
+                    return n, None
+    except (sf.LibsndfileError, RuntimeError) as e:
+        return n, _libsndfile_message(e)
+    return n, None
+
+
+def _libsndfile_message(e: Exception) -> str:
+    text = str(e).splitlines()[-1].strip() if str(e) else type(e).__name__
+    return text.removeprefix("Error : ").rstrip(".")
+
+
+def damaged(path, channels: int, rate: float, frame: int, exc: Exception) -> InputError:
+    """The one-line error for a recording that libsndfile cannot decode or seek in at ``frame``: where it breaks
+    (decoded from the start to find the first frame it cannot, when that is at most :data:`_LOCATE_SAMPLES`
+    samples) and the fix.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording.
+    channels : int
+        Its channels.
+    rate : float
+        Its sample rate (Hz).
+    frame : int
+        The frame the reader was at (reading or seeking to it).
+    exc : Exception
+        libsndfile's error.
+
+    Returns
+    -------
+    InputError
+        To raise.
+    """
+    p = Path(path)
+    where, cut = f"at or before frame {frame} ({frame / rate:.3f} s)", frame
+    if (frame + _SCAN_FRAMES) * channels <= _LOCATE_SAMPLES:
+        good, err = _decoded_frames(p, sf.info(str(p)), frame + _SCAN_FRAMES)
+        if err is not None:
+            where, cut = (f"between frames {good} and {good + _SCAN_FRAMES} ({good / rate:.3f}-"
+                          f"{(good + _SCAN_FRAMES) / rate:.3f} s)"), good
+    return InputError(f"{p} is damaged: its data cannot be decoded {where} (libsndfile: {_libsndfile_message(exc)}): "
+                      f"export the recording again, or cut it before the damage ({cut / rate:.3f} s)")
+
+
+def _flac_frames(p: Path, si) -> tuple[int, bool]:
+    """Frames of a FLAC (STREAMINFO compared with the frame headers: io/flac_header.py; an unstated length counted
+    from the frames) and whether STREAMINFO left the length unstated. The last frame must decode: a file cut
+    inside its last frame keeps that frame's header."""
+    stated, counted = check_flac(p)
+    if stated == 0 and counted is None:
+        counted, err = _decoded_frames(p, si)
+        if err is not None:
+            raise damaged(p, si.channels, si.samplerate, counted, RuntimeError(err))
+    frames = stated or counted
+    try:
+        with sf.SoundFile(str(p)) as f:
+            f.seek(frames - 1)
+            complete = _read_native(f, np.empty((1, si.channels), np.float64), "float64", stated == 0) == 1
     except (sf.LibsndfileError, RuntimeError):
         complete = False
-    require(complete, f"{p} is truncated: its header states {si.frames} frames ({si.frames / si.samplerate:.1f} s) "
-                      "but the last of them cannot be decoded: copy the file again")
+    require(complete, f"{p} is truncated or damaged at its end: its header states {frames} frames "
+                      f"({frames / si.samplerate:.1f} s) but the last of them cannot be decoded: copy the file again, "
+                      "or export it again")
+    return frames, stated == 0
 
 
 def read_wav_info(path) -> WavInfo:
@@ -230,13 +241,36 @@ def read_wav_info(path) -> WavInfo:
     sample_format = _sample_format(si, p)
     require(si.channels >= 1 and si.samplerate > 0, f"{p}: the header states {si.channels} channels at "
                                                     f"{si.samplerate} Hz: the header is damaged; export it again")
-    header = _walk_header(p, float(si.samplerate))
-    require(si.frames > 0 and header.data_bytes != 0,
-            f"{p} holds no samples (empty data): record or export a non-empty file")
-    _check_complete(p, si, header)
-    return WavInfo(p, int(si.channels), float(si.samplerate), int(si.frames), sample_format,
-                   _CONTAINERS[si.format], header.start_utc)
+    header = walk_riff(p, float(si.samplerate))
+    empty = f"{p} holds no samples (empty data): record or export a non-empty file"
+    if header is None:
+        require(si.frames > 0, empty)
+        frames, unstated = _flac_frames(p, si)
+    else:
+        require(si.frames > 0 and header.data_bytes != 0, empty)
+        frames, unstated = _riff_frames(p, si, header.data_bytes), False
+    require(frames > 0, empty)
+    return WavInfo(p, int(si.channels), float(si.samplerate), int(frames), sample_format, _CONTAINERS[si.format],
+                   header.start_utc if header else None, unstated)
 
+
+def seek_frame(f, info: WavInfo, frame: int) -> None:
+    """Seek the open recording ``f`` to ``frame``; a file libsndfile cannot seek in is refused as damaged
+    (:func:`damaged`).
+
+    Parameters
+    ----------
+    f : soundfile.SoundFile
+        The open recording.
+    info : WavInfo
+        Its header.
+    frame : int
+        Frame to seek to.
+    """
+    try:
+        f.seek(int(frame))
+    except (sf.LibsndfileError, RuntimeError) as e:
+        raise damaged(info.path, info.channels, info.sample_rate_hz, int(frame), e) from None
 
 def check_block(block: np.ndarray, path, start_s: float) -> None:
     """Refuse a block holding NaN/inf or a sample beyond :data:`MAX_FLOAT_SAMPLE`.
@@ -334,10 +368,10 @@ def read_frames_into(f, raw: np.ndarray, out: np.ndarray, info: WavInfo, start_s
     direct = scale == 1.0 and out.dtype == np.dtype(dtype) and out.T.flags.c_contiguous
     part = out.T if direct else raw[: out.shape[1]]
     try:
-        got = f.buffer_read_into(part, dtype)
+        got = _read_native(f, part, dtype, info.length_unstated)
     except (sf.LibsndfileError, RuntimeError) as e:
-        raise InputError(f"{info.path} cannot be decoded at {start_s:.1f} s ({e}): the file is truncated or "
-                         "damaged; copy it again") from None
+        frame = int(round(start_s * info.sample_rate_hz))
+        raise damaged(info.path, info.channels, info.sample_rate_hz, frame, e) from None
     if got != part.shape[0]:
         raise InputError(f"{info.path} was truncated while being read (at {start_s:.1f} s): copy the file again")
     if direct:
@@ -379,7 +413,7 @@ def iter_wav_blocks(info_or_path, block_frames: int, *, start_frame: int = 0,
     raw = native_buffer(info, block_frames)
     with sf.SoundFile(str(info.path)) as f:
         if start_frame:
-            f.seek(int(start_frame))
+            seek_frame(f, info, start_frame)
         for first in range(int(start_frame), stop - block_frames + 1, block_frames):
             start_s = first / info.sample_rate_hz
             # frames x channels transposed: the layout of the interleaved file, which the front end's FFTs have
