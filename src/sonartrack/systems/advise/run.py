@@ -91,7 +91,8 @@ def target_from_bearings(record: BearingRecord, ownship: OwnshipTrack, sigma_rad
     except InputError as exc:
         raise InputError(f"{name}: {exc}") from None
     X, P = est.state_at(t[-1])
-    require(est.converged and bool(np.all(np.isfinite(P))),
+    determined = bool(np.all(np.isfinite(P[0]))) and float(np.linalg.eigvalsh(0.5 * (P[0] + P[0].T))[0]) > 0.0
+    require(est.converged and determined,
             f"{name}: the constant-velocity batch ML did not converge to a determined range: no advice can rest on "
             "it; give a solution file (--solution) of sonartrack tma instead")
     return TargetNow(name, float(t[-1]), X[0], P[0])
