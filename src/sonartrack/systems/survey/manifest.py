@@ -100,9 +100,11 @@ def name_problem(name: str) -> str | None:
         return "is empty"
     if name in (".", ".."):
         return "is a reference to a folder, not a name"
+    if Path(name).is_absolute() or re.match(r"[A-Za-z]:", name):
+        return "is an absolute path"
     seps = [s for s in _SEPARATORS if s in name]
-    if seps or Path(name).is_absolute():
-        return f"holds {seps[0]!r} (a path, not a name)" if seps else "is an absolute path"
+    if seps:
+        return f"holds {seps[0]!r} (a path, not a name)"
     if _control(name):
         return "holds a control character"
     if name.startswith("."):
@@ -188,7 +190,8 @@ def _rows(p: Path) -> tuple[list[tuple[int, dict]], list[str]]:
         raise InputError(f"survey manifest {p} is not UTF-8 text (byte {exc.start}): save it as a UTF-8 CSV with "
                          f"the columns {', '.join(REQUIRED)}") from None
     except csv.Error as exc:
-        raise InputError(f"survey manifest {p} line {reader.line_num}: {exc}: a cell holds a path, a name or a "
+        # line_num counts the lines of the records read whole: the bad one starts on the next
+        raise InputError(f"survey manifest {p} line {reader.line_num + 1}: {exc}: a cell holds a path, a name or a "
                          "number; close the quote left open before it, or shorten the cell") from None
     return rows, header
 
