@@ -9,6 +9,7 @@ a failed recording is written by the same code as a finished one's (files.py ``s
 from __future__ import annotations
 
 import builtins
+import json
 import os
 from pathlib import Path
 
@@ -209,9 +210,14 @@ def test_an_unreadable_file_is_an_input_problem_named_with_its_path(tmp_path, un
     assert outcome.reason == f"cannot read {path}: permission denied: check its permissions (and its folder's)"
 
 
-def test_a_folder_where_a_file_is_expected_is_named(tmp_path, unreadable):
-    (tmp_path / "cal").mkdir()
-    (tmp_path / "m.csv").write_text("name,recording,navigation,spacing_m,settings\nleg1,rec.wav,nav.csv,2.5,cal\n")
-    (e,) = read_manifest(tmp_path / "m.csv")
-    reason = run_recording(e).reason
-    assert "bug" not in reason and str(tmp_path / "cal") in reason, reason
+def test_the_page_links_a_name_that_holds_address_characters(tmp_path):
+    from sonartrack.report.survey_page import write_survey_page
+
+    name = "leg#1 ?"
+    folder = tmp_path / "recordings" / name
+    folder.mkdir(parents=True)
+    (folder / "index.html").write_text("<html></html>")
+    (folder / "status.json").write_text(json.dumps({"name": name, "status": "failed", "reason": "why"}))
+    rows = files.survey_rows(tmp_path, [SurveyEntry(name, "x.wav", Path("nav.csv"), 2.5)])
+    page = write_survey_page(tmp_path, rows).read_text()
+    assert 'href="recordings/leg%231%20%3F/index.html"' in page

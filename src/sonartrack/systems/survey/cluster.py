@@ -10,7 +10,9 @@ SIGTERM to it (a service manager) never reaches a worker's Python (no KeyboardIn
 worker); this process alone acts on it and closes the cluster, which stops the workers (and kills one that
 does not stop within seconds). Dask's scratch folder is ``OUT/.dask-scratch-PID`` (not ``dask-scratch-space``
 in the system's temporary folder) and is removed when the cluster closes, interrupted or not; one left by a
-killed run is removed by the next (files.py ``remove_stale``).
+killed run is removed by the next (files.py ``remove_stale``). An interrupt closes the workers at once (a task
+under way is dropped: its recording is done again by the next run). With ``--scheduler`` the client connects and
+closes with the signals held too; the cluster's workers are not ours to stop.
 """
 
 from __future__ import annotations
@@ -103,11 +105,15 @@ def _remote(scheduler: str):
 
     check_scheduler(scheduler)
     try:
-        client = Client(scheduler, timeout="10s")
+        with signals_held():  # a connection interrupted half-way would print Dask's tracebacks
+            client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError, ValueError):
         raise InputError(f"cannot reach the Dask scheduler at {scheduler}: start it or fix --scheduler") from None
-    with client:
+    try:
         yield client
+    finally:
+        with signals_held():
+            client.close()
 
 
 @contextlib.contextmanager

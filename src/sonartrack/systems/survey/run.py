@@ -7,6 +7,10 @@ scheduler is at ``scheduler`` (as ``sonartrack reproduce --scheduler``). A task 
 navigation where the worker runs (so a cluster's workers must see the manifest's paths) and sends its
 result back; the client writes each recording's folder as its task finishes, so the workers need no shared
 output disk. The results do not depend on where a task ran: the chain is deterministic.
+
+Ctrl-C or SIGTERM (KeyboardInterrupt here) stops the tasks and the local cluster (cluster.py) and propagates:
+every recording stored by then is whole, the one being stored is not there at all (files.py), and a rerun does
+exactly the rest. Hidden leftovers of a killed run are removed first (files.py ``remove_stale``).
 """
 
 from __future__ import annotations
