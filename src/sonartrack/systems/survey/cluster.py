@@ -61,9 +61,6 @@ def signals_held():
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    from multiprocessing import resource_tracker
-
-    resource_tracker.ensure_running()  # started inside, it would unblock both in the thread that first needs it
     caught: list[int] = []
     held = {sig: h for sig in _HELD if (h := signal.getsignal(sig)) not in (signal.SIG_IGN, None)}
     for sig in held:
@@ -118,9 +115,14 @@ def _remote(scheduler: str):
 
 @contextlib.contextmanager
 def _local(workers: int, out):
+    from multiprocessing import resource_tracker
+
     import dask
     from distributed import Client, LocalCluster
 
+    # started inside the held window (by the cluster's first queue), the tracker would unblock SIGINT and SIGTERM
+    # in the cluster's thread on its way out, and the workers spawned from it would hear them again
+    resource_tracker.ensure_running()
     scratch = scratch_dir(out)
     cluster = client = None
     try:
