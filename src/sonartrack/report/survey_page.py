@@ -9,6 +9,7 @@ from __future__ import annotations
 import html
 from datetime import datetime, timedelta
 from pathlib import Path
+from urllib.parse import quote
 
 from sonartrack.io.atomic import save_figure, write_text
 from sonartrack.systems.survey.files import recording_dir, survey_targets
@@ -58,7 +59,8 @@ def _level(value) -> str:
 def _row_html(out: Path, r: dict) -> str:
     page = recording_dir(out, r["name"]) / "index.html"
     name = html.escape(r["name"])
-    link = f'<a href="recordings/{name}/index.html">{name}</a>' if page.is_file() else name
+    # a name may hold characters that mean something in an address (# ? %): the link quotes them
+    link = f'<a href="recordings/{html.escape(quote(r["name"]))}/index.html">{name}</a>' if page.is_file() else name
     cells = [link, html.escape(str(r["status"])), html.escape(str(r["start_utc"] or "")), f"{r['duration_h']:.3f}",
              f"{r['recorded_h']:.3f}", str(r["gaps"]), _level(r.get("level_db_re_1upa")), str(r["targets"]),
              html.escape(str(r["reason"] or ""))]

@@ -3,46 +3,105 @@
 ``OUT/recordings/NAME/``: the passive chain's tables (peaks.csv, bearing_tracks.csv, targets.csv, levels.csv),
 whatever the caller adds (the command line: the recording's page and pictures) and, last, ``status.json`` (ok
 or failed with the reason, the recording's UTC start, span, recorded seconds, gaps and overlaps, targets, wall
-time, the median broadband level in dB re 1 uPa, the warnings). Each file is written atomically (io/atomic.py)
-and the status last, after the old folder is removed, so a folder with a status.json is complete (a run
-killed half-way leaves a folder without one, which a rerun computes again); a recording whose status is ok
-is skipped on a rerun, a failed one is tried again.
+time, the median broadband level in dB re 1 uPa, the warnings). A recording's folder is written whole or not at
+all: everything goes into a hidden sibling ``OUT/recordings/.NAME.partial-PID`` (each file atomically,
+io/atomic.py, the status last), which is then renamed into place (the old folder, if any, renamed aside first
+to ``.NAME.old-PID`` and removed after). A run stopped at any moment leaves either the old folder or the new
+one, and perhaps hidden siblings, which the next run removes (:func:`remove_stale`) once the process that made
+them is gone. A recording whose status is ok is skipped on a rerun, a failed one is tried again.
 ``OUT/survey.csv``: one row per recording; ``OUT/survey_targets.csv``: one row per target (its first and last
 time, UTC when the recording's start is known).
+
+Nothing outside ``--out`` is ever written or removed. A recording's name is one plain folder name
+(manifest.py ``name_problem``; :func:`recording_dir` refuses any other), and the survey refuses to run when
+``OUT/recordings`` or a recording's folder in it is a symbolic link (which would take its writes, or the
+removal of an old folder, somewhere else); the renames and removals never follow a link either.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import re
 import shutil
 from datetime import datetime, timedelta
 from pathlib import Path
 
 import numpy as np
 
+from sonartrack.core.errors import InputError, require
 from sonartrack.io.atomic import write_csv, write_text
-from sonartrack.systems.survey.manifest import SurveyEntry
+from sonartrack.systems.survey.manifest import SurveyEntry, name_problem
 from sonartrack.systems.survey.recording import RecordingOutcome
 
 STATUS = "status.json"
+RECORDINGS = "recordings"
+#: the hidden siblings of a recording's folder while it is written or replaced: .NAME.partial-PID, .NAME.old-PID
+_SIBLING = re.compile(r"\..+\.(?:partial|old)-\d+")
+#: a local Dask cluster's scratch folder, OUT/.dask-scratch-PID (cluster.py)
+_SCRATCH = re.compile(r"\.dask-scratch-\d+")
+
+
+def _refuse_link(path: Path) -> None:
+    """Refuse a symbolic link where the survey writes or removes (module doc)."""
+    if path.is_symlink():
+        raise InputError(f"{path} is a symbolic link (to {os.readlink(path)}): a survey writes and removes only "
+                         "inside --out; remove the link (or give another --out)")
+
+
+def recordings_dir(out) -> Path:
+    """The folder of the recordings' folders, ``OUT/recordings``, checked (module doc): not a symbolic link.
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+
+    Returns
+    -------
+    Path
+        ``out / "recordings"`` (not created here).
+
+    Raises
+    ------
+    InputError
+        When it is a symbolic link, or a file.
+    """
+    folder = Path(out) / RECORDINGS
+    _refuse_link(folder)
+    require(not folder.exists() or folder.is_dir(), f"{folder} is a file, not a folder: move it away (or give "
+                                                    "another --out)")
+    return folder
 
 
 def recording_dir(out, name: str) -> Path:
-    """The folder of one recording's outputs: ``OUT/recordings/NAME``.
+    """The folder of one recording's outputs: ``OUT/recordings/NAME``, checked to stay there (module doc).
 
     Parameters
     ----------
     out : str or Path
         The survey's output folder.
     name : str
-        The recording's name (its manifest entry).
+        The recording's name (its manifest entry): one plain folder name.
 
     Returns
     -------
     Path
         ``out / "recordings" / name`` (not created here).
+
+    Raises
+    ------
+    InputError
+        When ``name`` is not one plain folder name, or the folder (or ``OUT/recordings``) is a symbolic link.
     """
-    return Path(out) / "recordings" / name
+    why = name_problem(name)
+    require(why is None, f"the recording name {name!r} {why}: give a plain name like leg1")
+    parent = recordings_dir(out)
+    folder = parent / name
+    _refuse_link(folder)
+    # belt and braces: with a plain name and no link, the resolved folder is a child of the resolved parent
+    require(folder.resolve().parent == parent.resolve(), f"{folder} lies outside {parent}: give a plain name")
+    return folder
 
 
 def read_status(out, name: str) -> dict | None:
@@ -109,7 +168,7 @@ def _median_level(level_db) -> float | None:
 
 
 def store_outcome(out, entry: SurveyEntry, outcome: RecordingOutcome, extra=None) -> Path:
-    """Write a recording's folder (module doc) and return it.
+    """Write a recording's folder, whole or not at all (module doc), and return it.
 
     Parameters
     ----------
@@ -120,7 +179,8 @@ def store_outcome(out, entry: SurveyEntry, outcome: RecordingOutcome, extra=None
     outcome : RecordingOutcome
         What the worker sent back.
     extra : callable, optional
-        ``extra(result, folder)`` writes more files (pages, pictures) into the folder before its status.
+        ``extra(result, folder, name)`` writes more files (pages, pictures) into ``folder`` (the hidden folder
+        being written, renamed to the recording's ``name`` once complete) before the status.
 
     Returns
     -------
@@ -130,15 +190,79 @@ def store_outcome(out, entry: SurveyEntry, outcome: RecordingOutcome, extra=None
     from sonartrack.systems.passive.files import write_passive_tables
 
     folder = recording_dir(out, entry.name)
-    (folder / STATUS).unlink(missing_ok=True)  # from here until the new status is written: not done
-    shutil.rmtree(folder, ignore_errors=True)
-    folder.mkdir(parents=True)
-    if outcome.ok:
-        write_passive_tables(outcome.result, folder, outcome.level_db)
-        if extra is not None:
-            extra(outcome.result, folder)
-    write_text(folder / STATUS, json.dumps(_status(entry, outcome), indent=1))
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    partial = folder.with_name(f".{entry.name}.partial-{os.getpid()}")
+    _remove(partial)
+    partial.mkdir()
+    try:
+        if outcome.ok:
+            write_passive_tables(outcome.result, partial, outcome.level_db)
+            if extra is not None:
+                extra(outcome.result, partial, entry.name)
+        write_text(partial / STATUS, json.dumps(_status(entry, outcome), indent=1))
+        _put_in_place(partial, folder)
+    finally:
+        _remove(partial)  # gone already unless something above failed
     return folder
+
+
+def _put_in_place(partial: Path, folder: Path) -> None:
+    """Rename the complete ``partial`` folder to ``folder``; an old folder (or a link, never followed) is renamed
+    aside first and removed after."""
+    _refuse_link(folder)
+    old = folder.with_name(f".{folder.name}.old-{os.getpid()}")
+    _remove(old)
+    try:
+        os.rename(folder, old)
+    except FileNotFoundError:
+        old = None
+    os.rename(partial, folder)
+    if old is not None:
+        _remove(old)
+
+
+def _remove(path: Path) -> None:
+    """Remove a file, a link (not what it points to) or a folder tree (links inside it unfollowed), if present."""
+    if path.is_symlink() or path.is_file():
+        path.unlink(missing_ok=True)
+    elif path.is_dir():
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process
+        return True
+    return True
+
+
+def remove_stale(out) -> list[Path]:
+    """Remove the hidden siblings (module doc) left in ``OUT/recordings`` by runs that were stopped, and their Dask
+    scratch folders ``OUT/.dask-scratch-PID``, keeping those of a process still running (another survey writing
+    into the same folder).
+
+    Parameters
+    ----------
+    out : str or Path
+        The survey's output folder.
+
+    Returns
+    -------
+    list of Path
+        What was removed.
+    """
+    parent = recordings_dir(out)
+    found = [p for p in parent.iterdir() if _SIBLING.fullmatch(p.name)] if parent.is_dir() else []
+    found += [p for p in Path(out).iterdir() if _SCRATCH.fullmatch(p.name)] if Path(out).is_dir() else []
+    stale = [p for p in found if not _alive(int(p.name.rpartition("-")[2]))]
+    for p in stale:
+        _remove(p)
+    return stale
 
 
 def survey_rows(out, entries: list[SurveyEntry]) -> list[dict]:

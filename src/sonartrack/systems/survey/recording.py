@@ -5,8 +5,11 @@ NMEA 0183 log or a GPX track) are read, checked and run exactly as ``sonartrack 
 systems/passive/files.py :func:`run_passive_recording`, the one place that knows how.
 
 Bad input (InputError anywhere: a missing file, files of different channel counts, NMEA without one good
-checksum, navigation not covering the recording) makes the outcome failed with its one-line reason; any
-other exception too, with the exception's type named, so that one recording never stops a survey.
+checksum, navigation not covering the recording) makes the outcome failed with its one-line reason. So does
+an OSError: everything a task opens is the user's (a recording, a navigation log, a calibration or settings
+file, a folder of files), so a file that cannot be read (no permission, a folder where a file is expected, a
+name too long) is an input problem, named with its path, not a bug. Any other exception makes the outcome
+failed too, with the exception's type named, so that one recording never stops a survey.
 """
 
 from __future__ import annotations
@@ -80,6 +83,30 @@ def run_recording(entry: SurveyEntry) -> RecordingOutcome:
         return _run(entry, t0)
     except InputError as e:
         reason = " ".join(str(e).split())  # one line in the table and the page, whatever the message
+    except OSError as e:
+        reason = os_reason(e)
     except Exception as e:  # noqa: BLE001 - one recording's bug must not stop the survey; its type is reported
         reason = f"unexpected {type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''} (a bug: please report)"
     return RecordingOutcome(entry.name, False, reason, None, None, 0.0, 0.0, wall_s=time.perf_counter() - t0)
+
+
+def os_reason(e: OSError) -> str:
+    """One line for a user's file that the system refused to read (module doc): the path, why, and the fix.
+
+    Parameters
+    ----------
+    e : OSError
+        The refusal.
+
+    Returns
+    -------
+    str
+        E.g. ``cannot read nav.csv: permission denied: check its permissions``.
+    """
+    where = f" {e.filename}" if e.filename is not None else ""
+    why = (e.strerror or type(e).__name__).lower()
+    if isinstance(e, PermissionError):
+        return f"cannot read{where}: {why}: check its permissions (and its folder's)"
+    if isinstance(e, IsADirectoryError):
+        return f"cannot read{where}: it is a folder where a file is expected: give the file"
+    return f"cannot read{where}: {why}: check the path and its permissions"

@@ -7,6 +7,10 @@ scheduler is at ``scheduler`` (as ``sonartrack reproduce --scheduler``). A task 
 navigation where the worker runs (so a cluster's workers must see the manifest's paths) and sends its
 result back; the client writes each recording's folder as its task finishes, so the workers need no shared
 output disk. The results do not depend on where a task ran: the chain is deterministic.
+
+Ctrl-C or SIGTERM (KeyboardInterrupt here) stops the tasks and the local cluster (cluster.py) and propagates:
+every recording stored by then is whole, the one being stored is not there at all (files.py), and a rerun does
+exactly the rest. Hidden leftovers of a killed run are removed first (files.py ``remove_stale``).
 """
 
 from __future__ import annotations
@@ -16,8 +20,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from sonartrack.core.errors import InputError, require
-from sonartrack.systems.survey.files import is_done, store_outcome, survey_rows, write_survey_tables
+from sonartrack.core.errors import require
+from sonartrack.systems.survey.cluster import check_scheduler, dask_client
+from sonartrack.systems.survey.files import is_done, remove_stale, store_outcome, survey_rows, write_survey_tables
 from sonartrack.systems.survey.manifest import SurveyEntry
 from sonartrack.systems.survey.recording import RecordingOutcome, run_recording
 
@@ -43,31 +48,22 @@ def _local(entries: list[SurveyEntry]) -> Iterator[tuple[SurveyEntry, RecordingO
         yield e, run_recording(e)
 
 
-@contextlib.contextmanager
-def _client(workers: int, scheduler: str | None):
-    """A Dask client on ``scheduler``, or on a local cluster of ``workers`` single-threaded processes."""
-    from distributed import Client, LocalCluster
-
-    if scheduler:
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {scheduler}: start it or fix --scheduler") from exc
-        with client:
-            yield client
-        return
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
-        yield client
-
-
-def _dask(entries: list[SurveyEntry], workers: int, scheduler: str | None):
+def _dask(entries: list[SurveyEntry], workers: int, scheduler: str | None, out: Path):
     from distributed import as_completed
 
-    with _client(workers, scheduler) as client:
+    with dask_client(workers, scheduler, out) as client:
         futures = {client.submit(run_recording, e, pure=False, key=f"survey-{e.name}"): e for e in entries}
         for fut in as_completed(list(futures)):
-            yield futures[fut], fut.result()
+            yield futures[fut], _outcome(fut, futures[fut])
+
+
+def _outcome(fut, entry: SurveyEntry) -> RecordingOutcome:
+    """The task's outcome; a task that the cluster lost (its worker died) is a failed recording, not a crash."""
+    try:
+        return fut.result()
+    except Exception as e:  # noqa: BLE001 - run_recording never raises: this is the cluster's failure, reported
+        reason = f"its task failed on the Dask cluster ({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})"
+        return RecordingOutcome(entry.name, False, reason, None, None, 0.0, 0.0)
 
 
 def run_survey(entries: list[SurveyEntry], out, *, workers: int = 1, scheduler: str | None = None, progress=None,
@@ -87,7 +83,7 @@ def run_survey(entries: list[SurveyEntry], out, *, workers: int = 1, scheduler: 
     progress : object, optional
         ``start(label, total, done)`` and ``advance(n)`` hooks, one step per recording.
     extra : callable, optional
-        ``extra(result, folder)`` adds files to a finished recording's folder (files.py ``store_outcome``).
+        ``extra(result, folder, name)`` adds files to a finished recording's folder (files.py ``store_outcome``).
 
     Returns
     -------
@@ -95,13 +91,16 @@ def run_survey(entries: list[SurveyEntry], out, *, workers: int = 1, scheduler: 
         This run's counts and the table of every recording.
     """
     require(workers >= 1, f"--workers must be >= 1, got {workers}")
+    if scheduler:
+        check_scheduler(scheduler)
     out = Path(out)
     todo = [e for e in entries if not is_done(out, e.name)]
+    remove_stale(out)
     skipped = len(entries) - len(todo)
     if progress is not None:
         progress.start("recordings", len(entries), skipped)
     ok = failed = 0
-    tasks = _dask(todo, workers, scheduler) if (scheduler or workers > 1) and todo else _local(todo)
+    tasks = _dask(todo, workers, scheduler, out) if (scheduler or workers > 1) and todo else _local(todo)
     with contextlib.closing(tasks):
         for entry, outcome in tasks:
             store_outcome(out, entry, outcome, extra if outcome.ok else None)
