@@ -21,12 +21,21 @@ Navigation, told apart by the file's suffix and else by its first lines: a table
 recording's start (.csv, .parquet; io/navigation.py), an NMEA 0183 log (.nmea, .txt, .log or ``$`` sentences;
 io/nmea.py) or a GPX track (.gpx or ``<gpx``; io/gpx.py). The last two are in UTC: they are aligned with the
 recording's UTC start, projected to local x/y (azimuthal equidistant about the first fix) and the array placed
-``tow_length_m`` behind the ship along its track (the tow model of io/nmea.py).
+``tow_length_m`` behind the ship along its track (the tow model of io/nmea.py; a tow length beyond 10 km refused).
+A UTC log is checked before it is used (io/nav_checks.py): fixes that jump away and back are dropped and reported,
+a track faster than 60 kn is refused, and so is a logged heading that is not the course made good (radians, a
+hemisphere letter wrong on every fix).
+
+Navigation gaps (io/nav_checks.py ``navigation_gaps``, every kind): a hole in the navigation over the recording is
+reported in a warning; where the ship turned or changed speed in it, the range of every target tracked across it
+(until the tow lag after it) is NOT DETERMINED, reason "navigation gap A-B s during the track, ..." in targets.csv
+and the summary (:func:`flag_navigation_gaps`). A batch ML solution faster than ``verdict.max_speed_mps`` is not
+printed as determined either (:func:`bound_batch_speed`: reason "diverged", as the sequential filters' verdict).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +71,18 @@ class PassiveRun:
     result: PassiveResult
     recording: RecordingSequence
     level_db: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class RecordingNavigation:
+    """The navigation of a recording as read: the Navigation, warning lines, the times (s, on its base) of the
+    log's samples whose gaps count (its fixes, and its heading sentences for a UTC log), and how long after a gap
+    the array's position still rests on it (``lag_s``: tow length over speed; 0 when the array is given)."""
+
+    nav: Navigation
+    warnings: list[str] = field(default_factory=list)
+    sample_times_s: tuple[np.ndarray, ...] = ()
+    lag_s: float = 0.0
 
 
 def navigation_kind(path) -> str:
@@ -101,7 +122,7 @@ def navigation_kind(path) -> str:
 
 
 def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m: float = 0.0
-                              ) -> tuple[Navigation, list[str]]:
+                              ) -> RecordingNavigation:
     """The navigation of a recording (module doc), with its warning lines.
 
     Parameters
@@ -115,16 +136,25 @@ def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m:
 
     Returns
     -------
-    (Navigation, list of str)
-        Times in seconds from the recording's first sample; warnings (skipped sentences, the array-at-the-ship
-        fallback).
+    RecordingNavigation
+        Times in seconds from the recording's first sample; warnings (skipped sentences, dropped fixes, the
+        array-at-the-ship fallback).
     """
+    from sonartrack.io.nmea import check_tow_length
+
+    check_tow_length(tow_length_m)
     p = Path(nav_path)
     kind = navigation_kind(p)
     if kind == "table":
         nav = read_navigation(p)
         fallback = check_array_fallback(nav, p)
-        return nav, [fallback] if fallback else []
+        return RecordingNavigation(nav, [fallback] if fallback else [], (nav.time_s,))
+    return _read_utc_navigation(p, kind, seq, tow_length_m)
+
+
+def _read_utc_navigation(p: Path, kind: str, seq: RecordingSequence, tow_length_m: float) -> RecordingNavigation:
+    """:func:`read_recording_navigation` of an NMEA log or a GPX track (module doc)."""
+    from sonartrack.io.nav_checks import check_logged_heading, drop_position_jumps
     from sonartrack.io.nmea import navigation_from_track
 
     require(seq.start_utc is not None, f"{p.name} is in UTC but the recording has no start time (none in its file "
@@ -142,11 +172,17 @@ def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m:
         track = log.track
         if log.counts.bad_checksum or log.counts.malformed:
             warnings.append(f"warning: NMEA log {p.name}: {log.counts.describe()}")
+    track, dropped = drop_position_jumps(track, p)
     nav, _ = navigation_from_track(track, seq.start_utc, tow_length_m=tow_length_m)
+    check_logged_heading(nav, track.heading_source, p)
     if tow_length_m <= 0:
         warnings.append(f"warning: the array is taken at the ship of {p.name} (tow length 0): give the tow length "
                         "for a towed array")
-    return nav, warnings
+    t0 = seq.start_utc.timestamp()
+    times = (nav.time_s,) + ((track.heading_time_unix_s - t0,) if track.heading_source != "none" else ())
+    speed = np.median(np.hypot(np.diff(nav.x_m), np.diff(nav.y_m)) / np.diff(nav.time_s))
+    lag_s = float(tow_length_m / speed) if speed > 0.1 else 0.0
+    return RecordingNavigation(nav, warnings + dropped, times, min(lag_s, float(np.ptp(nav.time_s))))
 
 
 def check_sequence(seq: RecordingSequence, stages: PassiveStages, n_windows: int, name: str) -> list[str]:
@@ -265,14 +301,124 @@ def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, cal
     name = Path(str(recording).rstrip("/")).name
     require(n_windows >= 1, f"{name} lasts {seq.duration_s:.2f} s, less than one {window_s:g} s window")
     check_memory(stages, n_windows)
-    nav, warnings = read_recording_navigation(nav_path, seq, tow_length_m=tow_length_m)
+    navr = read_recording_navigation(nav_path, seq, tow_length_m=tow_length_m)
+    nav, warnings = navr.nav, list(navr.warnings)
     check_navigation_covers(nav, 0.0, n_windows * window_s, path=f"navigation file {nav_path}")
+    gaps = recording_gaps(navr, n_windows * window_s)
     warnings += [f"warning: {name}: {d.describe()} (left blank in the bearing-time record)" for d in seq.gaps]
     warnings += [f"warning: {name}: {d.describe()} (the later file's copy dropped)" for d in seq.overlaps]
     warnings += check_sequence(seq, stages, n_windows, name)
     blocks = SpanBlocks(seq, window, n_windows, scale)
-    result = run_passive(blocks, n_windows, nav, stages, progress=progress)
-    return PassiveRun(replace(result, warnings=tuple(warnings) + result.warnings), seq, blocks.level_db)
+    result = bound_batch_speed(run_passive(blocks, n_windows, nav, stages, progress=progress))
+    result, gap_lines = flag_navigation_gaps(result, gaps, Path(nav_path).name)
+    return PassiveRun(replace(result, warnings=tuple(warnings + gap_lines) + result.warnings), seq, blocks.level_db)
+
+
+def recording_gaps(navr: RecordingNavigation, duration_s: float) -> list:
+    """The navigation's gaps over the recording ``[0, duration_s]`` (io/nav_checks.py ``navigation_gaps``), each
+    once, in time order.
+
+    Parameters
+    ----------
+    navr : RecordingNavigation
+        The navigation as read.
+    duration_s : float
+        The span the chain reads (s).
+
+    Returns
+    -------
+    list of NavGap
+        The gaps among the log's fixes and (a UTC log) its heading sentences.
+    """
+    from sonartrack.io.nav_checks import navigation_gaps
+
+    found = {}
+    for t in navr.sample_times_s:
+        for g in navigation_gaps(t, navr.nav, 0.0, duration_s, lag_s=navr.lag_s):
+            found.setdefault((g.start_s, g.end_s), g)
+    return [found[k] for k in sorted(found)]
+
+
+#: most gap lines printed (the rest counted in one more)
+MAX_GAP_LINES = 5
+
+
+def flag_navigation_gaps(result: PassiveResult, gaps: list, name: str) -> tuple[PassiveResult, list[str]]:
+    """Withhold the range of every target tracked across a navigation gap the ship turned in (module doc), and
+    one warning line per gap naming the targets it touches.
+
+    The batch ML's rows are all flagged (one fit of the whole record); the sequential filter's from the gap's start
+    (its earlier rows rest on navigation before the gap only). A row already not determined keeps its own reason.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+    gaps : list of NavGap
+        The navigation's gaps over the recording (:func:`recording_gaps`).
+    name : str
+        The navigation file's name (for the lines).
+
+    Returns
+    -------
+    (PassiveResult, list of str)
+        The result with its targets' verdicts; the warning lines.
+    """
+    targets, lines = list(result.targets), []
+    for g in gaps:
+        hit = [k for k, tg in enumerate(targets) if len(tg.track.time_s) and tg.track.time_s[0] < g.array_end_s
+               and tg.track.time_s[-1] > g.start_s]
+        if not g.kept_course:
+            for k in hit:
+                tg = targets[k]
+                targets[k] = replace(tg, ml=_withheld(tg.ml, g.reason(), -np.inf),
+                                     sequential=_withheld(tg.sequential, g.reason(), g.start_s))
+        ids = ", ".join(str(targets[k].target_id) for k in hit)
+        tail = "" if not hit else (f"; target(s) {ids} tracked across it: range NOT DETERMINED (fill the gap in "
+                                   "the log, or cut the recording at it)" if not g.kept_course
+                                   else f"; target(s) {ids} tracked across it")
+        lines.append(f"warning: navigation {name}: {g.describe()}{tail}")
+    if len(lines) > MAX_GAP_LINES:
+        lines = lines[:MAX_GAP_LINES] + [f"warning: navigation {name}: {len(lines) - MAX_GAP_LINES} more gap(s)"]
+    return replace(result, targets=targets), lines
+
+
+def _withheld(tma, why: str, from_s: float):
+    """A TMA result whose rows from ``from_s`` on are not determined for ``why``, ahead of any reason of their own
+    (a gap in the navigation is the cause, the solver's own verdict a consequence of it)."""
+    sol = tma.solution
+    reasons = np.where(np.asarray(sol.time_s) >= from_s, why, sol.reasons()).astype(object)
+    return replace(tma, solution=replace(sol, range_determined=reasons == "", undetermined_reason=reasons))
+
+
+def bound_batch_speed(result: PassiveResult) -> PassiveResult:
+    """Withhold the batch ML range of a target faster than ``verdict.max_speed_mps`` (the bound the sequential
+    filters' verdict applies, tma/verdict.py ``diverged_rows``): reason "diverged", and a warning line.
+
+    Parameters
+    ----------
+    result : PassiveResult
+        The chain's result.
+
+    Returns
+    -------
+    PassiveResult
+        The result with those rows not determined.
+    """
+    from sonartrack.tma.verdict import DIVERGED, with_reasons
+
+    targets, lines = [], []
+    for tg in result.targets:
+        sol, limit = tg.ml.solution, tg.ml.settings.verdict.max_speed_mps
+        speed = np.hypot(np.asarray(sol.state)[:, 2], np.asarray(sol.state)[:, 3])
+        fast = sol.range_flags() & (speed > limit)
+        if fast.any():
+            lines.append(f"warning: target {tg.target_id}: the batch ML makes it {speed[fast].max() / 0.514444:.0f} "
+                         f"kn, faster than any ship ({limit / 0.514444:.0f} kn, verdict.max_speed_mps): its range is "
+                         "NOT DETERMINED (wrong navigation, or another target's bearings?)")
+            tg = replace(tg, ml=replace(tg.ml, solution=with_reasons(sol, np.where(fast, DIVERGED, "").astype(object))))
+        targets.append(tg)
+    return replace(result, targets=targets, warnings=result.warnings + tuple(lines))
 
 
 def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress=None, **options) -> PassiveResult:
