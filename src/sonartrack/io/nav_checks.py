@@ -30,10 +30,10 @@ from datetime import UTC, datetime
 import numpy as np
 
 from sonartrack.core.errors import InputError
+from sonartrack.core.units import KNOT_MPS
 from sonartrack.io.navigation import MIN_COURSE_SEGMENTS, MIN_COURSE_SPEED_MPS, Navigation, heading_unit
 from sonartrack.io.nmea import GeoTrack
 
-KNOT_MPS = 1852.0 / 3600.0
 #: fastest ownship taken between two fixes (kn); module doc
 MAX_LOG_SPEED_KN = 60.0
 #: most consecutive fixes dropped as one jump away from the track and back

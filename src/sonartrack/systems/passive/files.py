@@ -405,6 +405,7 @@ def bound_batch_speed(result: PassiveResult) -> PassiveResult:
     PassiveResult
         The result with those rows not determined.
     """
+    from sonartrack.core.units import KNOT_MPS
     from sonartrack.tma.verdict import DIVERGED, with_reasons
 
     targets, lines = [], []
@@ -413,8 +414,8 @@ def bound_batch_speed(result: PassiveResult) -> PassiveResult:
         speed = np.hypot(np.asarray(sol.state)[:, 2], np.asarray(sol.state)[:, 3])
         fast = sol.range_flags() & (speed > limit)
         if fast.any():
-            lines.append(f"warning: target {tg.target_id}: the batch ML makes it {speed[fast].max() / 0.514444:.0f} "
-                         f"kn, faster than any ship ({limit / 0.514444:.0f} kn, verdict.max_speed_mps): its range is "
+            lines.append(f"warning: target {tg.target_id}: the batch ML makes it {speed[fast].max() / KNOT_MPS:.0f} "
+                         f"kn, faster than any ship ({limit / KNOT_MPS:.0f} kn, verdict.max_speed_mps): its range is "
                          "NOT DETERMINED (wrong navigation, or another target's bearings?)")
             tg = replace(tg, ml=replace(tg.ml, solution=with_reasons(sol, np.where(fast, DIVERGED, "").astype(object))))
         targets.append(tg)
