@@ -13,7 +13,8 @@ import pandas as pd
 import pytest
 
 from sonartrack.cli import main
-from sonartrack.systems.passive.files import bound_batch_speed, run_passive_recording, write_passive_tables
+from sonartrack.systems.passive.files import run_passive_recording, write_passive_tables
+from sonartrack.systems.passive.nav_flags import bound_batch_speed
 from sonartrack.systems.passive.settings import PassiveSettings
 from sonartrack.systems.passive.tables import summary_lines
 
