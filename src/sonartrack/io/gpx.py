@@ -1,7 +1,8 @@
 """GPX tracks (parsed and written by ``gpxpy``): track points to a UTC :class:`~sonartrack.io.nmea.GeoTrack`.
 
 Read: every track point (``trk/trkseg/trkpt``) of every track and segment, in time order, a time given twice
-kept once; each point needs a time (UTC; GPX times carry a zone, one without is taken as UTC). A point's
+kept once; each point needs a time (UTC; GPX times carry a zone, one without is taken as UTC) and a latitude,
+longitude (and course) within -90..90, -180..180 (0..360) deg, else it is refused by its number. A point's
 ``course`` (GPX 1.0, deg from true north) becomes the heading when every point has one; otherwise the heading
 is the direction of motion (io/nmea.py ``navigation_from_track``). Routes and waypoints are not tracks and are
 ignored. Write: one track of one segment, GPX 1.1, written atomically. Projection and tow model: io/nmea.py.
@@ -28,6 +29,17 @@ def _root_tag(p: Path) -> str:
 
 def _points(gpx) -> list:
     return [pt for trk in gpx.tracks for seg in trk.segments for pt in seg.points]
+
+
+def _check_point(pt, k: int, p: Path) -> None:
+    """Refuse a track point whose latitude, longitude or course is none (GPX: -90..90, -180..180, 0..360 deg)."""
+    where = f"{p}: track point {k + 1} ({pt.time:%H:%M:%S} UTC)" if pt.time is not None else f"{p}: track point {k + 1}"
+    require(-90.0 <= float(pt.latitude) <= 90.0, f"{where} has latitude {pt.latitude}, beyond 90 deg: fix the point")
+    require(-180.0 <= float(pt.longitude) <= 180.0,
+            f"{where} has longitude {pt.longitude}, beyond 180 deg: fix the point")
+    course = getattr(pt, "course", None)
+    require(course is None or 0.0 <= float(course) <= 360.0,
+            f"{where} has course {course}, outside 0..360 deg: give courses in degrees from true north")
 
 
 def read_gpx(path) -> GeoTrack:
@@ -62,6 +74,8 @@ def read_gpx(path) -> GeoTrack:
     untimed = sum(pt.time is None for pt in points)
     require(untimed == 0, f"{p}: {untimed} of {len(points)} track points have no time: give a track logged with "
                           "UTC times")
+    for k, pt in enumerate(points):
+        _check_point(pt, k, p)
     rows: dict[float, tuple] = {}
     for pt in points:
         when = pt.time if pt.time.tzinfo is not None else pt.time.replace(tzinfo=UTC)

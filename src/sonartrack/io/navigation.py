@@ -111,7 +111,8 @@ def _median_misfit_deg(heading_deg: np.ndarray, course_deg: np.ndarray) -> float
     return float(np.median(np.abs((heading_deg - course_deg + 180.0) % 360.0 - 180.0)))
 
 
-def heading_unit(heading, time_s, x_m, y_m, *, col: str = "heading_deg", path="navigation") -> str:
+def heading_unit(heading, time_s, x_m, y_m, *, col: str = "heading_deg", path="navigation",
+                 fix: str = "multiply the column by 180/pi") -> str:
     """Which unit a heading column is in, judged against the course made good between the rows' positions.
 
     A moving platform's heading follows its course made good, atan2(dx, dy), within its drift angle. A column
@@ -129,6 +130,8 @@ def heading_unit(heading, time_s, x_m, y_m, *, col: str = "heading_deg", path="n
         The column's name (for the message).
     path : str or path-like
         The file (for the message).
+    fix : str
+        The message's fix.
 
     Returns
     -------
@@ -150,7 +153,7 @@ def heading_unit(heading, time_s, x_m, y_m, *, col: str = "heading_deg", path="n
     if np.all(np.abs(h) <= 2.0 * np.pi) and misfit_deg > 2.0 and 3.0 * misfit_rad < misfit_deg:
         raise InputError(f"navigation file {path}: {col} fits the course made good between the positions only when "
                          f"read as radians (median misfit {misfit_rad:.1f} deg as radians, {misfit_deg:.1f} deg as "
-                         "degrees): multiply the column by 180/pi")
+                         f"degrees): {fix}")
     return "degrees" if 3.0 * misfit_deg < misfit_rad else "unknown"
 
 

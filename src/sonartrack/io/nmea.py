@@ -7,7 +7,10 @@ heading), else the course over ground from VTG, else from RMC. HDT and VTG carry
 of the last position sentence before it, and several between two fixes are averaged on the circle. Every
 sentence's checksum (XOR of the bytes between ``$`` and ``*``) is verified: a sentence with a wrong or missing
 checksum, or that does not parse, is counted and skipped; a log with no valid position is refused in one line
-with the counts. Text before the ``$`` of a line (a logger's own time stamp) is ignored.
+with the counts. Text before the ``$`` of a line (a logger's own time stamp) is ignored. A sentence whose checksum
+is right but whose position is no position -- a hemisphere letter other than N/S or E/W, minutes of 60 or more,
+a latitude beyond 90 deg or a longitude beyond 180 deg -- is refused with its line number (the logger wrote it
+so: skipping it would hide a log that is wrong elsewhere too); so is a heading outside 0..360 deg.
 
 Projection: latitude/longitude (WGS84) to x east / y north (m) on the azimuthal equidistant projection centred
 on a chosen origin (default: the first fix), through ``pyproj`` (PROJ ``+proj=aeqd``, ellipsoidal). Distances
@@ -19,7 +22,8 @@ tow model of ``sonartrack simulate`` (sim/platforms.py): the array centre lies `
 along the ship's own track, at the point the ship passed when it had run ``tow_length_m`` less, and points
 along the ship's heading then. For a steady speed v this is where the ship was L / v earlier, as the
 simulator has it; before the log has run L metres the array is placed back along the first heading. A tow
-length of 0 puts the array at the ship (a hull array), as io/navigation.py does without array columns.
+length of 0 puts the array at the ship (a hull array), as io/navigation.py does without array columns; one
+beyond :data:`MAX_TOW_LENGTH_M` is refused (:func:`check_tow_length`).
 
 Writing (:func:`write_nmea`, for ``sonartrack simulate --nmea``): one RMC (time to the centisecond, position to
 1e-6 minute, speed and course over ground, date) and one HDT (true heading) sentence per fix, CR LF line ends.
@@ -38,6 +42,11 @@ import numpy as np
 from sonartrack.core.errors import InputError, require
 from sonartrack.io.navigation import Navigation
 
+#: the longest distance (m) of an array centre behind its ship taken: a submarine's or frigate's thin-line array
+#: streams 1-2.5 km of cable, a seismic streamer's centre lies up to about 6 km astern; beyond 10 km the value is
+#: a unit slip (feet, centimetres) or garbage, and would put the array kilometres back along the first heading
+MAX_TOW_LENGTH_M = 10_000.0
+
 
 @dataclass(frozen=True, slots=True)
 class GeoTrack:
@@ -51,6 +60,8 @@ class GeoTrack:
     heading_time_unix_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
     heading_deg: np.ndarray = field(default_factory=lambda: np.zeros(0))
     heading_source: str = "none"
+    #: each fix's line in its log (1-based; NMEA only, empty otherwise), for the messages about a fix
+    fix_line: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
     @property
     def start_utc(self) -> datetime:
@@ -119,10 +130,35 @@ class _Parsed:
     headings: dict = field(default_factory=lambda: defaultdict(list))  # source -> [(fix key, deg)]
     counts: dict = field(default_factory=lambda: defaultdict(int))
     last_fix: object = None
+    path: object = "NMEA log"
 
 
 def _has_position(msg) -> bool:
     return bool(getattr(msg, "lat", "")) and bool(getattr(msg, "lon", ""))
+
+
+def _coordinate(text: str, letter: str, k: int, path, latitude: bool) -> float:
+    """Signed degrees of an NMEA ``(d)ddmm.mm`` field and its hemisphere letter; InputError naming the line when
+    the letter is not N/S (E/W), the minutes are 60 or more, or the value lies beyond 90 (180) deg."""
+    what, letters, limit = ("latitude", "NS", 90.0) if latitude else ("longitude", "EW", 180.0)
+    where = f"NMEA log {path} line {k + 1}"
+    require(letter in (letters[0], letters[1]), f"{where}: {what} hemisphere {letter!r} is not {letters[0]} or "
+                                                f"{letters[1]}: fix the letter, or delete the line")
+    value = float(text)
+    require(value >= 0, f"{where}: {what} {text} is negative (NMEA gives the sign by the letter {letters}): fix "
+                        "the sentence, or delete the line")
+    deg = math.floor(value / 100.0)
+    minutes = value - 100.0 * deg
+    require(minutes < 60.0, f"{where}: {what} {text} has {minutes:g} minutes ((d)ddmm.mm, minutes below 60): fix "
+                            "the sentence, or delete the line")
+    require(deg + minutes / 60.0 <= limit, f"{where}: {what} {text} is {deg + minutes / 60.0:g} deg, beyond {limit:g}: "
+                                           "fix the sentence, or delete the line")
+    return (deg + minutes / 60.0) * (1.0 if letter == letters[0] else -1.0)
+
+
+def _lat_lon(msg, k: int, acc: _Parsed) -> tuple[float, float]:
+    return (_coordinate(msg.lat, msg.lat_dir, k, acc.path, True),
+            _coordinate(msg.lon, msg.lon_dir, k, acc.path, False))
 
 
 def _take(msg, k: int, acc: _Parsed) -> str:
@@ -132,7 +168,7 @@ def _take(msg, k: int, acc: _Parsed) -> str:
         if msg.status != "A" or not _has_position(msg) or msg.datestamp is None or msg.timestamp is None:
             return "no_fix"
         when = msg.datetime.replace(tzinfo=UTC)
-        acc.dated.append((when, float(msg.latitude), float(msg.longitude)))
+        acc.dated.append((when, *_lat_lon(msg, k, acc), k))
         acc.rmc_dates.append((k, msg.datestamp, msg.timestamp))
         acc.last_fix = ("dated", when)
         if msg.true_course is not None:
@@ -141,13 +177,15 @@ def _take(msg, k: int, acc: _Parsed) -> str:
     if kind == "GGA":
         if not msg.gps_qual or not _has_position(msg) or msg.timestamp is None:
             return "no_fix"
-        acc.undated.append((k, msg.timestamp, float(msg.latitude), float(msg.longitude)))
+        acc.undated.append((k, msg.timestamp, *_lat_lon(msg, k, acc)))
         acc.last_fix = ("undated", k)
         return "used"
     if kind in ("HDT", "VTG"):
         value = msg.heading if kind == "HDT" else msg.true_track
         if value in (None, "") or acc.last_fix is None:
             return "no_fix"
+        require(0.0 <= float(value) <= 360.0, f"NMEA log {acc.path} line {k + 1}: {kind} heading {value} is outside "
+                                              "0..360 deg: fix the sentence, or delete the line")
         acc.headings[kind].append((acc.last_fix, float(value)))
         return "used"
     return "other"
@@ -169,6 +207,8 @@ def _parse_line(line: str, k: int, acc: _Parsed) -> str:
         return "malformed"
     try:
         return _take(msg, k, acc)
+    except InputError:  # a position that is no position (_coordinate): refused, not skipped
+        raise
     except (ValueError, TypeError, AttributeError):
         return "malformed"
 
@@ -199,14 +239,13 @@ def _assemble(acc: _Parsed, path, given: date | None) -> GeoTrack:
         require(acc.rmc_dates or given is not None, f"NMEA log {path} has GGA fixes but no RMC sentence to date "
                                                     "them: give the date of the log (UTC)")
     undated_time = {k: _date_of(k, tod, acc.rmc_dates, given) for k, tod, _, _ in acc.undated}
-    fixes = acc.dated + [(undated_time[k], lat, lon) for k, _, lat, lon in acc.undated]
-    by_time: dict[datetime, tuple[float, float]] = {}
-    for when, lat, lon in sorted(fixes, key=lambda f: f[0]):
-        by_time.setdefault(when, (lat, lon))
+    fixes = acc.dated + [(undated_time[k], lat, lon, k) for k, _, lat, lon in acc.undated]
+    by_time: dict[datetime, tuple[float, float, int]] = {}
+    for when, lat, lon, k in sorted(fixes, key=lambda f: f[0]):
+        by_time.setdefault(when, (lat, lon, k + 1))
     times = sorted(by_time)
     t = np.array([w.timestamp() for w in times])
-    lat = np.array([by_time[w][0] for w in times])
-    lon = np.array([by_time[w][1] for w in times])
+    lat, lon, line = (np.array([by_time[w][i] for w in times]) for i in range(3))
     for source in ("HDT", "VTG", "RMC"):
         if acc.headings.get(source):
             groups: dict[float, list[float]] = defaultdict(list)
@@ -214,8 +253,9 @@ def _assemble(acc: _Parsed, path, given: date | None) -> GeoTrack:
                 when = key if kind == "dated" else undated_time[key]
                 groups[when.timestamp()].append(deg)
             ht = np.array(sorted(groups))
-            return GeoTrack(t, lat, lon, ht, np.array([_circular_mean_deg(groups[s]) for s in ht]), source)
-    return GeoTrack(t, lat, lon)
+            return GeoTrack(t, lat, lon, ht, np.array([_circular_mean_deg(groups[s]) for s in ht]), source,
+                            line.astype(int))
+    return GeoTrack(t, lat, lon, fix_line=line.astype(int))
 
 
 def read_nmea(path, *, log_date: date | None = None) -> NmeaLog:
@@ -235,7 +275,7 @@ def read_nmea(path, *, log_date: date | None = None) -> NmeaLog:
     """
     p = Path(path)
     require(p.is_file(), f"NMEA log not found: {p}: give the navigation log (a text file of $..RMC/GGA/HDT lines)")
-    acc = _Parsed()
+    acc = _Parsed(path=p)
     n = 0
     with open(p, encoding="ascii", errors="replace") as fh:
         for k, line in enumerate(fh):
@@ -348,7 +388,7 @@ def navigation_from_track(track: GeoTrack, start_utc: datetime, *, tow_length_m:
     """
     require(start_utc.tzinfo is not None, "the recording's start time must be time-zone aware (UTC)")
     require(track.time_unix_s.size >= 2, "the navigation log has one fix: give a log covering the recording")
-    require(tow_length_m >= 0, f"tow length must be >= 0 m, got {tow_length_m:g}")
+    check_tow_length(tow_length_m)
     proj = projection or LocalProjection(float(track.lat_deg[0]), float(track.lon_deg[0]))
     t0 = start_utc.timestamp()
     x, y = proj.xy(track.lat_deg, track.lon_deg)
@@ -360,6 +400,26 @@ def navigation_from_track(track: GeoTrack, start_utc: datetime, *, tow_length_m:
         bh = _headings_rad(array_track, array_track.time_unix_s, bx, by)
         ax, ay, ah = (np.interp(track.time_unix_s, array_track.time_unix_s, v) for v in (bx, by, bh))
     return Navigation(track.time_unix_s - t0, x, y, h, ax, ay, ah), proj
+
+
+def check_tow_length(tow_length_m: float) -> None:
+    """Refuse a tow length that is no towed array's (:data:`MAX_TOW_LENGTH_M`).
+
+    Parameters
+    ----------
+    tow_length_m : float
+        Distance of the array centre behind the ship (m).
+
+    Raises
+    ------
+    InputError
+        Unless 0 <= tow_length_m <= MAX_TOW_LENGTH_M.
+    """
+    t = float(tow_length_m)
+    require(0.0 <= t <= MAX_TOW_LENGTH_M,
+            f"tow length {t:g} m (--tow-length, or tow_length_m of a survey) is outside 0..{MAX_TOW_LENGTH_M:g} m, "
+            "the range of towed arrays (a thin-line array streams 1-2.5 km): give the distance of the array centre "
+            "behind the ship in metres (0 for a hull array)")
 
 
 def _sentence(body: str) -> str:

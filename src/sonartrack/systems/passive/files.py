@@ -21,12 +21,22 @@ Navigation, told apart by the file's suffix and else by its first lines: a table
 recording's start (.csv, .parquet; io/navigation.py), an NMEA 0183 log (.nmea, .txt, .log or ``$`` sentences;
 io/nmea.py) or a GPX track (.gpx or ``<gpx``; io/gpx.py). The last two are in UTC: they are aligned with the
 recording's UTC start, projected to local x/y (azimuthal equidistant about the first fix) and the array placed
-``tow_length_m`` behind the ship along its track (the tow model of io/nmea.py).
+``tow_length_m`` behind the ship along its track (the tow model of io/nmea.py; a tow length beyond 10 km refused).
+A UTC log is checked before it is used (io/nav_checks.py): fixes that jump away and back are dropped and reported,
+a track faster than 60 kn is refused, and so is a logged heading that is not the course made good (radians, a
+hemisphere letter wrong on every fix).
+
+Navigation gaps (io/nav_checks.py ``navigation_gaps``, every kind): a hole in the navigation over the recording is
+reported in a warning; where the ship turned or changed speed in it, the range of every target tracked across it
+(until the tow lag after it) is NOT DETERMINED, reason "navigation gap A-B s during the track, ..." in targets.csv
+and the summary (systems/passive/nav_flags.py). A batch ML solution faster than ``verdict.max_speed_mps`` is not
+printed as determined either (nav_flags.py ``bound_batch_speed``: reason "diverged", as the sequential filters'
+verdict).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +53,7 @@ from sonartrack.systems.passive.checks import (
     excerpt_starts,
     first_pass,
 )
+from sonartrack.systems.passive.nav_flags import bound_batch_speed, flag_navigation_gaps, recording_gaps
 from sonartrack.systems.passive.settings import PassiveSettings, PassiveStages
 from sonartrack.systems.passive.tables import peaks_columns, targets_columns, write_columns_csv
 
@@ -62,6 +73,18 @@ class PassiveRun:
     result: PassiveResult
     recording: RecordingSequence
     level_db: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class RecordingNavigation:
+    """The navigation of a recording as read: the Navigation, warning lines, the times (s, on its base) of the
+    log's samples whose gaps count (its fixes, and its heading sentences for a UTC log), and how long after a gap
+    the array's position still rests on it (``lag_s``: tow length over speed; 0 when the array is given)."""
+
+    nav: Navigation
+    warnings: list[str] = field(default_factory=list)
+    sample_times_s: tuple[np.ndarray, ...] = ()
+    lag_s: float = 0.0
 
 
 def navigation_kind(path) -> str:
@@ -101,7 +124,7 @@ def navigation_kind(path) -> str:
 
 
 def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m: float = 0.0
-                              ) -> tuple[Navigation, list[str]]:
+                              ) -> RecordingNavigation:
     """The navigation of a recording (module doc), with its warning lines.
 
     Parameters
@@ -115,16 +138,25 @@ def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m:
 
     Returns
     -------
-    (Navigation, list of str)
-        Times in seconds from the recording's first sample; warnings (skipped sentences, the array-at-the-ship
-        fallback).
+    RecordingNavigation
+        Times in seconds from the recording's first sample; warnings (skipped sentences, dropped fixes, the
+        array-at-the-ship fallback).
     """
+    from sonartrack.io.nmea import check_tow_length
+
+    check_tow_length(tow_length_m)
     p = Path(nav_path)
     kind = navigation_kind(p)
     if kind == "table":
         nav = read_navigation(p)
         fallback = check_array_fallback(nav, p)
-        return nav, [fallback] if fallback else []
+        return RecordingNavigation(nav, [fallback] if fallback else [], (nav.time_s,))
+    return _read_utc_navigation(p, kind, seq, tow_length_m)
+
+
+def _read_utc_navigation(p: Path, kind: str, seq: RecordingSequence, tow_length_m: float) -> RecordingNavigation:
+    """:func:`read_recording_navigation` of an NMEA log or a GPX track (module doc)."""
+    from sonartrack.io.nav_checks import check_logged_heading, drop_position_jumps
     from sonartrack.io.nmea import navigation_from_track
 
     require(seq.start_utc is not None, f"{p.name} is in UTC but the recording has no start time (none in its file "
@@ -142,11 +174,17 @@ def read_recording_navigation(nav_path, seq: RecordingSequence, *, tow_length_m:
         track = log.track
         if log.counts.bad_checksum or log.counts.malformed:
             warnings.append(f"warning: NMEA log {p.name}: {log.counts.describe()}")
+    track, dropped = drop_position_jumps(track, p)
     nav, _ = navigation_from_track(track, seq.start_utc, tow_length_m=tow_length_m)
+    check_logged_heading(nav, track.heading_source, p)
     if tow_length_m <= 0:
         warnings.append(f"warning: the array is taken at the ship of {p.name} (tow length 0): give the tow length "
                         "for a towed array")
-    return nav, warnings
+    t0 = seq.start_utc.timestamp()
+    times = (nav.time_s,) + ((track.heading_time_unix_s - t0,) if track.heading_source != "none" else ())
+    speed = np.median(np.hypot(np.diff(nav.x_m), np.diff(nav.y_m)) / np.diff(nav.time_s))
+    lag_s = float(tow_length_m / speed) if speed > 0.1 else 0.0
+    return RecordingNavigation(nav, warnings + dropped, times, min(lag_s, float(np.ptp(nav.time_s))))
 
 
 def check_sequence(seq: RecordingSequence, stages: PassiveStages, n_windows: int, name: str) -> list[str]:
@@ -265,14 +303,17 @@ def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, cal
     name = Path(str(recording).rstrip("/")).name
     require(n_windows >= 1, f"{name} lasts {seq.duration_s:.2f} s, less than one {window_s:g} s window")
     check_memory(stages, n_windows)
-    nav, warnings = read_recording_navigation(nav_path, seq, tow_length_m=tow_length_m)
+    navr = read_recording_navigation(nav_path, seq, tow_length_m=tow_length_m)
+    nav, warnings = navr.nav, list(navr.warnings)
     check_navigation_covers(nav, 0.0, n_windows * window_s, path=f"navigation file {nav_path}")
+    gaps = recording_gaps(navr, n_windows * window_s)
     warnings += [f"warning: {name}: {d.describe()} (left blank in the bearing-time record)" for d in seq.gaps]
     warnings += [f"warning: {name}: {d.describe()} (the later file's copy dropped)" for d in seq.overlaps]
     warnings += check_sequence(seq, stages, n_windows, name)
     blocks = SpanBlocks(seq, window, n_windows, scale)
-    result = run_passive(blocks, n_windows, nav, stages, progress=progress)
-    return PassiveRun(replace(result, warnings=tuple(warnings) + result.warnings), seq, blocks.level_db)
+    result = bound_batch_speed(run_passive(blocks, n_windows, nav, stages, progress=progress))
+    result, gap_lines = flag_navigation_gaps(result, gaps, Path(nav_path).name)
+    return PassiveRun(replace(result, warnings=tuple(warnings + gap_lines) + result.warnings), seq, blocks.level_db)
 
 
 def run_passive_files(wav_path, nav_path, settings: PassiveSettings, *, progress=None, **options) -> PassiveResult:
