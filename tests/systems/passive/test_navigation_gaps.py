@@ -86,3 +86,16 @@ def test_an_implausible_tow_length_is_refused_in_one_line(scene_dir, tmp_path, c
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("error: tow length") and len(err.strip().splitlines()) == 1, err
     assert "0..10000 m" in err and not out.exists()
+
+
+def test_levels_outside_any_sea_are_named_with_their_likely_cause(runs, scene_dir, tmp_path):
+    """The recording is in pascals: read through a calibration whose full scale is 1000 V (millivolts given as
+    volts, with a sensitivity of -170 dB: 60 dB too loud), its median level lies beyond any sea and the run's
+    warnings say so and name the calibration; the clean run (no calibration) has no such warning."""
+    clean = runs[0]
+    assert not any("any sea" in w for w in clean.warnings)
+    cal = tmp_path / "cal.toml"
+    cal.write_text("sensitivity_db = -250.0\ngain_db = 0.0\nfull_scale_v = 1.0\n")
+    loud = run_passive_recording(scene_dir / "recording.wav", scene_dir / "nav.csv", SETTINGS, calibration=cal).result
+    line = [w for w in loud.warnings if "any sea" in w]
+    assert len(line) == 1 and "above any sea" in line[0] and "calibration" in line[0]

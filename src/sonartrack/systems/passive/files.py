@@ -291,7 +291,7 @@ def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, cal
         The result with the warning lines (gaps and overlaps among them), the recording, the window levels.
         Raises InputError on bad input (module doc, :func:`check_sequence`).
     """
-    from sonartrack.io.calibration import read_calibration
+    from sonartrack.io.calibration import level_warnings, read_calibration
 
     seq = open_sequence(recording, time_source=time_source, name_pattern=name_pattern)
     cal = read_calibration(calibration)
@@ -313,6 +313,7 @@ def run_passive_recording(recording, nav_path, settings: PassiveSettings, *, cal
     blocks = SpanBlocks(seq, window, n_windows, scale)
     result = bound_batch_speed(run_passive(blocks, n_windows, nav, stages, progress=progress))
     result, gap_lines = flag_navigation_gaps(result, gaps, Path(nav_path).name)
+    warnings += level_warnings(blocks.level_db, cal, name)  # levels are known only once the chain has read them
     return PassiveRun(replace(result, warnings=tuple(warnings + gap_lines) + result.warnings), seq, blocks.level_db)
 
 
