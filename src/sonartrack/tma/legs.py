@@ -324,6 +324,19 @@ def _profile_change_times(z, t, own, sig, theta, c, search_half_width_s: float):
     return theta, c
 
 
+def _initial_fit(z, t, own, sig, c, params_init, max_iter: int, tol: float):
+    """Theta by Levenberg-Marquardt at fixed change times from ``params_init``, else from the better of two starts:
+    the pseudo-linear estimate, and a target at rest 10 km out along the first bearing. The second is there
+    because the ownship's own track satisfies every bearing-line equation: when the ownship moves on legs the
+    pseudo-linear least squares can return it (range 0), a start the ML cannot leave."""
+    if params_init is not None:
+        return _lm(_residual_fn(z, t, own, sig, t[0], c), np.asarray(params_init, float).copy(), max_iter, tol)
+    far = np.r_[own[0] + 10_000.0 * np.array([np.sin(z[0]), np.cos(z[0])]), np.zeros(2 * len(c) + 2)]
+    fits = [_lm(_residual_fn(z, t, own, sig, t[0], c), x, max_iter, tol)
+            for x in (pseudo_linear_legs(z, t, own, t[0], c), far)]
+    return min(fits, key=lambda f: f[3] if np.isfinite(f[3]) else np.inf)
+
+
 def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine: bool = True,
              search_half_width_s: float = 900.0, params_init=None, max_iter: int = 100, tol: float = 1e-10,
              max_range_sd_fraction: float = MAX_RANGE_SD_FRACTION) -> LegFit:
@@ -358,8 +371,7 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
         Parameters, change times, covariance (inverse Fisher information at the estimate), legs, final position.
     """
     t, z, own, sig, c = _check_inputs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s)
-    theta = pseudo_linear_legs(z, t, own, t[0], c) if params_init is None else np.asarray(params_init, float).copy()
-    theta, e, Jac, cost, it, conv = _lm(_residual_fn(z, t, own, sig, t[0], c), theta, max_iter, tol)
+    theta, e, Jac, cost, it, conv = _initial_fit(z, t, own, sig, c, params_init, max_iter, tol)
     refined = bool(refine and len(c))
     if refined:
         theta, c = _profile_change_times(z, t, own, sig, theta, c.copy(), search_half_width_s)

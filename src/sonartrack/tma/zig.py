@@ -22,21 +22,39 @@ sums over i < tau give the same statistic, and each tau uses the shorter side (l
 
 Sequential use. The test runs at each new bearing over the bearings since the start of the current leg, at most
 ``window_s`` back; tau ranges over the bearing times leaving >= ``min_before`` bearings before and
->= ``min_after`` after it. The detection time is the first bearing at which GLR* crosses the threshold h. The
-change time is then estimated by the full (nonlinear) two-leg profile of tma/legs.py
-(:func:`~sonartrack.tma.legs.change_time_profile`) on that window: tau_hat = argmax GLR(tau), and the zig's
-interval is {tau : GLR(tau) >= GLR(tau_hat) - 3.84} (the chi-square(1) 95 % profile-likelihood interval).
-The next leg starts at tau_hat and the test restarts there (segmentation); the legs are then fitted jointly
-over the whole record with the change times refined (:func:`~sonartrack.tma.legs.fit_legs`).
+>= ``min_after`` after it. The score form screens; where it crosses the threshold h the test is confirmed on
+the window by the GLR itself: the CV ML re-fitted from cold starts too (a warm start can stop in a worse local
+minimum, whose structured residuals look like a zig) and the full (nonlinear) two-leg profile of tma/legs.py
+(:func:`~sonartrack.tma.legs.change_time_profile`), GLR(tau) = C_0 - C_1(tau). A zig is declared when its
+maximum exceeds h; the detection time is that bearing's. tau_hat = argmax GLR(tau), and the zig's interval is
+{tau : GLR(tau) >= GLR(tau_hat) - 3.84} (the chi-square(1) 95 % profile-likelihood interval).
+The test restarts after the change (after the later of the interval's end and the bearing ``min_after``
+before the detection, so that the next leg's window holds no bearing of the last one): segmentation. The legs
+are then fitted jointly over the whole record with the change times refined
+(:func:`~sonartrack.tma.legs.fit_legs`), and each zig's time and interval are read again from the two-leg
+profile of all the bearings between its neighbours' change times: the reported zig is the one that uses all
+the record, its ``detected_s`` the sequential test's.
 
 Threshold. GLR* is a maximum over correlated chi-square(2) variables, and successive tests share most of their
 bearings, so neither chi-square(2) nor a Bonferroni bound gives the false-alarm rate. We use the tail form of
-the maximum of chi-square(2) variables, P(GLR* > h) ~= N exp(-h / 2), so that
+the maximum of a smooth chi-square(2) process (its upcrossing rate grows like a power of the level times the
+chi-square(2) tail exp(-h / 2); Adler 1981, The Geometry of Random Fields, ch. 6; Siegmund 1985, Sequential
+Analysis, ch. IV), with the power and the constant measured:
 
-    h = 2 ln(N / alpha),   alpha = (false alarms per hour) x (median bearing interval) / 3600
+    P(a test declares a zig) = a (h / 2) exp(-h / 2),   a = TAIL_FACTOR = 0.25,
 
-(alpha is the false-alarm probability per tested bearing) with the effective number of independent tests N
-measured by simulation (constant-velocity targets, see :data:`EFFECTIVE_TESTS` for the numbers).
+so that h solves h / 2 - ln(h / 2) = ln(a / alpha) with alpha = (false zigs per hour) x (median bearing
+interval) / 3600, the false-alarm probability per tested bearing. The measurement (constant-velocity targets
+5-20 km away at 5-15 kn, ownship at 6 kn on 15-min legs turning 40-100 deg, 2 h records, window 1800 s):
+false zigs per tested bearing p and a = p / ((h / 2) exp(-h / 2)):
+
+    bearings every 20 s, sigma 1.0 deg, 40 h:  h = 9: p = 1.22e-2 (a = 0.24); h = 13: p = 2.54e-3 (a = 0.26)
+    bearings every 10 s, sigma 0.5 deg, 20 h:  h = 9: p = 1.14e-2 (a = 0.23); h = 13: p = 2.94e-3 (a = 0.30)
+    bearings every 60 s, sigma 0.5 deg, 79 h:  h = 8: p = 2.28e-2 (a = 0.31); h = 11: p = 7.2e-3 (a = 0.32)
+
+(before the restart rule below was final; tests/tma/test_zig.py checks the rate at 2 per hour, and
+benchmarks/bench_zig.py times the test). At the default 0.1 false zigs per hour and 30 s bearings, h = 15.5.
+The rate holds only with the right bearing sd: a sd stated too small inflates every GLR.
 """
 
 from __future__ import annotations
@@ -50,9 +68,8 @@ from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only, pseudo_linear_estimate
 from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, change_time_profile, fit_legs
 
-#: effective number of independent chi-square(2) tests per tested bearing in the threshold's tail form (module
-#: doc), measured on simulated constant-velocity records (see the module doc and tests/tma/test_zig.py)
-EFFECTIVE_TESTS = 1.0
+#: a in the threshold's tail form P = a (h / 2) exp(-h / 2) (module doc), measured on simulated CV records
+TAIL_FACTOR = 0.25
 #: the chi-square(1) 95 % quantile: a zig's time interval is the set of tau whose GLR is within it of the maximum
 CHI2_1_95 = 3.841458820694124
 
@@ -60,7 +77,7 @@ CHI2_1_95 = 3.841458820694124
 @dataclass(frozen=True, slots=True)
 class Zig:
     """One detected change of the target's velocity: its estimated time, the profile-likelihood interval of that
-    time, the bearing time at which the test first crossed its threshold, and the statistic there."""
+    time, the bearing time at which the test first crossed its threshold, and the GLR (nonlinear) there."""
 
     time_s: float
     interval_s: tuple[float, float]
@@ -97,9 +114,13 @@ def glr_threshold(false_alarm_per_hour: float, bearing_interval_s: float) -> flo
         h.
     """
     alpha = false_alarm_per_hour * bearing_interval_s / 3600.0
-    require(0.0 < alpha < 1.0, f"false_alarm_per_hour {false_alarm_per_hour:g} with bearings every "
-                               f"{bearing_interval_s:g} s is not a probability per bearing in (0, 1): lower it")
-    return float(2.0 * np.log(EFFECTIVE_TESTS / alpha))
+    require(0.0 < alpha < 0.05, f"false_alarm_per_hour {false_alarm_per_hour:g} with bearings every "
+                               f"{bearing_interval_s:g} s is not a small probability per bearing (0 < p < 0.05): "
+                               "lower it")
+    half = max(np.log(TAIL_FACTOR / alpha), 1.0)
+    for _ in range(50):  # h / 2 = ln(a / alpha) + ln(h / 2): a contraction for h / 2 > 1
+        half = np.log(TAIL_FACTOR / alpha) + np.log(half)
+    return float(2.0 * half)
 
 
 def _suffix(x):
@@ -177,13 +198,16 @@ def _window_fit(z, t, own, sig, x_init):
     """The CV ML on one window and its whitened residuals and Jacobian. Warm-started from the previous window's
     fit; where that lands at a cost the chi-square(m) distribution does not allow (a start whose range the last
     window left loose can slide along the flat valley through the ownship onto the mirror track), from the
-    pseudo-linear estimate as well, keeping the lower cost."""
+    pseudo-linear estimate, then from a target at rest 10 km out on the first bearing (the pseudo-linear
+    estimate can be the ownship's own track, tma/legs.py), keeping the lowest cost."""
     tau = t - t[0]
     cold = pseudo_linear_estimate(z, tau, own)
-    starts = [cold] if x_init is None or not np.all(np.isfinite(x_init)) else [x_init, cold]
+    far = np.r_[own[0] + 10_000.0 * np.array([np.sin(z[0]), np.cos(z[0])]), 0.0, 0.0]
+    starts = [cold, far] if x_init is None or not np.all(np.isfinite(x_init)) else [x_init, cold, far]
     best = None
     for x0 in starts:
-        est = ml_bearings_only(z, t, own, sig, x_init=x0, max_iter=30, tol=1e-8, check=False)
+        with np.errstate(invalid="ignore", divide="ignore"):  # a start on the ownship's track: r = 0, cost inf
+            est = ml_bearings_only(z, t, own, sig, x_init=x0, max_iter=30, tol=1e-8, check=False)
         if best is None or est.objective < best.objective:
             best = est
         if best.objective < len(z) + 5.0 * np.sqrt(2.0 * len(z)) + 10.0:
@@ -192,10 +216,12 @@ def _window_fit(z, t, own, sig, x_init):
     return best.x0, wrap_angle(z - h) / sig, H / sig[:, None]
 
 
-def _locate(z, t, own, sig, cost_cv: float, detected_s: float) -> Zig | None:
-    """The zig's time and interval from the nonlinear two-leg profile on the window (module doc); None when the
-    profile's maximum, the GLR itself, does not reach ``threshold`` after all (the score form only screens)."""
+def _locate(z, t, own, sig, cost_cv: float, detected_s: float, near_s=None) -> Zig:
+    """The zig's time and interval from the nonlinear two-leg profile (module doc) on the record ``t``, over the
+    midpoints between bearings (those within ``near_s`` = (lo, hi) if given)."""
     mid = 0.5 * (t[1:] + t[:-1])[MIN_BEARINGS_PER_LEG - 1:len(t) - MIN_BEARINGS_PER_LEG]
+    if near_s is not None:
+        mid = mid[(mid >= near_s[0]) & (mid <= near_s[1])]
     profile = cost_cv - change_time_profile(t, z, own, sig, mid)
     best = int(np.argmax(profile))
     inside = mid[profile >= profile[best] - CHI2_1_95]
@@ -203,14 +229,34 @@ def _locate(z, t, own, sig, cost_cv: float, detected_s: float) -> Zig | None:
                detected_s=float(detected_s), glr=float(profile[best]))
 
 
-def _confirm(z, t, own, sig, x_warm, e_warm, threshold: float, detected_s: float):
-    """A crossing of the screening statistic, checked: the CV ML re-fitted from the pseudo-linear start too (a
-    warm start can stop in a worse local minimum, whose structured residuals look like a zig), then the
-    nonlinear GLR profile. Returns (zig or None, the better CV fit's x0)."""
-    x_cold, e_cold, _ = _window_fit(z, t, own, sig, None)
-    x, e = (x_cold, e_cold) if e_cold @ e_cold < e_warm @ e_warm else (x_warm, e_warm)
-    zig = _locate(z, t, own, sig, float(e @ e), detected_s)
+def _confirm(z, t, own, sig, x_warm, e_warm, G_warm, threshold: float, detected_s: float):
+    """A crossing of the screening statistic, checked: the CV ML re-fitted from cold starts too (a warm start can
+    stop in a worse local minimum, whose structured residuals look like a zig), then the nonlinear GLR profile
+    over the change times whose score is within 10 of its maximum. Returns (zig or None, the better CV fit)."""
+    x_cold, e_cold, G_cold = _window_fit(z, t, own, sig, None)
+    x, e, G = (x_cold, e_cold, G_cold) if e_cold @ e_cold < e_warm @ e_warm else (x_warm, e_warm, G_warm)
+    taus, score = score_profile(t, e, G)
+    if not len(score) or score.max() <= threshold:
+        return None, x
+    near = taus[score >= score.max() - 10.0]
+    zig = _locate(z, t, own, sig, float(e @ e), detected_s, (near.min() - 1e-9, near.max() + t[-1] - t[-2]))
     return (zig if zig.glr > threshold else None), x
+
+
+def _refined_zigs(t, z, own, sig, zigs, change_times_s) -> tuple[Zig, ...]:
+    """Each zig's time and interval again, from all the bearings between its neighbours' change times (the joint
+    leg fit's): the two-leg profile of that stretch, within 900 s of the fitted time (module doc)."""
+    edges = np.r_[t[0] - 1.0, change_times_s, t[-1] + 1.0]
+    out = []
+    for k, zig in enumerate(zigs):
+        sel = (t > edges[k]) & (t < edges[k + 2])
+        c = change_times_s[k]
+        if sel.sum() < 2 * MIN_BEARINGS_PER_LEG + 6:  # too few bearings to profile: keep the sequential interval
+            out.append(Zig(time_s=float(c), interval_s=zig.interval_s, detected_s=zig.detected_s, glr=zig.glr))
+            continue
+        located = _locate(z[sel], t[sel], own[sel], sig[sel], 0.0, zig.detected_s, (c - 900.0, c + 900.0))
+        out.append(Zig(time_s=float(c), interval_s=located.interval_s, detected_s=zig.detected_s, glr=zig.glr))
+    return tuple(out)
 
 
 def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *, window_s: float = 1800.0,
@@ -257,10 +303,11 @@ def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *
         taus, glr = score_profile(t[w], e, G, min_before, min_after)
         stat[n] = glr.max() if len(glr) else np.nan
         if stat[n] > threshold:
-            zig, x_prev = _confirm(z[w], t[w], own[w], sig[w], x_prev, e, threshold, t[n])
-            if zig is not None:
+            zig, x_prev = _confirm(z[w], t[w], own[w], sig[w], x_prev, e, G, threshold, t[n])
+            if zig is not None:  # the next leg's test starts after the change, whichever estimate is later
                 zigs.append(zig)
-                seg, x_prev = int(np.searchsorted(t, zig.time_s, side="right")), None
+                seg = int(np.searchsorted(t, max(zig.interval_s[1], t[max(n - min_after, 0)]), side="right"))
+                x_prev = None
     return stat, tuple(zigs)
 
 
@@ -308,6 +355,7 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *, false_alarm_per_hou
     if fit:
         try:
             legs = fit_legs(t, z, own, sig, [zg.time_s for zg in zigs], refine=True)
+            zigs = _refined_zigs(t, z, own, sig, zigs, legs.change_times_s)
         except InputError as err:
             message = f"legs not fitted: {err}"
     return ZigReport(zigs=zigs, legs=legs, threshold=h, false_alarm_per_hour=float(false_alarm_per_hour),
