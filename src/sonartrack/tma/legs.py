@@ -500,7 +500,7 @@ def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, 
     theta = None if params_init is None else np.asarray(params_init, dtype=float)
     for i, ck in enumerate(cand):
         start = pseudo_linear_legs(z, t, own, t[0], [ck]) if theta is None else theta
-        th, _, _, cost, _, _ = _lm(_residual_fn(z, t, own, sig, t[0], [ck]), start.copy(), 30, 1e-8)
+        th, _, _, cost, _, _ = _lm(_residual_fn(z, t, own, sig, t[0], [ck]), start.copy(), 15, 1e-7)
         if np.isfinite(cost):
             out[i], theta = cost, th
     return out
