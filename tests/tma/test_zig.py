@@ -97,6 +97,8 @@ def test_two_zigs_are_found_and_segmented():
     rep = detect_zigs(t, z, own, sigma)
     assert len(rep.zigs) == 2, rep.zigs
     np.testing.assert_allclose(rep.legs.change_times_s, [2405.0, 4810.0], atol=180.0)
+    for zg, true_s in zip(rep.zigs, (2405.0, 4810.0), strict=True):  # each interval holds its zig (to a bearing)
+        assert zg.interval_s[0] - 30.0 <= true_s <= zg.interval_s[1] + 30.0, (zg, true_s)
     assert all(zg.detected_s > zg.time_s for zg in rep.zigs)
     assert np.isfinite(rep.statistic).sum() > len(t) // 2
 

@@ -473,7 +473,8 @@ def crb_legs(params_true, change_times_s, time_s, own_xy, sigma_rad, *, with_cha
 def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, params_init=None) -> np.ndarray:
     """The two-leg ML cost C(c) (chi-square, module doc) at each candidate change time c: the profile over one
     change time that a zig's time interval is read from (tma/zig.py). theta is re-fitted at each candidate,
-    warm-started from the previous one (in increasing order of c).
+    warm-started from the previous one (in increasing order of c); where that cost is implausible (far above
+    chi-square(n): a wrong basin), from ``params_init``, the pseudo-linear estimate and a far start as well.
 
     Parameters
     ----------
@@ -486,7 +487,7 @@ def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, 
     candidates_s : array_like, shape (m,)
         Increasing change times (s) strictly inside the record.
     params_init : array_like (6,) or None
-        Start for theta at the first candidate (None: pseudo-linear).
+        A reference start for theta (e.g. from a joint fit), tried where the warm start fails.
 
     Returns
     -------
@@ -497,10 +498,18 @@ def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, 
     sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
     cand = np.asarray(candidates_s, dtype=float)
     out = np.full(len(cand), np.inf)
-    theta = None if params_init is None else np.asarray(params_init, dtype=float)
+    ref = None if params_init is None else np.asarray(params_init, dtype=float)
+    theta = ref
+    plausible = len(t) + 5.0 * np.sqrt(2.0 * len(t)) + 10.0  # far above chi-square(n): a wrong basin
     for i, ck in enumerate(cand):
-        start = pseudo_linear_legs(z, t, own, t[0], [ck]) if theta is None else theta
-        th, _, _, cost, _, _ = _lm(_residual_fn(z, t, own, sig, t[0], [ck]), start.copy(), 15, 1e-7)
-        if np.isfinite(cost):
-            out[i], theta = cost, th
+        starts = [] if theta is None else [theta]
+        starts += [] if ref is None else [ref]
+        starts += [pseudo_linear_legs(z, t, own, t[0], [ck]),
+                   np.r_[own[0] + 10_000.0 * np.array([np.sin(z[0]), np.cos(z[0])]), np.zeros(4)]]
+        for start in starts:  # the warm start first; the others only while the cost is implausible
+            th, _, _, cost, _, _ = _lm(_residual_fn(z, t, own, sig, t[0], [ck]), start.copy(), 15, 1e-7)
+            if np.isfinite(cost) and cost < out[i]:
+                out[i], theta = cost, th
+            if out[i] < plausible:
+                break
     return out

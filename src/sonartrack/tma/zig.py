@@ -224,13 +224,13 @@ def _window_fit(z, t, own, sig, x_init):
     return best.x0, wrap_angle(z - h) / sig, H / sig[:, None]
 
 
-def _locate(z, t, own, sig, cost_cv: float, detected_s: float, near_s=None) -> Zig:
+def _locate(z, t, own, sig, cost_cv: float, detected_s: float, near_s=None, params_init=None) -> Zig:
     """The zig's time and interval from the nonlinear two-leg profile (module doc) on the record ``t``, over the
     midpoints between bearings (those within ``near_s`` = (lo, hi) if given)."""
     mid = 0.5 * (t[1:] + t[:-1])[MIN_BEARINGS_PER_LEG - 1:len(t) - MIN_BEARINGS_PER_LEG]
     if near_s is not None:
         mid = mid[(mid >= near_s[0]) & (mid <= near_s[1])]
-    profile = cost_cv - change_time_profile(t, z, own, sig, mid)
+    profile = cost_cv - change_time_profile(t, z, own, sig, mid, params_init)
     best = int(np.argmax(profile))
     inside = mid[profile >= profile[best] - CHI2_1_95]
     return Zig(time_s=float(mid[best]), interval_s=(float(inside.min()), float(inside.max())),
@@ -247,13 +247,15 @@ def _confirm(z, t, own, sig, x_warm, e_warm, G_warm, threshold: float, detected_
     if not len(score) or score.max() <= threshold:
         return None, x
     near = taus[score >= score.max() - 10.0]
-    zig = _locate(z, t, own, sig, float(e @ e), detected_s, (near.min() - 1e-9, near.max() + t[-1] - t[-2]))
+    zig = _locate(z, t, own, sig, float(e @ e), detected_s, (near.min() - 1e-9, near.max() + t[-1] - t[-2]),
+                  np.r_[x, x[2:]])  # the CV fit as two equal legs: a start in the right basin
     return (zig if zig.glr > threshold else None), x
 
 
-def _refined_zigs(t, z, own, sig, zigs, change_times_s) -> tuple[Zig, ...]:
+def _refined_zigs(t, z, own, sig, zigs, legs: LegFit) -> tuple[Zig, ...]:
     """Each zig's time and interval again, from all the bearings between its neighbours' change times (the joint
     leg fit's): the two-leg profile of that stretch, within 900 s of the fitted time (module doc)."""
+    change_times_s = legs.change_times_s
     edges = np.r_[t[0] - 1.0, change_times_s, t[-1] + 1.0]
     out = []
     for k, zig in enumerate(zigs):
@@ -262,7 +264,8 @@ def _refined_zigs(t, z, own, sig, zigs, change_times_s) -> tuple[Zig, ...]:
         if sel.sum() < 2 * MIN_BEARINGS_PER_LEG + 6:  # too few bearings to profile: keep the sequential interval
             out.append(Zig(time_s=float(c), interval_s=zig.interval_s, detected_s=zig.detected_s, glr=zig.glr))
             continue
-        located = _locate(z[sel], t[sel], own[sel], sig[sel], 0.0, zig.detected_s, (c - 900.0, c + 900.0))
+        ref = np.r_[legs.position_at(t[sel][:1])[0][0], legs.params[2 + 2 * k:6 + 2 * k]]  # this pair of legs
+        located = _locate(z[sel], t[sel], own[sel], sig[sel], 0.0, zig.detected_s, (c - 900.0, c + 900.0), ref)
         out.append(Zig(time_s=float(c), interval_s=located.interval_s, detected_s=zig.detected_s, glr=zig.glr))
     return tuple(out)
 
@@ -363,7 +366,7 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *, false_alarm_per_hou
     if fit:
         try:
             legs = fit_legs(t, z, own, sig, [zg.time_s for zg in zigs], refine=True)
-            zigs = _refined_zigs(t, z, own, sig, zigs, legs.change_times_s)
+            zigs = _refined_zigs(t, z, own, sig, zigs, legs)
         except InputError as err:
             message = f"legs not fitted: {err}"
     return ZigReport(zigs=zigs, legs=legs, threshold=h, false_alarm_per_hour=float(false_alarm_per_hour),
