@@ -1,0 +1,373 @@
+"""Zig detection: change points in a target's motion found from its bearings by a sequential generalised
+likelihood-ratio test of constant velocity against a velocity change at an unknown time.
+
+Test. On a window of bearings z_1..z_m (times t_i, ownship o_i, noise sd sigma_i) the null H0 is constant
+velocity (tma/batch_ml.py, X0 = [x, y, vx, vy]); the alternative H1(tau) adds a velocity change dv at time tau,
+p(t) = p_CV(t) + dv (t - tau)+. With the noise sd known,
+
+    GLR(tau) = 2 (log L_1(tau) - log L_0) = C_0 - C_1(tau),      GLR* = max_tau GLR(tau)
+
+(C the chi-square cost). At every tested bearing GLR(tau) is evaluated for all tau at once in its
+Gauss-Newton (score) form about the CV ML fit: with e the whitened residuals, G the whitened CV Jacobian,
+P = I - Q Q^T the projector off G's column space (Q from its SVD, so that a window whose range the bearings do
+not see, rank G = 3, is handled), and B(tau) = [(t_i - tau)+ g_i] (n x 2; g_i = dh_i/dp / sigma_i),
+
+    GLR(tau) ~= (B^T P e)^T (B^T P B)^-1 (B^T P e)      (Rao's score statistic; Kay 1998, Fundamentals of
+                                                           Statistical Signal Processing II, sec. 6.6)
+
+which is chi-square(2) under H0 for each tau and equals the GLR for small changes. Its sums over i > tau are
+suffix cumulative sums, so the whole profile costs O(m) (vectorised; no loop over tau). Since
+(t - tau)+ = (t - tau) + (tau - t)+ and (t - tau) g lies in G's span, P B(tau) = P [(tau - t_i)+ g_i]: the
+sums over i < tau give the same statistic, and each tau uses the shorter side (less cancellation).
+
+Sequential use. The test runs at each new bearing over the bearings since the start of the current leg, at most
+``window_s`` back; tau ranges over the bearing times leaving >= ``min_before`` bearings before and
+>= ``min_after`` after it. The score form screens; where it crosses the threshold h the test is confirmed on
+the window by the GLR itself: the CV ML re-fitted from cold starts too (a warm start can stop in a worse local
+minimum, whose structured residuals look like a zig) and the full (nonlinear) two-leg profile of tma/legs.py
+(:func:`~sonartrack.tma.legs.change_time_profile`), GLR(tau) = C_0 - C_1(tau). A zig is declared when its
+maximum exceeds h; the detection time is that bearing's. tau_hat = argmax GLR(tau), and the zig's interval is
+{tau : GLR(tau) >= GLR(tau_hat) - 3.84} (the chi-square(1) 95 % profile-likelihood interval).
+The test restarts after the change (after the later of the interval's end and the bearing ``min_after``
+before the detection, so that the next leg's window holds no bearing of the last one): segmentation. The legs
+are then fitted jointly over the whole record with the change times refined
+(:func:`~sonartrack.tma.legs.fit_legs`), and each zig's time and interval are read again from the two-leg
+profile of all the bearings between its neighbours' change times: the reported zig is the one that uses all
+the record, its ``detected_s`` the sequential test's.
+
+Threshold. GLR* is a maximum over correlated chi-square(2) variables, and successive tests share most of their
+bearings, so neither chi-square(2) nor a Bonferroni bound gives the false-alarm rate. We use the tail form of
+the maximum of a smooth chi-square(2) process (a power of the level times the chi-square(2) tail exp(-h / 2);
+Adler 1981, The Geometry of Random Fields, ch. 6; Siegmund 1985, Sequential Analysis, ch. IV), with the power
+and the constant fitted to simulations:
+
+    p = P(a tested bearing declares a false zig) = c sqrt(dt / 1 s) (h / 2)^2 exp(-h / 2),   c = 0.0085
+
+(dt the median bearing interval: denser bearings make successive tests more alike), so that h solves
+h / 2 = ln(c sqrt(dt) / alpha) + 2 ln(h / 2) with alpha = (false zigs per hour) x dt / 3600. The simulation
+(constant-velocity targets 5-20 km away at 5-15 kn, ownship at 6 kn on 15-min legs turning 40-100 deg either
+way, 2 h records, window 1800 s), false zigs per tested bearing p and the c it gives:
+
+    bearings every 20 s, sigma 1.0 deg, 40 h:  h = 9: p = 9.86e-3 (c = 0.0098); h = 13: p = 2.55e-3 (c = 0.0090)
+    bearings every 60 s, sigma 0.5 deg, 60 h:  h = 7: p = 2.76e-2 (c = 0.0097); h = 11: p = 8.31e-3 (c = 0.0087)
+
+    bearings every 40 s, sigma 0.75 deg, 80 h: h = 9.6: 54 false zigs where c = 0.0093 predicted 80 (c = 0.0063)
+
+c = 0.0085 is the geometric mean of the five: the stated rate holds within a factor 1.5 over these settings,
+which is what tests/tma/test_zig.py checks (on records of its own). The threshold at the default 0.1 false zigs
+per hour with 30 s bearings is h = 16.5. The rate holds only with the right bearing sd: a sd stated too small
+inflates every GLR.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import InputError, require
+from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only, pseudo_linear_estimate
+from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, change_time_profile, fit_legs
+
+#: c in the threshold's tail form p = c sqrt(dt / 1 s) (h / 2)^2 exp(-h / 2) (module doc), fitted to simulated CV
+#: records
+TAIL_FACTOR = 0.0085
+#: the chi-square(1) 95 % quantile: a zig's time interval is the set of tau whose GLR is within it of the maximum
+CHI2_1_95 = 3.841458820694124
+
+
+@dataclass(frozen=True, slots=True)
+class Zig:
+    """One detected change of the target's velocity: its estimated time, the profile-likelihood interval of that
+    time, the bearing time at which the test first crossed its threshold, and the GLR (nonlinear) there."""
+
+    time_s: float
+    interval_s: tuple[float, float]
+    detected_s: float
+    glr: float
+
+
+@dataclass(frozen=True, slots=True)
+class ZigReport:
+    """The zigs found in a record, its legs (None with ``message`` when they could not be fitted), the threshold
+    used, and the sequential statistic GLR* at each bearing (NaN where not tested)."""
+
+    zigs: tuple[Zig, ...]
+    legs: LegFit | None
+    threshold: float
+    false_alarm_per_hour: float
+    statistic: np.ndarray
+    message: str
+
+
+def glr_threshold(false_alarm_per_hour: float, bearing_interval_s: float) -> float:
+    """The threshold h on GLR* for a false-alarm rate (module doc): h / 2 = ln(c sqrt(dt) / alpha) + 2 ln(h / 2).
+
+    Parameters
+    ----------
+    false_alarm_per_hour : float
+        False zigs per hour of constant-velocity motion (> 0).
+    bearing_interval_s : float
+        Typical (median) time between bearings (s).
+
+    Returns
+    -------
+    float
+        h.
+    """
+    alpha = false_alarm_per_hour * bearing_interval_s / 3600.0
+    require(0.0 < alpha < 0.05, f"false_alarm_per_hour {false_alarm_per_hour:g} with bearings every "
+                               f"{bearing_interval_s:g} s is not a small probability per bearing (0 < p < 0.05): "
+                               "lower it")
+    level = np.log(TAIL_FACTOR * np.sqrt(bearing_interval_s) / alpha)
+    require(level > 0.7, f"false_alarm_per_hour {false_alarm_per_hour:g} with bearings every {bearing_interval_s:g} s "
+                         "is too high to set a threshold for (the tail form holds for small rates): lower it")
+    half = max(level, 3.0)
+    for _ in range(100):  # h / 2 = level + 2 ln(h / 2): a contraction for h / 2 > 2
+        half = level + 2.0 * np.log(half)
+    return float(2.0 * half)
+
+
+def _suffix(x):
+    """sum_{i > j} x_i for each j (axis 0)."""
+    cs = np.cumsum(x[::-1], axis=0)[::-1]
+    return np.concatenate([cs[1:], np.zeros_like(cs[:1])])
+
+
+def _prefix(x):
+    """sum_{i < j} x_i for each j (axis 0)."""
+    cs = np.cumsum(x, axis=0)
+    return np.concatenate([np.zeros_like(cs[:1]), cs[:-1]])
+
+
+def _one_sided(tau, ts, g, e, Q, sums):
+    """s = B^T P e and M = B^T P B for B = (+-(t - tau))+ g on one side, from cumulative ``sums`` (module doc)."""
+    e1 = g * e[:, None]
+    S0, S1 = sums(e1), sums(ts[:, None] * e1)
+    gg = g[:, :, None] * g[:, None, :]
+    T0, T1, T2 = sums(gg), sums(ts[:, None, None] * gg), sums(ts[:, None, None] ** 2 * gg)
+    qg = Q[:, :, None] * g[:, None, :]
+    U0, U1 = sums(qg), sums(ts[:, None, None] * qg)
+    tc, tm = tau[:, None], tau[:, None, None]
+    s = S1 - tc * S0
+    QB = U1 - tm * U0
+    M = T2 - 2.0 * tm * T1 + tm**2 * T0 - np.swapaxes(QB, 1, 2) @ QB
+    return s, M
+
+
+def score_profile(time_s, residual, G, min_before: int = 4, min_after: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """GLR(tau) in score form at tau = each bearing time (module doc), all tau at once.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (m,)
+        Bearing times (s), increasing.
+    residual : ndarray, shape (m,)
+        Whitened residuals wrap(z - h) / sigma of the CV ML fit.
+    G : ndarray, shape (m, 4)
+        Whitened CV Jacobian H / sigma (tma/batch_ml.py :func:`~sonartrack.tma.batch_ml.bearing_model`); its first
+        two columns are g_i = dh_i/dp / sigma_i.
+    min_before, min_after : int
+        Least number of bearings at or before tau and after it.
+
+    Returns
+    -------
+    tau_s : ndarray, shape (k,)
+        The candidate change times (s).
+    glr : ndarray, shape (k,)
+        The statistic at each.
+    """
+    t = np.asarray(time_s, dtype=float)
+    m = len(t)
+    U, sv, _ = np.linalg.svd(G, full_matrices=False)
+    Q = U[:, sv > sv[0] * 1e-9]
+    e = residual - Q @ (Q.T @ residual)
+    span = max(t[-1] - t[0], 1e-9)
+    ts = (t - t[-1]) / span  # a shift and scale of time leave the statistic unchanged; this keeps the sums tame
+    g = G[:, :2]
+    s_suf, M_suf = _one_sided(ts, ts, g, e, Q, _suffix)
+    s_pre, M_pre = _one_sided(ts, ts, g, e, Q, _prefix)
+    use_pre = (np.arange(m) < (m - 1) / 2.0)  # fewer bearings before tau than after: sum over the shorter side
+    s = np.where(use_pre[:, None], s_pre, s_suf)
+    M = np.where(use_pre[:, None, None], M_pre, M_suf)
+    det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
+    quad = s[:, 0] ** 2 * M[:, 1, 1] - 2.0 * s[:, 0] * s[:, 1] * M[:, 0, 1] + s[:, 1] ** 2 * M[:, 0, 0]
+    scale = np.maximum(M[:, 0, 0] * M[:, 1, 1], 1e-300)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        glr = np.where(det > 1e-10 * scale, quad / det, 0.0)
+    keep = slice(min_before - 1, m - min_after)
+    return t[keep], np.maximum(glr[keep], 0.0)
+
+
+def _window_fit(z, t, own, sig, x_init):
+    """The CV ML on one window and its whitened residuals and Jacobian. Warm-started from the previous window's
+    fit; where that lands at a cost the chi-square(m) distribution does not allow (a start whose range the last
+    window left loose can slide along the flat valley through the ownship onto the mirror track), from the
+    pseudo-linear estimate, then from a target at rest 10 km out on the first bearing (the pseudo-linear
+    estimate can be the ownship's own track, tma/legs.py), keeping the lowest cost."""
+    tau = t - t[0]
+    starts = [lambda: pseudo_linear_estimate(z, tau, own),
+              lambda: np.r_[own[0] + 10_000.0 * np.array([np.sin(z[0]), np.cos(z[0])]), 0.0, 0.0]]
+    if x_init is not None and np.all(np.isfinite(x_init)):
+        starts.insert(0, lambda: x_init)
+    best = None
+    for start in starts:  # made only when needed
+        x0 = start()
+        with np.errstate(invalid="ignore", divide="ignore"):  # a start on the ownship's track: r = 0, cost inf
+            est = ml_bearings_only(z, t, own, sig, x_init=x0, max_iter=30, tol=1e-8, check=False)
+        if best is None or est.objective < best.objective:
+            best = est
+        if best.objective < len(z) + 5.0 * np.sqrt(2.0 * len(z)) + 10.0:
+            break
+    h, H, _ = bearing_model(best.x0, tau, own)
+    return best.x0, wrap_angle(z - h) / sig, H / sig[:, None]
+
+
+def _locate(z, t, own, sig, cost_cv: float, detected_s: float, near_s=None, params_init=None) -> Zig:
+    """The zig's time and interval from the nonlinear two-leg profile (module doc) on the record ``t``, over the
+    midpoints between bearings (those within ``near_s`` = (lo, hi) if given)."""
+    mid = 0.5 * (t[1:] + t[:-1])[MIN_BEARINGS_PER_LEG - 1:len(t) - MIN_BEARINGS_PER_LEG]
+    if near_s is not None:
+        mid = mid[(mid >= near_s[0]) & (mid <= near_s[1])]
+    profile = cost_cv - change_time_profile(t, z, own, sig, mid, params_init)
+    best = int(np.argmax(profile))
+    inside = mid[profile >= profile[best] - CHI2_1_95]
+    return Zig(time_s=float(mid[best]), interval_s=(float(inside.min()), float(inside.max())),
+               detected_s=float(detected_s), glr=float(profile[best]))
+
+
+def _confirm(z, t, own, sig, x_warm, e_warm, G_warm, threshold: float, detected_s: float):
+    """A crossing of the screening statistic, checked: the CV ML re-fitted from cold starts too (a warm start can
+    stop in a worse local minimum, whose structured residuals look like a zig), then the nonlinear GLR profile
+    over the change times whose score is within 10 of its maximum. Returns (zig or None, the better CV fit)."""
+    x_cold, e_cold, G_cold = _window_fit(z, t, own, sig, None)
+    x, e, G = (x_cold, e_cold, G_cold) if e_cold @ e_cold < e_warm @ e_warm else (x_warm, e_warm, G_warm)
+    taus, score = score_profile(t, e, G)
+    if not len(score) or score.max() <= threshold:
+        return None, x
+    near = taus[score >= score.max() - 10.0]
+    zig = _locate(z, t, own, sig, float(e @ e), detected_s, (near.min() - 1e-9, near.max() + t[-1] - t[-2]),
+                  np.r_[x, x[2:]])  # the CV fit as two equal legs: a start in the right basin
+    return (zig if zig.glr > threshold else None), x
+
+
+def _refined_zigs(t, z, own, sig, zigs, legs: LegFit) -> tuple[Zig, ...]:
+    """Each zig's time and interval again, from all the bearings between its neighbours' change times (the joint
+    leg fit's): the two-leg profile of that stretch, within 900 s of the fitted time (module doc)."""
+    change_times_s = legs.change_times_s
+    edges = np.r_[t[0] - 1.0, change_times_s, t[-1] + 1.0]
+    out = []
+    for k, zig in enumerate(zigs):
+        sel = (t > edges[k]) & (t < edges[k + 2])
+        c = change_times_s[k]
+        if sel.sum() < 2 * MIN_BEARINGS_PER_LEG + 6:  # too few bearings to profile: keep the sequential interval
+            out.append(Zig(time_s=float(c), interval_s=zig.interval_s, detected_s=zig.detected_s, glr=zig.glr))
+            continue
+        ref = np.r_[legs.position_at(t[sel][:1])[0][0], legs.params[2 + 2 * k:6 + 2 * k]]  # this pair of legs
+        located = _locate(z[sel], t[sel], own[sel], sig[sel], 0.0, zig.detected_s, (c - 900.0, c + 900.0), ref)
+        out.append(Zig(time_s=float(c), interval_s=located.interval_s, detected_s=zig.detected_s, glr=zig.glr))
+    return tuple(out)
+
+
+def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *, window_s: float = 1800.0,
+                   min_before: int = 4, min_after: int = 2) -> tuple[np.ndarray, tuple[Zig, ...]]:
+    """Run the test as the record grows (module doc): at each bearing, GLR* over the current leg's window; on a
+    crossing, locate the zig and start the next leg at it.
+
+    Parameters
+    ----------
+    time_s, bearing_rad : ndarray, shape (n,)
+        Strictly increasing times (s) and bearings (rad).
+    own_xy_m : ndarray, shape (n, 2)
+        Ownship positions (m).
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise sd (rad).
+    threshold : float
+        h (:func:`glr_threshold`).
+    window_s : float
+        The longest stretch of bearings tested at once (s).
+    min_before, min_after : int
+        Least number of bearings of the window at or before a candidate change time, and after it.
+
+    Returns
+    -------
+    statistic : ndarray, shape (n,)
+        GLR* at each bearing (NaN where the window was too short to test).
+    zigs : tuple of Zig
+        In time order.
+    """
+    t, z, own = (np.asarray(a, dtype=float) for a in (time_s, bearing_rad, own_xy_m))
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
+    stat = np.full(len(t), np.nan)
+    zigs: list[Zig] = []
+    seg, x_prev, t_prev = 0, None, None
+    need = max(min_before + min_after, 6)
+    for n in range(len(t)):
+        w0 = max(seg, int(np.searchsorted(t, t[n] - window_s, side="left")))
+        if n - w0 + 1 < need:
+            continue
+        w = slice(w0, n + 1)
+        x_init = None if x_prev is None else x_prev + np.r_[x_prev[2:] * (t[w0] - t_prev), 0.0, 0.0]
+        x_prev, e, G = _window_fit(z[w], t[w], own[w], sig[w], x_init)
+        t_prev = t[w0]
+        taus, glr = score_profile(t[w], e, G, min_before, min_after)
+        stat[n] = glr.max() if len(glr) else np.nan
+        if stat[n] > threshold:
+            zig, x_prev = _confirm(z[w], t[w], own[w], sig[w], x_prev, e, G, threshold, t[n])
+            if zig is not None:  # the next leg's test starts after the change, whichever estimate is later
+                zigs.append(zig)
+                seg = int(np.searchsorted(t, max(zig.interval_s[1], t[max(n - min_after, 0)]), side="right"))
+                x_prev = None
+    return stat, tuple(zigs)
+
+
+def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *, false_alarm_per_hour: float = 0.1,
+                window_s: float = 1800.0, fit: bool = True) -> ZigReport:
+    """Find a target's zigs from its bearings and the ownship's positions, and fit its legs (module doc).
+
+    Parameters
+    ----------
+    time_s, bearing_rad : array_like, shape (n,)
+        Strictly increasing times (s) and bearings (rad, clockwise from north).
+    own_xy_m : array_like, shape (n, 2)
+        Ownship positions (m; x east, y north) at the bearing times.
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise sd (rad): the test's false-alarm rate holds only if it is right (estimate it from the
+        record's residuals when unknown).
+    false_alarm_per_hour : float
+        The stated rate of false zigs per hour of constant-velocity motion, which sets the threshold.
+    window_s : float
+        The longest stretch of bearings tested at once (s).
+    fit : bool
+        Fit the legs over the whole record (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times
+        refined).
+
+    Returns
+    -------
+    ZigReport
+        The zigs, the legs (or None and the reason), the threshold and the statistic at each bearing.
+    """
+    t = np.asarray(time_s, dtype=float)
+    z = np.asarray(bearing_rad, dtype=float)
+    own = np.asarray(own_xy_m, dtype=float)
+    require(t.ndim == 1 and z.shape == t.shape and own.shape == (len(t), 2) and len(t) >= 8,
+            f"zig detection needs at least 8 bearings with times and ownship positions (n, 2); got {t.shape}, "
+            f"{z.shape}, {own.shape}")
+    require(bool(np.all(np.isfinite(t)) and np.all(np.isfinite(z)) and np.all(np.isfinite(own))),
+            "times, bearings and ownship positions must be finite: drop the rows with NaN or inf")
+    require(bool(np.all(np.diff(t) > 0)), "bearing times must increase strictly: sort the record and drop duplicates")
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
+    require(bool(np.all(np.isfinite(sig)) and np.all(sig > 0)), "the bearing sd must be positive and finite (rad)")
+    require(window_s > 0, f"window_s must be positive, got {window_s:g}")
+    h = glr_threshold(false_alarm_per_hour, float(np.median(np.diff(t))))
+    stat, zigs = sequential_glr(t, z, own, sig, h, window_s=window_s)
+    legs, message = None, "no zig" if not zigs else ""
+    if fit:
+        try:
+            legs = fit_legs(t, z, own, sig, [zg.time_s for zg in zigs], refine=True)
+            zigs = _refined_zigs(t, z, own, sig, zigs, legs)
+        except InputError as err:
+            message = f"legs not fitted: {err}"
+    return ZigReport(zigs=zigs, legs=legs, threshold=h, false_alarm_per_hour=float(false_alarm_per_hour),
+                     statistic=stat, message=message)
