@@ -153,9 +153,18 @@ class SurveyRun:
 
 @pytest.fixture
 def run(inputs, tmp_path):
+    """A survey run, with Dask's default HTTP port 8787 held by another listener where it is free (another
+    cluster on the machine): the survey's cluster must neither need it nor warn about it."""
+    import socket
+
+    holder = socket.socket()
+    with contextlib.suppress(OSError):
+        holder.bind(("127.0.0.1", 8787))
+        holder.listen()
     r = SurveyRun(inputs, tmp_path)
     yield r
     r.kill_leftovers()
+    holder.close()
 
 
 def _the_one_line(err: str, run: SurveyRun) -> int:

@@ -129,9 +129,12 @@ def _local(workers: int, out):
         # the scheduler and the nannies make their scratch folders from the config, the workers from both
         with dask.config.set({"temporary-directory": str(scratch)}):
             with signals_held():
+                # no dashboard; the scheduler's HTTP routes (health, metrics) on loopback and a free port: the
+                # default, port 8787, warns into the survey's output whenever another cluster holds it
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                        dashboard_address=None, local_directory=str(scratch),
-                                       silence_logs=logging.ERROR)
+                                       silence_logs=logging.ERROR,
+                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
                 client = Client(cluster)
             try:
                 yield client
