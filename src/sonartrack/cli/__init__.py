@@ -152,9 +152,18 @@ class Interrupted(KeyboardInterrupt):
         self.message = message
 
 
+#: the SIGINT / SIGTERM received while the app runs (its number; None before one): whatever exception then ends the
+#: command is that interrupt (:func:`interrupt_of`): the handler's Interrupted, raised inside a numba-compiled call,
+#: comes out as a SystemError ("CPUDispatcher(...) returned a result with an exception set") whose chain may have
+#: lost it (measured: 2 of 7 interrupts of the active chain in-process)
+_signalled: int | None = None
+
+
 def _raise_interrupted(signum, frame) -> None:
     """Signal handler: stop the command once; further SIGINT/SIGTERM are ignored so that the clean-up
     (stopping workers, counting what was kept) is not itself interrupted into a traceback."""
+    global _signalled
+    _signalled = int(signum)
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
     raise Interrupted(signum)
@@ -181,20 +190,22 @@ def _stop_signals_raise():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
 
 
-def _interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt behind ``exc`` (typer turns one into ``Exit(130)``), if any."""
+def interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind ``exc`` (typer turns one into ``Exit(130)``), if any; once a signal was
+    received (:data:`_signalled`), an :class:`Interrupted` of it whatever ``exc`` is (a command that words its own
+    interrupt catches BaseException and asks this)."""
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
             return exc
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return None
+    return Interrupted(_signalled) if _signalled is not None else None
 
 
 def _report_interrupt(exc: BaseException | None) -> int:
     """Print the interrupted command's one line; the status is 128 + the signal number (130 for SIGINT)."""
-    intr = _interrupt_of(exc)
+    intr = interrupt_of(exc)
     typer.echo(getattr(intr, "message", None) or INTERRUPTED, err=True)
     return 128 + getattr(intr, "signum", signal.SIGINT)
 
@@ -219,6 +230,8 @@ def main(argv: list[str] | None = None) -> int:
     status 2. Any other exception is a bug in sonartrack:
     one line naming it and status 1, or, with ``--debug`` anywhere on the command line, the traceback.
     """
+    global _signalled
+    _signalled = None  # (a test may call main again in the same process)
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     args = [a for a in args if a != "--debug"]
@@ -231,9 +244,13 @@ def main(argv: list[str] | None = None) -> int:
         with _stop_signals_raise():
             run(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
+        if _signalled is not None:
+            return _report_interrupt(exc)
         typer.echo(f"error: {exc}", err=True)
         return 2
     except OSError as exc:
+        if _signalled is not None:
+            return _report_interrupt(exc)
         if debug:
             raise
         where = f": {exc.filename}" if exc.filename else ""
@@ -245,6 +262,8 @@ def main(argv: list[str] | None = None) -> int:
         status = _exit_status(exc.code)
         return _report_interrupt(exc) if status == 130 else status
     except Exception as exc:  # a bug: say so in one line unless asked for the traceback
+        if _signalled is not None:  # ... unless a signal came first: then it is that interrupt, whatever it became
+            return _report_interrupt(exc)
         if debug:
             raise
         typer.echo(f"error: internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}) "
