@@ -211,20 +211,22 @@ def _stop_signals_raise():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
 
 
-def _interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt behind ``exc`` (typer turns one into ``Exit(130)``), if any."""
+def interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind ``exc`` (typer turns one into ``Exit(130)``), if any; once a signal was
+    received (:data:`_SIGNAL_RECEIVED`), an :class:`Interrupted` of it whatever ``exc`` is (a command that words its own
+    interrupt catches BaseException and asks this)."""
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
             return exc
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return None
+    return Interrupted(_SIGNAL_RECEIVED) if _SIGNAL_RECEIVED is not None else None
 
 
 def _report_interrupt(exc: BaseException | None) -> int:
     """Print the interrupted command's one line; the status is 128 + the signal number (130 for SIGINT)."""
-    intr = _interrupt_of(exc)
+    intr = interrupt_of(exc)
     typer.echo(getattr(intr, "message", None) or INTERRUPTED, err=True)
     return 128 + getattr(intr, "signum", _SIGNAL_RECEIVED or signal.SIGINT)
 
@@ -249,6 +251,8 @@ def main(argv: list[str] | None = None) -> int:
     status 2. Any other exception is a bug in sonartrack:
     one line naming it and status 1, or, with ``--debug`` anywhere on the command line, the traceback.
     """
+    global _SIGNAL_RECEIVED
+    _SIGNAL_RECEIVED = None  # (a test may call main again in the same process)
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     args = [a for a in args if a != "--debug"]
@@ -261,6 +265,8 @@ def main(argv: list[str] | None = None) -> int:
         with _stop_signals_raise():
             run(args=args, prog_name="sonartrack", standalone_mode=True)
     except InputError as exc:
+        if _SIGNAL_RECEIVED is not None:
+            return _report_interrupt(exc)
         typer.echo(f"error: {exc}", err=True)
         return 2
     except OSError as exc:

@@ -5,7 +5,8 @@ the ping table and the pings one at a time (systems/active/scene_files.py) and r
 single-ping and MFTD detection, mirror-pair bistatic contacts, range-rate gate, IMM-IPDA);
 :func:`~sonartrack.systems.active.files.write_active_tables` writes detections.csv, contacts.csv, tracks.csv,
 the pictures (report/figures/active.py: bscan.png, tactical.png) and index.html (report/active_page.py) into
-``--out``, all or nothing; one summary line per confirmed track on stdout.
+``--out``, all or nothing (an interrupted or failed run changes none of its files there); one summary line per
+confirmed track on stdout.
 
 Settings: :class:`sonartrack.systems.active.settings.ActiveSettings`, from its defaults, then a ``--config``
 TOML file, then the options; ``--print-config`` prints the resolved settings.
@@ -55,12 +56,28 @@ def active_cmd(
     from sonartrack.systems.active.scene_files import read_active_nav
 
     require(pings is not None and nav is not None, "give the inputs: --pings SCENE_FOLDER --nav NAV.csv")
-    with output_folder(out), make_progress() as bar:  # --out made first: a bad one fails at once, in one line
-        result = run_active_files(pings, nav, settings, progress=TrialProgress(bar))
-        lines = summary_lines(result)
-        pngs = active_pngs(result, read_active_nav(nav))
-        page = active_page(result, lines, pngs, {"pings": str(pings), "navigation": str(nav)})
-        files = write_active_tables(result, out, extra={**pngs, "index.html": page})
+    try:
+        with output_folder(out), make_progress() as bar:  # --out made first: a bad one fails at once, in one line
+            result = run_active_files(pings, nav, settings, progress=TrialProgress(bar))
+            lines = summary_lines(result)
+            pngs = active_pngs(result, read_active_nav(nav))
+            page = active_page(result, lines, pngs, {"pings": str(pings), "navigation": str(nav)})
+            files = write_active_tables(result, out, extra={**pngs, "index.html": page})
+    except BaseException as exc:
+        _reraise_interrupt(exc, out)
+        raise
     for line in lines:
         typer.echo(line)
     typer.echo(f"active: wrote {len(files)} files in {out} (open index.html)")
+
+
+def _reraise_interrupt(exc: BaseException, out: Path) -> None:
+    """An interrupt (whatever it became on the way: cli ``interrupt_of``) with active's own line: its outputs are
+    written all at once at the end (systems/active/files.py), so an interrupted run wrote none."""
+    from sonartrack.cli import Interrupted, interrupt_of
+
+    intr = interrupt_of(exc)
+    if intr is not None:
+        raise Interrupted(getattr(intr, "signum", 2), f"interrupted: nothing written in {out} (active writes its "
+                                                      "files only when the run is complete); rerun the same command"
+                          ) from None

@@ -93,8 +93,8 @@ def simulate_cmd(
     try:  # the folder before the progress bar: a bad --out is one line; a failed run leaves none of its files
         with output_folder(folder), discard_on_failure(folder), make_progress() as bar:
             files = write_scene(settings, folder, only=only, progress=TrialProgress(bar), layout=layout)
-    except KeyboardInterrupt as exc:
-        raise _interrupted(exc, folder) from None
+    except BaseException as exc:
+        raise _as_interrupt(exc, folder)  # noqa: B904 (an interrupt gets simulate's line; anything else goes on)
     typer.echo(f"simulate: {files.summary}; wrote {len(files.paths)} files in {folder}")
     if layout != make_layout() and only != "samples":
         typer.echo(describe_layout(layout, settings.duration_s, settings.sample_rate_hz))
@@ -121,10 +121,23 @@ def _simulate_active(scene: Path | None, duration_s: float | None, seed: int | N
     try:
         with output_folder(folder), make_progress() as bar:
             paths, summary = write_active(settings, folder, progress=TrialProgress(bar))
-    except KeyboardInterrupt as exc:
-        raise _interrupted(exc, folder) from None
+    except BaseException as exc:
+        raise _as_interrupt(exc, folder)  # noqa: B904 (an interrupt gets simulate's line; anything else goes on)
     typer.echo(f"simulate: {summary}; wrote {len(paths)} files in {folder} (sonartrack active --pings {folder} "
                f"--nav {folder / 'nav.csv'} --spacing {settings.spacing_m:g})")
+
+
+def _as_interrupt(exc: BaseException, folder: Path) -> BaseException:
+    """An interrupt, whatever it became on the way (cli ``interrupt_of``: a SystemError out of a compiled call), as
+    simulate's own :func:`_interrupted`; any other exception itself."""
+    from sonartrack.cli import interrupt_of
+
+    intr = interrupt_of(exc)
+    if intr is None:
+        return exc
+    out = _interrupted(intr, folder)
+    out.__suppress_context__ = True
+    return out
 
 
 def _interrupted(exc: KeyboardInterrupt, folder: Path) -> KeyboardInterrupt:

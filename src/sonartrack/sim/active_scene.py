@@ -51,7 +51,26 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.settings import Settings, setting
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.sim.scene import OwnshipSettings, scenes_dir
+from sonartrack.sim.scene import (
+    MAX_DEPTH_M,
+    MAX_DURATION_S,
+    MAX_NOISE_LEVEL_DB,
+    MAX_POSITION_M,
+    MEMORY_LIMIT_BYTES,
+    MIN_LEVEL_DB,
+    OwnshipSettings,
+    scenes_dir,
+)
+
+#: plausible bounds of an active scene's values (beyond them a unit slip or a typo, not a scene; 1e300 dB of target
+#: strength overflows the echo's amplitude into NaN samples): a target strength in dB re 1 m^2 (a large ship or an
+#: iceberg is +40 or so, -100 is a silent target), a tow behind the ship, a scattering strength in dB re 1 m^2/m^2
+MIN_TARGET_STRENGTH_DB, MAX_TARGET_STRENGTH_DB = MIN_LEVEL_DB, 60.0
+MAX_TOW_M = 10_000.0
+MIN_SCATTERING_STRENGTH_DB = -150.0
+#: bytes of working memory per reverberation scatterer of a ping beyond 17 per element (sim/active_signals.py: its
+#: position, geometry, level and weights; measured with tracemalloc: 340 B at 16 elements, 1123 B at 64)
+SCATTERER_BYTES, SCATTERER_BYTES_PER_ELEMENT = 100.0, 17.0
 
 
 class ActiveOwnshipSettings(OwnshipSettings):
@@ -60,9 +79,9 @@ class ActiveOwnshipSettings(OwnshipSettings):
     speed_kn: float = setting(5.0, "speed through the water (5 kn = P4's 2.5 m/s)", unit="kn", gt=0, le=40)
     turn_deg: float = setting(-60.0, "course change (negative: to port); 0 for none; it makes the left/right side "
                                      "of the line array observable", unit="deg", ge=-180, le=180)
-    turn_rate_deg_s: float = setting(0.08, "rate of turn (P4's 0.08 deg/s)", unit="deg/s", gt=0)
+    turn_rate_deg_s: float = setting(0.08, "rate of turn (P4's 0.08 deg/s)", unit="deg/s", gt=0, le=10)
     turn_start_s: float | None = setting(1500.0, "time the turn starts (P4: 1500 s; not set: centred on the "
-                                                 "middle of the scene)", unit="s", ge=0)
+                                                 "middle of the scene)", unit="s", ge=0, le=MAX_DURATION_S)
 
 
 class SonarSettings(Settings):
@@ -70,11 +89,11 @@ class SonarSettings(Settings):
 
     source_level_db: float = setting(215.0, "source level SL at 1 m", unit="dB re 1 uPa", gt=100, le=260)
     source_tow_m: float = setting(300.0, "distance of the source behind the ship along its track (P4)", unit="m",
-                                  ge=0)
+                                  ge=0, le=MAX_TOW_M)
     array_tow_m: float = setting(450.0, "distance of the array centre behind the ship along its track (P4)",
-                                 unit="m", ge=0)
-    source_depth_m: float = setting(50.0, "source depth (transmission loss)", unit="m", gt=0)
-    array_depth_m: float = setting(50.0, "array depth (transmission loss)", unit="m", gt=0)
+                                 unit="m", ge=0, le=MAX_TOW_M)
+    source_depth_m: float = setting(50.0, "source depth (transmission loss)", unit="m", gt=0, le=MAX_DEPTH_M)
+    array_depth_m: float = setting(50.0, "array depth (transmission loss)", unit="m", gt=0, le=MAX_DEPTH_M)
     elements: int = setting(16, "hydrophones N of the line array", unit="1", ge=2, le=256)
     spacing_m: float | None = setting(None, "element spacing d (not set: half a wavelength at the carrier, "
                                             "c / (2 f_c))", unit="m", gt=0)
@@ -107,11 +126,11 @@ class ScattererSettings(Settings):
     density_per_km2: float = setting(..., "mean number of scatterers per square km at 10 km from the array, "
                                           "falling as 1 / range (Poisson, fresh each ping)", unit="1/km^2", ge=0)
     strength_db: float = setting(..., "scattering strength: total mean cross-section per square metre of sea",
-                                 unit="dB re 1 m^2/m^2", le=0)
+                                 unit="dB re 1 m^2/m^2", ge=MIN_SCATTERING_STRENGTH_DB, le=0)
     shape: float = setting(..., "K-distribution shape nu of a scatterer's cross-section (small: spiky, heavy "
                                 "tail; large: Rayleigh)", unit="1", gt=0)
     depth_m: float = setting(..., "depth of the scatterers (transmission loss with propagation = ram)", unit="m",
-                             gt=0)
+                             gt=0, le=MAX_DEPTH_M)
 
 
 def _boundary() -> ScattererSettings:
@@ -130,7 +149,7 @@ class ReverberationSettings(Settings):
     volume: ScattererSettings = setting(default_factory=_volume, doc="volume scatterers (fish schools, debris): "
                                         "sparse and spiky (nu = 0.3), the discrete clutter")
     min_range_m: float = setting(200.0, "no scatterers nearer than this to the array (inside the blanked near zone)",
-                                 unit="m", ge=0)
+                                 unit="m", ge=0, le=MAX_POSITION_M)
     doppler_step_hz: float = setting(0.25, "synthesis: scatterer Dopplers are split between nodes this far apart",
                                      unit="Hz", gt=0, le=2)
 
@@ -139,14 +158,16 @@ class TargetSettings(Settings):
     """A point target at constant velocity."""
 
     name: str = setting(..., "name (the target column of truth.csv)", unit="")
-    x_m: float = setting(..., "position east at t = 0", unit="m")
-    y_m: float = setting(..., "position north at t = 0", unit="m")
-    course_deg: float = setting(..., "course, clockwise from north", unit="deg")
+    x_m: float = setting(..., "position east at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    y_m: float = setting(..., "position north at t = 0", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
+    course_deg: float = setting(..., "course, clockwise from north", unit="deg", ge=-360, le=360)
     speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
-    depth_m: float = setting(100.0, "depth (transmission loss with propagation = ram)", unit="m", gt=0)
-    target_strength_db: float = setting(..., "target strength TS", unit="dB re 1 m^2")
+    depth_m: float = setting(100.0, "depth (transmission loss with propagation = ram)", unit="m", gt=0,
+                             le=MAX_DEPTH_M)
+    target_strength_db: float = setting(..., "target strength TS", unit="dB re 1 m^2", ge=MIN_TARGET_STRENGTH_DB,
+                                        le=MAX_TARGET_STRENGTH_DB)
     turn_start_s: float | None = setting(None, "time a course change starts (not set: constant velocity)", unit="s",
-                                         ge=0)
+                                         ge=0, le=MAX_DURATION_S)
     turn_deg: float = setting(0.0, "course change from turn_start_s (negative: to port)", unit="deg", ge=-360,
                               le=360)
     turn_rate_deg_s: float = setting(1.0, "rate of that turn", unit="deg/s", gt=0, le=10)
@@ -173,13 +194,13 @@ class ActiveSceneSettings(Settings):
     sound_speed_mps: float = setting(1500.0, "sound speed c (travel times, Doppler, plane-wave delays)", unit="m/s",
                                      gt=1300, lt=1700)
     noise_level_db: float = setting(60.0, "ambient noise spectral level NL, independent between elements",
-                                    unit="dB re 1 uPa^2/Hz")
+                                    unit="dB re 1 uPa^2/Hz", ge=MIN_LEVEL_DB, le=MAX_NOISE_LEVEL_DB)
     propagation: Literal["spherical", "ram"] = setting(
         "spherical", "transmission loss: spherical = 20 log10 r + Thorp absorption; ram = RAM in the environment, "
                      "averaged over tl_average_m", unit="")
     environment: str = setting("south-summer", "shipped environment of the RAM transmission loss (sonartrack tl "
                                                "--list)", unit="")
-    tl_average_m: float = setting(1000.0, "range average of the RAM transmission loss", unit="m", ge=0)
+    tl_average_m: float = setting(1000.0, "range average of the RAM transmission loss", unit="m", ge=0, le=100_000)
     target_fluctuation: Literal["swerling1", "steady"] = setting(
         "swerling1", "echo amplitude per ping: swerling1 = complex Gaussian (exponential power, paper P1's "
                      "model), steady = fixed level with a random phase", unit="")
@@ -209,7 +230,36 @@ class ActiveSceneSettings(Settings):
         names = [t.name for t in self.targets]
         if len(set(names)) != len(names):
             raise ValueError(f"target names must be unique: {names}")
+        needs = self.memory_needs()  # refused before anything is allocated, the largest named
+        if sum(need for need, _, _ in needs) > MEMORY_LIMIT_BYTES:
+            need, what, fix = max(needs, key=lambda x: x[0])
+            raise ValueError(f"{what} would take {need / 1e9:.3g} GB of memory, more than the "
+                             f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB the simulator plans for: {fix}")
         return self
+
+    def memory_needs(self) -> list[tuple[float, str, str]]:
+        """A ping's largest working arrays (sim/active_signals.py): bytes, what they hold and sizes them, the fix.
+
+        The reverberation's scatterers of one ping, E = sum of density x 10 km x 2 pi x (r_max - min_range_m) (the
+        Poisson mean of :func:`~sonartrack.sim.active_signals.draw_scatterers`), at ``SCATTERER_BYTES`` +
+        ``SCATTERER_BYTES_PER_ELEMENT`` N each; the ping's element spectra, samples and noise, 64 N F bytes
+        (F >= the FFT length of a listening window and a pulse: the next power of two).
+
+        Returns
+        -------
+        list of (float, str, str)
+            Bytes (estimate), what needs them (with the settings that size it), and how to make it smaller.
+        """
+        rv, n, m = self.reverberation, self.sonar.elements, self.samples_per_ping
+        width_m = max(max_path_range_m(self) - rv.min_range_m, 0.0)
+        per_ping = sum(p.density_per_km2 / 1e6 * 1e4 * 2.0 * np.pi * width_m for p in (rv.boundary, rv.volume))
+        n_fft = 2 ** int(np.ceil(np.log2(m + self.waveform.duration_s * self.sample_rate_hz + 2)))  # >= fft_length
+        return [(per_ping * (SCATTERER_BYTES + SCATTERER_BYTES_PER_ELEMENT * n), f"one ping's reverberation "
+                 f"({per_ping:.3g} scatterers of reverberation.boundary and .volume density_per_km2 out to "
+                 f"{max_path_range_m(self) / 1e3:.3g} km)",
+                 "lower the density_per_km2 (per square km, stated at 10 km)"),
+                (64.0 * n * n_fft, f"one ping's samples ({n} elements x {m} samples of ping_interval_s x "
+                 f"sample_rate_hz)", "lower sample_rate_hz or ping_interval_s, or use fewer sonar.elements")]
 
     @property
     def occupied_band_hz(self) -> float:

@@ -177,8 +177,10 @@ def sides_table(result: ActiveResult):
 def write_active_tables(result: ActiveResult, out, extra: dict | None = None) -> list[Path]:
     """detections.csv, contacts.csv and tracks.csv (and ``extra`` files) into ``out``, all or nothing.
 
-    Every file is rendered in memory first (a failure there writes nothing), then each is written atomically
-    (io/atomic.py), so no file is ever half written.
+    Every file is rendered in memory first (a failure there writes nothing), then written to its hidden temporary
+    sibling (io/atomic.py ``atomic_path``); only when every one is complete are they renamed over their names, one
+    rename each. A failure while writing (a full disk, a file-size limit) removes the temporaries and leaves
+    ``out`` as it was, an earlier run's files included.
 
     Parameters
     ----------
@@ -194,7 +196,10 @@ def write_active_tables(result: ActiveResult, out, extra: dict | None = None) ->
     list of Path
         The files written, in ``out``.
     """
-    from sonartrack.io.atomic import write_bytes, write_text
+    from contextlib import ExitStack
+
+    from sonartrack.io.atomic import atomic_path
+    from sonartrack.systems.active.scene_files import write_error
 
     files = {name: frame.to_csv(index=False) for name, frame in (("detections.csv", detections_table(result)),
                                                                    ("contacts.csv", contacts_table(result)),
@@ -203,8 +208,14 @@ def write_active_tables(result: ActiveResult, out, extra: dict | None = None) ->
     files.update(extra or {})
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    return [write_bytes(out / name, data) if isinstance(data, bytes) else write_text(out / name, data)
-            for name, data in files.items()]
+    with ExitStack() as renames:  # each atomic_path renames on a clean exit, all of them after the last write
+        for name, data in files.items():
+            tmp = renames.enter_context(atomic_path(out / name))
+            try:
+                tmp.write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
+            except OSError as exc:  # the file's name in the one-line message (a write error carries none)
+                raise write_error(exc, out / name) from None
+    return [out / name for name in files]
 
 
 def _side(result: ActiveResult, t_s: float, xy) -> str:

@@ -36,6 +36,7 @@ import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.detection.cells import Detections, PingCells
+from sonartrack.systems.active.checks import check_memory, check_spacing
 from sonartrack.systems.active.contacts import (
     ActiveGeometry,
     Contacts,
@@ -354,7 +355,8 @@ def ping_interval(ping_table, settings: ActiveSettings) -> float:
     if settings.ping_interval_s is not None:
         return float(settings.ping_interval_s)
     t = np.asarray(ping_table.transmit_time_s, float)
-    require(len(t) >= 2, "a single ping has no ping interval: give --ping-interval (s) or more pings")
+    require(len(t) >= 2, "a single ping has no ping interval for the MFTD: give more pings, or set ping_interval_s "
+                         "(s) in a --config file (see --print-config), or use --detector single")
     return float(np.median(np.diff(t)))
 
 
@@ -370,7 +372,9 @@ class _Chain:
         self.array = LineArray(int(s.elements), float(s.spacing_m))
         self.front_end = s.front_end_settings()
         self.threshold = detection_threshold(self.front_end)
-        self.period = ping_interval(ping_table, s)
+        self.period = ping_interval(ping_table, s) if s.detector == "mftd" else None
+        check_spacing(s, ping_table)
+        check_memory(s, ping_table, self.period)
         self.timer, self.mftd, self.tracker = _Timer(), None, None
         self.single: list[Detections] = []
         self.multi: list[Detections] = []

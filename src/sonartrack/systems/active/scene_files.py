@@ -17,8 +17,10 @@ scene.toml           the resolved scene settings
 
 Each file is written atomically (io/atomic.py). The readers refuse, in one line naming the fix: a ping file
 whose channel count, sample count or type disagrees with the ping table, a sample count that is not the
-table's listening window at its sample rate, a ping table that does not cover the navigation's pings, a
-waveform the settings cannot describe (a zero-bandwidth LFM, a CW pulse as long as the ping interval).
+table's listening window at its sample rate, a ping file that is not one .npy array (an .npz archive), a sample
+that is NaN or infinite, a ping table that does not cover the navigation's pings, a waveform the settings cannot
+describe (a zero-bandwidth LFM, a CW pulse as long as the ping interval, a pulse of fewer than
+:data:`MIN_PULSE_SAMPLES` samples, a band wider than the sample rate).
 """
 
 from __future__ import annotations
@@ -44,6 +46,9 @@ PING_TABLE_COLUMNS = ["ping", "transmit_time_s", "file", "waveform", "fc_hz", "b
 NAV_COLUMNS = ["time_s", "x_m", "y_m", "heading_deg", "source_x_m", "source_y_m", "array_x_m", "array_y_m",
                "array_heading_deg"]
 CSV_FLOAT = "%.9g"
+#: a pulse of fewer samples than this makes no matched filter (its replica is a click, its band undefined); the
+#: simulator refuses the same (sim/active_scene.py)
+MIN_PULSE_SAMPLES = 4
 
 
 def ping_file(ping: int) -> str:
@@ -60,6 +65,48 @@ def ping_file(ping: int) -> str:
         ``pings/ping_NNNN.npy`` (at least four digits).
     """
     return f"{PING_DIR}/ping_{int(ping):04d}.npy"
+
+
+def write_error(exc: OSError, path) -> Exception:
+    """A failed write as one line naming the file: a full disk, a quota or a file-size limit (the user's to change)
+    as an InputError with the fix, any other as the OSError with the file's name (a write error carries none).
+
+    Parameters
+    ----------
+    exc : OSError
+        The error of the write.
+    path : str or path-like
+        The file being written.
+
+    Returns
+    -------
+    Exception
+        The error to raise (``from None``).
+    """
+    import errno
+
+    if exc.errno in (errno.EFBIG, errno.ENOSPC, errno.EDQUOT):
+        return InputError(f"cannot write {path}: {exc.strerror} (a full disk, a quota or a file-size limit such as "
+                          "ulimit -f): no output was changed; free space, raise the limit or give another --out")
+    return OSError(exc.errno, exc.strerror, str(path))
+
+
+def ping_bytes(samples: np.ndarray) -> bytes:
+    """One ping's samples (channels, samples) as the bytes of a complex64 ``.npy`` file.
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        (channels, samples) complex baseband (``|x|^2`` in Pa^2), element 0 the front.
+
+    Returns
+    -------
+    bytes
+        The file's content.
+    """
+    buf = io.BytesIO()
+    np.save(buf, np.ascontiguousarray(samples, dtype=np.complex64), allow_pickle=False)
+    return buf.getvalue()
 
 
 def write_ping(folder, ping: int, samples: np.ndarray) -> Path:
@@ -79,11 +126,27 @@ def write_ping(folder, ping: int, samples: np.ndarray) -> Path:
     Path
         The file written.
     """
-    buf = io.BytesIO()
-    np.save(buf, np.ascontiguousarray(samples, dtype=np.complex64), allow_pickle=False)
     path = Path(folder) / ping_file(ping)
     path.parent.mkdir(parents=True, exist_ok=True)
-    return write_bytes(path, buf.getvalue())
+    return write_bytes(path, ping_bytes(samples))
+
+
+def table_text(columns: dict) -> str:
+    """A dict of equal-length columns as CSV text (floats with 9 significant digits).
+
+    Parameters
+    ----------
+    columns : dict
+        Column name -> array, all of one length.
+
+    Returns
+    -------
+    str
+        The CSV, a header line then a line per row.
+    """
+    import pandas as pd
+
+    return pd.DataFrame(columns).to_csv(index=False, float_format=CSV_FLOAT)
 
 
 def write_table(columns: dict, path) -> Path:
@@ -119,6 +182,23 @@ def _checked_waveforms(df, path, interval_s: float) -> np.ndarray:
     require(not np.any(dur >= interval_s), f"ping table {path}: a pulse of {dur.max():g} s is not shorter than the "
                                            f"ping interval ({interval_s:g} s): the echoes would overlap the next "
                                            "transmission; shorten duration_s")
+    fs = numeric_column(df, "fs_hz", "ping table", path, lo=0.0, lo_open=True)
+    short = dur * fs < MIN_PULSE_SAMPLES
+    require(not short.any(), f"ping table {path}: ping {df['ping'].iloc[int(np.argmax(short))]}'s pulse of "
+                             f"{dur[np.argmax(short)]:g} s holds {dur[np.argmax(short)] * fs[np.argmax(short)]:.3g} "
+                             f"samples at fs_hz {fs[np.argmax(short)]:g}, fewer than {MIN_PULSE_SAMPLES}: no matched "
+                             "filter can be made of it; check duration_s (seconds) and fs_hz (Hz)")
+    wide = bw >= fs
+    require(not wide.any(), f"ping table {path}: ping {df['ping'].iloc[int(np.argmax(wide))]}'s band "
+                            f"{bw[np.argmax(wide)]:g} Hz does not fit its complex baseband at fs_hz "
+                            f"{fs[np.argmax(wide)]:g} (the sweep's edges +-bandwidth_hz / 2 must lie inside "
+                            "+-fs_hz / 2, Nyquist): check bandwidth_hz and fs_hz (Hz)")
+    fc = numeric_column(df, "fc_hz", "ping table", path, lo=0.0, lo_open=True)
+    below = bw >= 2.0 * fc
+    require(not below.any(), f"ping table {path}: ping {df['ping'].iloc[int(np.argmax(below))]}'s band "
+                             f"{bw[np.argmax(below)]:g} Hz around fc_hz {fc[np.argmax(below)]:g} reaches 0 Hz or "
+                             "below: the sweep fc_hz +- bandwidth_hz / 2 must lie above 0 Hz; check fc_hz and "
+                             "bandwidth_hz (Hz)")
     return kind
 
 
@@ -178,9 +258,13 @@ def read_ping(folder, table: PingTable, i: int) -> np.ndarray:
     require(p.is_file(), f"ping {table.ping[i]}: file {p} is missing: the ping table and the pings folder disagree")
     try:
         x = np.load(p, mmap_mode="r", allow_pickle=False)
-    except (ValueError, OSError) as exc:
+    except (ValueError, OSError, EOFError) as exc:
         raise InputError(f"ping {table.ping[i]}: {p} is not a NumPy .npy array ({exc}): write complex64 arrays "
                          "(channels, samples)") from None
+    if not isinstance(x, np.ndarray):  # an .npz archive (np.load opens a zip whatever the file's name)
+        getattr(x, "close", lambda: None)()
+        raise InputError(f"ping {table.ping[i]}: {p} is a {type(x).__name__} (an .npz archive), not a NumPy .npy "
+                         "array: save each ping with np.save as complex64 (channels, samples)")
     require(np.iscomplexobj(x), f"ping {table.ping[i]}: {p} holds {x.dtype} samples, not complex baseband: give "
                                 "complex64 (channels, samples)")
     require(x.ndim == 2 and x.shape[0] == table.channels[i],
@@ -189,7 +273,23 @@ def read_ping(folder, table: PingTable, i: int) -> np.ndarray:
     require(x.shape[1] == table.samples[i],
             f"ping {table.ping[i]}: {p} holds {x.shape[1]} samples but the ping table says {table.samples[i]} at "
             f"{table.fs_hz[i]:g} Hz: fix the samples / fs_hz columns or the file")
-    return np.asarray(x, dtype=np.complex64)
+    with np.errstate(over="ignore", invalid="ignore"):  # a value complex64 cannot hold becomes inf: refused next
+        x = np.asarray(x, dtype=np.complex64)
+    _check_finite(x, p, int(table.ping[i]), float(table.fs_hz[i]))
+    return x
+
+
+def _check_finite(x: np.ndarray, path, ping: int, fs_hz: float) -> None:
+    """Refuse a ping holding a NaN or an infinity (or a value complex64 cannot hold), naming the first.
+
+    One such sample spreads through the beams' FFTs to every cell of the ping (no detection survives it), and
+    through the MFTD's stack to the next K - 1 pings': an answer that is not one."""
+    bad = ~np.isfinite(x)
+    if bad.any():
+        ch, k = (int(v) for v in np.unravel_index(int(np.argmax(bad)), x.shape))
+        raise InputError(f"ping {ping}: {path} holds {int(bad.sum())} non-finite sample(s), the first {x[ch, k]} at "
+                         f"channel {ch} (from 0), sample {k} ({k / fs_hz:.6g} s): give finite samples (replace or "
+                         "drop this ping and its row of the ping table)")
 
 
 def iter_pings(folder, table: PingTable) -> Iterator[tuple[int, float, np.ndarray]]:
