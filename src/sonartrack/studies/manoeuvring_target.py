@@ -442,7 +442,8 @@ def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
         "ml_determined_rejected_any": int(np.sum(rejected & (tr["ml_determined_any"] == 1.0))),
         "ml_determined_rejected_last": int(np.sum(rejected & (tr["ml_determined_last"] == 1.0))),
         "ml_determined_kept": _share(np.where(~rejected, tr["ml_determined_last"], np.nan)),
-        "advice_ratio_others": _median_interval(ratio_others), "advice_ratio_alternatives": _median_interval(ratio_alts),
+        "advice_ratio_others": _median_interval(ratio_others),
+        "advice_ratio_alternatives": _median_interval(ratio_alts),
         "advice_realised_over_predicted": _median_interval(calib),
     }
 
@@ -475,12 +476,13 @@ def _zig_claim(s: dict) -> Claim:
                  text=f"zigs detectable within {DETECT_WITHIN_S:g} s (Config doc) whose sequential test crossed its "
                       f"threshold at most {DETECT_WITHIN_S:g} s after the zig, share >= {DETECT_SHARE}",
                  ours=f"latency: detectable {_fmt_share(d)}, all {_fmt_share(s['latency_all'])}; localisation "
-                      f"(estimated time within {DETECT_WITHIN_S:g} s): detectable {_fmt_share(s['localised_detectable'])}"
-                      f", all {_fmt_share(s['localised_all'])}; detectable within {DETECT_WITHIN_S:g} s "
-                      f"{_fmt_share(s['detectable_share'])} of {s['zigs']} zigs; detected at all "
-                      f"{_fmt_share(s['found_all'])}, of those detectable by their leg's end "
-                      f"{_fmt_share(s['found_detectable_by_leg_end'])}; median latency {_num(s['latency_median_s']):.0f}"
-                      f" s; latency within {DETECT_WITHIN_S:g} s by turn and range: {bins}",
+                      f"(estimated time within {DETECT_WITHIN_S:g} s): detectable "
+                      f"{_fmt_share(s['localised_detectable'])}, all {_fmt_share(s['localised_all'])}; detectable "
+                      f"within {DETECT_WITHIN_S:g} s {_fmt_share(s['detectable_share'])} of {s['zigs']} zigs; "
+                      f"detected at all {_fmt_share(s['found_all'])}, of those detectable by their leg's end "
+                      f"{_fmt_share(s['found_detectable_by_leg_end'])}; median latency "
+                      f"{_num(s['latency_median_s']):.0f} s; latency within {DETECT_WITHIN_S:g} s by turn and range: "
+                      f"{bins}",
                  holds=d["n"] > 0 and _num(d["share"]) >= DETECT_SHARE, tolerance=SHARE_TOLERANCE)
 
 
