@@ -55,6 +55,7 @@ STUDIES: dict[str, str] = {
     "passive-chain": "sonartrack.studies.passive_chain",
     "quiet-target": "sonartrack.studies.quiet_target",
     "active-chain": "sonartrack.studies.active_chain",
+    "manoeuvring-target": "sonartrack.studies.manoeuvring_target",
 }
 
 

@@ -429,10 +429,18 @@ def _leg_summary(theta, c, cov, t, own, k: int, refined: bool, max_range_sd_frac
 
 def _correlation_condition(P) -> float:
     """Condition number of the correlation matrix of P (= that of the information D J D in correlation form)."""
-    d = np.sqrt(np.diag(P))
+    with np.errstate(invalid="ignore"):  # a negative variance (a covariance broken by rounding): NaN, refused below
+        d = np.sqrt(np.diag(P))
     if not np.all(np.isfinite(P)) or np.any(d <= 0):
         return float("inf")
-    w = np.linalg.eigvalsh(P / np.outer(d, d))
+    with np.errstate(over="ignore", invalid="ignore"):
+        R = P / np.outer(d, d)
+    if not np.all(np.isfinite(R)):  # sds near the float limit (a fit run off to 1e16 m): nothing is determined
+        return float("inf")
+    try:
+        w = np.linalg.eigvalsh(R)
+    except np.linalg.LinAlgError:
+        return float("inf")
     return float(w[-1] / w[0]) if w[0] > 0 else float("inf")
 
 

@@ -24,6 +24,7 @@ STUDY_FIGURES = {
     "passive-chain": "sonartrack.report.figures.passive_chain",
     "quiet-target": "sonartrack.report.figures.quiet_target",
     "active-chain": "sonartrack.report.figures.active",
+    "manoeuvring-target": "sonartrack.report.figures.manoeuvring_target",
 }
 
 
