@@ -628,7 +628,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     side_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
     ml = determination_checked(solve_tma(rec, sensor, _tma_settings("ml", sigma_ml, stages, None), ml_fit=fit,
-                                         unobservable="flag"), rel)
+                                         unobservable="flag", record_checks=False), rel)
     fixed = fixed_cone_note(ml, cone, rel)  # first: the other checks, and the frequency's Doppler, assume a target
     ml = ml if fixed is None else _undetermined(ml, FIXED_CONE, fixed)
     if fixed is None and use_frequency_ml and line_tonal(tonal, stages) is not None:  # bearings: the side fit's noise
@@ -639,7 +639,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     ml = ml if left_out is None else replace(ml, warnings=ml.warnings + (left_out,))
-    mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
+    mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag", record_checks=False)
     imm_tonal = _imm_tonal(t, chosen, tonal, stages)
     seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
@@ -765,7 +765,7 @@ def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: 
     seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, tonal)
     record = frequency_record(t, chosen, tonal) if tonal is not None else BearingRecord(time_s=t, bearing_rad=chosen)
     try:
-        return solve_tma(record, sensor, seq_settings)
+        return solve_tma(record, sensor, seq_settings, record_checks=False)  # the chain's checks follow
     except InputError as failure:  # the filter failed numerically on this track: a diverged answer, not a failed run
         n = len(record.time_s)
         solution = TmaSolution(time_s=np.asarray(record.time_s, float), state=np.full((n, 4), np.nan),
