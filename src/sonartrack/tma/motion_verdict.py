@@ -237,7 +237,10 @@ def record_verdict(result, judgement: RecordJudgement):
 
     result = replace(result, bearing_sd=judgement.noise, notes=result.notes + judgement.notes())
     s = result.settings
-    if judgement.rejected:
+    if judgement.rejected:  # before any reason the CV fit gave (unobservable...): the model itself is rejected
+        n = len(result.solution.time_s)
+        result = replace(result, solution=replace(result.solution, range_determined=np.ones(n, bool),
+                                                  undetermined_reason=np.full(n, "", dtype=object)))
         return undetermined(result, judgement.reason(), f"{judgement.test_note()}: the target did not keep one "
                             "course and speed over the record (solve its legs apart)")
     if judgement.why_untested is not None:
