@@ -407,6 +407,17 @@ def _bearings_alone(record: BearingRecord, ownship: OwnshipTrack, settings: TmaS
     return sol if sol.range_flags()[-1] else None
 
 
+def _judged(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, record_checks: bool):
+    """(the record's judgement or None, the settings with the bearing sd filled in when it is to be estimated)
+    (tma/motion_verdict.py :func:`~sonartrack.tma.motion_verdict.judge_record`)."""
+    if not record_checks and settings.sigma_bearing_deg is not None:
+        return None, settings
+    from sonartrack.tma.motion_verdict import judge_record
+
+    judgement = judge_record(record, ownship, settings)
+    return judgement, settings.model_copy(update={"sigma_bearing_deg": judgement.sigma_deg(settings)})
+
+
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,
               environment=None, tl_store=None, ml_fit=None,
               unobservable: Literal["raise", "flag"] = "raise", record_checks: bool = True) -> TmaResult:
@@ -435,11 +446,8 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
         (:class:`~sonartrack.core.errors.InputError`); "flag" returns the solution with every row's
         ``range_determined`` False and the reason in ``warnings``.
     record_checks : bool
-        Judge the answer by its record (tma/motion_verdict.py: the constant-velocity model tested, the bearing sd
-        estimated or checked, the ML's residual and profile checks, a sequential filter held to the ML). The
-        passive chain turns them off: it runs the same checks itself (systems/passive/targets.py), with its
-        line-array weights, side decision and jackknife. A ``settings.sigma_bearing_deg`` of None is estimated
-        from the record either way.
+        Judge the answer by its record (tma/motion_verdict.py). Off in the passive chain, which runs the same
+        checks with its line-array weights, side and jackknife. A ``sigma_bearing_deg`` of None is estimated anyway.
 
     Returns
     -------
@@ -454,12 +462,7 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     require(unobservable in ("raise", "flag"), f"unobservable must be 'raise' or 'flag', got {unobservable!r}")
     require(whole_ml or (ml_fit is None and unobservable == "raise"),
             "ml_fit and unobservable='flag' apply to method ml over the whole record (no batch.window_s)")
-    judgement = None
-    if record_checks or settings.sigma_bearing_deg is None:
-        from sonartrack.tma.motion_verdict import judge_record
-
-        judgement = judge_record(record, ownship, settings)
-        settings = settings.model_copy(update={"sigma_bearing_deg": judgement.sigma_deg(settings)})
+    judgement, settings = _judged(record, ownship, settings, record_checks)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if settings.is_sequential:
