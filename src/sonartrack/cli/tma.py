@@ -4,9 +4,13 @@ Reads the bearings and ownship files (systems/tma/files.py), solves with
 :func:`sonartrack.systems.tma.run.run_tma` (every method: sequential ``ekf``, ``mgekf``, ``imm-ekf``,
 ``imm-mgekf`` on bearings or bearings + frequency, paper P2; batch ``ml`` and ``em-map`` with a propagation
 model, paper P3), and writes atomically into ``--out``: ``tma_solution.csv`` (the target solution over time
-with standard deviations, ``range_determined`` and ``undetermined_reason``) and ``tactical_picture.png``
-(report/figures/tma.py), plus a one-line summary on stdout, which prints "range NOT DETERMINED (reason)" instead
-of a range the solution does not determine (tma/verdict.py).
+with standard deviations, ``range_determined`` and ``undetermined_reason``, and the bearing noise: the sd used and
+the record's residual sd with its 95 % interval) and ``tactical_picture.png`` (report/figures/tma.py), plus a
+one-line summary on stdout, which prints "range NOT DETERMINED (reason)" instead of a range the solution does not
+determine (tma/verdict.py) and says what the record says of the bearing noise. Every method's answer is judged by
+its record (tma/motion_verdict.py): a target the bearings show changing course or speed is "target manoeuvred"
+with the time span the residuals point at; without ``--sigma-bearing-deg`` the bearing sd is estimated from the
+record; a given one that the residuals contradict is reported.
 
 Settings: :class:`sonartrack.tma.settings.TmaSettings`, from its defaults, then a ``--config`` TOML file,
 then the options; ``--print-config`` prints the resolved settings.

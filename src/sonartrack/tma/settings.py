@@ -125,8 +125,10 @@ class TmaSettings(Settings):
     method: Method = setting("imm-mgekf", "TMA method: ekf | mgekf | imm-ekf | imm-mgekf (sequential) or ml | "
                                           "em-map (batch)")
     frequency: bool = setting(False, "use the measured frequency too (sequential methods)")
-    sigma_bearing_deg: float = setting(1.0, "bearing noise standard deviation (at most 30: beyond that a bearing "
-                                       "says nothing the small-error model can use)", unit="deg", gt=0, le=30)
+    sigma_bearing_deg: float | None = setting(
+        None, "bearing noise standard deviation (default: estimated from the record, the residual scale of its "
+              "constant-velocity fit; at most 30: beyond that a bearing says nothing the small-error model can use)",
+        unit="deg", gt=0, le=30)
     sigma_freq_hz: float = setting(0.1, "frequency noise standard deviation (at most 100)", unit="Hz", gt=0,
                                    le=100)
     ellipses: int = setting(8, "number of 95 % position ellipses drawn on the tactical picture", unit="1", ge=0)

@@ -37,6 +37,7 @@ from typing import Literal
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
+from sonartrack.tma.record_checks import BearingSd
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution, check_coverage
 from sonartrack.tma.settings import BATCH_METHODS, SEQUENTIAL_METHODS, TmaSettings
 
@@ -56,9 +57,11 @@ class TmaResult:
     mode_probabilities: tuple[float, ...] | None = None
     #: warnings of the solver (e.g. range unobservable from bearings alone), one line each
     warnings: tuple[str, ...] = ()
-    #: what the method found about its own answer (em-map: whether the propagation model explains the SNR), printed
-    #: at the end of the summary
+    #: what the method found about its own answer (em-map: whether the propagation model explains the SNR; the
+    #: bearing sd estimated or contradicted, tma/motion_verdict.py), printed at the end of the summary
     notes: tuple[str, ...] = ()
+    #: the bearing noise sd the record's constant-velocity residuals measure, with its interval (record checks)
+    bearing_sd: BearingSd | None = None
 
     def summary(self) -> str:
         """One line: the record, and the target's range, bearing, course and speed at the last time.
@@ -404,9 +407,20 @@ def _bearings_alone(record: BearingRecord, ownship: OwnshipTrack, settings: TmaS
     return sol if sol.range_flags()[-1] else None
 
 
+def _judged(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, record_checks: bool):
+    """(the record's judgement or None, the settings with the bearing sd filled in when it is to be estimated)
+    (tma/motion_verdict.py :func:`~sonartrack.tma.motion_verdict.judge_record`)."""
+    if not record_checks and settings.sigma_bearing_deg is not None:
+        return None, settings
+    from sonartrack.tma.motion_verdict import judge_record
+
+    judgement = judge_record(record, ownship, settings)
+    return judgement, settings.model_copy(update={"sigma_bearing_deg": judgement.sigma_deg(settings)})
+
+
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,
               environment=None, tl_store=None, ml_fit=None,
-              unobservable: Literal["raise", "flag"] = "raise") -> TmaResult:
+              unobservable: Literal["raise", "flag"] = "raise", record_checks: bool = True) -> TmaResult:
     """Solve a bearings (+ frequency, SNR) record for the target's track (module docstring).
 
     Parameters
@@ -431,6 +445,9 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
         ml over the whole record only: with an ownship that did not maneuver, "raise" refuses the record
         (:class:`~sonartrack.core.errors.InputError`); "flag" returns the solution with every row's
         ``range_determined`` False and the reason in ``warnings``.
+    record_checks : bool
+        Judge the answer by its record (tma/motion_verdict.py). Off in the passive chain, which runs the same
+        checks with its line-array weights, side and jackknife. A ``sigma_bearing_deg`` of None is estimated anyway.
 
     Returns
     -------
@@ -445,6 +462,7 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     require(unobservable in ("raise", "flag"), f"unobservable must be 'raise' or 'flag', got {unobservable!r}")
     require(whole_ml or (ml_fit is None and unobservable == "raise"),
             "ml_fit and unobservable='flag' apply to method ml over the whole record (no batch.window_s)")
+    judgement, settings = _judged(record, ownship, settings, record_checks)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if settings.is_sequential:
@@ -453,5 +471,10 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
             parts = _solve_ml(record, ownship, settings, ml_fit, unobservable)
         else:
             parts = _solve_batch(record, ownship, settings, environment, tl_store)
-    return TmaResult(record=record, ownship=ownship, settings=settings,
-                     warnings=tuple(str(w.message) for w in caught), **parts)
+    result = TmaResult(record=record, ownship=ownship, settings=settings,
+                       warnings=tuple(str(w.message) for w in caught), **parts)
+    if not record_checks:
+        return result
+    from sonartrack.tma.motion_verdict import record_verdict
+
+    return record_verdict(result, judgement)

@@ -30,7 +30,10 @@ the rest of it places more than a beamwidth away: another ship's bearings, or th
 :data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`). The passive chain holds
 its sequential filter to the batch ML of the same record (systems/passive/targets.py :func:`batch_held`): the ML's
 reason where the ML is not determined, else :data:`DISAGREES_WITH_BATCH` when the two final positions differ
-beyond what their covariances allow.
+beyond what their covariances allow. ``sonartrack tma`` (tma/solve.py :func:`~sonartrack.tma.solve.solve_tma`) judges
+every method's answer by its record (tma/motion_verdict.py): :data:`MANOEUVRED` on every row when the bearings
+reject constant velocity, else the ML's residual and profile-likelihood checks and, for a sequential filter on
+bearings, the batch ML's hold, as in the passive chain.
 """
 
 from __future__ import annotations
@@ -53,6 +56,10 @@ FLAT_LIKELIHOOD = "flat likelihood"
 NOT_ONE_TARGET = "bearings of more than one target"
 DISAGREES_WITH_BATCH = "disagrees with the batch ML"
 FIXED_CONE = "cone angle fixed to the array: own-ship or array noise, range unobservable"
+#: the record rejects the constant-velocity motion every method assumes (tma/motion_verdict.py); the reason goes on
+#: with the test and the span its residuals point at: "target manoeuvred: residuals reject constant velocity,
+#: largest 300-720 s"
+MANOEUVRED = "target manoeuvred"
 
 
 def with_reasons(solution: TmaSolution, reasons) -> TmaSolution:

@@ -42,7 +42,7 @@ def solved(t, own, heading, b):
                            batch=BatchSettings(correlation_inflation=True))
     sensor = OwnshipTrack(time_s=t, x_m=own[:, 0], y_m=own[:, 1])
     ml = determination_checked(solve_tma(BearingRecord(time_s=t, bearing_rad=chosen), sensor, settings, ml_fit=fit,
-                                         unobservable="flag"))
+                                         unobservable="flag", record_checks=False))  # as the chain calls it
     return side, ml, jackknife_checked(ml, side, (t, stbd, port, own), LN100, BEAMWIDTH_DEG)
 
 

@@ -39,7 +39,6 @@ import numpy as np
 
 from sonartrack.acoustics.line_array import Band, LineArray
 from sonartrack.core.errors import InputError
-from sonartrack.core.gaussian import chi2_quantile
 
 #: the first pass reads this many excerpts, spread from the file's start to its end ...
 EXCERPTS = 3
@@ -470,169 +469,17 @@ def check_memory(stages, n_windows: int) -> None:
                          f"{fix}")
 
 
-#: a determined solution's whitened residuals, averaged over blocks of this length, must fit their stated noise
-RESIDUAL_BLOCK_S = 30.0
-#: ... at this significance (upper tail: residuals larger than stated make the interval too narrow)
-RESIDUAL_ALPHA = 1e-3
-
-
-@dataclass(frozen=True, slots=True)
-class ResidualCheck:
-    """The normalised residual test of a fit (:func:`residual_check`): each statistic, its degrees of freedom and
-    the upper limit of its (1 - :data:`RESIDUAL_ALPHA`) interval; ``consistent`` when both lie below it."""
-
-    chi2: float
-    dof: int
-    limit: float
-    block_chi2: float
-    block_dof: int
-    block_limit: float
-
-    @property
-    def consistent(self) -> bool:
-        """Whether the residuals agree with the stated noise (both statistics within their intervals)."""
-        return self.chi2 <= self.limit and self.block_chi2 <= self.block_limit
-
-    def note(self) -> str:
-        """One line on the test, for a warning.
-
-        Returns
-        -------
-        str
-            Both chi-square statistics with their degrees of freedom and limits.
-        """
-        return (f"residuals disagree with the stated bearing noise (chi-square {self.chi2:.0f} for {self.dof} "
-                f"degrees of freedom, limit {self.limit:.0f}; {RESIDUAL_BLOCK_S:g} s block means {self.block_chi2:.0f}"
-                f" for {self.block_dof}, limit {self.block_limit:.0f})")
-
-
-def residual_check(time_s, residual_rad, sigma_rad: float, *, inflation: float = 1.0,
-                   n_params: int = 4) -> ResidualCheck:
-    """Do a fit's bearing residuals agree with the noise its covariance states?
-
-    With w_i = e_i / sigma the whitened residuals of n bearings and a fit of p parameters,
-
-        chi2 = sum_i w_i^2  ~  chi-square(n - p)                     (white noise of sd sigma)
-        chi2_B = sum_b n_b mean_b(w)^2 / kappa  ~  chi-square(B)     (B blocks of RESIDUAL_BLOCK_S)
-
-    the second for errors correlated from bearing to bearing, whose block means have variance kappa / n_b with
-    kappa = (1 + rho) / (1 - rho) the covariance inflation the solution states (AR(1) errors; Bretherton et al.
-    1999, J. Climate 12, eq. 31). A fit that left a slow structure in its residuals (a wrong track absorbing part of
-    the data) fails the block test although its chi2 fits. Upper-tail limits at RESIDUAL_ALPHA
-    (:func:`~sonartrack.core.gaussian.chi2_quantile`).
-
-    Parameters
-    ----------
-    time_s : array_like (n,)
-        Bearing times (s), increasing.
-    residual_rad : array_like (n,)
-        Measured minus fitted bearings (rad, wrapped).
-    sigma_rad : float
-        The bearing noise the fit states (rad).
-    inflation : float
-        kappa, the covariance inflation the fit states (1: none).
-    n_params : int
-        Parameters fitted (4: a constant-velocity track).
-
-    Returns
-    -------
-    ResidualCheck
-        The statistics and their limits.
-    """
-    t = np.asarray(time_s, float)
-    w = np.asarray(residual_rad, float) / float(sigma_rad)
-    dof = max(len(w) - n_params, 1)
-    block = np.floor((t - t[0]) / RESIDUAL_BLOCK_S).astype(int)
-    counts = np.bincount(block)
-    sums = np.bincount(block, weights=w)
-    full = counts >= 3
-    block_chi2 = float(np.sum(sums[full] ** 2 / counts[full]) / inflation)
-    b = max(int(full.sum()), 1)
-    q = 1.0 - RESIDUAL_ALPHA
-    return ResidualCheck(float(w @ w), dof, chi2_quantile(q, dof), block_chi2, b, chi2_quantile(q, b))
-
-
-#: residuals whose measured variance exceeds the stated noise's (and its correlation inflation) this many times are
-#: no noise but a wrong track (two ships joined): the range is then not determined rather than given with a
-#: covariance inflated that much. A 1 deg pull over 60 s of a 300 s, 0.3 deg record measures ~ 29 (its 30 s block
-#: means), and inflated by that the final position's NEES falls from 9-47 to 0.3-1.6
-MAX_RESIDUAL_SCALE = 100.0
-
-
-def residual_scale(check: ResidualCheck) -> float:
-    """The variance factor s2 >= 1 that makes a fit's residuals agree with its stated noise: the larger of
-    chi2 / dof and chi2_B / B (:func:`residual_check`), the measured scale of the residuals and of their block means
-    against what the noise states (the usual ML rescaling by the reduced chi-square, Bevington & Robinson, Data
-    Reduction and Error Analysis, 3rd ed., 2003, sec. 8.1; here also of the block means, for errors correlated over
-    a block). Scaling sigma^2 by s2 brings both statistics to their expected values.
-
-    Parameters
-    ----------
-    check : ResidualCheck
-        The test's statistics.
-
-    Returns
-    -------
-    float
-        s2 (1 when both statistics are at most their degrees of freedom).
-    """
-    return max(1.0, check.chi2 / check.dof, check.block_chi2 / check.block_dof)
-
-
-#: a determined range must tell the target from one this many times as far, or at the stated +3 sd if that is
-#: farther: the profile likelihood's rise there (in units of the stated covariance) must reach the 95 % point of
-#: chi-square(1) (a Gaussian likelihood rises 9 at 3 sd). Default scene: the tanker's 2.44 +- 0.87 km of the first
-#: 300 s rises 2.2 at 5.0 km (its truth is 13.9 km); the merchant's 10.5 km of 1200 s (truth 10.8 km) 6.5 at 21 km
-PROFILE_FAR_FACTOR = 2.0
-PROFILE_SIGMAS = 3.0
-PROFILE_MIN_RISE = 3.841
-
-
-def range_profile_rise(time_s, bearing_rad, own_xy, sigma_rad: float, end_state, range_m: float) -> float:
-    """How much worse the bearings fit a constant-velocity target held at ``range_m`` at the last time.
-
-    The profile likelihood of the final range (Pawitan, In All Likelihood, 2001, sec. 3.4): with the target at
-    the last time t_n parametrised by its bearing b and range r from the sensor, and its velocity (vx, vy),
-
-        J(b, r, vx, vy) = sum_i wrap(z_i - atan2(x_i - s_x,i, y_i - s_y,i))^2 / sigma^2,
-        x_i = s_x,n + r sin b + vx (t_i - t_n),  y_i = s_y,n + r cos b + vy (t_i - t_n),
-
-    the rise is min_{b, vx, vy} J(b, range_m, vx, vy) - J(end_state): 1 at one standard deviation when the
-    likelihood is Gaussian in r, much less where it is flat (a far target whose range the record barely touches,
-    whose first-order covariance at a near estimate claims far too much).
-
-    Parameters
-    ----------
-    time_s, bearing_rad : ndarray (n,)
-        Bearing times (s) and bearings (rad, clockwise from north).
-    own_xy : ndarray (n, 2)
-        The sensor's positions at those times (m).
-    sigma_rad : float
-        The bearing noise (rad).
-    end_state : array_like (4,)
-        The fit's state at the last time: x, y (m), vx, vy (m/s).
-    range_m : float
-        The range held (m).
-
-    Returns
-    -------
-    float
-        The rise of J (>= 0 up to the optimiser's tolerance).
-    """
-    from scipy.optimize import least_squares
-
-    t, z, own = np.asarray(time_s, float), np.asarray(bearing_rad, float), np.asarray(own_xy, float)
-    tau = t - t[-1]
-    x_end = np.asarray(end_state, float)
-    b0 = float(np.arctan2(x_end[0] - own[-1, 0], x_end[1] - own[-1, 1]))
-
-    def residual(p, r):
-        x = own[-1, 0] + r * np.sin(p[0]) + p[1] * tau
-        y = own[-1, 1] + r * np.cos(p[0]) + p[2] * tau
-        return ((z - np.arctan2(x - own[:, 0], y - own[:, 1]) + np.pi) % (2 * np.pi) - np.pi) / sigma_rad
-
-    r_fit = float(np.hypot(x_end[0] - own[-1, 0], x_end[1] - own[-1, 1]))
-    j_fit = float(np.sum(residual([b0, x_end[2], x_end[3]], r_fit) ** 2))
-    starts = ([b0, x_end[2], x_end[3]], [b0, 0.0, 0.0])
-    j_held = min(2.0 * least_squares(residual, s, args=(float(range_m),), method="lm").cost for s in starts)
-    return max(j_held - j_fit, 0.0)
+# the residual tests of a fit moved to the tma layer, where ``sonartrack tma`` uses them too (one mechanism);
+# re-exported here for the chain's modules and tests that import them from this one
+from sonartrack.tma.record_checks import (  # noqa: E402, F401
+    MAX_RESIDUAL_SCALE,
+    PROFILE_FAR_FACTOR,
+    PROFILE_MIN_RISE,
+    PROFILE_SIGMAS,
+    RESIDUAL_ALPHA,
+    RESIDUAL_BLOCK_S,
+    ResidualCheck,
+    range_profile_rise,
+    residual_check,
+    residual_scale,
+)

@@ -61,21 +61,26 @@ from sonartrack.acoustics.tonal import TonalTrack
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.core.gaussian import chi2_quantile
-from sonartrack.core.linalg import covariance_max
 from sonartrack.io.navigation import Navigation
-from sonartrack.models.motion import cv_transition
-from sonartrack.systems.passive.checks import (
+from sonartrack.systems.passive.measurements import TrackMeasurements
+from sonartrack.systems.passive.settings import PassiveStages
+from sonartrack.tma.record_checks import (
     MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
     PROFILE_MIN_RISE,
     PROFILE_SIGMAS,
     RESIDUAL_ALPHA,
-    range_profile_rise,
     residual_check,
     residual_scale,
 )
-from sonartrack.systems.passive.measurements import TrackMeasurements
-from sonartrack.systems.passive.settings import PassiveStages
+from sonartrack.tma.record_verdict import (  # the checks shared with ``sonartrack tma``; re-exported for the chain
+    UNSUPPORTED_RANGE,  # noqa: F401
+    batch_held,
+    determination_checked,
+    position_gap,
+)
+from sonartrack.tma.record_verdict import fit_at_bearings as _fit_at_bearings
+from sonartrack.tma.record_verdict import undetermined as _undetermined
 from sonartrack.tma.records import BearingRecord, TmaSolution
 from sonartrack.tma.settings import BatchSettings, TmaSettings
 from sonartrack.tma.sides import (
@@ -92,7 +97,6 @@ from sonartrack.tma.sides import (
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation, solve_tma
 from sonartrack.tma.verdict import (
-    DISAGREES_WITH_BATCH,
     DIVERGED,
     FIXED_CONE,
     FLAT_LIKELIHOOD,
@@ -102,8 +106,6 @@ from sonartrack.tma.verdict import (
     with_reasons,
 )
 
-#: how the warning of a range the record does not support begins (:func:`determination_checked`)
-UNSUPPORTED_RANGE = "range not supported by the record:"
 #: interval at which the side decision is re-taken on the growing record
 SIDE_CHECK_S = 60.0
 
@@ -235,92 +237,6 @@ def line_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | 
     if tonal is None or tonal.sigma_hz > stages.settings.max_sigma_freq_hz:
         return None
     return tonal
-
-
-def _residual_inflation(result: TmaResult, relative_sigma=1.0) -> tuple[float, float, str | None]:
-    """(kappa, s2, note) of a determined ML solution: kappa the correlation inflation it states, s2 >= 1 the
-    variance factor its residuals measure beyond kappa (1 when they are consistent), and the residual test's line
-    when s2 > 1; the residuals whitened by each bearing's ``relative_sigma`` (:func:`line_array_relative_sigma`)."""
-    t, z, own, at_t = _fit_at_bearings(result)
-    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1])) / relative_sigma
-    kappa = correlation_inflation(e) if result.settings.batch.correlation_inflation else 1.0
-    check = residual_check(t, e, float(np.deg2rad(result.settings.sigma_bearing_deg)), inflation=kappa)
-    if check.consistent:
-        return kappa, 1.0, None
-    return kappa, residual_scale(check), check.note()
-
-
-def _fit_at_bearings(result: TmaResult):
-    """(times, bearings, sensor positions, the solution's states) at the record's bearings."""
-    t = np.asarray(result.record.time_s, float)
-    z = np.asarray(result.record.bearing_rad, float)
-    ts, state = np.asarray(result.solution.time_s, float), np.asarray(result.solution.state, float)
-    own = result.ownship.position_at(t)
-    return t, z, own, np.stack([np.interp(t, ts, state[:, k]) for k in range(4)], axis=1)
-
-
-def _flat_likelihood_note(result: TmaResult, variance_factor: float, relative_sigma=1.0) -> str | None:
-    """Why a determined ML range is not what its record supports by the profile test, or None."""
-    t, z, own, at_t = _fit_at_bearings(result)
-    sigma = float(np.deg2rad(result.settings.sigma_bearing_deg)) * np.broadcast_to(relative_sigma, t.shape)
-    cols = solution_columns(result.solution, result.ownship)
-    r, sd = float(cols["range_m"][-1]), float(cols["range_std_m"][-1])
-    far = max(PROFILE_FAR_FACTOR * r, r + PROFILE_SIGMAS * sd)
-    rise = range_profile_rise(t, z, own, sigma, at_t[-1], far) / variance_factor
-    if rise >= PROFILE_MIN_RISE:
-        return None
-    return (f"the bearings fit a target at {far / 1e3:.1f} km almost as well as at {r / 1e3:.2f} km (likelihood "
-            f"rise {rise:.1f} < {PROFILE_MIN_RISE:g}, the 95 % point of chi-square(1)): the record does not support "
-            f"± {sd / 1e3:.2f} km")
-
-
-def determination_checked(result: TmaResult, relative_sigma=1.0) -> TmaResult:
-    """An ML range that its record does not support is reported as not determined; residuals larger than the stated
-    noise widen the stated covariance.
-
-    Two tests (systems/passive/checks.py), on the solution's own bearings and the noise it states. First the
-    residuals must agree with that noise (:func:`~sonartrack.systems.passive.checks.residual_check`: chi-square of
-    the residuals and of their 30 s block means, 99.9 % limits). Where they do not (bearings biased for a while,
-    e.g. by a louder ship nearby), the covariance is multiplied by the measured variance factor s2
-    (:func:`~sonartrack.systems.passive.checks.residual_scale`, which passes both tests) and the inflation is
-    reported; beyond :data:`~sonartrack.systems.passive.checks.MAX_RESIDUAL_SCALE` the residuals are no noise and
-    the range is not determined (reason "inconsistent residuals"). Then the likelihood must fall off as the
-    (inflated) covariance would have it: held at twice the range (or at the stated range + 3 sd, if farther), the
-    best fit must be worse by at least the 95 % point of chi-square(1) in units of that covariance
-    (:func:`~sonartrack.systems.passive.checks.range_profile_rise`; reason "flat likelihood"). A far target seen
-    through a small maneuver has a likelihood flat towards long ranges, so its first-order covariance at a near
-    estimate claims a narrow interval the data do not give (on the default scene's first 300 s: the tanker at
-    13.9 km estimated 2.44 +- 0.87 km, its likelihood at 5.0 km only 2.2 worse).
-
-    Parameters
-    ----------
-    result : TmaResult
-        The batch ML solution.
-    relative_sigma : float or ndarray (n,)
-        Each bearing's noise relative to the stated one (``settings.sigma_bearing_deg``), as the fit weighted it
-        (:func:`line_array_relative_sigma`; 1: equal weights).
-
-    Returns
-    -------
-    TmaResult
-        ``result`` when its range was undetermined or both tests pass; else a copy with the covariance inflated
-        (and the note as a warning), or with every row undetermined and the reason as a warning.
-    """
-    if not result.solution.range_flags().any():
-        return result
-    kappa, s2, note = _residual_inflation(result, relative_sigma)
-    if s2 > MAX_RESIDUAL_SCALE:
-        return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note} (more than {MAX_RESIDUAL_SCALE:g} times)")
-    if note is not None:
-        solution = replace(result.solution, covariance=np.asarray(result.solution.covariance) * s2)
-        result = replace(result, solution=solution, warnings=result.warnings + (
-            f"{note}: covariance inflated by {s2:.3g} (the residuals' measured scale)",))
-        cols = solution_columns(result.solution, result.ownship)
-        if not cols["range_std_m"][-1] < cols["range_m"][-1]:
-            return _undetermined(result, INCONSISTENT_RESIDUALS, f"{note}: inflated by {s2:.3g}, the range's standard "
-                                 "deviation exceeds the range")
-    flat = _flat_likelihood_note(result, kappa * s2, relative_sigma)
-    return result if flat is None else _undetermined(result, FLAT_LIKELIHOOD, flat)
 
 
 def jackknife_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float,
@@ -521,19 +437,6 @@ def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: floa
     return result if note is None else _undetermined(result, SIDE_UNRESOLVED, note)
 
 
-def position_gap(x_a, p_a, x_b, p_b) -> tuple[np.ndarray, float]:
-    """(x_a - x_b in position m, its squared Mahalanobis distance in P_a + P_b) of two [x, y, vx, vy] estimates of one
-    target at one time; NaN distance when P_a + P_b is singular. P_a + P_b bounds the covariance of the difference of
-    two estimates from one record (their cross-covariance, dropped, is positive), so the test keeps rather than
-    rejects (:func:`axis_checked`, :func:`batch_held`)."""
-    d = np.asarray(x_a, float)[:2] - np.asarray(x_b, float)[:2]
-    P = np.asarray(p_a, float)[:2, :2] + np.asarray(p_b, float)[:2, :2]
-    try:
-        return d, float(d @ np.linalg.solve(P, d))
-    except np.linalg.LinAlgError:
-        return d, float("nan")
-
-
 def _elsewhere(result: TmaResult, fit, t_end: float, sigma_rad: float) -> tuple[np.ndarray, float]:
     """(position difference m, its squared Mahalanobis distance in P + P_fit) of a unit-noise CV fit scaled by
     sigma^2 against the solution's final row (:func:`axis_checked`)."""
@@ -603,12 +506,6 @@ MIN_JACKKNIFE_BEARINGS = 10
 def ordinal(k: int) -> str:
     """1 -> "1st", 2 -> "2nd", 3 -> "3rd", 4 -> "4th" ... (k up to 20)."""
     return f"{k}{ {1: 'st', 2: 'nd', 3: 'rd'}.get(k, 'th')}"
-
-
-def _undetermined(result: TmaResult, reason: str, why: str) -> TmaResult:
-    """``result`` with every row undetermined for ``reason``, and the warning ``why``."""
-    solution = with_reasons(result.solution, np.full(len(result.solution.time_s), reason, dtype=object))
-    return replace(result, solution=solution, warnings=result.warnings + (f"{UNSUPPORTED_RANGE} {why}",))
 
 
 def side_checked(result: TmaResult, side: SideDecision, resolved_s: float, *, causal: bool) -> TmaResult:
@@ -731,7 +628,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     side_settings = _tma_settings("ml", side.sigma_bearing_rad, stages, None)
     rec, rec_other = BearingRecord(time_s=t, bearing_rad=chosen), BearingRecord(time_s=t, bearing_rad=other)
     ml = determination_checked(solve_tma(rec, sensor, _tma_settings("ml", sigma_ml, stages, None), ml_fit=fit,
-                                         unobservable="flag"), rel)
+                                         unobservable="flag", record_checks=False), rel)
     fixed = fixed_cone_note(ml, cone, rel)  # first: the other checks, and the frequency's Doppler, assume a target
     ml = ml if fixed is None else _undetermined(ml, FIXED_CONE, fixed)
     if fixed is None and use_frequency_ml and line_tonal(tonal, stages) is not None:  # bearings: the side fit's noise
@@ -742,7 +639,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     ml = ml if left_out is None else replace(ml, warnings=ml.warnings + (left_out,))
-    mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag")
+    mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag", record_checks=False)
     imm_tonal = _imm_tonal(t, chosen, tonal, stages)
     seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
@@ -852,63 +749,6 @@ def fixed_cone_note(bearings_ml: TmaResult, cone_rad, relative_sigma) -> str | N
             "at any range along its cone")
 
 
-def batch_held(seq: TmaResult, ml: TmaResult, alpha: float = RESIDUAL_ALPHA) -> TmaResult:
-    """The sequential IMM-MGEKF's solution held to the batch ML of the same record.
-
-    Both estimate one target from one record, the batch at once with every bearing and with the record's checks
-    (side, observability, one target, residuals, jackknife) behind its verdict, so the filter cannot determine what
-    the batch does not:
-
-    * when the ML's last row is not determined, every row of the filter that has no reason yet takes the ML's
-      (the record does not determine the range, whatever the filter's own covariance says: seen as NEES of 10^2 to
-      10^6 on such rows);
-    * when it is, the filter's last position must lie within the ``1 - alpha`` point of chi-square(2) of the ML's,
-      carried to the filter's last time along the ML's constant velocity, in P_ml + P_seq (the track-to-track test
-      of Bar-Shalom & Li, Multitarget-Multisensor Tracking, 1995, sec. 8.2, with the cross-covariance dropped: the
-      two estimates share their data, so the difference's true covariance P_ml + P_seq - 2 P_cross is smaller and
-      this test keeps a filter it could reject, not the reverse); else its last row is
-      :data:`~sonartrack.tma.verdict.DISAGREES_WITH_BATCH`;
-    * when they agree, the filter's last covariance is raised to the ML's (carried as above) along every direction
-      in which it claims less (:func:`~sonartrack.core.linalg.covariance_max`): the batch has every measurement of
-      the record and no process noise, so to first order it is the better informed of the two, and its covariance
-      has been checked against the record (residual scale, block jackknife), which the filter's has not. Seen on
-      the passive-chain study: the filter's last bearing follows a slow bias of the last minute's bearings with a
-      cross-range sd of 4 m at 7 km (NEES 82); the ML's block jackknife widens its own covariance to cover it.
-
-    Parameters
-    ----------
-    seq : TmaResult
-        The sequential filter's solution.
-    ml : TmaResult
-        The batch ML's, on the same record (its bearings-only or bearings + frequency version).
-    alpha : float
-        False-alarm probability of the agreement test.
-
-    Returns
-    -------
-    TmaResult
-        ``seq`` with those rows undetermined (and a warning when the two disagree), or with its last covariance
-        raised (and a warning when by more than 1 % in sd).
-    """
-    n = len(seq.solution.time_s)
-    ml_reason = ml.solution.reasons()[-1]
-    if ml_reason:
-        return replace(seq, solution=with_reasons(seq.solution, np.full(n, ml_reason, dtype=object)))
-    if not seq.solution.range_flags()[-1]:
-        return seq
-    F = cv_transition(float(seq.solution.time_s[-1]) - float(ml.solution.time_s[-1]))
-    P_ml = F @ np.asarray(ml.solution.covariance[-1], float) @ F.T
-    d, m2 = position_gap(seq.solution.state[-1], seq.solution.covariance[-1],
-                         F @ np.asarray(ml.solution.state[-1], float), P_ml)
-    if m2 <= chi2_quantile(1.0 - alpha, 2):
-        return _covariance_floored(seq, P_ml)
-    reasons = np.full(n, "", dtype=object)
-    reasons[-1] = DISAGREES_WITH_BATCH
-    why = (f"the IMM-MGEKF's last position is {np.hypot(*d):.0f} m from the batch ML's ({np.sqrt(m2):.3g} sd of "
-           "the two together): the filter's range is not supported by the record")
-    return replace(seq, solution=with_reasons(seq.solution, reasons), warnings=seq.warnings + (why,))
-
-
 def _imm_tonal(t, chosen, tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
     """The tonal the IMM-MGEKF runs with: a usable one (:func:`usable_tonal`) with a frequency at
     :data:`MIN_FREQUENCY_POINTS` of the bearings at least, else None (bearings only)."""
@@ -918,24 +758,6 @@ def _imm_tonal(t, chosen, tonal: TonalTrack | None, stages: PassiveStages) -> To
     return tonal
 
 
-def _covariance_floored(seq: TmaResult, P_ml) -> TmaResult:
-    """``seq`` with its last covariance at least ``P_ml`` (:func:`batch_held`); the batch's where the filter's is
-    not positive definite."""
-    P = np.array(seq.solution.covariance, float)
-    try:
-        P[-1] = covariance_max(P[-1], P_ml)
-    except np.linalg.LinAlgError:
-        P[-1] = P_ml
-    ratio = np.sqrt(np.diag(P[-1])[:2] / np.diag(np.asarray(seq.solution.covariance[-1], float))[:2])
-    with np.errstate(invalid="ignore"):
-        widest = float(np.nanmax(np.where(np.isfinite(ratio), ratio, np.inf)))
-    warnings = seq.warnings
-    if widest > 1.01:
-        warnings += (f"the IMM-MGEKF's last covariance claimed less than the batch ML's on the same record: raised to "
-                     f"it (position sd x {widest:.3g})",)
-    return replace(seq, solution=replace(seq.solution, covariance=P), warnings=warnings)
-
-
 def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: float, stages: PassiveStages
                 ) -> TmaResult:
     """The IMM-MGEKF on the chosen bearings, with ``tonal``'s frequency when given (:func:`_imm_tonal`); a filter that
@@ -943,7 +765,7 @@ def _sequential(t, chosen, tonal: TonalTrack | None, sensor, sigma_bearing_rad: 
     seq_settings = _tma_settings("imm-mgekf", sigma_bearing_rad, stages, tonal)
     record = frequency_record(t, chosen, tonal) if tonal is not None else BearingRecord(time_s=t, bearing_rad=chosen)
     try:
-        return solve_tma(record, sensor, seq_settings)
+        return solve_tma(record, sensor, seq_settings, record_checks=False)  # the chain's checks follow
     except InputError as failure:  # the filter failed numerically on this track: a diverged answer, not a failed run
         n = len(record.time_s)
         solution = TmaSolution(time_s=np.asarray(record.time_s, float), state=np.full((n, 4), np.nan),

@@ -2,7 +2,8 @@
 
 The readers and their checks are io/tma_files.py's (bearings ``time_s, bearing_deg[, frequency_hz, snr_db]``,
 ownship ``time_s, x_m, y_m``) and io/environment.py's; ``tma_solution.csv`` holds the columns of
-tma/solution_table.py, written atomically. The tactical picture is report/figures/tma.py's.
+tma/solution_table.py and the bearing noise (:data:`NOISE_COLUMNS`), written atomically. The tactical picture is
+report/figures/tma.py's.
 """
 
 from __future__ import annotations
@@ -18,6 +19,11 @@ if TYPE_CHECKING:
     from sonartrack.acoustics.environment import Environment
 
 CSV_NAME = "tma_solution.csv"
+#: the bearing noise, the same on every row: the sd the solution states (given, or estimated from the record) and
+#: the residual sd of the record's constant-velocity fit with its 95 % interval (tma/motion_verdict.py; empty when
+#: not measured). A stated sd outside that interval is one the record contradicts (unless the fit is rejected:
+#: then the residual sd holds the misfit, not the noise)
+NOISE_COLUMNS = ("sigma_bearing_deg", "residual_sd_deg", "residual_sd_lo_deg", "residual_sd_hi_deg")
 PNG_NAME = "tactical_picture.png"
 
 
@@ -67,8 +73,19 @@ def write_tma_solution(result, out) -> Path:
     Returns
     -------
     Path
-        The file written.
+        The file written: the solution table's columns, then :data:`NOISE_COLUMNS`.
     """
-    from sonartrack.io.tma_files import write_solution_csv
+    import numpy as np
+    import pandas as pd
 
-    return write_solution_csv(Path(out) / CSV_NAME, result.solution, result.ownship)
+    from sonartrack.io.atomic import write_csv
+    from sonartrack.tma.solution_table import solution_columns
+
+    frame = pd.DataFrame(solution_columns(result.solution, result.ownship))
+    sd = result.bearing_sd
+    measured = np.rad2deg([sd.sd_rad, sd.lo_rad, sd.hi_rad]) if sd is not None else [np.nan] * 3
+    for name, value in zip(NOISE_COLUMNS, [result.settings.sigma_bearing_deg, *measured], strict=True):
+        frame[name] = value
+    path = Path(out) / CSV_NAME
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_csv(frame, path, float_format="%.10g")

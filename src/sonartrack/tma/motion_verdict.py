@@ -1,0 +1,278 @@
+"""Every TMA method's answer judged against its record: is the target's constant-velocity motion what the bearings
+say, and what is their noise? (what :func:`~sonartrack.tma.solve.solve_tma` adds for ``sonartrack tma``).
+
+Every method of tma/ (the sequential filters through their tuned process noise too) reports a target that keeps
+its course and speed, so the record is first fitted by the bearings-only constant-velocity ML
+(:func:`judge_record`, tma/batch_ml.py) and its residuals tested (tma/record_checks.py):
+
+* the motion model: independent bearings leave white residuals about the right model; a target that changed course
+  or speed leaves runs of one sign (:func:`~sonartrack.tma.record_checks.whiteness_check`, at ``verdict.alpha``).
+  For bearing errors declared correlated (``batch.correlation_inflation``) the passive chain's block test is used
+  instead, the block means' chi-square against the stated (or estimated) noise with the lag-1 correlation inflation
+  (:func:`~sonartrack.tma.record_checks.residual_check`, blocks of at least three bearings). A rejected record
+  leaves every row of every method undetermined, reason ``target manoeuvred: residuals reject constant velocity,
+  largest A-B s`` (:data:`~sonartrack.tma.verdict.MANOEUVRED`; the span from
+  :func:`~sonartrack.tma.record_checks.residual_span`);
+* the noise: its sd measured from the residuals with its 95 % chi-square interval
+  (:func:`~sonartrack.tma.record_checks.bearing_sd_estimate`); used as the methods' bearing sd when none is given
+  (``sigma_bearing_deg`` unset), and when one is given and lies outside the interval, reported.
+
+Then, where the record keeps the model (:func:`record_verdict`): the ML is checked as the passive chain checks it
+(tma/record_verdict.py :func:`~sonartrack.tma.record_verdict.determination_checked`: residual scale against the
+stated noise, profile likelihood of the final range), and a sequential filter on bearings is held to that checked
+ML of the same record (:func:`~sonartrack.tma.record_verdict.batch_held`). Why the ML rather than the filter's own
+residuals: a filter's process noise lets it follow a turn, so its innovations can pass while its range is wrong
+(bearings-only, a target's manoeuvre can mimic a range change); the ML has no process noise, so its residuals carry
+the whole misfit, and its covariance is the one the record's checks have tested.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import InputError
+from sonartrack.tma.record_checks import (
+    RESIDUAL_BLOCK_S,
+    BearingSd,
+    ResidualCheck,
+    WhitenessCheck,
+    bearing_sd_estimate,
+    residual_check,
+    residual_span,
+    whiteness_check,
+)
+from sonartrack.tma.records import BearingRecord, OwnshipTrack
+from sonartrack.tma.settings import TmaSettings
+from sonartrack.tma.verdict import MANOEUVRED
+
+#: the bearings' resolution (deg): residual structure far below it is not judged a manoeuvre
+#: (:func:`~sonartrack.tma.record_checks.whiteness_check`'s floor), and an estimated sd is at least this. Bearing
+#: files give degrees to 0.01 at best, and an ownship interpolated between fixes on a turn errs by about 0.001 deg
+#: (a 5 kn ship turning 2.25 deg/s, fixes 10 s apart, a target at 10 km: 0.0013 deg rms, 0.009 deg at most)
+SIGMA_FLOOR_DEG = 0.01
+#: ... and at most this (the settings' limit)
+SIGMA_CEILING_DEG = 30.0
+
+
+@dataclass(frozen=True, slots=True)
+class RecordJudgement:
+    """What the constant-velocity ML says of a record (:func:`judge_record`): its residual scale, the stated sd
+    (None: estimated), the motion test and the span its residuals point at. ``why_untested`` when no fit was
+    possible (a record too short or degenerate)."""
+
+    noise: BearingSd | None
+    given_rad: float | None
+    whiteness: WhitenessCheck | None = None
+    block: ResidualCheck | None = None
+    span: tuple[float, float] | None = None
+    why_untested: str | None = None
+
+    @property
+    def rejected(self) -> bool:
+        """Whether the record rejects constant velocity."""
+        if self.whiteness is not None:
+            return not self.whiteness.white
+        return self.block is not None and self.block.block_chi2 > self.block.block_limit
+
+    def reason(self) -> str:
+        """The rows' reason for a rejected record, with the span.
+
+        Returns
+        -------
+        str
+            "target manoeuvred: residuals reject constant velocity, largest A-B s".
+        """
+        where = f", largest {self.span[0]:.0f}-{self.span[1]:.0f} s" if self.span is not None else ""
+        return f"{MANOEUVRED}: residuals reject constant velocity{where}"
+
+    def test_note(self) -> str:
+        """The motion test's statistic in a phrase.
+
+        Returns
+        -------
+        str
+            The whiteness or block test's line.
+        """
+        if self.whiteness is not None:
+            return self.whiteness.note()
+        return self.block.note() if self.block is not None else ""
+
+    def notes(self) -> tuple[str, ...]:
+        """What the summary says of the noise: the estimate, a stated sd the residuals contradict, or why no
+        test was made.
+
+        Returns
+        -------
+        tuple of str
+            Zero or one phrase.
+        """
+        if self.why_untested is not None:
+            return (f"motion model not tested: {self.why_untested}",)
+        if self.rejected:
+            return (f"bearing sd not estimated: the constant-velocity fit is rejected (its residual scale "
+                    f"{np.rad2deg(self.noise.sd_rad):.3g} deg bounds it)",)
+        if self.given_rad is None:
+            floored = np.rad2deg(self.noise.sd_rad) < SIGMA_FLOOR_DEG
+            used = f"; used {SIGMA_FLOOR_DEG:g} deg, the bearings' resolution" if floored else ""
+            return (f"bearing sd estimated from the record: {self.noise.text()}{used}",)
+        if self.noise.excludes(self.given_rad):
+            return (f"the given bearing sd {np.rad2deg(self.given_rad):.3g} deg is contradicted by the record: its "
+                    f"residuals measure {self.noise.text()}",)
+        return ()
+
+    def sigma_deg(self, settings: TmaSettings) -> float:
+        """The bearing sd the methods use (deg): the given one, else the estimate within the bounds.
+
+        Parameters
+        ----------
+        settings : TmaSettings
+            ``sigma_bearing_deg`` (None: estimated).
+
+        Returns
+        -------
+        float
+            The sd (deg).
+        """
+        if settings.sigma_bearing_deg is not None:
+            return float(settings.sigma_bearing_deg)
+        if self.noise is None:
+            raise InputError(f"the bearing sd cannot be estimated from this record ({self.why_untested}): give it "
+                             "with --sigma-bearing-deg (sigma_bearing_deg)")
+        return float(np.clip(np.rad2deg(self.noise.sd_rad), SIGMA_FLOOR_DEG, SIGMA_CEILING_DEG))
+
+
+def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
+    """The residuals (rad) of the bearings-only constant-velocity ML of the whole record: the lowest-cost fit from
+    the pseudo-linear start (tma/batch_ml.py) and from the passive chain's multi-start tracks (tma/sides.py
+    :func:`~sonartrack.tma.sides.fit_cv_target`), the ownship's maneuver not required. One start is not enough
+    for a test of the model: without an ownship maneuver the cost is flat along range, and a single Gauss-Newton
+    start may stop in a far local minimum whose residuals run in arcs (measured: a one-leg ownship, 151 bearings of
+    0.5 deg, read back from a CSV file: residual sd 6.5 deg, lag-1 correlation 0.97, against 0.44 deg and -0.02 for
+    the best of the starts).
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad) at times (s).
+    ownship : OwnshipTrack
+        The sensor's track (m).
+
+    Returns
+    -------
+    ndarray (n,)
+        Measured minus fitted bearings (rad, wrapped). Raises InputError, LinAlgError or FloatingPointError when no
+        fit is possible.
+    """
+    from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only
+    from sonartrack.tma.sides import fit_cv_target
+
+    t = np.asarray(record.time_s, float)
+    z = wrap_angle(np.asarray(record.bearing_rad, float))
+    own = ownship.position_at(t)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        fits = [fit_cv_target(z, t, own)]
+        with contextlib.suppress(InputError, np.linalg.LinAlgError, FloatingPointError):
+            fits.append(ml_bearings_only(z, t, own, 1.0, check=False))
+        fits = [f for f in fits if f is not None and np.isfinite(f.objective) and np.all(np.isfinite(f.x0))]
+        if not fits:
+            raise FloatingPointError("no start converges")
+        best = min(fits, key=lambda f: f.objective)
+        h, _, _ = bearing_model(best.x0, t - t[0], own)
+    e = wrap_angle(z - h)
+    if not np.all(np.isfinite(e)):
+        raise FloatingPointError("the constant-velocity fit is not finite")
+    return e
+
+
+def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings) -> RecordJudgement:
+    """The constant-velocity ML's judgement of a record (module docstring).
+
+    Parameters
+    ----------
+    record : BearingRecord
+        Bearings (rad) at times (s).
+    ownship : OwnshipTrack
+        The sensor's track (m).
+    settings : TmaSettings
+        ``sigma_bearing_deg`` (None: estimated), ``verdict.alpha``, ``batch.correlation_inflation``.
+
+    Returns
+    -------
+    RecordJudgement
+        The residual scale, the motion test and the span (``why_untested`` set when no fit is possible).
+    """
+    from sonartrack.tma.solve import correlation_inflation
+
+    given = None if settings.sigma_bearing_deg is None else float(np.deg2rad(settings.sigma_bearing_deg))
+    try:
+        e = cv_residuals(record, ownship)
+    except (InputError, np.linalg.LinAlgError, FloatingPointError) as failure:
+        return RecordJudgement(None, given, why_untested=f"no constant-velocity fit of the bearings ({failure})")
+    t = np.asarray(record.time_s, float)
+    noise = bearing_sd_estimate(e)
+    sigma = given if given is not None else max(noise.sd_rad, float(np.deg2rad(SIGMA_FLOOR_DEG)))
+    if settings.batch.correlation_inflation:
+        block_s = max(RESIDUAL_BLOCK_S, 3.0 * float(np.median(np.diff(t))))
+        block = residual_check(t, e, sigma, inflation=correlation_inflation(e), block_s=block_s)
+        judgement = RecordJudgement(noise, given, block=block)
+    else:
+        judgement = RecordJudgement(noise, given, whiteness=whiteness_check(
+            e, settings.verdict.alpha, float(np.deg2rad(SIGMA_FLOOR_DEG))))
+    if judgement.rejected:
+        judgement = replace(judgement, span=residual_span(t, e, sigma))
+    return judgement
+
+
+def record_verdict(result, judgement: RecordJudgement):
+    """``result`` judged by its record (module docstring): every row undetermined when the record rejects constant
+    velocity; else the whole-record ML checked (residual scale, profile likelihood) and a sequential filter on
+    bearings held to that checked ML; the noise's note added either way.
+
+    Parameters
+    ----------
+    result : TmaResult
+        A method's answer (tma/solve.py).
+    judgement : RecordJudgement
+        :func:`judge_record` of its record.
+
+    Returns
+    -------
+    TmaResult
+        ``result`` with its verdict, ``bearing_sd`` and notes.
+    """
+    from sonartrack.tma.record_verdict import determination_checked, undetermined
+
+    result = replace(result, bearing_sd=judgement.noise, notes=result.notes + judgement.notes())
+    s = result.settings
+    if judgement.rejected:  # before any reason the CV fit gave (unobservable...): the model itself is rejected
+        n = len(result.solution.time_s)
+        result = replace(result, solution=replace(result.solution, range_determined=np.ones(n, bool),
+                                                  undetermined_reason=np.full(n, "", dtype=object)))
+        return undetermined(result, judgement.reason(), f"{judgement.test_note()}: the target did not keep one "
+                            "course and speed over the record (solve its legs apart)")
+    if judgement.why_untested is not None:
+        return result
+    if s.method == "ml" and s.batch.window_s is None:
+        return determination_checked(result)
+    if s.is_sequential and not s.frequency:
+        return _held_to_ml(result)
+    return result
+
+
+def _held_to_ml(result):
+    """A sequential filter on bearings held to the checked bearings-only ML of its record (module docstring)."""
+    from sonartrack.tma.record_verdict import batch_held, determination_checked
+    from sonartrack.tma.solve import solve_tma
+
+    ml_settings = result.settings.model_copy(update={"method": "ml", "frequency": False})
+    try:
+        ml = solve_tma(result.record, result.ownship, ml_settings, unobservable="flag", record_checks=False)
+    except (InputError, np.linalg.LinAlgError):
+        return result
+    return batch_held(result, determination_checked(ml))
