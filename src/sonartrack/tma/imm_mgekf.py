@@ -37,6 +37,7 @@ from sonartrack.filters.imm import imm_combine, imm_mix, imm_mixing, imm_mode_up
 from sonartrack.filters.mgekf import mgekf_update
 from sonartrack.models.passive import SOUND_SPEED_MPS, bf_jacobian, bf_measurement, modified_matrix
 from sonartrack.models.relative_motion import relative_process_noise, relative_process_noise_stack, relative_transition
+from sonartrack.tma.records import ModeProbabilities
 
 
 def transition_matrix(n_modes: int, diagonal: float) -> np.ndarray:
@@ -59,6 +60,49 @@ def transition_matrix(n_modes: int, diagonal: float) -> np.ndarray:
     Pi = np.full((n_modes, n_modes), (1.0 - diagonal) / (n_modes - 1))
     np.fill_diagonal(Pi, diagonal)
     return validate_transition_matrix(Pi)
+
+
+def mode_names(qs) -> tuple[str, ...]:
+    """A name per mode for the output columns: ``cv`` for the quietest (smallest q), ``q<q:g>`` for the others.
+
+    Parameters
+    ----------
+    qs : array_like, shape (r,)
+        The modes' process-noise intensities (m^2/s^3).
+
+    Returns
+    -------
+    tuple of str
+        One name per mode, in the bank's order (a repeated q gets its index appended).
+    """
+    q = np.asarray(qs, float)
+    quiet = int(np.argmin(q))
+    names = ["cv" if j == quiet else f"q{v:g}" for j, v in enumerate(q)]
+    return tuple(n if names.count(n) == 1 else f"{n}_{j}" for j, n in enumerate(names))
+
+
+def mode_probabilities(qs, mu, *, manoeuvre_q_min: float, level: float) -> ModeProbabilities:
+    """An IMM's mode probabilities as the solution carries them (tma/records.py, solution table's columns).
+
+    Parameters
+    ----------
+    qs : array_like, shape (r,)
+        The modes' intensities (m^2/s^3).
+    mu : array_like, shape (n, r)
+        Mode probabilities per time (:func:`run_imm_bf`).
+    manoeuvre_q_min : float
+        The modes with q at least this are manoeuvre modes (m^2/s^3).
+    level : float
+        Manoeuvre-probability level above which a row is flagged as manoeuvring.
+
+    Returns
+    -------
+    ModeProbabilities
+        Names, probabilities, manoeuvre-mode mask and level.
+    """
+    q = np.asarray(qs, float)
+    return ModeProbabilities(names=mode_names(q), prob=np.asarray(mu, float), manoeuvre_mode=q >= manoeuvre_q_min,
+                             level=float(level))
 
 
 def imm_bf_step_reference(x, P, mu, z, u, dt_s, qs, Pi, R, *, modified: bool, q_f0: float = 0.0,

@@ -11,7 +11,7 @@ with keywords: ``BearingRecord(time_s=t, bearing_rad=b)``, ``OwnshipTrack(time_s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -79,6 +79,29 @@ class OwnshipTrack:
 
 
 @dataclass(frozen=True, slots=True)
+class ModeProbabilities:
+    """An IMM's mode probabilities over time and which of its modes are manoeuvre modes.
+
+    ``names`` one per mode ("cv" for the quietest, "q<intensity>" for the others, tma/imm_mgekf.py
+    ``mode_names``), ``prob`` (n, r) the posterior probability of each mode per time, ``manoeuvre_mode`` (r,)
+    True for the modes whose process noise stands for a manoeuvre, ``level`` the probability of the manoeuvre
+    modes above which a row is flagged as manoeuvring."""
+
+    names: tuple[str, ...]
+    prob: np.ndarray  # (n, r)
+    manoeuvre_mode: np.ndarray  # (r,) bool
+    level: float
+
+    def manoeuvre_prob(self) -> np.ndarray:
+        """The probability of the manoeuvre modes together, per time (n,) (NaN where the filter gave none)."""
+        return np.asarray(self.prob, float)[:, np.asarray(self.manoeuvre_mode, bool)].sum(axis=1)
+
+    def joined(self, later: ModeProbabilities) -> ModeProbabilities:
+        """These rows, then ``later``'s from its second row on (same bank of modes)."""
+        return replace(self, prob=np.concatenate([self.prob, later.prob[1:]]))
+
+
+@dataclass(frozen=True, slots=True)
 class TmaSolution:
     """A target solution against time: state ``[x, y, vx, vy]`` (m, m/s) and its covariance."""
 
@@ -91,6 +114,8 @@ class TmaSolution:
     range_determined: np.ndarray | None = None
     #: (n,) why each undetermined row is so ("diverged", "unobservable", ...; "" where determined). None: no reasons.
     undetermined_reason: np.ndarray | None = None
+    #: an IMM's mode probabilities per row (imm-ekf, imm-mgekf); None for the other methods
+    modes: ModeProbabilities | None = None
 
     def range_flags(self) -> np.ndarray:
         """``range_determined`` as a boolean array (all True when not set).
@@ -121,7 +146,8 @@ class TmaSolution:
                            state=np.concatenate([self.state, later.state[1:]]),
                            covariance=np.concatenate([self.covariance, later.covariance[1:]]), method=later.method,
                            range_determined=np.concatenate([self.range_flags(), later.range_flags()[1:]]),
-                           undetermined_reason=np.concatenate([self.reasons(), later.reasons()[1:]]))
+                           undetermined_reason=np.concatenate([self.reasons(), later.reasons()[1:]]),
+                           modes=_joined_modes(self, later))
 
     def reasons(self) -> np.ndarray:
         """Why each row's range is not determined: ``undetermined_reason``, "" on determined rows, and "not
@@ -136,6 +162,14 @@ class TmaSolution:
         given = (np.full(len(flags), "", dtype=object) if self.undetermined_reason is None
                  else np.asarray(self.undetermined_reason, dtype=object))
         return np.where(flags, "", np.where(given == "", "not determined", given)).astype(object)
+
+
+def _joined_modes(first: TmaSolution, later: TmaSolution) -> ModeProbabilities | None:
+    """The mode probabilities of two joined solutions: kept only when both have them, from the same bank."""
+    a, b = first.modes, later.modes
+    if a is None or b is None or a.names != b.names:
+        return None
+    return a.joined(b)
 
 
 def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:

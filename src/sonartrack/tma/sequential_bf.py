@@ -28,7 +28,7 @@ import numpy as np
 from sonartrack.core.errors import InputError, require
 from sonartrack.models.passive import SOUND_SPEED_MPS
 from sonartrack.models.relative_motion import observer_inputs
-from sonartrack.tma.imm_mgekf import ImmBfModel, run_imm_bf, transition_matrix
+from sonartrack.tma.imm_mgekf import ImmBfModel, mode_probabilities, run_imm_bf, transition_matrix
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.tma.settings import SEQUENTIAL_METHODS, ImmSettings, SequentialSettings
 
@@ -219,4 +219,6 @@ def solve_sequential(record: BearingRecord, ownship: OwnshipTrack, method: str =
                          "sequential.initial_range_m / sigma_range_m in --config")
     track = SequentialTrack(t, x, P, mu, failed, method, tuple(float(q) for q in model.qs))
     state = x[:, :4] + np.concatenate([pos, vel], axis=-1)
-    return TmaSolution(time_s=t, state=state, covariance=P[:, :4, :4].copy(), method=method), track
+    modes = (mode_probabilities(model.qs, mu, manoeuvre_q_min=imm.manoeuvre_q_min, level=imm.manoeuvre_level)
+             if method.startswith("imm") else None)
+    return TmaSolution(time_s=t, state=state, covariance=P[:, :4, :4].copy(), method=method, modes=modes), track

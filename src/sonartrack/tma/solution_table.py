@@ -7,6 +7,12 @@ where the data cannot resolve range: the range, course and speed of that row mea
 ``undetermined_reason`` (why not, tma/verdict.py; empty where determined), from the solution's
 covariance by first-order propagation; range and bearing are from the ownship to the target; courses and
 bearings in degrees clockwise from north, 0..360.
+
+An IMM solution (imm-ekf, imm-mgekf) appends, after those: ``mode_prob_<name>`` per mode of its bank in the
+bank's order (``cv`` for the quietest mode, ``q<intensity>`` for the others, e.g. ``mode_prob_cv,
+mode_prob_q0.001, mode_prob_q0.1``), ``manoeuvre_prob`` (the manoeuvre modes' probability together: the modes
+whose intensity is at least ``imm.manoeuvre_q_min``) and ``manoeuvre`` (True where ``manoeuvre_prob`` exceeds
+``imm.manoeuvre_level``). Other methods have no mode, so no such column: no number where there is none.
 """
 
 from __future__ import annotations
@@ -41,7 +47,8 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
     -------
     dict of str to ndarray, each shape (n,)
         time_s, x_m, y_m, vx_mps, vy_mps, course_deg and bearing_deg (0..360, clockwise from north), speed_kn,
-        range_m, their standard deviations (``*_std_*``), range_determined and undetermined_reason (str).
+        range_m, their standard deviations (``*_std_*``), range_determined and undetermined_reason (str); then an
+        IMM's mode columns (:func:`mode_columns`).
     """
     t = np.asarray(solution.time_s, float)
     X = np.asarray(solution.state, float)
@@ -66,4 +73,27 @@ def solution_columns(solution: TmaSolution, ownship: OwnshipTrack) -> dict[str, 
             "x_std_m": sd[:, 0], "y_std_m": sd[:, 1], "vx_std_mps": sd[:, 2], "vy_std_mps": sd[:, 3],
             "course_std_deg": np.minimum(np.rad2deg(np.nan_to_num(course_std, nan=np.pi)), 180.0),
             "speed_std_kn": speed_std / KNOT_MPS, "range_std_m": range_std, "bearing_std_deg": np.rad2deg(bearing_std),
-            "range_determined": solution.range_flags(), "undetermined_reason": solution.reasons()}
+            "range_determined": solution.range_flags(), "undetermined_reason": solution.reasons(),
+            **mode_columns(solution)}
+
+
+def mode_columns(solution: TmaSolution) -> dict[str, np.ndarray]:
+    """The IMM columns of the table (module docstring); none when the solution has no modes.
+
+    Parameters
+    ----------
+    solution : TmaSolution
+        A solution, with ``modes`` set by an IMM.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (n,)
+        ``mode_prob_<name>`` per mode, ``manoeuvre_prob`` and ``manoeuvre`` (bool); empty without modes.
+    """
+    modes = solution.modes
+    if modes is None:
+        return {}
+    prob = np.asarray(modes.prob, float)
+    cols = {f"mode_prob_{name}": prob[:, j] for j, name in enumerate(modes.names)}
+    man = modes.manoeuvre_prob()
+    return {**cols, "manoeuvre_prob": man, "manoeuvre": np.nan_to_num(man, nan=0.0) > modes.level}
