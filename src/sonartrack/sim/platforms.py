@@ -228,6 +228,6 @@ class LegTrack:
         return xy, v[k][..., None] * np.stack([np.sin(heading), np.cos(heading)], axis=-1), heading
 
     def towed(self, t_s, cable_m: float):
-        """Position (..., 2) (m) and axis heading (...) (rad) of a body towed ``cable_m`` behind (:meth:`towed_state`)."""
+        """Position (..., 2) (m) and axis heading (...) (rad) of a body towed ``cable_m`` behind (``towed_state``)."""
         xy, _, heading = self.towed_state(t_s, cable_m)
         return xy, heading
