@@ -20,6 +20,14 @@ p(t_c) - v t_c with p(t_c) = p_array(t_c) + r [sin(h + beta), cos(h + beta)]. A 
 (beta = 0 or 180 deg) with a course across it crosses endfire at t_c; two ships placed at the same t_c and beta at
 different ranges cross there in bearing and cone angle.
 
+Legs (issue 30): a ship may give ``legs = [{duration_s, course_deg, speed_kn}, ...]`` instead of ``course_deg`` and
+``speed_kn``, and the ownship ``legs`` instead of its single turn; legs run from t = 0 one after another, every leg
+but the last gives its duration (the last is open-ended), the position is continuous. A ship's velocity changes at
+once between legs (the piecewise-constant-velocity model of tma/legs.py, exact for its bounds); the ownship turns
+the shorter way at ``turn_rate_deg_s`` from the start of each leg (a towing ship cannot turn at once, and the array
+follows its track through the turn), its speed changing at once. The shipped ``zigzag`` scene
+(``sonartrack/data/scenes/zigzag.toml``) is an example.
+
 Every field is bounded to what a sea and a recorder can be (positions within 1000 km, levels within -100..220 dB,
 at most 1024 elements and 1 MHz); across fields, the scene must give a WAV header's whole sample rate, an array
 whose delays stay within a tenth of the synthesis block (the circular delay of sim/array_signals.py), a RAM field
