@@ -43,7 +43,7 @@ def simulate_cmd(
                                            "towed source on a towed line array (the input of sonartrack active).")]
     = "passive",
     scene: Annotated[Path | None, typer.Option(help="Scene TOML file (see --print-config), or a shipped scene's "
-                                                    "name (passive, active).")] = None,
+                                                    "name (passive, active, zigzag).")] = None,
     duration_s: Annotated[float | None, typer.Option(help=_help("duration_s"))] = None,
     seed: Annotated[int | None, typer.Option(help=_help("seed"))] = None,
     propagation: Annotated[str | None, typer.Option(help=_help("propagation"))] = None,

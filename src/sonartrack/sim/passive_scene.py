@@ -3,11 +3,13 @@
 Platforms (x east, y north; bearings clockwise from north):
 
 * the ownship is a :class:`~sonartrack.sim.platforms.ManeuveringTrack` (a straight leg, one turn, a
-  straight leg; or a zig-zag of turns alternating in direction); the array centre is towed ``tow_length_m``
-  behind it along its own track, so it sits where the ship was L / v seconds earlier and its axis heading is
-  the ship's heading then (the array heading lags the ship's through the turn);
-* each ship moves at constant velocity from its position at t = 0 (given, or from its place relative to the
-  array at a time: :func:`place_ship`).
+  straight leg; or a zig-zag of turns alternating in direction), or with ``ownship.legs`` a
+  :class:`~sonartrack.sim.platforms.LegTrack` (legs of their own course and speed, turns at the ownship's rate);
+  the array centre is towed ``tow_length_m`` behind it along its own track, so it sits where the ship was
+  ``tow_length_m`` of path earlier (L / v seconds at a constant speed) and its axis heading is the ship's heading
+  then (the array heading lags the ship's through the turn);
+* each ship moves at constant velocity, or on ``legs`` of constant velocity joined by instantaneous changes, from
+  its position at t = 0 (given, or from its place relative to the array at a time: :func:`place_ship`).
 
 Seen from the array centre (what the array measures; the ship itself is ``tow_length_m`` ahead):
 
@@ -38,8 +40,8 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.units import KNOT_MPS
-from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.sim.scene import PassiveSceneSettings, ShipSettings
+from sonartrack.sim.platforms import LegTrack, ManeuveringTrack
+from sonartrack.sim.scene import PassiveSceneSettings, ShipSettings, course_change_deg, leg_starts_s
 
 #: RAM fields are computed out to a whole number of these (m), so that scenes of different lengths
 #: share cached fields
@@ -73,8 +75,9 @@ class ReceivedLevels:
     tonal_hz: np.ndarray
 
 
-def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
-    """The ownship's track: a straight leg, its turn (if any) starting at ``scene.turn_start_s``, a straight leg.
+def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack | LegTrack:
+    """The ownship's track: a straight leg, its turn (if any) starting at ``scene.turn_start_s``, a straight leg;
+    or its legs (:func:`own_leg_track`).
 
     Parameters
     ----------
@@ -83,10 +86,12 @@ def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
 
     Returns
     -------
-    ManeuveringTrack
+    ManeuveringTrack or LegTrack
         The track in SI units (m, m/s, rad).
     """
     o = scene.ownship
+    if o.legs is not None:
+        return own_leg_track(o)
     turns = ()
     if o.turn_deg != 0:
         t0 = scene.turn_start_s
@@ -98,6 +103,74 @@ def ownship_track(scene: PassiveSceneSettings) -> ManeuveringTrack:
     return ManeuveringTrack(o.x_m, o.y_m, o.speed_kn * KNOT_MPS, float(np.deg2rad(o.course_deg)), turns)
 
 
+def own_leg_track(own) -> LegTrack:
+    """The ownship on its legs: each leg from its start, the course change into it a turn the shorter way at
+    ``turn_rate_deg_s`` from the leg's start, the speed change at once.
+
+    Parameters
+    ----------
+    own : OwnshipSettings
+        The ownship (start position in m, legs in s, deg, kn; turn rate in deg/s).
+
+    Returns
+    -------
+    LegTrack
+        Its segments in SI units (s, m/s, rad, rad/s), from t = 0.
+    """
+    rate = np.deg2rad(own.turn_rate_deg_s)
+    segments = []
+    for k, (start, leg) in enumerate(zip(leg_starts_s(own.legs), own.legs, strict=True)):
+        v, course = leg.speed_kn * KNOT_MPS, float(np.deg2rad(leg.course_deg))
+        turn = course_change_deg(own.legs[k - 1].course_deg, leg.course_deg) if k else 0.0
+        if turn != 0.0:
+            previous = float(np.deg2rad(own.legs[k - 1].course_deg))
+            segments.append((start, v, previous, float(np.sign(turn) * rate)))
+            start += abs(turn) / own.turn_rate_deg_s
+        segments.append((start, v, course, 0.0))
+    return LegTrack(own.x_m, own.y_m, tuple(segments))
+
+
+def ship_leg_track(ship: ShipSettings, x0_m: float, y0_m: float) -> LegTrack:
+    """A ship on its legs from (``x0_m``, ``y0_m``) at t = 0: constant velocity on each, changed at once between.
+
+    Parameters
+    ----------
+    ship : ShipSettings
+        The ship (legs in s, deg, kn).
+    x0_m, y0_m : float
+        Its position at t = 0 (m).
+
+    Returns
+    -------
+    LegTrack
+        Its segments in SI units (s, m/s, rad; no turn segments).
+    """
+    return LegTrack(x0_m, y0_m, tuple((start, leg.speed_kn * KNOT_MPS, float(np.deg2rad(leg.course_deg)), 0.0)
+                                      for start, leg in zip(leg_starts_s(ship.legs), ship.legs, strict=True)))
+
+
+def array_state(track: ManeuveringTrack | LegTrack, t_s, tow_length_m: float):
+    """Position (T, 2), velocity (T, 2) and axis heading (T,) of the array centre towed ``tow_length_m`` behind.
+
+    Parameters
+    ----------
+    track : ManeuveringTrack or LegTrack
+        The ownship's track.
+    t_s : ndarray, shape (T,)
+        Times (s).
+    tow_length_m : float
+        Tow length (m).
+
+    Returns
+    -------
+    tuple of ndarray
+        Position (m), velocity (m/s), heading (rad, not wrapped).
+    """
+    if isinstance(track, LegTrack):
+        return track.towed_state(t_s, tow_length_m)
+    return track.state(t_s - tow_length_m / track.speed_mps)
+
+
 def place_ship(scene: PassiveSceneSettings, ship: ShipSettings) -> ShipSettings:
     """A ship placed relative to the array as the same ship with its position at t = 0 (x_m, y_m).
 
@@ -106,7 +179,7 @@ def place_ship(scene: PassiveSceneSettings, ship: ShipSettings) -> ShipSettings:
 
         p(t_c) = p_array(t_c) + r [sin(h + beta), cos(h + beta)],   p(0) = p(t_c) - v t_c
 
-    with v the ship's constant velocity (course, speed).
+    with v the ship's constant velocity (course, speed); a ship on legs goes back from p(t_c) along its legs.
 
     Parameters
     ----------
@@ -122,9 +195,13 @@ def place_ship(scene: PassiveSceneSettings, ship: ShipSettings) -> ShipSettings:
     """
     if not ship.placed:
         return ship
-    track = ownship_track(scene)
-    xy, _, h = track.state(np.array([ship.at_time_s - scene.array.tow_length_m / track.speed_mps]))
+    xy, _, h = array_state(ownship_track(scene), np.array([ship.at_time_s]), scene.array.tow_length_m)
     a = float(h[0]) + np.deg2rad(ship.at_relative_bearing_deg)
+    if ship.legs is not None:
+        p0 = xy[0] + ship.at_range_m * np.array([np.sin(a), np.cos(a)])
+        p0 = p0 - ship_leg_track(ship, 0.0, 0.0).state(np.array([ship.at_time_s]))[0][0]
+        return ship.model_copy(update={"x_m": float(p0[0]), "y_m": float(p0[1]), "at_time_s": None,
+                                       "at_range_m": None, "at_relative_bearing_deg": None})
     course = np.deg2rad(ship.course_deg)
     v = ship.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
     p0 = xy[0] + ship.at_range_m * np.array([np.sin(a), np.cos(a)]) - v * ship.at_time_s
@@ -133,7 +210,7 @@ def place_ship(scene: PassiveSceneSettings, ship: ShipSettings) -> ShipSettings:
 
 
 def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Positions and velocities of a constant-velocity ship at times ``t_s``.
+    """Positions and velocities of a ship at times ``t_s`` (at constant velocity, or on its legs).
 
     Parameters
     ----------
@@ -150,6 +227,9 @@ def ship_motion(ship: ShipSettings, t_s: np.ndarray) -> tuple[np.ndarray, np.nda
     velocity : ndarray, shape (T, 2)
         [vx, vy] (m/s).
     """
+    if ship.legs is not None:
+        xy, v, _ = ship_leg_track(ship, ship.x_m, ship.y_m).state(np.asarray(t_s, dtype=float))
+        return xy, v
     course = np.deg2rad(ship.course_deg)
     v = ship.speed_kn * KNOT_MPS * np.array([np.sin(course), np.cos(course)])
     t = np.asarray(t_s, dtype=float)
@@ -178,8 +258,7 @@ def scene_geometry(scene: PassiveSceneSettings, t_s) -> SceneGeometry:
     t = np.atleast_1d(np.asarray(t_s, dtype=float))
     track = ownship_track(scene)
     own_xy, _, own_h = track.state(t)
-    lag_s = scene.array.tow_length_m / track.speed_mps
-    array_xy, array_v, array_h = track.state(t - lag_s)
+    array_xy, array_v, array_h = array_state(track, t, scene.array.tow_length_m)
     motion = [ship_motion(place_ship(scene, s), t) for s in scene.ships]
     ship_xy = np.stack([m[0] for m in motion]) if motion else np.zeros((0, t.size, 2))
     ship_v = np.stack([m[1] for m in motion]) if motion else np.zeros((0, t.size, 2))

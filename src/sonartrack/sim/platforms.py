@@ -152,3 +152,82 @@ def constant_velocity_track(t_s, x0_m, y0_m, vx_mps, vy_mps, t0_s: float = 0.0):
     t = np.asarray(t_s, dtype=float) - t0_s
     return np.stack([x0_m + vx_mps * t, y0_m + vy_mps * t,
                      np.full_like(t, vx_mps), np.full_like(t, vy_mps)], axis=-1)
+
+
+def _displacement(speed_mps, dt_s, h0_rad, rate_rad_s):
+    """Displacement (..., 2) after ``dt_s`` at ``speed_mps`` from heading ``h0_rad`` turning at ``rate_rad_s``
+    (closed form: straight or arc; w -> 0 safe)."""
+    v, dt, h0, w = np.broadcast_arrays(*(np.asarray(a, float) for a in (speed_mps, dt_s, h0_rad, rate_rad_s)))
+    small = np.abs(w * dt) < 1e-9
+    ws = np.where(small, 1.0, w)
+    h1 = h0 + w * dt
+    dx = np.where(small, v * dt * np.sin(h0 + 0.5 * w * dt), v / ws * (np.cos(h0) - np.cos(h1)))
+    dy = np.where(small, v * dt * np.cos(h0 + 0.5 * w * dt), v / ws * (np.sin(h1) - np.sin(h0)))
+    return np.stack([dx, dy], axis=-1)
+
+
+@dataclass(frozen=True, slots=True)
+class LegTrack:
+    """A platform on legs: segments ``(t_start_s, speed_mps, heading_rad, rate_rad_s)`` of constant speed and
+    constant turn rate (0 on a leg, non-zero in a turn between legs), the position continuous.
+
+    The first segment starts at the time of ``(x0_m, y0_m)`` and is extrapolated backwards before it; the last goes
+    on for ever. A speed change is instantaneous (at a segment's start); a course change is a turn segment, or
+    instantaneous when the next segment simply starts on the new heading (a velocity step, the model of tma/legs.py).
+    A body towed ``cable_m`` behind sits on the ship's own track ``cable_m`` of path behind the ship (for a constant
+    speed, where the ship was ``cable_m / v`` earlier, as :meth:`ManeuveringTrack.towed`)."""
+
+    x0_m: float
+    y0_m: float
+    segments: tuple[tuple[float, float, float, float], ...]
+
+    def __post_init__(self):
+        require(len(self.segments) >= 1, "a leg track needs at least one segment")
+        starts = [s[0] for s in self.segments]
+        require(all(b > a for a, b in zip(starts[:-1], starts[1:], strict=True)), "segments must start in order")
+        require(all(s[1] >= 0 for s in self.segments), "segment speeds must be non-negative")
+
+    def _knots(self):
+        """Per segment: start time, speed, heading, rate, and the position and path length at its start."""
+        seg = np.array(self.segments, float)
+        t, v, h, w = seg.T
+        dt = np.diff(t)
+        steps = _displacement(v[:-1], dt, h[:-1], w[:-1])
+        pos = np.vstack([[self.x0_m, self.y0_m], np.array([self.x0_m, self.y0_m]) + np.cumsum(steps, axis=0)])
+        path = np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
+        return t, v, h, w, pos, path
+
+    def state(self, t_s):
+        """Position (..., 2) (m), velocity (..., 2) (m/s) and heading (...) (rad, clockwise from north, not
+        wrapped) at times ``t_s`` (s), in closed form."""
+        t = np.asarray(t_s, dtype=float)
+        ts, v, h, w, pos, _ = self._knots()
+        k = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 1)
+        dt = t - ts[k]
+        heading = h[k] + w[k] * dt
+        xy = pos[k] + _displacement(v[k], dt, h[k], w[k])
+        return xy, v[k][..., None] * np.stack([np.sin(heading), np.cos(heading)], axis=-1), heading
+
+    def towed_state(self, t_s, cable_m: float):
+        """Position (..., 2), velocity (..., 2) and axis heading (...) of a body towed ``cable_m`` behind along the
+        ship's own track (class doc): at path length s(t) - cable_m, moving along the track at the ship's speed.
+
+        Raises
+        ------
+        InputError
+            If a segment has speed 0 (a towed body needs way on).
+        """
+        t = np.asarray(t_s, dtype=float)
+        ts, v, _, _, _, path = self._knots()
+        require(bool(np.all(v > 0)), "a towed body needs a moving ship (speed > 0 on every leg)")
+        k = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 1)
+        behind = path[k] + v[k] * (t - ts[k]) - cable_m
+        j = np.clip(np.searchsorted(path, behind, side="right") - 1, 0, len(ts) - 1)
+        tau = ts[j] + (behind - path[j]) / v[j]
+        xy, _, heading = self.state(tau)
+        return xy, v[k][..., None] * np.stack([np.sin(heading), np.cos(heading)], axis=-1), heading
+
+    def towed(self, t_s, cable_m: float):
+        """Position (..., 2) (m) and axis heading (...) (rad) of a body towed ``cable_m`` behind (``towed_state``)."""
+        xy, _, heading = self.towed_state(t_s, cable_m)
+        return xy, heading

@@ -20,6 +20,14 @@ p(t_c) - v t_c with p(t_c) = p_array(t_c) + r [sin(h + beta), cos(h + beta)]. A 
 (beta = 0 or 180 deg) with a course across it crosses endfire at t_c; two ships placed at the same t_c and beta at
 different ranges cross there in bearing and cone angle.
 
+Legs (issue 30): a ship may give ``legs = [{duration_s, course_deg, speed_kn}, ...]`` instead of ``course_deg`` and
+``speed_kn``, and the ownship ``legs`` instead of its single turn; legs run from t = 0 one after another, every leg
+but the last gives its duration (the last is open-ended), the position is continuous. A ship's velocity changes at
+once between legs (the piecewise-constant-velocity model of tma/legs.py, exact for its bounds); the ownship turns
+the shorter way at ``turn_rate_deg_s`` from the start of each leg (a towing ship cannot turn at once, and the array
+follows its track through the turn), its speed changing at once. The shipped ``zigzag`` scene
+(``sonartrack/data/scenes/zigzag.toml``) is an example.
+
 Every field is bounded to what a sea and a recorder can be (positions within 1000 km, levels within -100..220 dB,
 at most 1024 elements and 1 MHz); across fields, the scene must give a WAV header's whole sample rate, an array
 whose delays stay within a tenth of the synthesis block (the circular delay of sim/array_signals.py), a RAM field
@@ -49,6 +57,8 @@ MAX_DURATION_S = 86_400.0
 MAX_ELEMENTS = 1024
 MAX_SAMPLE_RATE_HZ = 1e6
 MAX_SHIPS = 64
+#: legs of a ship or of the ownship: more is a typo (or a track from another tool, better given as its own table)
+MAX_LEGS = 1000
 #: levels in dB: -100 is a silent source (tests switch a source off with it); a ship's spectral source level above
 #: 220 dB re 1 uPa^2/Hz, or an ambient spectral level above 140 dB, is no sea
 MIN_LEVEL_DB = -100.0
@@ -63,9 +73,58 @@ MAX_RAM_RANGE_M = 200_000.0
 MEMORY_LIMIT_BYTES = 2 * 1024**3
 
 
+class LegSettings(Settings):
+    """One leg of a ship: its course and speed, held for ``duration_s`` from the leg's start (the last leg: open)."""
+
+    duration_s: float | None = setting(None, "length of the leg from its start (every leg but the last, which goes "
+                                             "on to the end of the recording and is given without one)", unit="s",
+                                       gt=0, le=MAX_DURATION_S)
+    course_deg: float = setting(..., "course, clockwise from north", unit="deg", ge=0, lt=360)
+    speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
+
+
+class OwnshipLegSettings(LegSettings):
+    """One leg of the ownship: as a ship's, at a speed a towing ship keeps (way on, at most 40 kn)."""
+
+    speed_kn: float = setting(..., "speed through the water", unit="kn", gt=0, le=40)
+
+
+def check_legs(legs: list[LegSettings], who: str) -> None:
+    """Every leg but the last gives its duration; the last is open-ended.
+
+    Parameters
+    ----------
+    legs : list of LegSettings
+        The legs, in order.
+    who : str
+        The owner's name in the message (``ownship``, ``ship merchant``).
+
+    Raises
+    ------
+    ValueError
+        Naming the leg and the fix.
+    """
+    for k, leg in enumerate(legs[:-1]):
+        if leg.duration_s is None:
+            raise ValueError(f"{who} legs[{k}] has no duration_s (s): every leg but the last gives its length")
+    if legs[-1].duration_s is not None:
+        raise ValueError(f"{who} legs[{len(legs) - 1}].duration_s {legs[-1].duration_s:g} s: the last leg is "
+                         "open-ended (it lasts to the end of the recording): leave out its duration_s")
+
+
+def leg_starts_s(legs: list[LegSettings]) -> list[float]:
+    """Start time (s, from t = 0) of every leg: the running sum of the durations before it."""
+    return list(math.fsum([0.0, *(leg.duration_s for leg in legs[:k])]) for k in range(len(legs)))
+
+
+#: the ownship's single-turn (and zig-zag) fields: with ``ownship.legs`` they are left out
+SINGLE_TURN_FIELDS = ("speed_kn", "course_deg", "turn_deg", "turn_start_s", "zigzag_turns", "leg_s")
+
+
 class OwnshipSettings(Settings):
     """The ownship: a straight leg, one course change, a straight leg (sim/platforms.py ManeuveringTrack); or, with
-    ``zigzag_turns`` > 1, a zig-zag of legs ``leg_s`` apart alternating between two courses."""
+    ``zigzag_turns`` > 1, a zig-zag of legs ``leg_s`` apart alternating between two courses; or, with ``legs``, legs
+    of their own course and speed joined by turns at ``turn_rate_deg_s`` (sim/platforms.py LegTrack)."""
 
     x_m: float = setting(0.0, "start position east", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
     y_m: float = setting(0.0, "start position north", unit="m", ge=-MAX_POSITION_M, le=MAX_POSITION_M)
@@ -81,14 +140,42 @@ class OwnshipSettings(Settings):
                                    "alternate between course_deg and course_deg + turn_deg", unit="1", ge=1, le=100)
     leg_s: float = setting(300.0, "zig-zag: time from the start of one turn to the start of the next (longer than "
                                   "a turn, |turn_deg| / turn_rate_deg_s)", unit="s", gt=0, le=MAX_DURATION_S)
+    legs: list[OwnshipLegSettings] | None = setting(
+        None, "legs instead of the single turn (then speed_kn, course_deg, turn_deg, turn_start_s, zigzag_turns and "
+              "leg_s are left out): [{duration_s, course_deg, speed_kn}, ...] from t = 0, the last without "
+              "duration_s; each course change is a turn the shorter way (180 deg: to starboard) at turn_rate_deg_s "
+              "starting at its leg's start, each speed change instantaneous", unit="", min_length=1,
+        max_length=MAX_LEGS)
 
     @model_validator(mode="after")
     def _legs_longer_than_turns(self):
+        if self.legs is not None:
+            self._check_own_legs()
+            return self
         turn_s = abs(self.turn_deg) / self.turn_rate_deg_s
         if self.zigzag_turns > 1 and self.leg_s <= turn_s:
             raise ValueError(f"ownship.leg_s {self.leg_s:g} s is not longer than a turn ({turn_s:g} s = |turn_deg| / "
                              "turn_rate_deg_s): lengthen leg_s or turn less or faster")
         return self
+
+    def _check_own_legs(self) -> None:
+        """Legs replace the single turn, and each leg lasts longer than the turn into it."""
+        for name in SINGLE_TURN_FIELDS:
+            if getattr(self, name) != type(self).model_fields[name].default:
+                raise ValueError(f"ownship.{name} belongs to the single turn: with ownship.legs leave it out (the "
+                                 "legs give the courses, speeds and times)")
+        check_legs(self.legs, "ownship")
+        for k in range(1, len(self.legs)):
+            turn_s = abs(course_change_deg(self.legs[k - 1].course_deg, self.legs[k].course_deg)) / self.turn_rate_deg_s
+            if self.legs[k].duration_s is not None and self.legs[k].duration_s <= turn_s:
+                raise ValueError(f"ownship legs[{k}].duration_s {self.legs[k].duration_s:g} s is not longer than the "
+                                 f"turn into it ({turn_s:g} s at turn_rate_deg_s {self.turn_rate_deg_s:g} deg/s): "
+                                 "lengthen the leg or turn faster")
+
+    @property
+    def max_speed_kn(self) -> float:
+        """The fastest speed of the ownship (kn)."""
+        return max(leg.speed_kn for leg in self.legs) if self.legs is not None else self.speed_kn
 
     @property
     def maneuver_s(self) -> float:
@@ -96,6 +183,13 @@ class OwnshipSettings(Settings):
         if self.turn_deg == 0:
             return 0.0
         return (self.zigzag_turns - 1) * self.leg_s + abs(self.turn_deg) / self.turn_rate_deg_s
+
+
+def course_change_deg(from_deg: float, to_deg: float) -> float:
+    """The turn from one course to another the shorter way (deg, in (-180, 180]; positive to starboard, and a
+    reversal of course to starboard)."""
+    d = (to_deg - from_deg) % 360.0
+    return d - 360.0 if d > 180.0 else d
 
 
 class ArraySettings(Settings):
@@ -114,7 +208,8 @@ class ArraySettings(Settings):
 
 
 class ShipSettings(Settings):
-    """A ship at constant velocity radiating broadband noise (flat over the scene's band) and one tonal line."""
+    """A ship radiating broadband noise (flat over the scene's band) and one tonal line, at constant velocity
+    (``course_deg``, ``speed_kn``) or on ``legs`` of constant velocity joined by instantaneous changes."""
 
     name: str = setting(..., "name (the ship column of truth.csv)", unit="")
     x_m: float | None = setting(None, "position east at t = 0 (not set: placed by at_time_s, at_range_m and "
@@ -131,8 +226,13 @@ class ShipSettings(Settings):
               "and 180 astern are on the axis, endfire: a ship crossing it there changes side; 90 the starboard "
               "beam, -90 port); two ships placed at the same time and relative bearing at different ranges cross "
               "there in bearing and cone angle", unit="deg", ge=-360, le=360)
-    course_deg: float = setting(..., "course, clockwise from north", unit="deg", ge=-360, le=360)
-    speed_kn: float = setting(..., "speed", unit="kn", ge=0, le=60)
+    course_deg: float | None = setting(None, "course, clockwise from north (not set: legs)", unit="deg", ge=-360,
+                                       le=360)
+    speed_kn: float | None = setting(None, "speed (not set: legs)", unit="kn", ge=0, le=60)
+    legs: list[LegSettings] | None = setting(
+        None, "legs instead of course_deg and speed_kn: [{duration_s, course_deg, speed_kn}, ...] from t = 0, the "
+              "last without duration_s; the velocity changes at once between legs (a zig), the position is "
+              "continuous", unit="", min_length=1, max_length=MAX_LEGS)
     depth_m: float = setting(5.0, "source depth (of the transmission loss)", unit="m", gt=0, le=MAX_DEPTH_M)
     source_level_db: float = setting(..., "broadband spectral source level at 1 m, flat over the band",
                                      unit="dB re 1 uPa^2/Hz", ge=MIN_LEVEL_DB, le=MAX_SOURCE_LEVEL_DB)
@@ -148,7 +248,19 @@ class ShipSettings(Settings):
         if not ((all(absolute) and not any(placed)) or (all(placed) and not any(absolute))):
             raise ValueError(f"ship {self.name}: give either x_m and y_m, or at_time_s, at_range_m and "
                              "at_relative_bearing_deg (placed relative to the array)")
+        if self.legs is None and (self.course_deg is None or self.speed_kn is None):
+            raise ValueError(f"ship {self.name}: give course_deg (deg) and speed_kn (kn), or legs")
+        if self.legs is not None:
+            if self.course_deg is not None or self.speed_kn is not None:
+                raise ValueError(f"ship {self.name}: give legs, or course_deg and speed_kn, not both (the first leg "
+                                 "gives the course and speed at t = 0)")
+            check_legs(self.legs, f"ship {self.name}")
         return self
+
+    @property
+    def max_speed_kn(self) -> float:
+        """The fastest speed of the ship (kn)."""
+        return max(leg.speed_kn for leg in self.legs) if self.legs is not None else self.speed_kn
 
     @property
     def placed(self) -> bool:
@@ -291,9 +403,10 @@ class PassiveSceneSettings(Settings):
         def start_distance(s: ShipSettings) -> float:  # a placed ship: at most this far at t = 0
             if not s.placed:
                 return math.hypot(s.x_m - o.x_m, s.y_m - o.y_m)
-            return s.at_range_m + self.array.tow_length_m + (s.speed_kn + o.speed_kn) * KNOT_MPS * abs(s.at_time_s)
+            return s.at_range_m + self.array.tow_length_m + (s.max_speed_kn + o.max_speed_kn) * KNOT_MPS * abs(
+                s.at_time_s)
 
-        reach = max(start_distance(s) + (s.speed_kn + o.speed_kn) * KNOT_MPS * self.duration_s
+        reach = max(start_distance(s) + (s.max_speed_kn + o.max_speed_kn) * KNOT_MPS * self.duration_s
                     for s in self.ships) + self.array.tow_length_m
         if reach > MAX_RAM_RANGE_M:
             raise ValueError(f"propagation = ram would compute the field out to {reach / 1e3:.0f} km (the farthest "
