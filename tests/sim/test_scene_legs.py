@@ -217,3 +217,18 @@ def test_shipped_zigzag_scene_has_its_legs_and_reads_back(tmp_path):
     path.write_text(to_commented_toml(s))
     assert resolve(PassiveSceneSettings, path) == s
     assert tomllib.loads(path.read_text())["ships"][0]["legs"][3]["course_deg"] == courses[3]
+
+
+def test_a_leg_value_out_of_range_names_its_range_and_unit():
+    """A bound inside a list of legs is reported like any other setting's: its range and unit (io/toml.py looks
+    inside ``list[Leg] | None``), and a check across fields without pydantic's 'Value error, ' prefix."""
+    legs = [{"duration_s": 900.0, "course_deg": 270.0, "speed_kn": 61.0}, {"course_deg": 210.0, "speed_kn": 10.0}]
+    ship = {"name": "zig", "x_m": 0.0, "y_m": 5000.0, "source_level_db": 130.0, "legs": legs}
+    with pytest.raises(InputError) as e:
+        validate(PassiveSceneSettings, {"ships": [ship]}, source="config zig.toml")
+    assert "is outside its range" in str(e.value) and "(kn)" in str(e.value)
+    own = {"legs": [{"duration_s": 600.0, "course_deg": 0.0, "speed_kn": 6.0},
+                    {"duration_s": 60.0, "course_deg": 90.0, "speed_kn": 6.0}, {"course_deg": 0.0, "speed_kn": 6.0}]}
+    with pytest.raises(InputError) as e:
+        validate(PassiveSceneSettings, {"ownship": own}, source="config own.toml")
+    assert "Value error" not in str(e.value)

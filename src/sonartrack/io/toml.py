@@ -103,7 +103,7 @@ def validate(model_cls, data: dict, source: str = "config", given: frozenset[str
             raise InputError(f"{origin}: {range_message(model_cls, loc, err)}") from None
         if not loc:  # a check across fields (a model validator): its own message says which keys and the fix
             raise InputError(f"{origin}: {str(err.get('msg')).removeprefix('Value error, ')}") from None
-        raise InputError(f"{origin}: '{where}': {err.get('msg')}") from None
+        raise InputError(f"{origin}: '{where}': {str(err.get('msg')).removeprefix('Value error, ')}") from None
 
 
 #: pydantic's error types of a numeric bound
@@ -124,6 +124,7 @@ def _field_at(model_cls, loc: tuple):
             return None
         info = cls.model_fields[part]
         kinds = [info.annotation, *get_args(info.annotation)]
+        kinds += [a for k in kinds[1:] for a in get_args(k)]  # list[Group] | None: the group inside the list
         cls = next((k for k in kinds if isinstance(k, type) and issubclass(k, BaseModel)), None)
     return info
 
