@@ -618,8 +618,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
         Side decision, both sides' ML fits, IMM-MGEKF, each row with its verdict; zigs and legs (:func:`_with_legs`).
     """
     m, left_out = without_neighbour_scans(m, neighbours, stages.min_separation_deg)
-    min_log_lr = stages.settings.min_side_log_lr
-    t = np.asarray(m.time_s, float)
+    min_log_lr, t = stages.settings.min_side_log_lr, np.asarray(m.time_s, float)
     xy, heading = nav.array_at(t)
     side, cone = _side_of(m, t, heading, xy, min_log_lr)
     since = side_resolved_time(t, cone, heading, xy, side, min_log_lr)
