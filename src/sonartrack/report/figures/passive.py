@@ -112,6 +112,29 @@ def _plausible(tma_result, min_range_m: float = 500.0) -> bool:
     return bool(tma_result.solution.range_flags().all() and np.min(cols["range_m"]) >= min_range_m)
 
 
+def _draw_legs(ax, target, color: str) -> bool:
+    """A target with a zig drawn by its leg-wise ML (systems/passive/target_legs.py): each leg a segment, the zig
+    points marked (open diamonds), 95 % ellipses on the rows whose range is determined, and the label naming the
+    legs; True when drawn (its constant-velocity ML, which the zig rejects, is then not drawn)."""
+    legs = getattr(target, "legs", None)
+    if legs is None or legs.result is None:
+        return False
+    sol = legs.result.solution
+    X, P, det = np.asarray(sol.state), np.asarray(sol.covariance), sol.range_flags()
+    k = legs.leg_of(sol.time_s)
+    for j in range(int(k.max()) + 1):
+        on = (k == j) & det
+        ax.plot(X[on, 0] / 1e3, X[on, 1] / 1e3, "-", color=color, lw=1.5,
+                label=f"target {target.target_id} ({int(k.max()) + 1} legs)" if j == 0 else None)
+    zig_xy, _ = legs.fit.position_at(legs.fit.change_times_s)
+    ax.plot(zig_xy[:, 0] / 1e3, zig_xy[:, 1] / 1e3, "D", color=color, ms=7, mfc="none")
+    if det[-1]:
+        ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "^", color=color, ms=8)
+    if det.any():
+        ellipses(ax, X[det], P[det], 6, color=color, alpha=0.8, label=None)
+    return True
+
+
 def tactical_picture(result):
     """The tactical picture.
 
@@ -123,7 +146,8 @@ def tactical_picture(result):
     Returns
     -------
     matplotlib.figure.Figure
-        Ownship and array tracks, each target's ML track with 95 % ellipses, its rejected mirror faint.
+        Ownship and array tracks, each target's ML track with 95 % ellipses, its rejected mirror faint; a target
+        with a zig drawn by its legs instead (:func:`_draw_legs`).
     """
     nav = result.nav
     fig = _figure((8, 8))
@@ -133,6 +157,8 @@ def tactical_picture(result):
     for k, tg in enumerate(result.targets):
         color = f"C{(k + 1) % 10}"
         X, P = np.asarray(tg.ml.solution.state), np.asarray(tg.ml.solution.covariance)
+        if _draw_legs(ax, tg, color):
+            continue
         if not tg.ml.solution.range_flags()[-1]:
             continue  # an undetermined range would draw a meaningless track; the summary line says so
         ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "-", color=color, lw=1.5, label=f"target {tg.target_id}")
@@ -145,6 +171,8 @@ def tactical_picture(result):
             Xm = np.asarray(mirror.solution.state)
             ax.plot(Xm[:, 0] / 1e3, Xm[:, 1] / 1e3, ":", color=color, lw=1.0, alpha=0.35)
     ax.plot([], [], ":", color="0.5", alpha=0.5, label="rejected mirror (other side)")
+    if any(getattr(tg, "legs", None) is not None and tg.legs.result is not None for tg in result.targets):
+        ax.plot([], [], "D", color="0.3", ms=6, mfc="none", label="zig (leg-wise ML)")
     ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title="tactical picture (batch ML, 95 % "
                                                                                "ellipses)")
     ax.legend(fontsize=8, loc="best")

@@ -244,6 +244,11 @@ class PassiveSettings(Settings):
                                                "by the sequential TMA (bearings only then); [tonal] min_line_snr_db "
                                                "decides whether a line is found at all", unit="dB",
                                           ge=-50, le=100)
+    zig_false_alarm_per_hour: float = setting(0.1, "stated rate of false zigs per hour of a constant-velocity "
+                                                   "target for each target's zig test (tma/zig.py, on 30 s block "
+                                                   "means of its bearings: systems/passive/target_legs.py); a "
+                                                   "target with a zig gets leg-wise TMA rows and its constant-"
+                                                   "velocity answers are not determined", unit="1/h", gt=0, le=10)
     front_end: FrontEndSettings = setting(default_factory=FrontEndSettings, doc="beamforming and peak picking")
     tracker: PassiveTrackerSettings = setting(default_factory=PassiveTrackerSettings,
                                               doc="JPDA_A bearing tracker on the peaks")

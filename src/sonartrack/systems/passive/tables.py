@@ -1,7 +1,9 @@
 """The chain's results as tables (what ``sonartrack passive`` writes) and one summary line per target.
 
 targets.csv: one row per target, per TMA method (``ml``: batch ML, paper P3; ``imm-mgekf``: sequential,
-paper P2), per time of its record; columns: the target and track ids, the method, the side decision
+paper P2; ``legs``: the leg-wise ML of a target with a zig, systems/passive/target_legs.py, after every target's ML
+and IMM-MGEKF rows), per time of its record; columns: the target and track ids, the method, ``leg`` (the 0-based leg
+of the target's legs that the row's time falls in: 0 on every row of a target without a zig), the side decision
 (side at that time -- it changes where the target crosses the array's axis --, side_log_lr = ln L_starboard -
 ln L_port, side_resolved_s), joined_track_ids (the other tracks joined into this target as its fragments, space
 separated; empty when none), the solution columns of
@@ -26,7 +28,7 @@ if TYPE_CHECKING:
     from sonartrack.systems.passive.chain import PassiveResult
     from sonartrack.systems.passive.targets import Target
 
-TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "side", "side_log_lr", "side_resolved_s",
+TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "leg", "side", "side_log_lr", "side_resolved_s",
                      "joined_track_ids"]
 
 
@@ -87,7 +89,7 @@ def blank_undetermined(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: (np.where(det, v, np.nan) if k in RANGE_DEPENDENT_COLUMNS else v) for k, v in cols.items()}
 
 
-def _target_rows(target: Target, result_tma) -> dict[str, np.ndarray]:
+def _target_rows(target: Target, result_tma, method: str | None = None) -> dict[str, np.ndarray]:
     sol = result_tma.solution
     cols = blank_undetermined(solution_columns(sol, result_tma.ownship))
     n = len(cols["time_s"])
@@ -95,7 +97,9 @@ def _target_rows(target: Target, result_tma) -> dict[str, np.ndarray]:
     freq = (np.interp(cols["time_s"], tonal.time_s, tonal.frequency_hz, left=np.nan, right=np.nan)
             if tonal is not None else np.full(n, np.nan))
     head = {"target_id": np.full(n, target.target_id), "track_id": np.full(n, target.track.track_id),
-            "method": np.full(n, result_tma.settings.method), "side": target.side.side_at(cols["time_s"]),
+            "method": np.full(n, method or result_tma.settings.method),
+            "leg": target.legs.leg_of(cols["time_s"]) if target.legs is not None else np.zeros(n, int),
+            "side": target.side.side_at(cols["time_s"]),
             "side_log_lr": np.full(n, target.side.log_likelihood_ratio),
             "side_resolved_s": np.full(n, target.side_resolved_s),
             "joined_track_ids": np.full(n, " ".join(str(i) for i in target.track.joined_track_ids))}
@@ -141,6 +145,8 @@ def targets_columns(result: PassiveResult) -> dict[str, np.ndarray]:
         (:data:`EMPTY_TARGET_COLUMNS`) when there is no target.
     """
     parts = [_target_rows(tg, r) for tg in result.targets for r in (tg.ml, tg.sequential)]
+    parts += [_target_rows(tg, tg.legs.result, "legs") for tg in result.targets
+              if tg.legs is not None and tg.legs.result is not None]
     if not parts:
         return {c: np.array([], dtype=object) for c in EMPTY_TARGET_COLUMNS}
     return {c: stack_column([p[c] for p in parts]) for c in parts[0]}
@@ -258,6 +264,8 @@ def target_line(target: Target) -> str:
                  f"{c['course_std_deg']:.0f} deg, speed {c['speed_kn']:.1f} ± {c['speed_std_kn']:.1f} kn (ML)")
     else:
         line += f"{not_determined_text(c['undetermined_reason'])} by this record (ML)"
+    if target.legs is not None and target.legs.note():
+        line += f"; {target.legs.note()}"
     if target.tonal is not None:
         line += f"; tonal {target.tonal.line_hz:.2f} Hz"
     q = {k: v[-1] for k, v in solution_columns(target.sequential.solution, target.sequential.ownship).items()}

@@ -64,6 +64,7 @@ from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.io.navigation import Navigation
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
+from sonartrack.systems.passive.target_legs import TargetLegs, target_legs, with_legs_verdict
 from sonartrack.tma.record_checks import (
     MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
@@ -124,6 +125,8 @@ class Target:
     mirror_ml: TmaResult | None
     sequential: TmaResult
     tonal: TonalTrack | None
+    #: the zigs and legs of its side-resolved bearings (systems/passive/target_legs.py); None: not tested
+    legs: TargetLegs | None = None
 
 
 def side_resolved_time(t, cone_rad, heading_rad, xy, final: SideDecision, min_log_lr: float) -> float:
@@ -606,17 +609,16 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
         track are left out (:func:`without_neighbour_scans`; reported among the ML's warnings).
     use_frequency_ml : bool
         The ML on bearings + the tonal's frequency (:func:`frequency_ml`) when its frequency is clean enough
-        (:func:`line_tonal`): for a target
-        found through its line (a narrowband target), whose bearings alone rarely determine the range.
+        (:func:`line_tonal`): for a target found through its line (a narrowband target), whose bearings alone rarely
+        determine the range.
 
     Returns
     -------
     Target
-        The side decision, the ML fits of both sides, and the IMM-MGEKF solution, each row with its verdict.
+        Side decision, both sides' ML fits, IMM-MGEKF, each row with its verdict; zigs and legs (:func:`_with_legs`).
     """
     m, left_out = without_neighbour_scans(m, neighbours, stages.min_separation_deg)
-    min_log_lr = stages.settings.min_side_log_lr
-    t = np.asarray(m.time_s, float)
+    min_log_lr, t = stages.settings.min_side_log_lr, np.asarray(m.time_s, float)
     xy, heading = nav.array_at(t)
     side, cone = _side_of(m, t, heading, xy, min_log_lr)
     since = side_resolved_time(t, cone, heading, xy, side, min_log_lr)
@@ -639,12 +641,30 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     ml = ml if left_out is None else replace(ml, warnings=ml.warnings + (left_out,))
+    ml, legs = _with_legs(ml, side, since, (t, chosen, xy, rel, fit, sigma_ml), stages)
     mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag", record_checks=False)
     imm_tonal = _imm_tonal(t, chosen, tonal, stages)
     seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
                        causal=True)
     seq = batch_held(seq, batch_reference(ml, t, chosen, imm_tonal, side.sigma_bearing_rad, stages))
-    return Target(target_id, m, side, since, ml, mirror, seq, tonal)
+    return Target(target_id, m, side, since, ml, mirror, seq, tonal, legs)
+
+
+def _with_legs(ml: TmaResult, side: SideDecision, since: float, record, stages: PassiveStages
+               ) -> tuple[TmaResult, TargetLegs | None]:
+    """(the ML, every row not determined when the record has a zig; the zigs and legs of the side-resolved record,
+    systems/passive/target_legs.py, the legs' rows side-checked as the ML's; None when the side is not resolved: no
+    true bearings to test). ``record``: (times s, chosen side's bearings rad, array centre (n, 2) m, relative sigma,
+    the noise-law CV fit, its sigma_u rad)."""
+    if side.side == "unresolved":
+        return ml, None
+    t, chosen, xy, rel, fit, sigma_u = record
+    s = stages.settings
+    legs = target_legs(t, chosen, xy, rel, fit, sigma_u, ml, false_alarm_per_hour=s.zig_false_alarm_per_hour,
+                       max_range_sd_fraction=s.verdict.max_range_sd_fraction, sigma_floor_rad=SIGMA_U_FLOOR_RAD)
+    if legs.result is None:
+        return ml, legs
+    return with_legs_verdict(ml, legs), replace(legs, result=side_checked(legs.result, side, since, causal=False))
 
 
 def _side_of(m: TrackMeasurements, t, heading, xy, min_log_lr: float) -> tuple[SideDecision, np.ndarray]:

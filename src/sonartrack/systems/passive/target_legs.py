@@ -1,0 +1,244 @@
+"""A passive target's legs: the zigs of its side-resolved bearings and the leg-wise ML over them (tma/zig.py,
+tma/legs.py), for every target of the chain (systems/passive/targets.py :func:`~.targets.solve_target`).
+
+Record. The chain's bearings come every window (1 s by default) with errors that are correlated from window to
+window and a noise that follows the line array's law (sigma_n = sigma_u r_n, :func:`~.targets.line_array_relative_
+sigma`). The zig test's threshold is calibrated on white bearings 20-60 s apart (tma/zig.py), and its sequential
+fits on thousands of bearings cost minutes; so the test runs on block means over :data:`LEG_BLOCK_S` (the chain's
+residual block, tma/record_checks.py ``RESIDUAL_BLOCK_S``): per block, at its weighted mean time t_b,
+
+    z_b = h_cv(t_b) + sum_n w_n e_n / sum_n w_n,      w_n = 1 / r_n^2,      sigma_b = sigma_u sqrt(kappa / sum_n w_n)
+
+with e_n the residuals of the chain's noise-law CV fit (:func:`~.targets.u_weighted_fit`), h_cv(t_b) its bearing from
+the array's position at t_b (so that the bearing's curvature over the block does not enter the mean) and kappa the
+correlation inflation of the weighted residuals (tma/solve.py ``correlation_inflation``, as the ML's covariance
+states it; an AR(1) error's block mean has variance sigma^2 kappa / m). The test's false-alarm rate is the chain's
+``zig_false_alarm_per_hour`` setting. A record of fewer than 8 blocks (240 s) is not tested. Where the test finds a
+zig, the CV fit's sigma_u and kappa hold the zig's misfit too (the 2-leg world of tests/systems/passive/
+test_target_legs.py: the legs' range sd 2.3 km for an error of 0.05 km); so the noise is measured again about the
+legs (sigma_u^2 = sum (e_n / r_n)^2 / (n - P), P the legs' parameters and change times), the block means taken about
+the legs, and the test and leg fit run again on them: that second run's zigs and legs are the answer.
+
+Answers. With a zig: the legs (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times refined) give rows of
+method ``legs`` at the record's bearing times (state and covariance from the leg fit; the covariance widened by
+the block residuals' scale when they exceed their stated noise, undetermined beyond
+:data:`~sonartrack.tma.record_checks.MAX_RESIDUAL_SCALE`; a row whose range sd exceeds the verdict's
+``max_range_sd_fraction`` of its range is undetermined), and every constant-velocity answer of the target (the ML
+and, through :func:`~sonartrack.tma.record_verdict.batch_held`, the IMM-MGEKF held to it) is not determined, reason
+``target manoeuvred: zig at T s (A-B)`` (:data:`~sonartrack.tma.verdict.MANOEUVRED`). Without one: nothing changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sonartrack.core.angles import wrap_angle
+from sonartrack.core.errors import InputError
+from sonartrack.core.gaussian import chi2_quantile
+from sonartrack.tma.legs import LegFit, _state_map
+from sonartrack.tma.record_checks import MAX_RESIDUAL_SCALE, RESIDUAL_ALPHA, RESIDUAL_BLOCK_S
+from sonartrack.tma.record_verdict import undetermined
+from sonartrack.tma.records import TmaSolution
+from sonartrack.tma.solution_table import solution_columns
+from sonartrack.tma.solve import TmaResult, correlation_inflation
+from sonartrack.tma.verdict import INCONSISTENT_RESIDUALS, MANOEUVRED, UNOBSERVABLE, with_reasons
+from sonartrack.tma.zig import Zig, detect_zigs
+
+#: the block over which the chain's bearings are averaged for the zig test (module doc)
+LEG_BLOCK_S = RESIDUAL_BLOCK_S
+#: fewest blocks the zig test runs on (tma/zig.py :func:`~sonartrack.tma.zig.detect_zigs` needs 8)
+MIN_LEG_BLOCKS = 8
+
+
+@dataclass(frozen=True, slots=True)
+class TargetLegs:
+    """A target's zigs and legs: ``zigs`` (empty: none found, or not tested -- ``message`` says which), ``fit`` the
+    leg-wise ML on the block means (None without a zig), ``result`` its rows (method ``legs``) at the record's
+    bearing times (None without a zig)."""
+
+    zigs: tuple[Zig, ...]
+    fit: LegFit | None
+    result: TmaResult | None
+    message: str
+
+    def leg_of(self, time_s) -> np.ndarray:
+        """The 0-based leg index at each time (0 everywhere without a zig): leg k runs up to its change time."""
+        t = np.asarray(time_s, float)
+        if self.fit is None:
+            return np.zeros(t.shape, int)
+        return np.searchsorted(self.fit.change_times_s, t, side="left").astype(int)
+
+    def note(self) -> str:
+        """The summary line's words on the zigs: "zig at 612 s (598-630), 2 legs; current leg 231 ± 3 deg, 8.1 ±
+        0.4 kn, range 7.21 ± 0.40 km (legs)", or "" without a zig."""
+        if not self.zigs or self.fit is None:
+            return ""
+        zigs = ", ".join(zig_text(z) for z in self.zigs)
+        leg = self.fit.legs[-1]
+        text = (f"zig{'s' if len(self.zigs) > 1 else ''} at {zigs}, {len(self.fit.legs)} legs; current leg "
+                f"{leg.course_deg:.0f} ± {leg.course_sd_deg:.0f} deg, {leg.speed_kn:.1f} ± {leg.speed_sd_kn:.1f} kn")
+        cols = solution_columns(self.result.solution, self.result.ownship)
+        if cols["range_determined"][-1]:
+            return text + f", range {cols['range_m'][-1] / 1e3:.2f} ± {cols['range_std_m'][-1] / 1e3:.2f} km (legs)"
+        return text + f" (legs: range not determined, {cols['undetermined_reason'][-1]})"
+
+
+def block_means(t, z, xy, relative_sigma, position_m, sigma_u: float, block_s: float = LEG_BLOCK_S):
+    """The record's bearings as block means about a fitted track (module doc).
+
+    Parameters
+    ----------
+    t, z : ndarray (n,)
+        Times (s) and the chosen side's true bearings (rad).
+    xy : ndarray (n, 2)
+        The array centre (m) at those times.
+    relative_sigma : ndarray (n,)
+        r_n, each bearing's noise relative to sigma_u.
+    position_m : callable
+        Times (k,) -> the fitted target's positions (k, 2) (m): the chain's CV fit, or the legs.
+    sigma_u : float
+        The bearing noise at broadside (rad).
+    block_s : float
+        The block length (s).
+
+    Returns
+    -------
+    tuple of ndarray
+        Block times (m,), bearings (m,) rad, array centre (m, 2), sd (m,) rad.
+    """
+    w = 1.0 / np.asarray(relative_sigma, float) ** 2 * np.ones(len(t))
+    e = _residuals(t, z, xy, position_m)
+    kappa = correlation_inflation(e * np.sqrt(w))
+    _, idx = np.unique(np.floor((t - t[0]) / block_s).astype(int), return_inverse=True)
+    sw = np.bincount(idx, w)
+    tb = np.bincount(idx, w * t) / sw
+    own = np.column_stack([np.interp(tb, t, xy[:, 0]), np.interp(tb, t, xy[:, 1])])
+    pb = position_m(tb)
+    zb = wrap_angle(np.arctan2(pb[:, 0] - own[:, 0], pb[:, 1] - own[:, 1]) + np.bincount(idx, w * e) / sw)
+    return tb, zb, own, sigma_u * np.sqrt(kappa / sw)
+
+
+def _residuals(t, z, xy, position_m) -> np.ndarray:
+    """wrap(z - h(t)) of bearings z from ``xy`` to the fitted track (rad)."""
+    p = position_m(t)
+    return wrap_angle(z - np.arctan2(p[:, 0] - xy[:, 0], p[:, 1] - xy[:, 1]))
+
+
+def measured_sigma_u(t, z, xy, relative_sigma, position_m, n_params: int, floor_rad: float) -> float:
+    """sigma_u^2 = sum_n (e_n / r_n)^2 / (n - n_params), as the chain measures it about its CV fit
+    (:func:`~.targets.u_weighted_fit`), floored at ``floor_rad``."""
+    e = _residuals(t, z, xy, position_m) / relative_sigma
+    return max(float(np.sqrt(np.sum(e**2) / max(len(t) - n_params, 1))), floor_rad)
+
+
+def legs_rows(fit: LegFit, t, record, ownship, settings) -> TmaResult:
+    """The leg-wise solution's rows (solution method ``legs``) at times ``t``: state and covariance from ``fit``;
+    ``record``, ``ownship`` and ``settings`` those of the target's ML."""
+    c = fit.change_times_s
+    pos, _ = fit.position_at(t)
+    k = np.searchsorted(c, t, side="left")
+    vel = np.asarray(fit.params[2:], float).reshape(-1, 2)[k]
+    L = np.stack([_state_map(fit.params, c, fit.t0_s, ti, fit.refined) for ti in t])
+    with np.errstate(invalid="ignore"):
+        cov = L @ fit.covariance @ np.swapaxes(L, 1, 2)
+    solution = TmaSolution(time_s=np.asarray(t, float), state=np.column_stack([pos, vel]), covariance=cov,
+                           method="legs")
+    return TmaResult(solution=solution, record=record, ownship=ownship, settings=settings)
+
+
+def _checked_rows(result: TmaResult, fit: LegFit, max_range_sd_fraction: float) -> TmaResult:
+    """The legs' rows with their verdict: the block residuals' scale (covariance widened by it when their chi-square
+    exceeds its 1 - RESIDUAL_ALPHA point, undetermined beyond MAX_RESIDUAL_SCALE), then each row's range sd."""
+    scale = fit.objective / max(fit.dof, 1)
+    if fit.dof > 0 and fit.objective > chi2_quantile(1.0 - RESIDUAL_ALPHA, fit.dof):
+        if scale > MAX_RESIDUAL_SCALE:
+            return undetermined(result, INCONSISTENT_RESIDUALS, f"the legs' block residuals are {scale:.3g} times "
+                                f"their stated variance (more than {MAX_RESIDUAL_SCALE:g})")
+        sol = result.solution
+        result = replace(result, solution=replace(sol, covariance=np.asarray(sol.covariance) * scale),
+                         warnings=result.warnings + (f"legs: covariance widened by the block residuals' scale "
+                                                     f"{scale:.3g}",))
+    if not fit.converged:
+        return undetermined(result, UNOBSERVABLE, "the leg-wise ML did not converge")
+    cols = solution_columns(result.solution, result.ownship)
+    with np.errstate(invalid="ignore"):
+        loose = ~(cols["range_std_m"] <= max_range_sd_fraction * cols["range_m"])
+    return replace(result, solution=with_reasons(result.solution, np.where(loose, UNOBSERVABLE, "")))
+
+
+def manoeuvred_reason(zigs) -> str:
+    """The reason of a CV answer that the zigs reject: "target manoeuvred: zig at 612 s (598-630)"."""
+    return f"{MANOEUVRED}: zig at " + ", ".join(zig_text(z) for z in zigs)
+
+
+def zig_text(zig: Zig) -> str:
+    """"612 s (598-630)": the zig's time and its interval, widened to hold the time (tma/zig.py reads the interval
+    from a profile on the midpoints between bearings, here 30 s apart, and the time from the joint leg fit, which
+    lies between them: the interval alone can miss it)."""
+    lo, hi = min(zig.interval_s[0], zig.time_s), max(zig.interval_s[1], zig.time_s)
+    return f"{zig.time_s:.0f} s ({lo:.0f}-{hi:.0f})"
+
+
+def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaResult, *,
+                false_alarm_per_hour: float, max_range_sd_fraction: float, sigma_floor_rad: float = 0.0
+                ) -> TargetLegs:
+    """Zigs and legs of one target's record (module doc).
+
+    Parameters
+    ----------
+    t, chosen : ndarray (n,)
+        The record's times (s) and the chosen side's true bearings (rad).
+    xy : ndarray (n, 2)
+        The array centre (m).
+    relative_sigma : ndarray (n,)
+        Each bearing's noise relative to ``sigma_u`` (the line array's law).
+    cv_fit : BatchEstimate or None
+        The chain's noise-law CV fit (None: no test).
+    sigma_u : float
+        Its sigma_u (rad).
+    ml : TmaResult
+        The target's ML (its ownship and settings carried to the legs' rows).
+    false_alarm_per_hour : float
+        The zig test's stated false-alarm rate.
+    max_range_sd_fraction : float
+        A legs row whose range sd exceeds this fraction of its range is not determined.
+    sigma_floor_rad : float
+        The least sigma_u measured about the legs (the chain's ``SIGMA_U_FLOOR_RAD``).
+
+    Returns
+    -------
+    TargetLegs
+        The zigs and legs; no zig with the reason in ``message`` when the record is too short or the test fails.
+    """
+    t, chosen, xy = np.asarray(t, float), np.asarray(chosen, float), np.asarray(xy, float)
+    if cv_fit is None:
+        return TargetLegs((), None, None, "no constant-velocity fit to test")
+    if t[-1] - t[0] < MIN_LEG_BLOCKS * LEG_BLOCK_S:
+        return TargetLegs((), None, None, f"record shorter than {MIN_LEG_BLOCKS * LEG_BLOCK_S:.0f} s: no zig test")
+    try:
+        with np.errstate(all="ignore"):
+            report = detect_zigs(*block_means(t, chosen, xy, relative_sigma, lambda tt: cv_fit.state_at(tt)[0][:, :2],
+                                              sigma_u), false_alarm_per_hour=false_alarm_per_hour)
+            if report.zigs and report.legs is not None:  # the noise again, about the legs (module doc)
+                track = report.legs.position_at
+                sigma_legs = measured_sigma_u(t, chosen, xy, relative_sigma, lambda tt: track(tt)[0],
+                                              len(report.legs.params) + len(report.zigs), sigma_floor_rad)
+                report = detect_zigs(*block_means(t, chosen, xy, relative_sigma, lambda tt: track(tt)[0], sigma_legs),
+                                     false_alarm_per_hour=false_alarm_per_hour)
+    except (InputError, np.linalg.LinAlgError, ValueError) as failure:
+        return TargetLegs((), None, None, f"zig test not run: {failure}")
+    if not report.zigs or report.legs is None:
+        return TargetLegs(report.zigs, None, None, report.message or "no zig")
+    rows = legs_rows(report.legs, t, ml.record, ml.ownship, ml.settings)
+    rows = _checked_rows(rows, report.legs, max_range_sd_fraction)
+    return TargetLegs(report.zigs, report.legs, rows, "")
+
+
+def with_legs_verdict(result: TmaResult, legs: TargetLegs) -> TmaResult:
+    """A constant-velocity answer of the target, every row not determined when its legs hold a zig."""
+    if not legs.zigs or legs.fit is None:
+        return result
+    reason = manoeuvred_reason(legs.zigs)
+    return undetermined(result, reason, f"{reason}: the bearings reject constant velocity ({len(legs.fit.legs)} legs)")
