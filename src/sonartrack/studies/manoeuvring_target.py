@@ -24,7 +24,8 @@ On each record (:func:`run_trial`):
   that must also find the time does better;
 * the current leg: the joint leg fit's last leg (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times
   refined) at the last bearing, determined when its range sd is below its range and the fit's own whiteness tests
-  pass (tma/legs.py: a missed zig leaves a leg whose residuals reject it), its position error against the Cramer-Rao bound of the true legs with the change
+  pass (tma/legs.py: a missed zig leaves a leg whose residuals reject it), its position error against the
+  Cramer-Rao bound of the true legs with the change
   times unknown (:func:`~sonartrack.tma.legs.crb_legs`), and against its own covariance;
 * the constant-velocity verdict: an independent chi-square test of the constant-velocity ML fit's residuals
   (each bearing's own sd, multi-start: pseudo-linear, far, and the true first leg; alpha ``cv_alpha``) decides

@@ -273,7 +273,9 @@ def _refined_zigs(t, z, own, sig, zigs, legs: LegFit) -> tuple[Zig, ...]:
             continue
         ref = np.r_[legs.position_at(t[sel][:1])[0][0], legs.params[2 + 2 * k:6 + 2 * k]]  # this pair of legs
         located = _locate(z[sel], t[sel], own[sel], sig[sel], 0.0, zig.detected_s, (c - 900.0, c + 900.0), ref)
-        out.append(Zig(time_s=float(c), interval_s=located.interval_s, detected_s=zig.detected_s, glr=zig.glr))
+        lo, hi = located.interval_s  # the grid's interval, widened to hold the joint fit's time between its points
+        out.append(Zig(time_s=float(c), interval_s=(min(lo, float(c)), max(hi, float(c))), detected_s=zig.detected_s,
+                       glr=zig.glr))
     return tuple(out)
 
 
