@@ -42,7 +42,9 @@ this check: 26 of 91 determined current legs beyond 5 of their own sds, every on
 So the fit's residuals are tested as ``sonartrack tma`` tests a constant-velocity fit (tma/motion_verdict.py): the
 lag-1 whiteness test of tma/record_checks.py (:func:`~sonartrack.tma.record_checks.whiteness_check`, at
 ``motion_alpha``; no stated sd needed, the bearings' resolution as its floor) on the whitened residuals of each
-leg, and of the whole record. A leg whose residuals reject it is not determined, reason
+leg, and of the whole record; and their chi-square against the stated sd (chi-square(n - p) upper tail at
+``motion_alpha``: a missed zig whose residuals the lag-1 test does not see still adds misfit; with the sd estimated
+from the same residuals it cannot fail). A leg whose residuals reject it is not determined, reason
 ``target manoeuvred: residuals reject constant velocity on leg k, largest A-B s`` (the span from
 :func:`~sonartrack.tma.record_checks.residual_span`); since the position is continuous, one leg's misfit biases
 the others', so every other leg is then not determined either (reason: leg k's).
@@ -56,6 +58,7 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import require
+from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.tma.batch_ml import _damped_step, bearing_model
 from sonartrack.tma.record_checks import residual_span, whiteness_check
@@ -460,6 +463,9 @@ def motion_rejection(time_s, residual, sigma_rad, change_times_s, n_params: int,
             return _span_reason(f"on leg {k + 1}" if K else "on its one leg", t[sel], w[sel])
     if K and not whiteness_check(w, alpha, floor, n_params=n_params).white:
         return _span_reason("over the record's legs", t, w)
+    dof = len(w) - n_params
+    if dof > 0 and float(w @ w) > chi2_quantile(1.0 - alpha, dof):  # more misfit than the stated noise allows
+        return _span_reason(f"(chi-square {float(w @ w):.0f} for {dof} degrees of freedom at the stated sd)", t, w)
     return ""
 
 
