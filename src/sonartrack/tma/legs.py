@@ -504,8 +504,8 @@ def _leg_summary(theta, c, cov, t, own, k: int, refined: bool, max_range_sd_frac
     cond = _correlation_condition(P)
     determined = bool(np.isfinite(rng_sd) and rng_sd <= max_range_sd_fraction * rng)
     reason = "" if determined else (
-        f"range not determined on leg {k + 1}: sd {rng_sd / 1e3:.3g} km for a range of {rng / 1e3:.3g} km "
-        f"(information condition {cond:.2g})")
+        f"range not determined on leg {k + 1}: its sd exceeds {max_range_sd_fraction:g} of the range (information "
+        f"condition {cond:.2g})")  # no number for a range the bearings do not give
     return Leg(start_s=float(start), end_s=float(end), start_sd_s=float(sd_c[k - 1]) if k else 0.0,
                end_sd_s=float(sd_c[k]) if k < K else 0.0, course_deg=course, course_sd_deg=course_sd,
                speed_kn=speed, speed_sd_kn=speed_sd, state=state, state_cov=P, range_m=rng, range_sd_m=rng_sd,
