@@ -47,7 +47,9 @@ def test_tma_tracks_the_target_and_writes_outputs(files, tmp_path, capsys, metho
     code, stdout, err = run(capsys, "tma", "--bearings", d / "bearings.csv", "--ownship", d / "own.parquet",
                             "--frequency", "--method", method, "--out", out)
     assert code == 0, err
-    assert stdout.count("\n") == 1 and f"tma {method}" in stdout and "f0 300.0" in stdout
+    lines = stdout.splitlines()  # the summary, then the zigs and legs (issue 30), one line each
+    assert f"tma {method}" in lines[0] and "f0 300.0" in lines[0]
+    assert lines[1].startswith("legs: 0 zigs; 1 leg") and lines[2].startswith("  leg 1 (current)")
     df = pd.read_csv(out / "tma_solution.csv")
     assert len(df) == len(truth)
     last = df.iloc[-1]
@@ -56,7 +58,7 @@ def test_tma_tracks_the_target_and_writes_outputs(files, tmp_path, capsys, metho
     assert last.range_std_m > 0 and last.course_std_deg > 0
     png = (out / "tactical_picture.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in out.iterdir()) == ["tactical_picture.png", "tma_solution.csv"]
+    assert sorted(p.name for p in out.iterdir()) == ["tactical_picture.png", "tma_legs.csv", "tma_solution.csv"]
 
 
 def test_bearings_only_with_config_file(files, tmp_path, capsys):
@@ -173,7 +175,7 @@ def test_the_command_calls_the_library_with_the_resolved_settings(files, tmp_pat
     s = calls["settings"]
     assert (s.method, s.sigma_bearing_deg, s.batch.sl_db, s.batch.freq_hz) == ("ml", 2.0, 150.0, 300.0)
     assert calls["n"] == len(truth) and calls["nav"] == 164 and calls["env"].name == "east-summer"
-    assert err == "warning: a warning\n" and stdout.startswith("tma ml: ") and stdout.count("\n") == 1
+    assert err == "warning: a warning\n" and stdout.startswith("tma ml: ") and "\nlegs: " in stdout
     assert len(pd.read_csv(tmp_path / "o" / "tma_solution.csv")) == len(truth)
     assert (tmp_path / "o" / "tactical_picture.png").exists()
 

@@ -12,6 +12,13 @@ its record (tma/motion_verdict.py): a target the bearings show changing course o
 with the time span the residuals point at; without ``--sigma-bearing-deg`` the bearing sd is estimated from the
 record; a given one that the residuals contradict is reported.
 
+Every record's zigs and legs are found too (tma/leg_solution.py: the sequential GLR zig detector and the leg-wise
+ML with its own residual verdict): printed after the summary, one line for the zigs and one per leg (span, course,
+speed, range at its end with sds, or "range not determined (reason)"), written as ``tma_legs.csv`` and drawn on the
+tactical picture; when the method's answer is not determined (a target that manoeuvred) and the current leg is,
+the current leg's solution is printed as the answer, and from a determined current leg the observer advice (the
+next ownship leg that most reduces the predicted range sd, tma/advice.py).
+
 Settings: :class:`sonartrack.tma.settings.TmaSettings`, from its defaults, then a ``--config`` TOML file,
 then the options; ``--print-config`` prints the resolved settings.
 """
@@ -55,7 +62,7 @@ def tma_cmd(
     from sonartrack.core.errors import require
     from sonartrack.io.environment import TLDiskCache
     from sonartrack.report.figures.tma import write_tactical_picture
-    from sonartrack.systems.tma.files import PNG_NAME, read_tma_inputs, write_tma_solution
+    from sonartrack.systems.tma.files import PNG_NAME, read_tma_inputs, write_tma_legs, write_tma_solution
     from sonartrack.systems.tma.run import run_tma
 
     settings = resolve(TmaSettings, config, method=method, frequency=frequency,
@@ -67,9 +74,13 @@ def tma_cmd(
     inputs = read_tma_inputs(bearings, ownship, settings)
     with output_folder(out):
         result = run_tma(inputs.record, inputs.ownship, settings, environment=inputs.environment,
-                         tl_store=TLDiskCache())
+                         tl_store=TLDiskCache(), legs=True)
         for w in result.warnings:
             typer.echo(f"warning: {w}", err=True)
         csv = write_tma_solution(result, out)
+        legs_csv = write_tma_legs(result, out)
         png = write_tactical_picture(out / PNG_NAME, result)
-    typer.echo(f"{result.summary()}; wrote {csv} and {png}")
+    wrote = ", ".join(str(p) for p in (csv, legs_csv) if p is not None)
+    typer.echo(f"{result.summary()}; wrote {wrote} and {png}")
+    for line in result.leg_lines():
+        typer.echo(line)

@@ -35,23 +35,43 @@ parameters (a leg's course, speed, range) gets the bound mapped through its grad
 the condition number of the leg state's information in correlation form (scale-free: 1 is perfect, 1e8 is a
 direction the bearings do not see). A leg whose range sd exceeds ``max_range_sd_fraction`` of its range (the
 value of the verdict's ``max_range_sd_fraction``, tma/settings.py) is not determined and says so.
+
+The fit's own verdict. The covariance is the bound of the *model*: a zig the segmentation missed leaves a leg
+whose velocity was not constant, and its covariance then claims far too much (the manoeuvring-target study, before
+this check: 26 of 91 determined current legs beyond 5 of their own sds, every one on a record with a missed zig).
+So the fit's residuals are tested as ``sonartrack tma`` tests a constant-velocity fit (tma/motion_verdict.py): the
+lag-1 whiteness test of tma/record_checks.py (:func:`~sonartrack.tma.record_checks.whiteness_check`, at
+``motion_alpha``; no stated sd needed, the bearings' resolution as its floor) on the whitened residuals of each
+leg, and of the whole record; and their chi-square against the stated sd (chi-square(n - p) upper tail at
+``motion_alpha``: a missed zig whose residuals the lag-1 test does not see still adds misfit; with the sd estimated
+from the same residuals it cannot fail). A leg whose residuals reject it is not determined, reason
+``target manoeuvred: residuals reject constant velocity on leg k, largest A-B s`` (the span from
+:func:`~sonartrack.tma.record_checks.residual_span`); since the position is continuous, one leg's misfit biases
+the others', so every other leg is then not determined either (reason: leg k's).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import require
+from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.tma.batch_ml import _damped_step, bearing_model
+from sonartrack.tma.record_checks import residual_span, whiteness_check
+from sonartrack.tma.verdict import MANOEUVRED
 
 #: a leg whose range sd exceeds this fraction of its range is not determined (as verdict.max_range_sd_fraction)
 MAX_RANGE_SD_FRACTION = 1.0
 #: each leg needs at least this many bearings strictly inside it
 MIN_BEARINGS_PER_LEG = 2
+#: significance of the leg fit's whiteness tests (each leg's and the whole record's; as verdict.alpha)
+MOTION_ALPHA = 1e-3
+#: the bearings' resolution (deg), the whiteness test's floor (as tma/motion_verdict.py's SIGMA_FLOOR_DEG)
+RESOLUTION_DEG = 0.01
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +122,15 @@ class LegFit:
     iterations: int
     converged: bool
     refined: bool
+    #: whitened residuals wrap(z - h) / sigma at the bearings, and the motion test's phrase ("" when it passed or
+    #: was not run)
+    residuals: np.ndarray | None = None
+    motion_note: str = ""
+
+    @property
+    def manoeuvre_rejected(self) -> bool:
+        """Whether the fit's residuals reject the piecewise-constant-velocity model (module doc)."""
+        return bool(self.motion_note)
 
     def position_at(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """Positions (n, 2) (m) and their covariances (n, 2, 2) at times ``t_s`` (s, same clock as ``t0_s``)."""
@@ -339,7 +368,8 @@ def _initial_fit(z, t, own, sig, c, params_init, max_iter: int, tol: float):
 
 def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine: bool = True,
              search_half_width_s: float = 900.0, params_init=None, max_iter: int = 100, tol: float = 1e-10,
-             max_range_sd_fraction: float = MAX_RANGE_SD_FRACTION) -> LegFit:
+             max_range_sd_fraction: float = MAX_RANGE_SD_FRACTION,
+             motion_alpha: float | None = MOTION_ALPHA) -> LegFit:
     """Leg-wise bearings-only ML (module doc): piecewise-constant velocity, continuous position, velocity changes
     at ``change_times_s``; with ``refine`` the change times are estimated too (profile, then joint Gauss-Newton).
 
@@ -364,11 +394,14 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
         Levenberg-Marquardt iteration limit and relative cost decrease that ends it.
     max_range_sd_fraction : float
         A leg whose range sd exceeds this fraction of its range is not determined.
+    motion_alpha : float or None
+        Significance of the fit's own whiteness tests (module doc); None: not tested.
 
     Returns
     -------
     LegFit
-        Parameters, change times, covariance (inverse Fisher information at the estimate), legs, final position.
+        Parameters, change times, covariance (inverse Fisher information at the estimate), legs (not determined
+        where the residuals reject them), final position.
     """
     t, z, own, sig, c = _check_inputs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s)
     theta, e, Jac, cost, it, conv = _initial_fit(z, t, own, sig, c, params_init, max_iter, tol)
@@ -382,12 +415,64 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
     except np.linalg.LinAlgError:
         cov = np.full((Jac.shape[1],) * 2, np.inf)
     legs = tuple(_leg_summary(theta, c, cov, t, own, k, refined, max_range_sd_fraction) for k in range(len(c) + 1))
+    note = "" if motion_alpha is None else motion_rejection(t, e, sig, c, Jac.shape[1], motion_alpha)
+    if note:
+        legs = tuple(replace(leg, determined=False, reason=note) for leg in legs)
     L = _state_map(theta, c, t[0], t[-1], refined)[:2]
     with np.errstate(invalid="ignore"):
         p_cov = L @ cov @ L.T
     return LegFit(params=theta, change_times_s=c, covariance=cov, t0_s=float(t[0]), t_end_s=float(t[-1]), legs=legs,
                   position_end_m=_positions(theta, c, t[0], t[-1:])[0], position_end_cov=p_cov, objective=cost,
-                  dof=len(t) - Jac.shape[1], iterations=it, converged=bool(conv), refined=refined)
+                  dof=len(t) - Jac.shape[1], iterations=it, converged=bool(conv), refined=refined,
+                  residuals=np.asarray(e, float), motion_note=note)
+
+
+def motion_rejection(time_s, residual, sigma_rad, change_times_s, n_params: int, alpha: float) -> str:
+    """The leg fit's own verdict (module doc): "" when its whitened residuals pass the whiteness test on every leg
+    and over the record, else the reason naming the first leg that fails (or the record) and its span.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (n,)
+        Bearing times (s).
+    residual : ndarray, shape (n,)
+        Whitened residuals wrap(z - h) / sigma of the leg fit.
+    sigma_rad : ndarray, shape (n,)
+        Bearing noise sd (rad): the resolution floor is whitened by it.
+    change_times_s : ndarray, shape (K,)
+        The fit's change times (s).
+    n_params : int
+        Parameters fitted over the record (2K + 4 [+ K]).
+    alpha : float
+        Significance of each test.
+
+    Returns
+    -------
+    str
+        "" or "target manoeuvred: residuals reject constant velocity on leg k, largest A-B s".
+    """
+    t, w = np.asarray(time_s, float), np.asarray(residual, float)
+    floor = float(np.radians(RESOLUTION_DEG) / np.median(sigma_rad))
+    if not np.all(np.isfinite(w)):
+        return ""
+    leg_of = np.searchsorted(np.asarray(change_times_s, float), t, side="left")
+    K = len(change_times_s)
+    for k in range(K + 1):
+        sel = leg_of == k
+        if sel.sum() >= 8 and not whiteness_check(w[sel], alpha, floor, n_params=4).white:
+            return _span_reason(f"on leg {k + 1}" if K else "on its one leg", t[sel], w[sel])
+    if K and not whiteness_check(w, alpha, floor, n_params=n_params).white:
+        return _span_reason("over the record's legs", t, w)
+    dof = len(w) - n_params
+    if dof > 0 and float(w @ w) > chi2_quantile(1.0 - alpha, dof):  # more misfit than the stated noise allows
+        return _span_reason(f"(chi-square {float(w @ w):.0f} for {dof} degrees of freedom at the stated sd)", t, w)
+    return ""
+
+
+def _span_reason(where: str, t, w) -> str:
+    span = residual_span(t, w, 1.0)
+    at = f", largest {span[0]:.0f}-{span[1]:.0f} s" if span is not None else ""
+    return f"{MANOEUVRED}: residuals reject constant velocity {where}{at}"
 
 
 def _course_speed(v, P):
@@ -419,8 +504,8 @@ def _leg_summary(theta, c, cov, t, own, k: int, refined: bool, max_range_sd_frac
     cond = _correlation_condition(P)
     determined = bool(np.isfinite(rng_sd) and rng_sd <= max_range_sd_fraction * rng)
     reason = "" if determined else (
-        f"range not determined on leg {k + 1}: sd {rng_sd / 1e3:.3g} km for a range of {rng / 1e3:.3g} km "
-        f"(information condition {cond:.2g})")
+        f"range not determined on leg {k + 1}: its sd exceeds {max_range_sd_fraction:g} of the range (information "
+        f"condition {cond:.2g})")  # no number for a range the bearings do not give
     return Leg(start_s=float(start), end_s=float(end), start_sd_s=float(sd_c[k - 1]) if k else 0.0,
                end_sd_s=float(sd_c[k]) if k < K else 0.0, course_deg=course, course_sd_deg=course_sd,
                speed_kn=speed, speed_sd_kn=speed_sd, state=state, state_cov=P, range_m=rng, range_sd_m=rng_sd,

@@ -32,7 +32,7 @@ from __future__ import annotations
 import warnings
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -40,6 +40,10 @@ from sonartrack.core.errors import InputError, require
 from sonartrack.tma.record_checks import BearingSd
 from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution, check_coverage
 from sonartrack.tma.settings import BATCH_METHODS, SEQUENTIAL_METHODS, TmaSettings
+
+if TYPE_CHECKING:
+    from sonartrack.tma.advice import ObserverAdvice
+    from sonartrack.tma.leg_solution import LegSolution
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,6 +66,10 @@ class TmaResult:
     notes: tuple[str, ...] = ()
     #: the bearing noise sd the record's constant-velocity residuals measure, with its interval (record checks)
     bearing_sd: BearingSd | None = None
+    #: the record's zigs and legs (tma/leg_solution.py; set by systems/tma/run.py ``run_tma(..., legs=True)``)
+    legs: LegSolution | None = None
+    #: the next ownship leg advised from the current leg's solution (tma/advice.py; None: not determined)
+    advice: ObserverAdvice | None = None
 
     def summary(self) -> str:
         """One line: the record, and the target's range, bearing, course and speed at the last time.
@@ -96,6 +104,53 @@ class TmaResult:
         if not s.is_sequential and s.batch.window_s is not None:
             line += f", batch on the first {s.batch.window_s:g} s then a sequential EKF"
         return line + "".join(f"; {n}" for n in self.notes)
+
+    def leg_lines(self) -> list[str]:
+        """The zigs and legs (tma/leg_solution.py), the current leg's answer when the method's last row is not
+        determined and the current leg is, and the advice: lines printed after :meth:`summary` (none without legs).
+
+        Returns
+        -------
+        list of str
+            The lines.
+        """
+        if self.legs is None:
+            return []
+        out = self.legs.lines()
+        leg = self.legs.current
+        if leg is not None and not self.solution.range_flags()[-1] and len(self.legs.legs) > 1:
+            out.append(current_leg_text(leg, self.ownship, float(self.record.time_s[-1])))
+        if self.advice is not None:
+            out.append(self.advice.line())
+        return out
+
+
+def current_leg_text(leg, ownship: OwnshipTrack, time_s: float) -> str:
+    """The current leg's answer in a phrase: range and bearing at the last time, course and speed, with sds.
+
+    Parameters
+    ----------
+    leg : Leg
+        The current (last) leg (tma/legs.py), state at ``time_s``.
+    ownship : OwnshipTrack
+        The sensor's track (m).
+    time_s : float
+        The last bearing's time (s).
+
+    Returns
+    -------
+    str
+        "current leg (leg-wise ML): at T s the target is at range R ± S km, bearing ..., course ..., speed ...".
+    """
+    d = leg.state[:2] - ownship.position_at(time_s)
+    r = float(np.hypot(*d))
+    u = np.array([d[1], -d[0]]) / max(r * r, 1e-300)  # d bearing / d position (rad / m)
+    with np.errstate(invalid="ignore"):
+        b_sd = float(np.degrees(np.sqrt(u @ leg.state_cov[:2, :2] @ u)))
+    return (f"current leg (leg-wise ML, since {leg.start_s:.0f} s): at {time_s:g} s the target is at range "
+            f"{leg.range_m / 1e3:.2f} ± {leg.range_sd_m / 1e3:.2f} km, bearing "
+            f"{np.degrees(np.arctan2(d[0], d[1])) % 360:.1f} ± {b_sd:.1f} deg, course {leg.course_deg:.0f} ± "
+            f"{leg.course_sd_deg:.0f} deg, speed {leg.speed_kn:.1f} ± {leg.speed_sd_kn:.1f} kn")
 
 
 def check_settings(settings: TmaSettings) -> None:

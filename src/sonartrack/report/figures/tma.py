@@ -1,4 +1,4 @@
-"""TMA pictures for the command line: the tactical picture of a solved record."""
+"""TMA pictures for the command line: the tactical picture of a solved record, with the target's legs."""
 
 from __future__ import annotations
 
@@ -41,18 +41,45 @@ def ellipses(ax, state, covariance, n_ellipses: int, color: str = "r", alpha: fl
                              alpha=alpha, zorder=2, label=label if j == 0 else None))
 
 
-def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str = "TMA"):
-    """Ownship track, measured bearing lines, estimated target track and its 95 % position ellipses (Figure).
+def draw_legs(ax, legs) -> int:
+    """The target's determined legs (tma/leg_solution.py ``LegSolution``): each leg's track in its own colour, a
+    diamond at each zig, the current leg's 95 % ellipse at the last time. Returns how many legs were drawn."""
+    fit = None if legs is None or legs.report is None else legs.report.legs
+    if fit is None:
+        return 0
+    colours = ["tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+    drawn, zig_label = 0, "zig"
+    for k, leg in enumerate(fit.legs):
+        if not leg.determined:
+            continue
+        xy, _ = fit.position_at(np.linspace(leg.start_s, leg.end_s, 50))
+        ax.plot(xy[:, 0] / 1e3, xy[:, 1] / 1e3, "-", color=colours[k % len(colours)], lw=2.0, zorder=3,
+                label=f"leg {k + 1}: {leg.course_deg:03.0f} deg, {leg.speed_kn:.1f} kn")
+        if k:
+            ax.plot(xy[0, 0] / 1e3, xy[0, 1] / 1e3, "kD", ms=5, zorder=4, label=zig_label)
+            zig_label = None
+        drawn += 1
+    last = fit.legs[-1]
+    if last.determined:
+        ellipses(ax, last.state[None], last.state_cov[None], 1, color="k", label="current leg, 95 % ellipse")
+    return drawn
+
+
+def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str = "TMA", legs=None):
+    """Ownship track, measured bearing lines, estimated target track and its 95 % position ellipses, and the
+    target's determined legs when ``legs`` is given (Figure).
 
     Only the rows whose range is determined (``solution.range_flags()``) are drawn: a diverged, unobservable or
     otherwise undetermined position is not a position, so where no row is determined the picture shows the
-    bearings and says why in its title."""
+    bearings (and the legs that are determined) and says why in its title."""
     import matplotlib.pyplot as plt
 
     ok = solution.range_flags() & np.all(np.isfinite(np.asarray(solution.state, float)), axis=1)
     X = np.asarray(solution.state, float)[ok]
     fig, ax = plt.subplots(figsize=(7, 7))
-    est_range = np.hypot(*(X[:, :2] - ownship.position_at(np.asarray(solution.time_s)[ok])).T) if ok.any() else []
+    est_range = list(np.hypot(*(X[:, :2] - ownship.position_at(np.asarray(solution.time_s)[ok])).T)) if ok.any() \
+        else []
+    est_range += [leg.range_m for leg in (legs.legs if legs is not None else ()) if leg.determined]
     length = 1.3 * float(np.max(est_range)) if len(est_range) else 10_000.0
     _bearing_lines(ax, record, ownship, length)
     ax.plot(np.asarray(ownship.x_m) / 1e3, np.asarray(ownship.y_m) / 1e3, "b-", lw=1.5, label="ownship", zorder=3)
@@ -61,10 +88,13 @@ def tactical_picture(record, ownship, solution, n_ellipses: int = 8, title: str 
         ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "r-", lw=1.5, label="target (estimated)", zorder=3)
         ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "r^", ms=8, zorder=4)
         ellipses(ax, X, np.asarray(solution.covariance, float)[ok], n_ellipses)
-    else:
+    n_legs = draw_legs(ax, legs)
+    if not ok.any():
         reasons = solution.undetermined_reason
         why = sorted({str(r) for r in reasons if str(r)}) if reasons is not None else []
         title = f"{title}: range NOT DETERMINED ({', '.join(why) or 'see the summary'})"
+        if n_legs:
+            title += f"\n{n_legs} leg{'s' if n_legs > 1 else ''} determined (leg-wise ML)"
     ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title=title)
     ax.legend(fontsize=8, loc="best")
     return fig
@@ -77,5 +107,6 @@ def write_tactical_picture(path, result) -> Path:
     matplotlib.use("Agg")
     s = result.settings
     title = f"TMA ({s.method}{', bearings + frequency' if s.frequency else ''})"
-    fig = tactical_picture(result.record, result.ownship, result.solution, s.ellipses, title=title)
+    fig = tactical_picture(result.record, result.ownship, result.solution, s.ellipses, title=title,
+                           legs=getattr(result, "legs", None))
     return save_figure(fig, path, dpi=110, bbox_inches="tight")

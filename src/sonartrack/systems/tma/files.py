@@ -2,8 +2,9 @@
 
 The readers and their checks are io/tma_files.py's (bearings ``time_s, bearing_deg[, frequency_hz, snr_db]``,
 ownship ``time_s, x_m, y_m``) and io/environment.py's; ``tma_solution.csv`` holds the columns of
-tma/solution_table.py and the bearing noise (:data:`NOISE_COLUMNS`), written atomically. The tactical picture is
-report/figures/tma.py's.
+tma/solution_table.py and the bearing noise (:data:`NOISE_COLUMNS`), ``tma_legs.csv`` one row per leg of the
+target (tma/leg_solution.py :meth:`~sonartrack.tma.leg_solution.LegSolution.table`), both written atomically. The
+tactical picture is report/figures/tma.py's.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ CSV_NAME = "tma_solution.csv"
 #: then the residual sd holds the misfit, not the noise)
 NOISE_COLUMNS = ("sigma_bearing_deg", "residual_sd_deg", "residual_sd_lo_deg", "residual_sd_hi_deg")
 PNG_NAME = "tactical_picture.png"
+LEGS_NAME = "tma_legs.csv"
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,3 +91,31 @@ def write_tma_solution(result, out) -> Path:
     path = Path(out) / CSV_NAME
     path.parent.mkdir(parents=True, exist_ok=True)
     return write_csv(frame, path, float_format="%.10g")
+
+
+def write_tma_legs(result, out) -> Path | None:
+    """Write a solved record's legs as ``tma_legs.csv`` in ``out``, atomically (one row per leg: span and the zig
+    interval that starts it, course and speed with sds, the state at the leg's end with position sds, range and its
+    sd, determined and reason, current).
+
+    Parameters
+    ----------
+    result : TmaResult
+        What :func:`~sonartrack.systems.tma.run.run_tma` returned with ``legs=True``.
+    out : path-like
+        Output folder.
+
+    Returns
+    -------
+    Path or None
+        The file written (None when no legs were fitted: nothing is written).
+    """
+    import pandas as pd
+
+    from sonartrack.io.atomic import write_csv
+
+    if result.legs is None or not result.legs.legs:
+        return None
+    path = Path(out) / LEGS_NAME
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_csv(pd.DataFrame(result.legs.table()), path, float_format="%.10g")
