@@ -15,7 +15,14 @@ its course and speed, so the record is first fitted by the bearings-only constan
   :func:`~sonartrack.tma.record_checks.residual_span`);
 * the noise: its sd measured from the residuals with its 95 % chi-square interval
   (:func:`~sonartrack.tma.record_checks.bearing_sd_estimate`); used as the methods' bearing sd when none is given
-  (``sigma_bearing_deg`` unset), and when one is given and lies outside the interval, reported.
+  (``sigma_bearing_deg`` unset), and when one is given and lies outside the interval, reported;
+* the misfit against a given noise: with ``sigma_bearing_deg`` given, the residuals' chi-square
+  S / sigma^2 ~ chi-square(n - 4) under the model (Bar-Shalom, Li & Kirubarajan 2001, sec. 3.7.4: the fit's
+  normalised sum of squares) above its 1 - ``verdict.alpha`` point rejects the fit as well (reason ``residuals
+  exceed the stated noise``): either the target manoeuvred in a way that leaves no runs (small zigs under wide
+  noise) or the stated sd is too small; the answer is not printed as determined either way, and leaving the sd
+  out (estimated) is the fix for the second. Only the upper tail: a given sd larger than the residuals is
+  reported, not rejected.
 
 Then, where the record keeps the model (:func:`record_verdict`): the ML is checked as the passive chain checks it
 (tma/record_verdict.py :func:`~sonartrack.tma.record_verdict.determination_checked`: residual scale against the
@@ -36,6 +43,7 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError
+from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.tma.record_checks import (
     RESIDUAL_BLOCK_S,
     BearingSd,
@@ -48,7 +56,7 @@ from sonartrack.tma.record_checks import (
 )
 from sonartrack.tma.records import BearingRecord, OwnshipTrack
 from sonartrack.tma.settings import TmaSettings
-from sonartrack.tma.verdict import MANOEUVRED
+from sonartrack.tma.verdict import EXCEEDS_STATED_NOISE, MANOEUVRED
 
 #: the bearings' resolution (deg): residual structure far below it is not judged a manoeuvre
 #: (:func:`~sonartrack.tma.record_checks.whiteness_check`'s floor), and an estimated sd is at least this. Bearing
@@ -71,13 +79,26 @@ class RecordJudgement:
     block: ResidualCheck | None = None
     span: tuple[float, float] | None = None
     why_untested: str | None = None
+    #: the residuals' chi-square against the given sd and its 1 - alpha point (None without a given sd)
+    misfit: tuple[float, float] | None = None
 
     @property
-    def rejected(self) -> bool:
-        """Whether the record rejects constant velocity."""
+    def runs(self) -> bool:
+        """Whether the residuals' runs (or correlated blocks) reject constant velocity."""
         if self.whiteness is not None:
             return not self.whiteness.white
         return self.block is not None and self.block.block_chi2 > self.block.block_limit
+
+    @property
+    def excess(self) -> bool:
+        """Whether the residuals exceed the given noise (chi-square above its 1 - alpha point)."""
+        return self.misfit is not None and self.misfit[0] > self.misfit[1]
+
+    @property
+    def rejected(self) -> bool:
+        """Whether the record rejects the constant-velocity fit: runs in its residuals, or more misfit than the
+        given noise allows."""
+        return self.runs or self.excess
 
     def reason(self) -> str:
         """The rows' reason for a rejected record, with the span.
@@ -88,7 +109,11 @@ class RecordJudgement:
             "target manoeuvred: residuals reject constant velocity, largest A-B s".
         """
         where = f", largest {self.span[0]:.0f}-{self.span[1]:.0f} s" if self.span is not None else ""
-        return f"{MANOEUVRED}: residuals reject constant velocity{where}"
+        if self.runs:
+            return f"{MANOEUVRED}: residuals reject constant velocity{where}"
+        return (f"{EXCEEDS_STATED_NOISE}: rms {np.rad2deg(self.noise.sd_rad):.3g} deg against the stated "
+                f"{np.rad2deg(self.given_rad):.3g} deg (target manoeuvred{where}, or the sd too small: leave it out "
+                "to estimate it)")
 
     def test_note(self) -> str:
         """The motion test's statistic in a phrase.
@@ -98,6 +123,9 @@ class RecordJudgement:
         str
             The whiteness or block test's line.
         """
+        if self.excess and not self.runs:
+            return (f"residual chi-square {self.misfit[0]:.1f} against the stated sd > {self.misfit[1]:.1f} "
+                    "(its 1 - alpha point)")
         if self.whiteness is not None:
             return self.whiteness.note()
         return self.block.note() if self.block is not None else ""
@@ -113,7 +141,7 @@ class RecordJudgement:
         """
         if self.why_untested is not None:
             return (f"motion model not tested: {self.why_untested}",)
-        if self.rejected:
+        if self.runs:
             return (f"bearing sd not estimated: the constant-velocity fit is rejected (its residual scale "
                     f"{np.rad2deg(self.noise.sd_rad):.3g} deg bounds it)",)
         if self.given_rad is None:
@@ -224,6 +252,9 @@ def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSett
     else:
         judgement = RecordJudgement(noise, given, whiteness=whiteness_check(
             e, settings.verdict.alpha, float(np.deg2rad(SIGMA_FLOOR_DEG))))
+    if given is not None and e.size > 4:
+        misfit = float(np.sum((np.asarray(e, float) / given) ** 2))
+        judgement = replace(judgement, misfit=(misfit, float(chi2_quantile(1.0 - settings.verdict.alpha, e.size - 4))))
     if judgement.rejected:
         judgement = replace(judgement, span=residual_span(t, e, sigma))
     return judgement

@@ -60,6 +60,7 @@ FIXED_CONE = "cone angle fixed to the array: own-ship or array noise, range unob
 #: with the test and the span its residuals point at: "target manoeuvred: residuals reject constant velocity,
 #: largest 300-720 s"
 MANOEUVRED = "target manoeuvred"
+EXCEEDS_STATED_NOISE = "residuals exceed the stated noise"
 
 
 def with_reasons(solution: TmaSolution, reasons) -> TmaSolution:

@@ -32,6 +32,7 @@ from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, derived_settings, setting
 from sonartrack.detection.btr_mftd import BtrMftdSettings
 from sonartrack.tma.settings import ImmSettings, SequentialSettings, VerdictSettings
+from sonartrack.tma.zig import DEFAULT_FALSE_ALARM_PER_HOUR
 from sonartrack.tracking.line_tracks import LineTrackerSettings
 from sonartrack.tracking.settings import BearingTrackerSettings
 
@@ -244,7 +245,8 @@ class PassiveSettings(Settings):
                                                "by the sequential TMA (bearings only then); [tonal] min_line_snr_db "
                                                "decides whether a line is found at all", unit="dB",
                                           ge=-50, le=100)
-    zig_false_alarm_per_hour: float = setting(0.1, "stated rate of false zigs per hour of a constant-velocity "
+    zig_false_alarm_per_hour: float = setting(DEFAULT_FALSE_ALARM_PER_HOUR,
+                                              "stated rate of false zigs per hour of a constant-velocity "
                                                    "target for each target's zig test (tma/zig.py, on 30 s block "
                                                    "means of its bearings: systems/passive/target_legs.py); a "
                                                    "target with a zig gets leg-wise TMA rows and its constant-"
