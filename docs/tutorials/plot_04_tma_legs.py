@@ -90,7 +90,7 @@ for p, c in zip(position, covariance, strict=True):
     ellipse = p[:, None] + np.linalg.cholesky(c) @ np.stack([np.cos(angle), np.sin(angle)]) * np.sqrt(5.991)
     ax.plot(ellipse[0] / 1e3, ellipse[1] / 1e3, "b-", lw=0.8)
 ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal", title="geometry")
-ax.legend(loc="lower left")
+ax.legend(loc="lower right")
 ax_glr.plot(t, report.statistic, "b.", label="GLR* at each bearing")
 ax_glr.axhline(report.threshold, color="r", label="threshold")
 for zig in report.zigs:
