@@ -38,8 +38,9 @@ templates_path = ["_templates"]
 exclude_patterns = ["_build", "tutorials/README.rst"]
 root_doc = "index"
 html_theme = "alabaster"
+# wide pages: the docstrings' equations and tables are wide
 html_theme_options = {"description": "underwater detection, tracking and TMA", "fixed_sidebar": True,
-                      "page_width": "min(1400px, 96vw)", "sidebar_width": "230px", "body_max_width": "none"}  # wide equations
+                      "page_width": "min(1400px, 96vw)", "sidebar_width": "230px", "body_max_width": "none"}
 highlight_language = "none"  # a docstring's literal block is a plain-text equation; code blocks name their language
 html_sidebars = {"**": ["about.html", "navigation.html", "searchbox.html"]}
 html_show_sourcelink = False

@@ -91,8 +91,9 @@ for track in confirmed:
 fig, ax = plt.subplots(figsize=(6, 5))
 ax.plot(*np.array(clutter).T, ".", color="0.7", ms=3, label="clutter")
 ax.plot(*np.array(truth).T, "g--", label="target (truth)")
-for track in confirmed:
+for i, track in enumerate(confirmed):  # the most probable first
     xy = np.array([[s.state_vector[0, 0], s.state_vector[2, 0]] for s in track])
-    ax.plot(xy[:, 0], xy[:, 1], "b-", label="confirmed track")
+    label = "most probable track" if i == 0 else "other confirmed tracks" if i == 1 else None
+    ax.plot(xy[:, 0], xy[:, 1], "b-" if i == 0 else "c-", lw=2.0 if i == 0 else 0.8, label=label)
 ax.set(xlabel="x (m)", ylabel="y (m)", title="IMM-IPDA (paper P4) from Stone Soup parts")
 ax.legend()
