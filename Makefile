@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    ?= results
 
-.PHONY: demo test lint bench install install-test stonesoup-suite clean
+.PHONY: demo test lint bench docs install install-test install-docs stonesoup-suite clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,8 +19,13 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $(VENV)/.installed $@
 
+$(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(VENV)/.installed $@
+
 install: $(VENV)/.installed
 install-test: $(VENV)/.installed-test
+install-docs: $(VENV)/.installed-docs
 
 # Stone Soup's own tests (its sdist has them, its wheel not), for tests/stonesoup/test_stonesoup_suite.py,
 # which runs them with our components swapped in. Downloaded here, at install time, for the installed
@@ -35,8 +40,15 @@ demo: install
 	$(BIN)/sonartrack reproduce all --quick --out $(OUT)
 	@echo "Report: $(abspath $(OUT))/report.html"
 
-test: install-test stonesoup-suite lint
+test: install-test stonesoup-suite lint docs
 	$(BIN)/python -m pytest -q -n 2
+
+# The site in docs/_build/html: API reference, pages, tutorials executed (warnings are errors). Incremental: a
+# failed build drops its saved state, so the next one reads every page again and cannot pass on stale pages.
+docs: install-docs
+	NUMBA_CACHE_DIR=$(CURDIR)/.numba-cache $(BIN)/python -m sphinx -W --keep-going -j 2 -q -b html \
+		-d docs/_build/doctrees docs docs/_build/html || { rm -rf docs/_build/doctrees; exit 1; }
+	@echo "Docs: $(abspath docs/_build/html)/index.html"
 
 lint: install-test
 	$(BIN)/ruff check src tests benchmarks examples

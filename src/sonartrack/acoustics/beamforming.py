@@ -80,7 +80,7 @@ class BeamformerSettings(Settings):
     ===================  ========================================  ==========================================
     scene                old default: octave [f_a/2, f_a]          automatic band (this default)
     ===================  ========================================  ==========================================
-    default              5 targets for 3 ships (trawler, tanker      3 targets for 3 ships, sides right,
+    default              5 targets for 3 ships (trawler, tanker    3 targets for 3 ships, sides right,
                          in 2 fragments, 2 sides unresolved)       held 0.99/0.99/1.00
     B (f_a 600 Hz)       4 targets for 3 ships (yacht, -10 dB,     2 targets, ferry/coaster held 0.99/1.00;
                          in 2 fragments, side wrong/unresolved)    the yacht missed (detectable 16 s)

@@ -9,7 +9,9 @@ Peaks pass an amplitude threshold tau before tracking. Above it:
   N(z; z_hat, sigma_a^2) / Phi(...), so P_D x density = P_D0 N(z; z_hat, sigma_a^2) (the Phi cancel).
 
 JPDA_A multiplies each pair weight of JPDA by the amplitude likelihood ratio
+
     log r_tj = log N(z_j; z_hat_t, sigma_a,t^2) - log(alpha exp(-alpha (z_j - tau)))
+
 (with the thresholded P_D used in the miss weight). Equal amplitude densities give r = 1: JPDA.
 
 Track strength (eq. 9): z_hat(k) = 0.7 z_hat(k-1) + 0.3 max_j z(k, j) over the track's gate, from 15000.

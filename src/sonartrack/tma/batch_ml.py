@@ -14,6 +14,7 @@ J = H / sigma, e = wrap(z - h) / sigma; accept if C falls (lambda / 10), else re
 Covariance: the inverse Fisher information (J^T J)^-1 at the solution; the CRB is the same matrix
 at the true state (Nardone, Lindgren & Gong 1984). Starting point: the pseudo-linear estimate
 (Lindgren & Gong 1978): each bearing line gives the linear equation
+
     [cos z, -sin z, tau cos z, -tau sin z] X0 = ox cos z - oy sin z.
 
 Observability: with the ownship at constant velocity every target track scaled about the ownship's

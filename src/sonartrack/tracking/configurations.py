@@ -1,15 +1,15 @@
 """The paper trackers as configurations of the same parts (tracking/multi_target.py).
 
-=====================  ===========================================  ==========================================
-part                   position tracker (P4, :func:`position_tracker`)  bearing tracker (P0, :func:`bearing_tracker`)
-=====================  ===========================================  ==========================================
-motion                 CV in x, y; one mode per q, IMM chain          CV in bearing (deg); one mode
-measurements           points with R_m, chi-square gate               peaks, window gate V, sigma_p per track
-associator             PDA (IPDA / IMM-IPDA with existence)           exact JPDA (JPDA_A: amplitude ratio)
-existence              IPDA Markov chain                               none
-initiator              one-point, velocity prior                      strongest peak per cluster (or given tracks)
-deleter                existence thresholds                            M-of-N, consecutive misses
-=====================  ===========================================  ==========================================
+============  ===============================================  =============================================
+part          position tracker (P4, :func:`position_tracker`)  bearing tracker (P0, :func:`bearing_tracker`)
+============  ===============================================  =============================================
+motion        CV in x, y; one mode per q, IMM chain            CV in bearing (deg); one mode
+measurements  points with R_m, chi-square gate                 peaks, window gate V, sigma_p per track
+associator    PDA (IPDA / IMM-IPDA with existence)             exact JPDA (JPDA_A: amplitude ratio)
+existence     IPDA Markov chain                                none
+initiator     one-point, velocity prior                        strongest peak per cluster (or given tracks)
+deleter       existence thresholds                             M-of-N, consecutive misses
+============  ===============================================  =============================================
 """
 
 from __future__ import annotations

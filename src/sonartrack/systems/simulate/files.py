@@ -3,7 +3,7 @@ other command (the data: run.py; the scene: sim/scene.py).
 
 Written into the output folder, each atomically (io/atomic.py):
 
-===================  ======================================================================================
+==================== =====================================================================================
 recording.wav        N channels (element 1 = front), 32-bit float samples = pressure in pascals, written
                      block by block (memory does not grow with the duration; io/recording_writer.py: RF64
                      past 4 GiB); ``--format``, ``--split-s``, ``--gap-s``, ``--nmea``: recording_layout.py
@@ -22,7 +22,7 @@ raw.csv, raw_nav.csv the same contacts raw (travel time, bearing) and the Tx/Rx 
 frames.npy           K x Nr x Nd range-Doppler frames with one target (``detect --frames``)
 brg.csv, own.csv     one ship's bearings, frequency and SNR, and the array's track (``tma``)
 ctd.csv              the environment's sound-speed profile (``tl --profile``)
-===================  ======================================================================================
+==================== =====================================================================================
 
 All or nothing: the recording's size is checked against the 4 GiB of a WAV file and the free disk before anything
 is written (:func:`check_recording_fits`), and a run that fails or is interrupted removes every file it wrote
