@@ -51,10 +51,10 @@ docs: install-docs
 	@echo "Docs: $(abspath docs/_build/html)/index.html"
 
 lint: install-test
-	$(BIN)/ruff check src tests benchmarks examples
+	$(BIN)/ruff check src tests benchmarks examples docs
 
 bench: install-test
 	$(BIN)/python benchmarks/run_all.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache docs/_build docs/api docs/auto_tutorials docs/sg_execution_times.rst

@@ -2,4 +2,5 @@
 
 from sonartrack.cli import _entry
 
-_entry()
+if __name__ == "__main__":
+    _entry()
