@@ -214,3 +214,15 @@ def test_a_run_that_fails_after_its_first_output_leaves_nothing(tmp_path, monkey
     # and a clean run keeps its outputs
     assert main(["detect", "--frames", str(frames), "--threshold", "1", "--out", str(out)]) == 0
     assert {"detection.csv", "detection.png", "older.txt"} <= {p.name for p in out.iterdir()}
+
+
+@pytest.mark.parametrize("signum, status", [(2, 130), (15, 143)])
+def test_a_signal_before_the_command_line_is_imported_is_one_line(signum, status):
+    """The console script's launcher (sonartrack/_launch.py) holds the interrupt from its first line: a signal that
+    arrives while the command line's modules are still being imported ends the process with the interrupted line
+    and 128 + the signal (before it: Python's KeyboardInterrupt traceback, or a silent death by SIGTERM)."""
+    code = ("import os, signal; from sonartrack import _launch; _launch.install(); "
+            f"os.kill(os.getpid(), {signum}); import sonartrack.cli; print('imported')")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert res.returncode == status and "imported" not in res.stdout
+    assert res.stderr == "interrupted: nothing half-written was kept; rerun the same command\n"

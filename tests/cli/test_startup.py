@@ -65,11 +65,12 @@ def test_studies_loads_only_its_own_command_module():
 def test_studies_imports_no_study_module_and_no_numpy():
     """``sonartrack studies`` reads its listing from the study modules' source (``studies.listing``): no study
     module is imported, and so none of their numerical libraries or settings models; outside the command line
-    itself, only the package root, its error type and the studies package are loaded."""
+    itself, only the package root, its launcher, its error type and the studies package are loaded."""
     modules = imported_by("studies")
     ours = [m for m in modules if m.startswith("sonartrack") and not m.startswith("sonartrack.cli")]
     assert "sonartrack.cli.studies" in modules  # the command ran
-    assert sorted(ours) == ["sonartrack", "sonartrack.core", "sonartrack.core.errors", "sonartrack.studies"]
+    assert sorted(ours) == ["sonartrack", "sonartrack._launch", "sonartrack.core", "sonartrack.core.errors",
+                            "sonartrack.studies"]
     assert "numpy" not in modules
 
 

@@ -23,6 +23,7 @@ import threading
 
 import typer
 
+from sonartrack._launch import EARLY_INTERRUPTED
 from sonartrack.core.errors import InputError
 
 #: how the app is made (also the listing app of :func:`_listing_app`, which must print the same help)
@@ -139,7 +140,7 @@ def _listing_app(args: list[str]) -> typer.Typer | None:
 
 #: what an interrupted command prints when it has no account of its own (status 130 for SIGINT, 143 for SIGTERM);
 #: a command that keeps partial work (reproduce's trials, survey's recordings) says what it kept in its own words
-INTERRUPTED = "interrupted: nothing half-written was kept; rerun the same command"
+INTERRUPTED = EARLY_INTERRUPTED  # (sonartrack/_launch.py: the same line before this module is imported)
 
 #: the signal that stopped the running command, once one has arrived (None before): an exception raised after it,
 #: whatever its type, is that interrupt's doing (a signal handler's exception raised inside compiled code, numba's
