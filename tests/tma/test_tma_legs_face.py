@@ -83,3 +83,21 @@ def test_a_constant_velocity_record_prints_one_leg_and_a_determined_answer(tmp_p
     assert len(table) == 1 and table["determined"].iloc[0]
     assert abs(angle_diff(table["course_deg"].iloc[0], courses[0])) <= 3 * table["course_sd_deg"].iloc[0]
     assert "advice: turn to" in out and "current leg (leg-wise ML" not in out  # the method's own answer stands
+
+
+def test_no_leg_faster_than_any_ship_is_printed_as_determined(tmp_path, capsys):
+    """The shipped zigzag scene's bearings (three zigs, one of them missed by the detector at its stated rate): the
+    leg fit ran to 696 kn on its first leg and printed the current leg at 40 ± 16 km for a target at 4-12 km.
+    Every leg of a fit with a leg beyond the verdict's speed bound (58 kn) is now not determined."""
+    from sonartrack.tma.settings import VerdictSettings
+
+    scene, out = tmp_path / "zz", tmp_path / "tma"
+    assert main(["simulate", "--scene", "zigzag", "--only", "samples", "--out", str(scene)]) == 0
+    assert main(["tma", "--bearings", str(scene / "brg.csv"), "--ownship", str(scene / "own.csv"), "--method", "ml",
+                 "--out", str(out)]) == 0
+    legs_table = pd.read_csv(out / "tma_legs.csv")
+    fast = legs_table["speed_kn"] * KN > VerdictSettings().max_speed_mps
+    if fast.any():
+        assert not legs_table["determined"].any()
+        assert legs_table["reason"].str.contains("faster than any ship").all()
+    assert "current leg (leg-wise ML" not in capsys.readouterr().out or not fast.any()

@@ -51,7 +51,7 @@ from sonartrack.sim.manoeuvre_scene import OWN_PATTERNS, ManoeuvreSceneSettings
 STUDY_ID = "manoeuvring-target"
 TITLE = "Targets that zig: zig detection, leg-wise TMA, the constant-velocity verdict and observer advice"
 PAPER = "sonartrack's own (issue 30): sequential GLR zigs, leg-wise ML with its CRB, Fisher-information advice"
-TRIAL_VERSION = 4
+TRIAL_VERSION = 5
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 100

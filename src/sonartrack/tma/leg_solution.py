@@ -79,10 +79,13 @@ class LegSolution:
                f"{self.report.false_alarm_per_hour:g} per hour)"]
         for k, leg in enumerate(self.legs):
             now = " (current)" if k == len(self.legs) - 1 else ""
-            rng = (f"range at its end {leg.range_m / 1e3:.2f} ± {leg.range_sd_m / 1e3:.2f} km" if leg.determined
-                   else f"range not determined ({leg.reason})")
-            out.append(f"  leg {k + 1}{now}: {leg.start_s:.0f}-{leg.end_s:.0f} s, course {leg.course_deg:03.0f} ± "
-                       f"{leg.course_sd_deg:.0f} deg, speed {leg.speed_kn:.1f} ± {leg.speed_sd_kn:.1f} kn, {rng}")
+            if leg.determined:  # without a range, bearings give no course or speed either: none is printed
+                what = (f"course {leg.course_deg:03.0f} ± {leg.course_sd_deg:.0f} deg, speed {leg.speed_kn:.1f} ± "
+                        f"{leg.speed_sd_kn:.1f} kn, range at its end {leg.range_m / 1e3:.2f} ± "
+                        f"{leg.range_sd_m / 1e3:.2f} km")
+            else:
+                what = f"range, course and speed not determined ({leg.reason})"
+            out.append(f"  leg {k + 1}{now}: {leg.start_s:.0f}-{leg.end_s:.0f} s, {what}")
         return out
 
     def table(self) -> dict[str, np.ndarray]:

@@ -62,10 +62,13 @@ from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.tma.batch_ml import _damped_step, bearing_model
 from sonartrack.tma.record_checks import residual_span, whiteness_check
-from sonartrack.tma.verdict import MANOEUVRED
+from sonartrack.tma.settings import VerdictSettings
+from sonartrack.tma.verdict import DIVERGED, MANOEUVRED
 
 #: a leg whose range sd exceeds this fraction of its range is not determined (as verdict.max_range_sd_fraction)
 MAX_RANGE_SD_FRACTION = 1.0
+#: no ship is faster (m/s): the verdict's bound (tma/settings.py VerdictSettings.max_speed_mps)
+MAX_SPEED_MPS = VerdictSettings().max_speed_mps
 #: each leg needs at least this many bearings strictly inside it
 MIN_BEARINGS_PER_LEG = 2
 #: significance of the leg fit's whiteness tests (each leg's and the whole record's; as verdict.alpha)
@@ -369,7 +372,7 @@ def _initial_fit(z, t, own, sig, c, params_init, max_iter: int, tol: float):
 def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine: bool = True,
              search_half_width_s: float = 900.0, params_init=None, max_iter: int = 100, tol: float = 1e-10,
              max_range_sd_fraction: float = MAX_RANGE_SD_FRACTION,
-             motion_alpha: float | None = MOTION_ALPHA) -> LegFit:
+             motion_alpha: float | None = MOTION_ALPHA, max_speed_mps: float = MAX_SPEED_MPS) -> LegFit:
     """Leg-wise bearings-only ML (module doc): piecewise-constant velocity, continuous position, velocity changes
     at ``change_times_s``; with ``refine`` the change times are estimated too (profile, then joint Gauss-Newton).
 
@@ -396,6 +399,9 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
         A leg whose range sd exceeds this fraction of its range is not determined.
     motion_alpha : float or None
         Significance of the fit's own whiteness tests (module doc); None: not tested.
+    max_speed_mps : float
+        A fit with a leg faster than this is no ship's track (a missed zig, or a range the bearings do not fix):
+        no leg of it is determined (:func:`_speed_rejection`).
 
     Returns
     -------
@@ -416,6 +422,7 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
         cov = np.full((Jac.shape[1],) * 2, np.inf)
     legs = tuple(_leg_summary(theta, c, cov, t, own, k, refined, max_range_sd_fraction) for k in range(len(c) + 1))
     note = "" if motion_alpha is None else motion_rejection(t, e, sig, c, Jac.shape[1], motion_alpha)
+    note = note or _speed_rejection(legs, max_speed_mps)
     if note:
         legs = tuple(replace(leg, determined=False, reason=note) for leg in legs)
     L = _state_map(theta, c, t[0], t[-1], refined)[:2]
@@ -510,6 +517,18 @@ def _leg_summary(theta, c, cov, t, own, k: int, refined: bool, max_range_sd_frac
                end_sd_s=float(sd_c[k]) if k < K else 0.0, course_deg=course, course_sd_deg=course_sd,
                speed_kn=speed, speed_sd_kn=speed_sd, state=state, state_cov=P, range_m=rng, range_sd_m=rng_sd,
                information_condition=cond, determined=determined, reason=reason)
+
+
+def _speed_rejection(legs, max_speed_mps: float) -> str:
+    """The reason no leg of a fit is determined when one of its legs is faster than ``max_speed_mps`` (m/s), else
+    "". The legs share the fit's positions, so one impossible leg (seen on a record with a missed zig: 696 kn on
+    its first leg while the last printed 40 km for a target at 4-12 km) discredits the others."""
+    fast = [(k, leg.speed_kn) for k, leg in enumerate(legs) if not leg.speed_kn * KNOT_MPS <= max_speed_mps]
+    if not fast:
+        return ""
+    k, speed_kn = max(fast, key=lambda f: f[1] if np.isfinite(f[1]) else np.inf)
+    return (f"{DIVERGED}: leg {k + 1} at {speed_kn:.0f} kn, faster than any ship ({max_speed_mps / KNOT_MPS:.0f} kn): "
+            "a zig missed, or ranges the bearings do not fix")
 
 
 def _correlation_condition(P) -> float:
