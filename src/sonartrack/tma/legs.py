@@ -416,14 +416,10 @@ def fit_legs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s, *, refine
         theta, c = _profile_change_times(z, t, own, sig, theta, c.copy(), search_half_width_s)
         x, e, Jac, cost, it2, conv = _lm(_residual_fn(z, t, own, sig, t[0]), np.r_[theta, c], max_iter, tol)
         theta, c, it = x[:2 * len(c) + 4], x[2 * len(c) + 4:], it + it2
-    try:
-        cov = np.linalg.inv(Jac.T @ Jac)
-    except np.linalg.LinAlgError:
-        cov = np.full((Jac.shape[1],) * 2, np.inf)
+    cov = _inverse_information(Jac)
     legs = tuple(_leg_summary(theta, c, cov, t, own, k, refined, max_range_sd_fraction) for k in range(len(c) + 1))
     note = "" if motion_alpha is None else motion_rejection(t, e, sig, c, Jac.shape[1], motion_alpha)
-    note = note or _speed_rejection(legs, max_speed_mps)
-    if note:
+    if note := note or _speed_rejection(legs, max_speed_mps):
         legs = tuple(replace(leg, determined=False, reason=note) for leg in legs)
     L = _state_map(theta, c, t[0], t[-1], refined)[:2]
     with np.errstate(invalid="ignore"):
@@ -517,6 +513,14 @@ def _leg_summary(theta, c, cov, t, own, k: int, refined: bool, max_range_sd_frac
                end_sd_s=float(sd_c[k]) if k < K else 0.0, course_deg=course, course_sd_deg=course_sd,
                speed_kn=speed, speed_sd_kn=speed_sd, state=state, state_cov=P, range_m=rng, range_sd_m=rng_sd,
                information_condition=cond, determined=determined, reason=reason)
+
+
+def _inverse_information(Jac) -> np.ndarray:
+    """(J^T J)^-1 of the whitened Jacobian J: the fit's covariance (the CRB at the estimate); inf where singular."""
+    try:
+        return np.linalg.inv(Jac.T @ Jac)
+    except np.linalg.LinAlgError:
+        return np.full((Jac.shape[1],) * 2, np.inf)
 
 
 def _speed_rejection(legs, max_speed_mps: float) -> str:
