@@ -38,6 +38,7 @@ import numpy as np
 
 from sonartrack.core.errors import InputError, require
 from sonartrack.core.random import trial_rng
+from sonartrack.core.signals import signals_held
 from sonartrack.experiment import store
 
 DEFAULT_CHUNK = 10
@@ -244,34 +245,12 @@ def _stop_signals_held():
     it was meant for on the way out, so no worker is ever started but missing from the pool's table
     (and thus never stopped). Signal handlers belong to the main thread: elsewhere this does nothing.
     """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    mask = hasattr(signal, "pthread_sigmask")
-    if mask:
+    if threading.current_thread() is threading.main_thread() and hasattr(signal, "pthread_sigmask"):
         from multiprocessing import resource_tracker
 
         resource_tracker.ensure_running()  # started inside, it would unblock SIGINT on its way out
-    caught: list[int] = []
-    old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    held = {sig: h for sig, h in old.items() if h not in (signal.SIG_IGN, None)}
-    for sig in held:
-        signal.signal(sig, lambda signum, frame: caught.append(signum))
-    if mask:
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
+    with signals_held((signal.SIGINT,)):
         yield
-    finally:
-        if mask:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # a pending one is noted now
-        for sig, handler in held.items():
-            signal.signal(sig, handler)
-    if caught:
-        handler = held[caught[0]]
-        if callable(handler):
-            handler(caught[0], None)
-        else:
-            signal.raise_signal(caught[0])
 
 
 def _stop_pool(pool) -> None:

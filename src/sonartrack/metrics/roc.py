@@ -178,3 +178,24 @@ def rise_is_significant(p_before: float, p_after: float, n: int, z: float = 1.96
     """
     se = np.sqrt(max(p_before * (1 - p_before), 1e-12) / n + max(p_after * (1 - p_after), 1e-12) / n)
     return bool(p_after - p_before > z * se)
+
+
+def binomial_share(ok) -> dict:
+    """The share of successes among the finite values of ``ok`` (1/0; NaN: not counted) with its 95 %
+    Clopper-Pearson interval (:func:`binomial_interval`), as the studies report it.
+
+    Parameters
+    ----------
+    ok : array_like
+        1 (success), 0 (failure) or NaN (no case).
+
+    Returns
+    -------
+    dict
+        ``k``, ``n``, ``share`` (NaN when n is 0), ``low``, ``high``.
+    """
+    x = np.asarray(ok, float)
+    x = x[np.isfinite(x)]
+    k, n = int(np.sum(x)), int(len(x))
+    lo, hi = binomial_interval(k, max(n, 1))
+    return {"k": k, "n": n, "share": k / n if n else float("nan"), "low": float(lo), "high": float(hi)}

@@ -350,13 +350,9 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 
 def _share(ok) -> dict:
     """{k, n, share, low, high}: successes among the finite values (1/0) with the 95 % Clopper-Pearson interval."""
-    from sonartrack.metrics.roc import binomial_interval
+    from sonartrack.metrics.roc import binomial_share
 
-    x = np.asarray(ok, float)
-    x = x[np.isfinite(x)]
-    k, n = int(np.sum(x)), int(len(x))
-    lo, hi = binomial_interval(k, max(n, 1))
-    return {"k": k, "n": n, "share": k / n if n else float("nan"), "low": float(lo), "high": float(hi)}
+    return binomial_share(ok)
 
 
 def _poisson_rate(k: int, hours: float) -> dict:

@@ -315,6 +315,42 @@ def _damped_step(residual, x, e, J, cost: float, lam: float):
     return x, e, J, cost, lam, False
 
 
+def levenberg_marquardt(residual, x, e, J, max_iter: int, tol: float, *, finite_only: bool = False):
+    """The Levenberg-Marquardt loop (Marquardt 1963) of :func:`_damped_step`s from ``x`` with residuals ``e`` and
+    Jacobian ``J`` there: stops when a step fails to lower the cost or lowers it by less than ``tol`` (relative),
+    or after ``max_iter`` steps; ``finite_only`` stops at once on a non-finite starting cost.
+
+    Parameters
+    ----------
+    residual : callable
+        ``residual(x) -> (e, J)``, whitened residuals and their Jacobian.
+    x, e, J : ndarray
+        Start, its residuals and Jacobian.
+    max_iter : int
+        Step limit.
+    tol : float
+        Relative cost decrease that ends the loop.
+    finite_only : bool
+        Take no step from a non-finite cost.
+
+    Returns
+    -------
+    tuple
+        (x, e, J, cost, iterations, converged).
+    """
+    cost = float(e @ e)
+    lam, it, converged, rel = 1e-3, 0, False, np.inf
+    while it < max_iter and (not finite_only or np.isfinite(cost)):
+        it += 1
+        x, e, J, c_new, lam, improved = _damped_step(residual, x, e, J, cost, lam)
+        if improved:
+            rel, cost = (cost - c_new) / max(cost, 1e-300), c_new
+        if not improved or rel < tol:
+            converged = improved or rel < tol
+            break
+    return x, e, J, cost, it, converged
+
+
 def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: int = 100, tol: float = 1e-10,
                      check: bool = True) -> BatchEstimate:
     """ML X0 from bearings by Gauss-Newton / Levenberg-Marquardt (module doc); stops when no damped step
@@ -359,16 +395,7 @@ def ml_bearings_only(z_rad, time_s, own_xy, sigma_rad, x_init=None, max_iter: in
         return (wrap_angle(z - h), H) if unit else (wrap_angle(z - h) / sig, H / sig[:, None])
 
     e, J = residual(x)
-    cost = float(e @ e)
-    lam, it, converged, rel = 1e-3, 0, False, np.inf
-    while it < max_iter:
-        it += 1
-        x, e, J, c_new, lam, improved = _damped_step(residual, x, e, J, cost, lam)
-        if improved:
-            rel, cost = (cost - c_new) / max(cost, 1e-300), c_new
-        if not improved or rel < tol:
-            converged = improved or rel < tol
-            break
+    x, e, J, cost, it, converged = levenberg_marquardt(residual, x, e, J, max_iter, tol)
     try:
         cov = np.linalg.inv(J.T @ J)
     except np.linalg.LinAlgError:

@@ -15,7 +15,7 @@ g_n = [dy_n, -dx_n] / r_n^2 (batch_ml eq. 16, the position part) the Jacobian ro
 
 (moving c_k later by dc keeps leg k for dc longer instead of leg k+1 after c_k). The ML minimises
 C = sum_n wrap(z_n - h_n)^2 / sigma_n^2 by Gauss-Newton with the Levenberg-Marquardt safeguard of
-tma/batch_ml.py (its :func:`~sonartrack.tma.batch_ml._damped_step`, Marquardt 1963), from the pseudo-linear
+tma/batch_ml.py (its :func:`~sonartrack.tma.batch_ml.levenberg_marquardt`, Marquardt 1963), from the pseudo-linear
 start generalised to legs (each bearing line is linear in theta: x(t) cos z - y(t) sin z = ox cos z - oy sin z;
 Lindgren & Gong 1978).
 
@@ -60,7 +60,7 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import require
 from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.core.units import KNOT_MPS
-from sonartrack.tma.batch_ml import _damped_step, bearing_model
+from sonartrack.tma.batch_ml import bearing_model, levenberg_marquardt
 from sonartrack.tma.record_checks import residual_span, whiteness_check
 from sonartrack.tma.settings import VerdictSettings
 from sonartrack.tma.verdict import DIVERGED, MANOEUVRED
@@ -251,17 +251,7 @@ def _lm(residual, x, max_iter: int, tol: float):
     """Levenberg-Marquardt as tma/batch_ml.ml_bearings_only runs it; returns (x, e, J, cost, iterations, converged)."""
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         e, J = residual(x)
-    cost = float(e @ e)
-    lam, it, converged, rel = 1e-3, 0, False, np.inf
-    while it < max_iter and np.isfinite(cost):
-        it += 1
-        x, e, J, c_new, lam, improved = _damped_step(residual, x, e, J, cost, lam)
-        if improved:
-            rel, cost = (cost - c_new) / max(cost, 1e-300), c_new
-        if not improved or rel < tol:
-            converged = improved or rel < tol
-            break
-    return x, e, J, cost, it, converged
+    return levenberg_marquardt(residual, x, e, J, max_iter, tol, finite_only=True)
 
 
 def _residual_fn(z, t, own, sig, t0, change_times_s=None):

@@ -23,15 +23,13 @@ import logging
 import os
 import re
 import shutil
-import signal
-import threading
 from pathlib import Path
 
 from sonartrack.core.errors import InputError, require
+from sonartrack.core.signals import signals_held
 
 #: a Dask scheduler's address: [protocol://]host:port
 _ADDRESS = re.compile(r"(?:(?:tcp|tls|ws|wss|ucx)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}")
-_HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 def check_scheduler(address: str) -> None:
@@ -49,35 +47,6 @@ def check_scheduler(address: str) -> None:
     """
     require(bool(_ADDRESS.fullmatch(address)), f"--scheduler {address!r} is not a Dask scheduler address: give "
                                                "it as tcp://host:8786 (protocol, host and port)")
-
-
-@contextlib.contextmanager
-def signals_held():
-    """Hold SIGINT and SIGTERM inside the block, deliver one that came once it ends (module doc).
-
-    In the main thread only (signal handlers belong to it); elsewhere this does nothing. A signal ignored on
-    entry stays ignored.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    held = {sig: h for sig in _HELD if (h := signal.getsignal(sig)) not in (signal.SIG_IGN, None)}
-    for sig in held:
-        signal.signal(sig, lambda signum, frame: caught.append(signum))
-    signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD)  # a pending one is noted now
-        for sig, handler in held.items():
-            signal.signal(sig, handler)
-    if caught:
-        handler = held[caught[0]]
-        if callable(handler):
-            handler(caught[0], None)
-        else:
-            signal.raise_signal(caught[0])
 
 
 def scratch_dir(out) -> Path:
