@@ -37,7 +37,7 @@ PKG = Path(__file__).resolve().parents[2] / "src" / "sonartrack"
 RANK = {
     "core": 0, "models": 1, "acoustics": 2, "sim": 3, "filters": 4, "association": 5,
     "tracking": 6, "tma": 6, "detection": 6, "io": 7, "systems": 7.5, "experiment": 8, "studies": 9,
-    "report": 10, "cli": 11, "stonesoup": 11,
+    "report": 10, "console": 10, "cli": 11, "stonesoup": 11,
 }
 #: metrics/ sits beside the algorithm layers: it may import core/ and models/ only, and anyone above
 #: models may import it.
