@@ -9,9 +9,12 @@ with the tracker's transition model, takes the detection with the highest mixtur
 and every filter and weight is updated (Ristic et al. 2004, ch. 6). Its moment-matched Gaussian is handed to the
 tracker once the range is known well enough for one EKF: the release rule is
 
-    held detections >= min_detections   and   sd_r / r <= release_cv
+    held detections >= min_detections   and   sd_r / r <= release_cv   and   w_1 + w_N <= max_edge_weight
 
-with r and sd_r the collapsed Gaussian's range from the sensor and its sd along the line of sight. The track's
+with r and sd_r the collapsed Gaussian's range from the sensor and its sd along the line of sight, and w_1, w_N
+the weights of the shortest- and longest-range filters: a mixture piled against an end of [min_range,
+max_range] has its range from the prior's bound, not from the bearings (a constant bearing favours the far
+filters, whose predicted bearings move least), and is not released. The track's
 states are the collapsed Gaussians after each held detection (``GaussianStateUpdate``, one per detection, so the
 track starts where the target was first seen), its last state the one the tracker continues from; the mixture at
 release is in ``track.metadata["range_mixture"]`` (a Stone Soup ``GaussianMixture``). The first state is one
@@ -55,7 +58,7 @@ from sonartrack.stonesoup.range_mixture import (
 RANGE_MIXTURE = "range_mixture"
 
 
-@dataclass(slots=True)
+@dataclass(slots=True, eq=False)  # held banks are compared by identity
 class _Held:
     """One bank of range filters held in the initiator (arrays: x (N, n), P (N, n, n), log_w (N,))."""
 
@@ -94,6 +97,8 @@ class RangeParameterisedInitiator(GaussianInitiator):
         default=None, doc="Bearing model for detections that carry none")
     release_cv: float = Property(
         default=0.2, doc="Hand the collapsed Gaussian to the tracker once its range sd / range is at most this")
+    max_edge_weight: float = Property(
+        default=0.01, doc="Release only while the first and last range filters hold at most this weight together")
     min_detections: int = Property(default=3, doc="Fewest detections held before a track is released")
     max_misses: int = Property(default=3, doc="Drop a held candidate after this many scans running without one")
     max_held: int = Property(
@@ -103,7 +108,7 @@ class RangeParameterisedInitiator(GaussianInitiator):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        require(0.0 < self.release_cv, f"release_cv {self.release_cv} must be positive (sd_r / r)")
+        require(self.release_cv > 0.0, f"release_cv {self.release_cv} must be positive (sd_r / r)")
         require(self.min_detections >= 1, f"min_detections {self.min_detections}: need at least 1")
         n_filters = filters_for_cv(self.min_range, self.max_range, self.range_cv)
         self._range_m, self._range_sd_m, weight = range_subintervals(
@@ -219,7 +224,8 @@ class RangeParameterisedInitiator(GaussianInitiator):
         state = held.states[-1]
         _, cv = range_cv(np.asarray(state.state_vector, float).ravel()[list(position)],
                          np.asarray(state.covar, float)[np.ix_(position, position)], held.offset_m)
-        return cv <= self.release_cv
+        edge_weight = float(np.exp(held.log_w[0]) + (np.exp(held.log_w[-1]) if self.n_filters > 1 else 0.0))
+        return cv <= self.release_cv and edge_weight <= self.max_edge_weight
 
     def _release(self, held: _Held) -> Track:
         """The track of a ready bank; removed from the held banks."""
