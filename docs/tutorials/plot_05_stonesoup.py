@@ -4,8 +4,9 @@ sonartrack parts inside a Stone Soup tracker
 
 ``sonartrack.stonesoup`` (``pip install sonartrack[stonesoup]``) offers our estimators as Stone Soup components:
 they subclass Stone Soup's bases and take and return its types, so they drop into a Stone Soup tracker in place
-of its own. Here: the exact JPDA as the data associator of a Stone Soup JPDA tracker (one changed import), and
-paper P4's IMM-IPDA built from Stone Soup's constant-velocity models and Kalman filters, in clutter.
+of its own. Here: the exact JPDA as the data associator of a Stone Soup JPDA tracker (one changed import),
+paper P4's IMM-IPDA built from Stone Soup's constant-velocity models and Kalman filters, in clutter, and a
+bearings-only initiator in Stone Soup's own bearing-only example.
 """
 
 # %%
@@ -96,4 +97,79 @@ for i, track in enumerate(confirmed):  # the most probable first
     label = "most probable track" if i == 0 else "other confirmed tracks" if i == 1 else None
     ax.plot(xy[:, 0], xy[:, 1], "b-" if i == 0 else "c-", lw=2.0 if i == 0 else 0.8, label=label)
 ax.set(xlabel="x (m)", ylabel="y (m)", title="IMM-IPDA (paper P4) from Stone Soup parts")
+ax.legend()
+
+# %%
+# 3. A bearings-only initiator in Stone Soup's bearing-only example
+# -----------------------------------------------------------------
+# Stone Soup's bearing-only example (docs/examples/filters/bearing_only_example.py) says Stone Soup has no
+# bearings-only initiator and starts its EKF tracker from the target's true initial state. Here is its scene
+# (sensor from (0, 0) m at (-5, -7) m/s, target from (50, 50) m at rest with q = 1 m^2/s^3, bearings
+# +/- 0.025 deg every second for 100 s) and its tracker, with ``RangeParameterisedInitiator`` in place of the
+# truth: Peach's bank of range-parameterised EKFs (10 m to 2 km) is held inside the initiator until the range
+# sd is at most 20 % of the range, then handed to Stone Soup's EKF as one Gaussian.
+from stonesoup.dataassociator.neighbour import NearestNeighbour
+from stonesoup.deleter.time import UpdateTimeStepsDeleter
+from stonesoup.hypothesiser.distance import DistanceHypothesiser
+from stonesoup.measures import Mahalanobis
+from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing
+from stonesoup.predictor.kalman import ExtendedKalmanPredictor
+from stonesoup.tracker.simple import SingleTargetTracker
+from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+from sonartrack.stonesoup import RANGE_MIXTURE, RangeParameterisedInitiator
+
+transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(1.0), ConstantVelocity(1.0)])
+sigma = np.deg2rad(0.025)
+rng = np.random.default_rng(2001)
+F, Q = transition.matrix(time_interval=datetime.timedelta(seconds=1)), transition.covar(
+    time_interval=datetime.timedelta(seconds=1))
+target, sensor, truth, sensor_track, scans = np.array([50.0, 0, 50, 0]), np.zeros(2), [], [], []
+for k in range(101):
+    if k:
+        target = F @ target + rng.multivariate_normal(np.zeros(4), Q)
+        sensor = sensor + np.array([-5.0, -7.0])
+    when = t0 + datetime.timedelta(seconds=k)
+    bearing = np.arctan2(target[2] - sensor[1], target[0] - sensor[0]) + rng.normal(0, sigma)
+    model = Cartesian2DToBearing(4, (0, 2), np.array([[sigma**2]]), translation_offset=sensor.reshape(2, 1).copy())
+    truth.append(target[[0, 2]].copy())
+    sensor_track.append(sensor.copy())
+    scans.append((when, {Detection(np.array([[bearing]]), timestamp=when, measurement_model=model)}))
+
+initiator = RangeParameterisedInitiator(transition_model=transition, min_range=10.0, max_range=2000.0,
+                                        target_speed=2.0)
+predictor, updater = ExtendedKalmanPredictor(transition), ExtendedKalmanUpdater(measurement_model=None)
+tracker = SingleTargetTracker(initiator=initiator, deleter=UpdateTimeStepsDeleter(3), detector=scans,
+                              updater=updater, data_associator=NearestNeighbour(
+                                  DistanceHypothesiser(predictor, updater, Mahalanobis(), missed_distance=5)))
+track, released_at = None, None
+for when, tracks in tracker:
+    if tracks and track is None:
+        track, released_at = next(iter(tracks)), when
+k_release = int((released_at - t0).total_seconds())
+for k, label in ((k_release, "at release"), (100, "at the end")):
+    state = next(s for s in track if s.timestamp == t0 + datetime.timedelta(seconds=k))
+    error = np.hypot(*(state.state_vector[[0, 2], 0] - truth[k]))
+    sd = np.sqrt(np.trace(state.covar[np.ix_([0, 2], [0, 2])]))
+    print(f"{label} (t = {k} s): position error {error:.1f} m, position sd {sd:.1f} m, "
+          f"range {np.hypot(*(truth[k] - sensor_track[k])):.0f} m")
+print(f"{initiator.n_filters} range filters held {k_release + 1} bearings; the track's states start at "
+      f"t = {(track.states[0].timestamp - t0).seconds} s")
+
+# %%
+# The track's first states are the collapsed mixture after each held bearing (from the first, where the mean is
+# the prior's, half way out along the bearing), then Stone Soup's EKF carries it on. The circles are the range filters at release, their area the filter's weight: the
+# bearings have ruled out all ranges but a few. The range stays the weakly known quantity of this scene (the
+# sensor moves almost straight away from the target), but no truth went into the tracker.
+mixture = track.metadata[RANGE_MIXTURE]
+fig, ax = plt.subplots(figsize=(6, 5))
+ax.plot(*np.array(truth).T, "g--", label="target (truth)")
+ax.plot(*np.array(sensor_track).T, "k:", label="sensor")
+xy = np.array([s.state_vector[[0, 2], 0] for s in track])
+ax.plot(*xy[:k_release + 1].T, ".", color="c", ms=4, label="held (collapsed mixture)")
+ax.plot(*xy[k_release:].T, "b-", label="track (Stone Soup EKF)")
+ax.scatter([c.state_vector[0, 0] for c in mixture], [c.state_vector[2, 0] for c in mixture],
+           s=[400 * float(c.weight) for c in mixture], facecolors="none", edgecolors="r", label="range filters")
+ax.set(xlabel="x (m)", ylabel="y (m)", title="Stone Soup's bearing-only example, started by sonartrack",
+       aspect="equal")
 ax.legend()

@@ -15,6 +15,9 @@ into a Stone Soup tracker in place of Stone Soup's:
   :func:`imm_ipda_tracker` -- stonesoup/imm.py;
 * :class:`MGEKFUpdater` (modified-gain EKF, paper P2) and the bearing + frequency measurement model
   :class:`BearingFrequency` with :class:`RelativeConstantVelocity` -- stonesoup/mgekf.py, models.py;
+* :class:`RangeParameterisedInitiator` -- a bearings-only initiator: Peach's range-parameterised EKF bank held
+  until the range is known, then one Gaussian (Stone Soup has none) -- stonesoup/bearings_initiator.py,
+  range_mixture.py;
 * converters between our arrays and files and Stone Soup's types -- stonesoup/convert.py;
 * Stone Soup's OSPA and GOSPA metric generators over our tables of time, id and position
   (:mod:`sonartrack.stonesoup.metrics`, imported on its own; our own are metrics/ospa.py).
@@ -31,6 +34,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
     raise ImportError("sonartrack.stonesoup needs Stone Soup: pip install sonartrack[stonesoup]") from exc
 
 from sonartrack.stonesoup.amplitude import AMPLITUDE, AmplitudeHypothesiser, JPDAWithAmplitude
+from sonartrack.stonesoup.bearings_initiator import RANGE_MIXTURE, RangeParameterisedInitiator
 from sonartrack.stonesoup.existence import ExistenceDeleter, ExistenceInitiator, confirmed_tracks
 from sonartrack.stonesoup.imm import (
     IMMIPDAHypotheses,
@@ -56,5 +60,6 @@ __all__ = [
     "JPDAWithAmplitude", "confirmed_tracks", "existence_of",
     "IMMIPDAHypotheses", "IMMIPDAHypothesiser", "IMMIPDATracker", "IMMIPDAUpdater", "IMMPredictor", "IMMState",
     "IMMStatePrediction", "IMMStateUpdate", "IMMUpdater", "imm_ipda_tracker",
+    "RANGE_MIXTURE", "RangeParameterisedInitiator",
     "MGEKFUpdater", "BearingFrequency", "RelativeConstantVelocity", "observer_control_model",
 ]
