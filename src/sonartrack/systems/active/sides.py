@@ -241,7 +241,8 @@ class SideTracker:
         self._turned: dict[int, bool] = {}
         self._history: dict[int, list[tuple[float, float]]] = {}
         self._last_side: dict[int, int] = {}
-        self._took: dict[tuple[float, int], list[tuple[int, int]]] = {}  # (ping, detection) -> [(track, side)]
+        self._shared: dict[tuple[int, int], int] = {}  # (track, track) -> pings they took one detection's mirrors
+        self._twins: dict[int, int] = {}
 
     def update(self, t_s: float, heading_rad: float, contacts, track_ids, x, P, sides_of) -> None:
         """Add this ping's contacts of the confirmed tracks.
@@ -310,6 +311,7 @@ class SideTracker:
         return k if d2[k] < self.gamma else None
 
     def _update(self, t_s, heading_rad, contacts, track_ids, x, P, side) -> None:
+        took: dict[int, list[tuple[int, int]]] = {}  # detection -> [(track, side of the contact it took)]
         for k, tid in enumerate(np.asarray(track_ids).tolist()):
             if tid not in self._sums:
                 self._retrodict(tid, t_s, heading_rad, contacts, np.asarray(x[k], float), np.asarray(P[k], float))
@@ -320,7 +322,7 @@ class SideTracker:
             if pair is None:
                 continue
             own, mirror = pair
-            self._took.setdefault((float(t_s), int(contacts.detection[own])), []).append((tid, int(contacts.side[own])))
+            self._count_twins(took.setdefault(int(contacts.detection[own]), []), tid, int(contacts.side[own]))
             t0 = self._t0.setdefault(tid, t_s)
             sums = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
             sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own])
@@ -328,6 +330,15 @@ class SideTracker:
             if sums[0].n >= MIN_CONTACTS:  # before the turn the two fits are equal: ln LR = 0 uncomputed
                 lr = sums[0].log_likelihood() - sums[1].log_likelihood() if self._turned[tid] else 0.0
                 self._history.setdefault(tid, []).append((t_s, lr))
+        self._twins = self.twins()
+
+    def _count_twins(self, took: list[tuple[int, int]], tid: int, side: int) -> None:
+        """Count one ping on which ``tid`` and each track in ``took`` took the two mirror contacts of a detection."""
+        for other, other_side in took:
+            if other != tid and other_side != side:
+                key = (min(other, tid), max(other, tid))
+                self._shared[key] = self._shared.get(key, 0) + 1
+        took.append((tid, side))
 
     def _pair(self, contacts, x, P) -> tuple[int, int] | None:
         """(own, mirror) rows: the contact nearest the track inside its gate, and the other of its detection."""
@@ -370,18 +381,28 @@ class SideTracker:
         dict
             Both directions of each pair (a -> b and b -> a).
         """
-        shared: dict[tuple[int, int], int] = {}
-        for took in self._took.values():
-            for i, (a, sa) in enumerate(took):
-                for b, sb in took[i + 1:]:
-                    if a != b and sa != sb:
-                        key = (min(a, b), max(a, b))
-                        shared[key] = shared.get(key, 0) + 1
         out: dict[int, int] = {}
-        for (a, b), n in sorted(shared.items(), key=lambda kv: (-kv[1], kv[0])):
+        for (a, b), n in sorted(self._shared.items(), key=lambda kv: (-kv[1], kv[0])):
             if n >= MIN_TWIN_PINGS and a not in out and b not in out:
                 out[a], out[b] = b, a
         return out
+
+    def rejected(self, track_id: int) -> bool:
+        """True when ``track_id`` is the rejected hypothesis of a decided target: decided a ghost itself, or the
+        mirror twin (:meth:`twins`) of a track decided on its target's side.
+
+        Parameters
+        ----------
+        track_id : int
+            The track's id.
+
+        Returns
+        -------
+        bool
+            Whether the track is a decided target's mirror.
+        """
+        twin = self._twins.get(int(track_id))
+        return self.decision(track_id) < 0 or (twin is not None and self.decision(twin) > 0)
 
     def result(self) -> SideDecisions:
         """Every confirmed track's decision (:class:`SideDecisions`).
@@ -413,8 +434,8 @@ class SideTracker:
 
 @dataclass(frozen=True)
 class GhostDeleter:
-    """A deleter part that runs ``inner`` and then deletes every track ``sides`` has decided a ghost (the mirror of
-    a target on the other side: :meth:`SideTracker.decision` -1), so the rejected hypothesis of a mirror pair
+    """A deleter part that runs ``inner`` and then deletes every track ``sides`` has rejected (the mirror of a
+    target decided on the other side: :meth:`SideTracker.rejected`), so the rejected hypothesis of a mirror pair
     leaves the picture at the scan after its side is decided instead of starving for several pings.
 
     Parameters
@@ -437,5 +458,5 @@ class GhostDeleter:
         T = self.inner.manage(T, hit)
         if not len(T):
             return T
-        ghost = np.array([self.sides.decision(int(i)) < 0 for i in T.track_id], bool)
+        ghost = np.array([self.sides.rejected(int(i)) for i in T.track_id], bool)
         return T.select(~ghost) if ghost.any() else T
