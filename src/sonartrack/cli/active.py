@@ -5,8 +5,10 @@ the ping table and the pings one at a time (systems/active/scene_files.py) and r
 single-ping and MFTD detection, mirror-pair bistatic contacts, range-rate gate, IMM-IPDA);
 :func:`~sonartrack.systems.active.files.write_active_tables` writes detections.csv, contacts.csv, tracks.csv,
 the pictures (report/figures/active.py: bscan.png, tactical.png) and index.html (report/active_page.py) into
-``--out``, all or nothing (an interrupted or failed run changes none of its files there); one summary line per
-confirmed track on stdout.
+``--out``, all or nothing (an interrupted or failed run changes none of its files there); on stdout a count line
+and one line per target (a decided target once, an undecided mirror pair once with both positions: files.py
+``summary_lines``); a scene folder holding the simulator's truth.csv gets the held fraction and the false targets
+on the page's summary line.
 
 Settings: :class:`sonartrack.systems.active.settings.ActiveSettings`, from its defaults, then a ``--config``
 TOML file, then the options; ``--print-config`` prints the resolved settings.
@@ -61,7 +63,8 @@ def active_cmd(
             result = run_active_files(pings, nav, settings, progress=TrialProgress(bar))
             lines = summary_lines(result)
             pngs = active_pngs(result, read_active_nav(nav))
-            page = active_page(result, lines, pngs, {"pings": str(pings), "navigation": str(nav)})
+            page = active_page(result, lines, pngs, {"pings": str(pings), "navigation": str(nav)},
+                               truth=_scene_truth(pings))
             files = write_active_tables(result, out, extra={**pngs, "index.html": page})
     except BaseException as exc:
         _reraise_interrupt(exc, out)
@@ -69,6 +72,16 @@ def active_cmd(
     for line in lines:
         typer.echo(line)
     typer.echo(f"active: wrote {len(files)} files in {out} (open index.html)")
+
+
+def _scene_truth(pings: Path):
+    """The truth of a simulated scene (its truth.csv, written by ``sonartrack simulate --kind active``), or None: the
+    page then states the held fraction and the false targets against it."""
+    from sonartrack.systems.active.files import scene_folder
+    from sonartrack.systems.active.scene_files import TRUTH_FILE, read_truth
+
+    path = scene_folder(pings) / TRUTH_FILE
+    return read_truth(path) if path.is_file() else None
 
 
 def _reraise_interrupt(exc: BaseException, out: Path) -> None:

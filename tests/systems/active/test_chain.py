@@ -122,7 +122,8 @@ def test_files_written_all_or_nothing(result, tmp_path):
         files_mod.tracks_table = real
     assert not (tmp_path / "out2").exists() or list((tmp_path / "out2").iterdir()) == []
     lines = summary_lines(result)
-    assert lines and all(line.startswith("track ") for line in lines)
+    # a count line, then one line per target (a mirror pair is one target, not two tracks: targets.py)
+    assert lines[0].startswith("active: ") and len(lines) > 1 and all(line.startswith("target ") for line in lines[1:])
 
 
 def test_cli_runs_and_writes_the_page(scene_folder, tmp_path):

@@ -1,5 +1,6 @@
 """Pictures of the active chain (``sonartrack active``): range-bearing B-scans of pings with their detections,
-and the tactical picture (PPI: ownship, source, array, confirmed tracks with 95 % ellipses)."""
+and the tactical picture (PPI: ownship, source, array, the targets: decided tracks with 95 % ellipses, undecided
+mirror pairs as dashed twins)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,6 @@ from pathlib import Path
 import numpy as np
 
 from sonartrack.io.atomic import save_figure
-from sonartrack.report.figures.tma import ellipses
 
 
 def _bscan_pings(n: int, shown: int) -> list[int]:
@@ -46,26 +46,66 @@ def bscan_picture(result, shown: int = 4):
     return fig
 
 
-def tactical_picture(result, nav):
-    """Ownship, source and array tracks, every confirmed track (solid) with 95 % ellipses, and the confirmed
-    tracks' positions at the end as triangles (Figure)."""
+def _confirmed_rows(t, tid: int) -> np.ndarray:
+    return np.nonzero((t.track_id == tid) & t.confirmed)[0] if tid >= 0 else np.zeros(0, np.int64)
+
+
+def _draw_target(ax, result, targets, k: int, color: str) -> None:
+    """One target (systems/active/targets.py): each hypothesis dashed while the side is undecided, the target's
+    track solid from the ping its side was decided on with 95 % ellipses and a triangle at its last position, the
+    two hypotheses joined by a dotted line at that ping (or at their last common ping, undecided)."""
+    from sonartrack.report.figures.tma import ellipses
+
+    t, P = result.tracks.tracks, result.tracks.P
+    when = float(targets.resolved_s[k])
+    decided = targets.decision[k] == "decided"
+    own, mirror = _confirmed_rows(t, int(targets.track_id[k])), _confirmed_rows(t, int(targets.mirror_track_id[k]))
+    name = f"target {targets.target[k]}"
+    for rows, main in ((own, True), (mirror, False)):
+        if not len(rows):
+            continue
+        X = t.x[rows] / 1e3
+        before = t.time_s[rows] <= when if decided and main else np.ones(len(rows), bool)
+        undecided_label = f"{name} (undecided: both hypotheses)" if main and not decided else None
+        ax.plot(X[before, 0], X[before, 1], "--", color=color, lw=1.0, alpha=0.8 if main else 0.5,
+                label=undecided_label)
+        if (~before).any():
+            ax.plot(X[~before, 0], X[~before, 1], "-", color=color, lw=1.5, label=f"{name} ({targets.side[k]})")
+            ellipses(ax, t.x[rows[~before]], P[rows[~before]], 5, color=color, alpha=0.8, label=None)
+        ax.plot(X[-1, 0], X[-1, 1], "x" if decided and not main else "^", color=color, ms=7 if main else 5)
+    _join(ax, t, own, mirror, when if decided else None, color)
+
+
+def _join(ax, t, own, mirror, when: float | None, color: str) -> None:
+    """A dotted line between the two hypotheses at the decision ping (or their last common ping)."""
+    if not (len(own) and len(mirror)):
+        return
+    common = np.intersect1d(t.time_s[own], t.time_s[mirror])
+    if not len(common):
+        return
+    at = common[-1] if when is None else common[np.argmin(np.abs(common - when))]
+    a, b = own[t.time_s[own] == at][0], mirror[t.time_s[mirror] == at][0]
+    ax.plot([t.x[a, 0] / 1e3, t.x[b, 0] / 1e3], [t.x[a, 1] / 1e3, t.x[b, 1] / 1e3], ":", color=color, lw=1.0)
+
+
+def tactical_picture(result, nav, targets=None):
+    """Ownship, source and array tracks and every target (Figure): a decided target's track solid from its
+    decision with 95 % ellipses, an undecided mirror pair as two dashed twins of one colour joined by a dotted
+    line (one target, two hypotheses), a decided target's hypotheses before its decision dashed (its rejected
+    mirror fading, x at its end)."""
     import matplotlib.pyplot as plt
 
+    from sonartrack.systems.active.targets import mirror_targets
+
+    m = mirror_targets(result.tracks, result.geometry) if targets is None else targets
     fig, ax = plt.subplots(figsize=(8, 8))
     ax.plot(nav.own_xy[:, 0] / 1e3, nav.own_xy[:, 1] / 1e3, "b-", lw=1.5, label="ownship")
     ax.plot(nav.source_xy[:, 0] / 1e3, nav.source_xy[:, 1] / 1e3, "m:", lw=1.0, label="source")
     ax.plot(nav.array_xy[:, 0] / 1e3, nav.array_xy[:, 1] / 1e3, "c--", lw=1.0, label="array centre")
-    t = result.tracks.tracks
-    P = result.tracks.P
-    for n, tid in enumerate(dict.fromkeys(t.track_id[t.confirmed].tolist())):
-        rows = np.nonzero((t.track_id == tid) & t.confirmed)[0]
-        color = f"C{(n + 1) % 10}"
-        X = t.x[rows]
-        ax.plot(X[:, 0] / 1e3, X[:, 1] / 1e3, "-", color=color, lw=1.4, label=f"track {tid}")
-        ax.plot(X[-1, 0] / 1e3, X[-1, 1] / 1e3, "^", color=color, ms=7)
-        ellipses(ax, X, P[rows], 5, color=color, alpha=0.8, label=None)
+    for k in range(len(m)):
+        _draw_target(ax, result, m, k, f"C{(k + 1) % 10}")
     ax.set(xlabel="x east (km)", ylabel="y north (km)", aspect="equal",
-           title="tactical picture: confirmed IMM-IPDA tracks, 95 % ellipses")
+           title="tactical picture: targets (solid: side decided, 95 % ellipses; dashed twins: both hypotheses)")
     ax.legend(fontsize=8, loc="best")
     return fig
 

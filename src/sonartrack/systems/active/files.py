@@ -12,10 +12,24 @@ and each is written atomically, so a failure leaves no half-written output):
   tracked detector's), side (starboard | port), range_rate_mps, rx_range_m, statistic and gated (False: kept
   from the tracker by the range-rate gate);
 * tracks.csv: one row per live track per ping: time_s, track_id, status (confirmed | tentative), existence,
-  x_m, y_m, vx_mps, vy_mps, sd_x_m, sd_y_m, mode_prob_<j> (tracking/run.py), and sd_vx_mps, sd_vy_mps,
-  cov_xy_m2;
-* sides.csv: the left/right decision of each confirmed track (systems/active/sides.py: decision, side, ln LR,
-  time resolved).
+  x_m, y_m, vx_mps, vy_mps, sd_x_m, sd_y_m, mode_prob_<j> (tracking/run.py), sd_vx_mps, sd_vy_mps, cov_xy_m2, and
+  the row's ``target`` and ``hypothesis`` (below; target empty and hypothesis "" for a track never confirmed);
+* sides.csv: one row per target (below): target, decision (decided | undecided), side (the target's side when
+  decided), track_id and track_side (decided: the track on the target's side; undecided: the pair's
+  first-confirmed track and its side of the array), mirror_track_id (the other hypothesis's track; empty: none
+  confirmed), log_lr (ln LR of track_id's side against the other, systems/active/sides.py), resolved_s (the ping
+  the side was decided from), first_s, last_s (confirmed span), x_m, y_m (track_id's last position) and
+  mirror_x_m, mirror_y_m (the other hypothesis's: its track's last position, or the reflection of x_m, y_m about
+  the array's axis when undecided with no confirmed twin; empty for a decided target with no twin).
+
+Targets, not tracks (systems/active/targets.py). A line array gives each echo two mirror contacts, so a target is
+tracked on both sides of the array until the array's turn decides its side. A confirmed track and its mirror twin
+(the track that took the other contact of the same detections) are ONE target with two hypotheses: ``target``
+numbers them 1.. in order of first confirmation, and each track row says which hypothesis it is: ``starboard`` |
+``port`` while the side is undecided (the target is here if it is on that side of the array), ``decided`` from
+the ping its side was decided on, ``mirror`` for the rejected twin of a decided target (which the chain deletes
+at the next ping). The summary lines and the page list targets (decided ones, then undecided mirror pairs with
+both positions), never a ghost as a target of its own.
 """
 
 from __future__ import annotations
@@ -133,45 +147,84 @@ def contacts_table(result: ActiveResult):
                         columns=CONTACT_COLUMNS)
 
 
-def tracks_table(result: ActiveResult):
+def targets_of(result: ActiveResult):
+    """The run's targets: confirmed tracks grouped with their mirror twins (systems/active/targets.py).
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result (its tracks, side decisions and geometry).
+
+    Returns
+    -------
+    MirrorTargets
+        One row per target.
+    """
+    from sonartrack.systems.active.targets import mirror_targets
+
+    return mirror_targets(result.tracks, result.geometry)
+
+
+def _ids(v):
+    """Track ids as a nullable integer column (-1, none, written empty)."""
+    import pandas as pd
+
+    return pd.array(np.where(np.asarray(v) < 0, None, np.asarray(v)), dtype="Int64")
+
+
+def tracks_table(result: ActiveResult, targets=None):
     """tracks.csv (module doc).
 
     Parameters
     ----------
     result : ActiveResult
         The chain's result (its ``tracks``).
+    targets : MirrorTargets, optional
+        Its targets (default: :func:`targets_of`).
 
     Returns
     -------
     pandas.DataFrame
-        The tracker's frame plus ``sd_vx_mps``, ``sd_vy_mps`` (m/s) and ``cov_xy_m2`` (m^2) from the covariances.
+        The tracker's frame plus ``sd_vx_mps``, ``sd_vy_mps`` (m/s) and ``cov_xy_m2`` (m^2) from the covariances, and
+        each row's ``target`` (empty: never confirmed) and ``hypothesis``.
     """
+    from sonartrack.systems.active.targets import track_hypotheses
+
     t, P = result.tracks.tracks, result.tracks.P
     df = t.to_frame()
     df["sd_vx_mps"], df["sd_vy_mps"], df["cov_xy_m2"] = np.sqrt(P[:, 2, 2]), np.sqrt(P[:, 3, 3]), P[:, 0, 1]
+    target, hypothesis = track_hypotheses(result.tracks, targets_of(result) if targets is None else targets,
+                                          result.geometry)
+    df["target"], df["hypothesis"] = _ids(target), hypothesis
     return df
 
 
-def sides_table(result: ActiveResult):
-    """sides.csv: the side decision of each track.
+SIDE_COLUMNS = ["target", "decision", "side", "track_id", "track_side", "mirror_track_id", "log_lr", "resolved_s",
+                "first_s", "last_s", "x_m", "y_m", "mirror_x_m", "mirror_y_m"]
+
+
+def sides_table(result: ActiveResult, targets=None):
+    """sides.csv: one row per target, both hypotheses (module doc).
 
     Parameters
     ----------
     result : ActiveResult
-        The chain's result (its ``tracks.sides``, None when no side decision was made).
+        The chain's result.
+    targets : MirrorTargets, optional
+        Its targets (default: :func:`targets_of`).
 
     Returns
     -------
     pandas.DataFrame
-        Columns track_id, decision, side, log_lr, resolved_s (s), contacts; no rows when there are no decisions.
+        Columns ``SIDE_COLUMNS`` (times s, positions m x east, y north); no rows when no track was confirmed.
     """
     import pandas as pd
 
-    d = result.tracks.sides
-    cols = ["track_id", "decision", "side", "log_lr", "resolved_s", "contacts"]
-    if d is None:
-        return pd.DataFrame(columns=cols)
-    return pd.DataFrame({c: getattr(d, c) for c in cols}, columns=cols)
+    m = targets_of(result) if targets is None else targets
+    cols = {c: getattr(m, c) for c in SIDE_COLUMNS[:10]}
+    cols["track_id"], cols["mirror_track_id"] = _ids(m.track_id), _ids(m.mirror_track_id)
+    cols.update(x_m=m.xy[:, 0], y_m=m.xy[:, 1], mirror_x_m=m.mirror_xy[:, 0], mirror_y_m=m.mirror_xy[:, 1])
+    return pd.DataFrame(cols, columns=SIDE_COLUMNS)
 
 
 def write_active_tables(result: ActiveResult, out, extra: dict | None = None) -> list[Path]:
@@ -227,7 +280,7 @@ def _side(result: ActiveResult, t_s: float, xy) -> str:
 
 
 def track_line(result: ActiveResult, track_id: int) -> str:
-    """One line for a confirmed track: span, last estimate with sds, speed and course, existence, modes, side.
+    """A confirmed track's estimate in words: span, last estimate with sds, speed and course, existence, modes.
 
     Parameters
     ----------
@@ -239,8 +292,7 @@ def track_line(result: ActiveResult, track_id: int) -> str:
     Returns
     -------
     str
-        Positions and sds in km (x east, y north), speed in knots, course in deg clockwise from north, side of the
-        array axis at the last estimate, and the side decision in words.
+        Positions and sds in km (x east, y north), speed in knots, course in deg clockwise from north.
     """
     t = result.tracks.tracks
     rows = np.nonzero(t.track_id == track_id)[0]
@@ -250,26 +302,48 @@ def track_line(result: ActiveResult, track_id: int) -> str:
     speed = float(np.hypot(x[2], x[3]))
     course = float(np.rad2deg(np.arctan2(x[2], x[3])) % 360.0)
     modes = "/".join(f"{m:.2f}" for m in t.mode_prob[last])
-    return (f"track {track_id}: confirmed {t.time_s[conf[0]]:.0f}..{t.time_s[conf[-1]]:.0f} s ({len(conf)} pings); "
+    return (f"track {track_id} confirmed {t.time_s[conf[0]]:.0f}..{t.time_s[conf[-1]]:.0f} s ({len(conf)} pings), "
             f"at {t.time_s[last]:.0f} s ({x[0] / 1e3:.2f}, {x[1] / 1e3:.2f}) km ± ({t.sd_x_m[last] / 1e3:.2f}, "
-            f"{t.sd_y_m[last] / 1e3:.2f}), {speed / 0.514444:.1f} kn course {course:.0f} deg, "
-            f"{_side(result, t.time_s[last], x[:2])} of the array; existence {t.existence[last]:.2f}, "
-            f"mode probabilities {modes}; {_side_text(result, track_id)}")
+            f"{t.sd_y_m[last] / 1e3:.2f}), {speed / 0.514444:.1f} kn course {course:.0f} deg, existence "
+            f"{t.existence[last]:.2f}, mode probabilities {modes}")
 
 
-def _side_text(result: ActiveResult, track_id: int) -> str:
-    """The track's side decision in words (sides.py)."""
-    d = result.tracks.sides
-    k = None if d is None else d.of(track_id)
-    if k is None or d.decision[k] == "undecided":
-        lr = "" if k is None else f" (ln LR {d.log_lr[k]:+.1f})"
-        return f"side undecided{lr}"
-    what = "on its target's side" if d.decision[k] == "track" else "a mirror ghost"
-    return f"{what}: target {d.side[k]} (ln LR {d.log_lr[k]:+.1f}, from {d.resolved_s[k]:.0f} s)"
+def target_line(result: ActiveResult, targets, k: int) -> str:
+    """One line for target row ``k``: decided (its side, ln LR, when, the mirror dropped) or an undecided mirror
+    pair (both hypotheses' positions), then its track's estimate (:func:`track_line`).
+
+    Parameters
+    ----------
+    result : ActiveResult
+        The chain's result.
+    targets : MirrorTargets
+        Its targets (:func:`targets_of`).
+    k : int
+        The row.
+
+    Returns
+    -------
+    str
+        The line (positions in km, x east, y north).
+    """
+    m = targets
+    own, mirror = int(m.track_id[k]), int(m.mirror_track_id[k])
+    km = lambda xy: f"({xy[0] / 1e3:.2f}, {xy[1] / 1e3:.2f}) km"  # noqa: E731
+    head = f"target {m.target[k]}: "
+    if m.decision[k] == "decided":
+        drop = f"; mirror track {mirror} dropped" if mirror >= 0 else ""
+        head += (f"{m.side[k]}, decided at {m.resolved_s[k]:.0f} s (ln LR {m.log_lr[k]:+.1f}{drop})")
+        if own < 0:
+            return head + f"; only its mirror was tracked (track {mirror}, last at {km(m.mirror_xy[k])})"
+        return head + "; " + track_line(result, own)
+    other = m.track_side[k] == "starboard" and "port" or "starboard"
+    twin = f"track {mirror}" if mirror >= 0 else "not tracked"
+    return (head + f"side undecided (ln LR {m.log_lr[k]:+.1f}): {m.track_side[k]} at {km(m.xy[k])} or {other} at "
+            f"{km(m.mirror_xy[k])} ({twin}); " + track_line(result, own))
 
 
 def summary_lines(result: ActiveResult) -> list[str]:
-    """One line per confirmed track, or one line saying that nothing was confirmed.
+    """One line for the targets' count, then one per target, or one line saying that nothing was confirmed.
 
     Parameters
     ----------
@@ -279,12 +353,16 @@ def summary_lines(result: ActiveResult) -> list[str]:
     Returns
     -------
     list of str
-        :func:`track_line` of each confirmed track in order of first confirmation, or one line with the numbers
-        of pings, detections and contacts.
+        The count line and :func:`target_line` of each target in order of first confirmation (decided and
+        undecided mirror pairs alike, each pair once), or one line with the numbers of pings, detections and
+        contacts.
     """
-    t = result.tracks.tracks
-    ids = list(dict.fromkeys(t.track_id[t.confirmed].tolist()))
-    if not ids:
+    m = targets_of(result)
+    if not len(m):
         return [f"active: no confirmed track in {len(result.ping_time_s)} pings ({len(result.detections)} "
                 f"{result.settings.detector} detections, {len(result.contacts)} contacts)"]
-    return [track_line(result, i) for i in ids]
+    decided = int((m.decision == "decided").sum())
+    pairs = int(((m.decision == "undecided") & (m.mirror_track_id >= 0)).sum())
+    head = (f"active: {len(m)} targets in {len(result.ping_time_s)} pings: {decided} with the side decided, "
+            f"{len(m) - decided} undecided ({pairs} of them tracked on both sides: one target, two hypotheses)")
+    return [head] + [target_line(result, m, k) for k in range(len(m))]

@@ -46,7 +46,7 @@ from sonartrack.systems.active.contacts import (
     resolve_mirrors,
 )
 from sonartrack.systems.active.settings import ActiveSettings
-from sonartrack.systems.active.sides import SideDecisions, SideTracker
+from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
@@ -156,6 +156,8 @@ class ContactTracker:
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
+        if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
+            self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 

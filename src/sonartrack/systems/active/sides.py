@@ -67,6 +67,8 @@ MAX_MISSES = 3
 STRAY_PROBABILITY = 1e-6
 #: refits of the capped CV fit beyond two per contact (it stops when the kept set repeats)
 MAX_REFITS = 10
+#: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings
+MIN_TWIN_PINGS = 2
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,7 +78,8 @@ class SideDecisions:
     array (port | starboard) the target is judged on (the track's side at its last update, the other one for a
     ghost, "" when undecided); ``log_lr`` ln LR at the track's last contact; ``resolved_s`` the ping time (s)
     from which |ln LR| stayed above the threshold with the final sign (NaN: never); ``contacts`` the number of
-    contacts in the fit."""
+    contacts in the fit; ``twin`` the confirmed track on this one's mirror (the track that took the other contact
+    of the same detections on at least ``MIN_TWIN_PINGS`` pings, the most such pings), -1 when none."""
 
     track_id: np.ndarray
     decision: np.ndarray
@@ -84,6 +87,7 @@ class SideDecisions:
     log_lr: np.ndarray
     resolved_s: np.ndarray
     contacts: np.ndarray
+    twin: np.ndarray
 
     def __len__(self) -> int:
         return len(self.track_id)
@@ -237,6 +241,8 @@ class SideTracker:
         self._turned: dict[int, bool] = {}
         self._history: dict[int, list[tuple[float, float]]] = {}
         self._last_side: dict[int, int] = {}
+        self._shared: dict[tuple[int, int], int] = {}  # (track, track) -> pings they took one detection's mirrors
+        self._twins: dict[int, int] = {}
 
     def update(self, t_s: float, heading_rad: float, contacts, track_ids, x, P, sides_of) -> None:
         """Add this ping's contacts of the confirmed tracks.
@@ -305,6 +311,7 @@ class SideTracker:
         return k if d2[k] < self.gamma else None
 
     def _update(self, t_s, heading_rad, contacts, track_ids, x, P, side) -> None:
+        took: dict[int, list[tuple[int, int]]] = {}  # detection -> [(track, side of the contact it took)]
         for k, tid in enumerate(np.asarray(track_ids).tolist()):
             if tid not in self._sums:
                 self._retrodict(tid, t_s, heading_rad, contacts, np.asarray(x[k], float), np.asarray(P[k], float))
@@ -315,6 +322,7 @@ class SideTracker:
             if pair is None:
                 continue
             own, mirror = pair
+            self._count_twins(took.setdefault(int(contacts.detection[own]), []), tid, int(contacts.side[own]))
             t0 = self._t0.setdefault(tid, t_s)
             sums = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
             sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own])
@@ -322,6 +330,15 @@ class SideTracker:
             if sums[0].n >= MIN_CONTACTS:  # before the turn the two fits are equal: ln LR = 0 uncomputed
                 lr = sums[0].log_likelihood() - sums[1].log_likelihood() if self._turned[tid] else 0.0
                 self._history.setdefault(tid, []).append((t_s, lr))
+        self._twins = self.twins()
+
+    def _count_twins(self, took: list[tuple[int, int]], tid: int, side: int) -> None:
+        """Count one ping on which ``tid`` and each track in ``took`` took the two mirror contacts of a detection."""
+        for other, other_side in took:
+            if other != tid and other_side != side:
+                key = (min(other, tid), max(other, tid))
+                self._shared[key] = self._shared.get(key, 0) + 1
+        took.append((tid, side))
 
     def _pair(self, contacts, x, P) -> tuple[int, int] | None:
         """(own, mirror) rows: the contact nearest the track inside its gate, and the other of its detection."""
@@ -355,6 +372,38 @@ class SideTracker:
             return 0
         return 1 if h[-1][1] > 0 else -1
 
+    def twins(self) -> dict[int, int]:
+        """Mirror twins: track -> the confirmed track that took the other contact of the same detection on the most
+        pings (at least ``MIN_TWIN_PINGS``), each track in one pair at most (pairs taken by decreasing count).
+
+        Returns
+        -------
+        dict
+            Both directions of each pair (a -> b and b -> a).
+        """
+        out: dict[int, int] = {}
+        for (a, b), n in sorted(self._shared.items(), key=lambda kv: (-kv[1], kv[0])):
+            if n >= MIN_TWIN_PINGS and a not in out and b not in out:
+                out[a], out[b] = b, a
+        return out
+
+    def rejected(self, track_id: int) -> bool:
+        """True when ``track_id`` is the rejected hypothesis of a decided target: decided a ghost itself, or the
+        mirror twin (:meth:`twins`) of a track decided on its target's side.
+
+        Parameters
+        ----------
+        track_id : int
+            The track's id.
+
+        Returns
+        -------
+        bool
+            Whether the track is a decided target's mirror.
+        """
+        twin = self._twins.get(int(track_id))
+        return self.decision(track_id) < 0 or (twin is not None and self.decision(twin) > 0)
+
     def result(self) -> SideDecisions:
         """Every confirmed track's decision (:class:`SideDecisions`).
 
@@ -364,6 +413,7 @@ class SideTracker:
             One row per track seen confirmed, by increasing id; ``resolved_s`` in s.
         """
         ids = sorted(self._h0)
+        twins = self.twins()
         dec, side, lr, when, n = [], [], [], [], []
         for tid in ids:
             h = np.array(self._history.get(tid, []), float).reshape(-1, 2)
@@ -378,4 +428,35 @@ class SideTracker:
             start = bad[-1] + 1 if len(bad) else 0
             when.append(float(h[start, 0]) if d and start < len(h) else float("nan"))
         return SideDecisions(np.array(ids, np.int64), np.array(dec, dtype=object), np.array(side, dtype=object),
-                             np.array(lr), np.array(when), np.array(n, np.int64))
+                             np.array(lr), np.array(when), np.array(n, np.int64),
+                             np.array([twins.get(i, -1) for i in ids], np.int64))
+
+
+@dataclass(frozen=True)
+class GhostDeleter:
+    """A deleter part that runs ``inner`` and then deletes every track ``sides`` has rejected (the mirror of a
+    target decided on the other side: :meth:`SideTracker.rejected`), so the rejected hypothesis of a mirror pair
+    leaves the picture at the scan after its side is decided instead of starving for several pings.
+
+    Parameters
+    ----------
+    inner : deleter part
+        The tracker's own deleter (tracking/deleters.py, or a wrapper of it).
+    sides : SideTracker
+        The running side decisions.
+    """
+
+    inner: object
+    sides: SideTracker
+
+    def new_track_attrs(self, k: int) -> dict:
+        """The inner deleter's per-track counters (``inner.new_track_attrs(k)``)."""
+        return self.inner.new_track_attrs(k)
+
+    def manage(self, T, hit):
+        """The inner deleter's confirmation and deletion, then the ghosts' deletion (TrackArrays in and out)."""
+        T = self.inner.manage(T, hit)
+        if not len(T):
+            return T
+        ghost = np.array([self.sides.rejected(int(i)) for i in T.track_id], bool)
+        return T.select(~ghost) if ghost.any() else T
