@@ -52,7 +52,8 @@ sonartrack("active", "--pings", "active-scene/pings", "--nav", "active-scene/nav
            "--out", "active")
 
 # %%
-# ``sides.csv`` holds each confirmed track's decision; ``tracks.csv`` every track at every ping.
+# ``sides.csv`` holds one row per target (a mirror pair once, both positions); ``tracks.csv`` every track at
+# every ping with its target and hypothesis.
 pd.read_csv(work / "active" / "sides.csv")
 
 # %%
