@@ -120,7 +120,7 @@
     }
     g.textAlign = "right"; g.textBaseline = "middle";
     const span = S.view.rows * geom.dt, step = niceStep(span / 6);
-    for (let t = Math.floor(geom.tTop / step) * step; t > geom.tBottom; t -= step) {
+    for (let t = Math.floor(geom.tTop / step) * step; t > geom.tBottom && t >= 0; t -= step) {
       const y = geom.y(t); if (y < box.y || y > box.y + box.h) continue;
       g.fillText(clock(t).slice(span < 3600 ? 3 : 0), box.x - 4, y);
       g.beginPath(); g.moveTo(box.x - 3, y); g.lineTo(box.x, y); g.stroke();
@@ -153,11 +153,14 @@
     geom.paths = paths;
     for (const [id, p] of paths) {
       const sel = id === S.selected, col = sel ? "#ffe14d" : colourOf(id);
-      g.strokeStyle = col; g.lineWidth = sel ? 2 : 1; g.globalAlpha = p.status === "confirmed" ? 0.95 : 0.55;
-      g.setLineDash(p.status === "confirmed" ? [] : [3, 3]);
-      g.globalAlpha *= sel ? 1 : 0.6; g.beginPath();   // (a jump of over 1/8 of the width starts a new piece)
-      p.pts.forEach(([x, y], k) => (k && Math.abs(x - p.pts[k - 1][0]) < geom.box.w / 8 ? g.lineTo(x, y) : g.moveTo(x, y)));
-      g.stroke(); g.setLineDash([]); g.globalAlpha = 1;
+      g.strokeStyle = col; g.globalAlpha = p.status === "confirmed" ? 1 : 0.5;
+      let lastY = -1e9;                     // brackets either side of the trace, so the trace itself stays visible
+      g.beginPath();
+      for (const [x, y] of p.pts) {
+        if (Math.abs(y - lastY) < 16) continue;
+        lastY = y; g.moveTo(x - 12, y); g.lineTo(x - 5, y); g.moveTo(x + 5, y); g.lineTo(x + 12, y);
+      }
+      g.lineWidth = sel ? 3 : 2; g.stroke(); g.setLineDash([]); g.globalAlpha = 1;
       const [x0, y0] = p.pts[0];
       g.font = sel ? "bold 12px monospace" : "11px monospace"; g.textAlign = "left"; g.textBaseline = "top";
       g.fillStyle = "rgba(0,0,0,0.65)"; g.fillRect(x0 + 4, y0 + 2, 8 + 7 * String(id).length, 14);
