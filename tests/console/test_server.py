@@ -29,7 +29,8 @@ def server():
     s.stop()
 
 
-def raw_request(server: ConsoleServer, target: str, *, method: str = "GET", host: str | None = None) -> tuple[int, bytes]:
+def raw_request(server: ConsoleServer, target: str, *, method: str = "GET",
+                host: str | None = None) -> tuple[int, bytes]:
     """(status, body) of one HTTP request written byte for byte (no client library tidies the path)."""
     with socket.create_connection(("127.0.0.1", server.port), timeout=10) as sock:
         sock.sendall(f"{method} {target} HTTP/1.1\r\nHost: {host or f'127.0.0.1:{server.port}'}\r\n"
@@ -199,7 +200,7 @@ def test_publish_from_many_threads_keeps_each_threads_order(server):
         for i in range(150):
             server.publish({"type": "tracks", "t_s": float(i), "source": k, "tracks": []})
 
-    threads = [threading.Thread(target=publisher, args=(k,)) for k in range(4)]
+    threads = [threading.Thread(target=publisher, args=(k,)) for k in range(4)]  # a burst: no one is dropped
     for t in threads:
         t.start()
     for t in threads:
@@ -212,8 +213,8 @@ def test_publish_from_many_threads_keeps_each_threads_order(server):
 
 
 def test_a_client_that_stops_reading_is_dropped():
-    """A stalled client cannot make the server's memory grow: past max_pending unsent updates it is dropped."""
-    with ConsoleServer(port=0, max_pending=8) as s:
+    """A stalled client cannot make the server's memory grow: past max_pending_bytes unsent it is dropped."""
+    with ConsoleServer(port=0, max_pending_bytes=4 * 2**20) as s:
         sock = socket.create_connection(("127.0.0.1", s.port), timeout=10)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
         sock.sendall(f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{s.port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"

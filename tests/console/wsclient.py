@@ -55,7 +55,8 @@ class Client:
         with self._arrived:
             ok = self._arrived.wait_for(lambda: predicate(self.messages) or self.closed.is_set(), timeout_s)
             value = predicate(self.messages)
-        assert value, f"never happened within {timeout_s} s; {len(self.messages)} messages, closed={self.closed.is_set()}"
+        assert value, (f"never happened within {timeout_s} s; {len(self.messages)} messages, "
+                       f"closed={self.closed.is_set()}")
         assert ok
         return value
 

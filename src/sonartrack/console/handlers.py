@@ -22,13 +22,16 @@ class AssetHandler(tornado.web.RequestHandler):
     """GET/HEAD of a name in the asset map (exact path, no decoding, no file system); 404 for any other."""
 
     def initialize(self, server) -> None:
+        """Tornado's per-request set-up: the :class:`ConsoleServer` this handler answers for."""
         self.server = server
 
     def prepare(self) -> None:
+        """403 for a request addressed to a name the server does not answer to."""
         if not self.server.allowed_host(self.request.host):
             raise tornado.web.HTTPError(403)
 
     def get(self, *args) -> None:
+        """The asset named by the exact request path, or 404."""
         entry = asset_map().get(self.request.path)
         if entry is None:
             raise tornado.web.HTTPError(404)
@@ -40,9 +43,11 @@ class AssetHandler(tornado.web.RequestHandler):
         self.write(body)
 
     def head(self, *args) -> None:
+        """As GET (tornado leaves the body out)."""
         self.get()
 
     def write_error(self, status_code: int, **kwargs) -> None:
+        """A one-line plain-text error page (no traceback, nothing echoed from the request)."""
         self.set_header("Content-Type", "text/plain; charset=utf-8")
         self.finish(f"{status_code} {self._reason}\n")
 
@@ -51,16 +56,19 @@ class UpdateSocket(tornado.websocket.WebSocketHandler):
     """One client: on open a hello and the history, then every published update; its messages go to the server."""
 
     def initialize(self, server) -> None:
+        """Tornado's per-connection set-up: the server, the characters not yet sent and the bad messages."""
         self.server = server
         self.pending = 0
         self.bad_messages = 0
         self.accepted = False
 
     def prepare(self) -> None:
+        """403 for an upgrade addressed to a name the server does not answer to (the origin is tornado's check)."""
         if not self.server.allowed_host(self.request.host):
             raise tornado.web.HTTPError(403)
 
     def open(self, *args) -> None:
+        """Join (or be refused when the server is full), then the hello and the history."""
         if not self.server.joined(self):
             self.close(1013, "too many clients; try again later")
             return
@@ -70,15 +78,17 @@ class UpdateSocket(tornado.websocket.WebSocketHandler):
         self.push(self.server.history.snapshot())
 
     def on_message(self, message) -> None:
+        """Every message goes to the server's checks (:meth:`ConsoleServer.receive`)."""
         if self.accepted:
             self.server.receive(self, message)
 
     def on_close(self) -> None:
+        """Leave the server's list of clients."""
         self.server.left(self)
 
     def push(self, text: str) -> None:
-        """Send ``text``; a client with :attr:`ConsoleServer.max_pending` unsent updates is dropped."""
-        if self.pending >= self.server.max_pending:
+        """Send ``text``; a client with more than :attr:`ConsoleServer.max_pending_bytes` unsent is dropped."""
+        if self.pending + len(text) > self.server.max_pending_bytes and self.pending:
             self.server.left(self)
             self.close(1013, "too slow to follow the updates; reconnect for the history")
             return
@@ -87,11 +97,12 @@ class UpdateSocket(tornado.websocket.WebSocketHandler):
         except tornado.websocket.WebSocketClosedError:
             self.server.left(self)
             return
-        self.pending += 1
-        future.add_done_callback(self._sent)
+        size = len(text)
+        self.pending += size
+        future.add_done_callback(lambda f: self._sent(f, size))
 
-    def _sent(self, future) -> None:
-        self.pending -= 1
+    def _sent(self, future, n: int) -> None:
+        self.pending -= n
         future.exception()  # (a closed stream: retrieved, so that asyncio does not log it)
 
 

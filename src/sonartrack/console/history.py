@@ -2,8 +2,9 @@
 
 A client that joins late (or reconnects) gets one ``{"type": "history", "updates": [...]}`` message holding the
 series (bearing-time rows, track positions, LOFAR rows, ownship positions, B-scans) as far back as the buffers
-reach, the health updates that reported events (the event log), then the latest of every other kind (targets, health, the selection). The buffers have a fixed length,
-so a day of updates takes no more memory than ``history_rows`` of them (issue 31 item 4).
+reach, the health updates that reported events (the event log), then the latest of every other kind (targets,
+health, the selection). The buffers have a fixed length, so a day of updates takes no more memory than
+``history_rows`` of them (issue 31 item 4).
 """
 
 from __future__ import annotations

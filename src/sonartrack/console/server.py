@@ -17,6 +17,7 @@ so no client can make the server's memory grow.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import threading
 from collections.abc import Callable
@@ -63,15 +64,16 @@ class ConsoleServer:
         Rows of each series kept for a client that joins late (bearing-time rows, track scans, LOFAR rows).
     max_clients : int
         Clients served at once; one more is refused (close code 1013) until another leaves.
-    max_pending : int
-        Updates queued for one client before it counts as stalled and is dropped.
+    max_pending_bytes : int
+        Bytes of updates queued for one client (written but not yet taken by its connection) before it counts as
+        stalled and is dropped (a count of bytes, not of updates, so that a burst of small updates drops no one).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, *, history_rows: int = 3600, max_clients: int = 16,
-                 max_pending: int = 512):
+                 max_pending_bytes: int = 32 * 2**20):
         self.host, self.port = host, int(port)
         self.history = UpdateHistory(history_rows)
-        self.max_clients, self.max_pending = int(max_clients), int(max_pending)
+        self.max_clients, self.max_pending_bytes = int(max_clients), int(max_pending_bytes)
         self.url = ""
         self.selected: int | None = None
         self.received = 0  # messages received from clients
@@ -100,10 +102,8 @@ class ConsoleServer:
         self.history.add(kind, text, has_events=kind == "health" and bool(update.get("events")))
         loop = self._loop
         if loop is not None:
-            try:
+            with contextlib.suppress(RuntimeError):  # the loop closed under us: stop() is running
                 loop.call_soon_threadsafe(self._broadcast, text)
-            except RuntimeError:  # the loop closed under us: stop() is running
-                pass
 
     def start(self) -> None:
         """Bind the port and serve from a background thread; InputError naming the address if it cannot bind."""
@@ -184,6 +184,7 @@ class ConsoleServer:
         return True
 
     def left(self, client) -> None:
+        """A client disconnected (or was dropped): it gets no more updates."""
         self._clients.discard(client)
 
     def receive(self, client, message) -> None:

@@ -4,7 +4,7 @@
   const $ = (id) => document.getElementById(id);
   const S = {                       // everything on screen comes from here; every list is bounded (historyRows)
     historyRows: 3600, btr: [], tracks: [], lofar: new Map(), own: [], targets: null, health: null,
-    selected: null, bscan: null, events: [], messages: 0, lastMessage: 0, conn: "connecting",
+    selected: null, bscan: null, events: [], drawLog: [], messages: 0, lastMessage: 0, conn: "connecting",
     view: { rows: 240, back: 0 },   // rows shown in the waterfall, and how many rows back from the newest
   };
   const TRACK_COLOURS = ["#ff6b6b", "#4dabf7", "#ffd43b", "#da77f2", "#63e6be", "#ffa94d", "#a9e34b", "#f783ac"];
@@ -158,9 +158,11 @@
       g.beginPath();
       for (const [x, y] of p.pts) {
         if (Math.abs(y - lastY) < 16) continue;
-        lastY = y; g.moveTo(x - 12, y); g.lineTo(x - 5, y); g.moveTo(x + 5, y); g.lineTo(x + 12, y);
+        lastY = y; g.moveTo(x - 18, y); g.lineTo(x - 8, y); g.moveTo(x + 8, y); g.lineTo(x + 18, y);
       }
-      g.lineWidth = sel ? 3 : 2; g.stroke(); g.setLineDash([]); g.globalAlpha = 1;
+      const a = g.globalAlpha;
+      g.strokeStyle = "#000"; g.lineWidth = sel ? 6 : 5; g.stroke();        // a dark edge: visible on any colour
+      g.strokeStyle = col; g.lineWidth = sel ? 3.5 : 2.5; g.globalAlpha = a; g.stroke(); g.globalAlpha = 1;
       const [x0, y0] = p.pts[0];
       g.font = sel ? "bold 12px monospace" : "11px monospace"; g.textAlign = "left"; g.textBaseline = "top";
       g.fillStyle = "rgba(0,0,0,0.65)"; g.fillRect(x0 + 4, y0 + 2, 8 + 7 * String(id).length, 14);
@@ -408,6 +410,9 @@
     requestAnimationFrame(() => {
       dirty = false;
       try { drawBtr(); drawLofar(); drawTac(); drawTable(); drawHealth(); drawBscan(); } catch (e) { console.error(e); throw e; }
+      if (S.btr.length) {                   // when each row reached the screen (benchmarks/bench_console.py)
+        S.drawLog.push([S.btr[S.btr.length - 1].t_s, Date.now()]); cap(S.drawLog, 4000);
+      }
     });
   }
 
