@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    ?= results
 
-.PHONY: demo test lint bench docs install install-test install-docs stonesoup-suite clean
+.PHONY: demo test lint bench docs install install-test install-docs stonesoup-suite browser clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -40,8 +40,17 @@ demo: install
 	$(BIN)/sonartrack reproduce all --quick --out $(OUT)
 	@echo "Report: $(abspath $(OUT))/report.html"
 
-test: install-test stonesoup-suite lint docs
+test: install-test stonesoup-suite browser lint docs
 	$(BIN)/python -m pytest -q -n 2
+
+# Debian's headless Chromium (and its driver) for the console's browser test (tests/console/test_browser.py),
+# installed with apt-get only where missing; the test drives the browser over the DevTools protocol.
+browser:
+	@if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then \
+		command -v apt-get >/dev/null || { echo "make browser: no apt-get here; install chromium yourself" >&2; exit 1; }; \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium chromium-driver; \
+	fi
 
 # The site in docs/_build/html: API reference, pages, tutorials executed (warnings are errors). Incremental: a
 # failed build drops its saved state, so the next one reads every page again and cannot pass on stale pages.

@@ -1,0 +1,150 @@
+"""``sonartrack live``: the passive chain on a live stream, shown in the operator console in the browser.
+
+Parses the options, opens the sample and navigation sources (:mod:`sonartrack.io.stream.sources`: a recorder's
+TCP stream, a folder a recorder writes, or a finished recording replayed at ``--speed`` times real time), starts
+the console's server (:class:`sonartrack.console.server.ConsoleServer`, bound to 127.0.0.1 unless ``--host``
+says otherwise) and runs :func:`sonartrack.systems.live.run_live`, which publishes every display update to it;
+the operator's selection of a trace goes back to the chain. At the end of the stream the targets are printed
+as ``passive`` prints them; Ctrl-C stops the run (status 130), its state kept in ``--checkpoint`` if given.
+
+Settings: :class:`sonartrack.systems.passive.settings.PassiveSettings`, as for ``passive`` (defaults, then
+``--config``, then the options; ``--print-config``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.systems.passive.settings import FrontEndSettings, PassiveSettings
+
+
+def register(app: typer.Typer) -> None:
+    app.command("live")(live_cmd)
+
+
+def _help(name: str, model=PassiveSettings) -> str:
+    return option_help(model, name)
+
+
+def live_cmd(
+    tcp: Annotated[str | None, typer.Option(help="A recorder's sample stream to connect to, HOST:PORT (the framing "
+                                                 "of sonartrack.io.stream.frames; reconnects when it drops).")] = None,
+    folder: Annotated[Path | None, typer.Option(help="A folder a recorder writes WAV/RF64/W64/FLAC files into: new "
+                                                     "files are read as they appear, the newest as it grows.")] = None,
+    wav: Annotated[Path | None, typer.Option(help="A finished recording, replayed as if live (see --speed).")] = None,
+    speed: Annotated[float, typer.Option(help="Replay --wav at this many times real time.", min=0.01)] = 1.0,
+    nav_udp: Annotated[int | None, typer.Option("--nav-udp", help="UDP port on which NMEA 0183 navigation arrives "
+                                                                  "(as ship systems broadcast it).",
+                                                min=1, max=65535)] = None,
+    nav: Annotated[Path | None, typer.Option(help="Navigation file, read as it grows: NMEA 0183 or CSV.")] = None,
+    host: Annotated[str, typer.Option(help="Address the console listens on (127.0.0.1: this machine only; 0.0.0.0 "
+                                           "opens it to the network).")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port of the console (0 picks a free one).", min=0, max=65535)] = 8765,
+    checkpoint: Annotated[Path | None, typer.Option(help="Keep the chain's state in this file, so that a restart "
+                                                         "resumes (and the display with it).")] = None,
+    spacing: Annotated[float | None, typer.Option("--spacing", help=_help("spacing_m"))] = None,
+    elements: Annotated[int | None, typer.Option(help=_help("elements"))] = None,
+    method: Annotated[str | None, typer.Option(help=_help("method", FrontEndSettings))] = None,
+    band_hz: Annotated[tuple[float, float] | None, typer.Option(help=_help("band_hz", FrontEndSettings)
+                                                              + " Two numbers: LOW HIGH.")] = None,
+    config: Annotated[Path | None, typer.Option(help="TOML file of passive settings (see --print-config).")] = None,
+    print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
+) -> None:
+    """Live passive chain on a stream (TCP, a recorder's folder, or a replayed recording) with a browser console."""
+    settings = resolve(PassiveSettings, config, spacing_m=spacing, elements=elements, front_end__method=method,
+                       front_end__band_hz=list(band_hz) if band_hz else None)
+    if print_config:
+        print_config_and_exit(settings)
+    plan = _plan(tcp, folder, wav, speed, nav_udp, nav)
+    from sonartrack.console.server import ConsoleServer
+
+    server = ConsoleServer(host=host, port=port)
+    server.start()
+    typer.echo(f"live: console at {server.url} (Ctrl-C to stop)", err=True)
+    try:
+        result = _run(plan, settings, server, checkpoint=checkpoint)
+    except KeyboardInterrupt as exc:
+        raise _interrupted(exc, checkpoint) from None
+    finally:
+        server.stop()
+    from sonartrack.systems.passive.files import passive_summary
+
+    for warning in getattr(result, "warnings", []):
+        typer.echo(warning, err=True)
+    for line in passive_summary(result):
+        typer.echo(line)
+    typer.echo("live: the stream ended", err=True)
+
+
+def parse_host_port(text: str) -> tuple[str, int]:
+    """``HOST:PORT`` (``[v6]:PORT`` too) as (host, port); InputError naming the form otherwise."""
+    from sonartrack.core.errors import InputError
+
+    host, sep, port = text.rpartition(":")
+    host = host.strip("[]")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise InputError(f"--tcp takes HOST:PORT (e.g. 127.0.0.1:5555), not {text!r}")
+    return host, int(port)
+
+
+def _plan(tcp, folder, wav, speed, nav_udp, nav) -> dict:
+    """The sources asked for, checked before anything starts: one sample source, one navigation source."""
+    from sonartrack.core.errors import require
+
+    given = [name for name, v in (("--tcp", tcp), ("--folder", folder), ("--wav", wav)) if v is not None]
+    require(len(given) == 1, "give one sample source: --tcp HOST:PORT, --folder DIR or --wav FILE"
+            + (f" (not {' and '.join(given)})" if given else ""))
+    require(wav is not None or speed == 1.0, "--speed replays a finished --wav; a live --tcp or --folder runs at the "
+                                             "recorder's pace")
+    require((nav_udp is None) != (nav is None), "give one navigation source: --nav-udp PORT or --nav FILE")
+    require(folder is None or folder.is_dir(), f"--folder {folder} is not a folder")
+    require(wav is None or wav.is_file(), f"--wav {wav} is not a file")
+    return {"tcp": parse_host_port(tcp) if tcp else None, "folder": folder, "wav": wav, "speed": speed,
+            "nav_udp": nav_udp, "nav": nav}
+
+
+def _open_sources(plan: dict):
+    """(sample source, navigation source) of the plan (io/stream/sources.py, LIVE.md)."""
+    from sonartrack.io.stream import sources
+
+    if plan["tcp"] is not None:
+        samples = sources.TcpSampleSource(*plan["tcp"])
+    elif plan["folder"] is not None:
+        samples = sources.FolderSampleSource(plan["folder"])
+    else:
+        samples = sources.ReplaySampleSource(plan["wav"], speed=plan["speed"])
+    navigation = (sources.UdpNmeaSource(plan["nav_udp"]) if plan["nav_udp"] is not None
+                  else sources.FileNavSource(plan["nav"]))
+    return samples, navigation
+
+
+def _run(plan: dict, settings, server, *, checkpoint):
+    """Run the live chain, publishing to ``server``, until the stream ends (or Ctrl-C); its PassiveResult."""
+    import threading
+
+    from sonartrack.systems.live import run_live
+
+    samples, navigation = _open_sources(plan)
+    stop = threading.Event()
+    try:
+        return run_live(samples, navigation, settings, server.publish, checkpoint=checkpoint, stop=stop,
+                        selected=lambda: server.selected)
+    finally:
+        stop.set()
+        for source in (samples, navigation):
+            source.close()
+
+
+def _interrupted(exc: KeyboardInterrupt, checkpoint: Path | None) -> KeyboardInterrupt:
+    """The interrupt with live's own line: what was kept, and how to resume."""
+    import signal
+
+    from sonartrack.cli import Interrupted
+
+    kept = (f"the chain's state is in {checkpoint} as of its last checkpoint; run the same command to resume"
+            if checkpoint is not None else "nothing was kept (give --checkpoint FILE to resume after a restart)")
+    return Interrupted(getattr(exc, "signum", signal.SIGINT), f"interrupted: the live run stopped; {kept}")

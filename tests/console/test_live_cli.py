@@ -1,0 +1,93 @@
+"""``sonartrack live``: its options checked before anything starts, and its wiring source -> chain -> console,
+with stand-ins for the stream sources and the live chain (io/stream and systems/live are other helpers' work)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import types
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from wsclient import Client  # noqa: E402
+
+from sonartrack.cli import main  # noqa: E402
+from sonartrack.console.fake import FakeLive  # noqa: E402
+
+
+@pytest.mark.parametrize("argv, message", [
+    ([], "give one sample source"),
+    (["--tcp", "h:1", "--wav", "x.wav", "--nav", "n.csv"], "not --tcp and --wav"),
+    (["--tcp", "nohost", "--nav", "n.csv"], "HOST:PORT"),
+    (["--tcp", "h:99999", "--nav", "n.csv"], "HOST:PORT"),
+    (["--tcp", "h:5555"], "give one navigation source"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--nav-udp", "10110"], "give one navigation source"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--speed", "20"], "--speed replays a finished --wav"),
+    (["--wav", "missing.wav", "--nav", "n.csv"], "is not a file"),
+    (["--folder", "missing-folder", "--nav", "n.csv"], "is not a folder"),
+])
+def test_bad_options_are_one_line_and_status_2(argv, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["live", "--port", "0", *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
+
+
+class _Source:
+    def __init__(self, *args, **kwargs):
+        self.args, self.closed = args, False
+        opened.append(self)
+
+    def close(self):
+        self.closed = True
+
+
+opened: list[_Source] = []
+
+
+def _fake_modules(monkeypatch, run_live) -> None:
+    sources = types.ModuleType("sonartrack.io.stream.sources")
+    for name in ("TcpSampleSource", "FolderSampleSource", "ReplaySampleSource", "UdpNmeaSource", "FileNavSource"):
+        setattr(sources, name, type(name, (_Source,), {}))
+    stream = types.ModuleType("sonartrack.io.stream")
+    stream.sources = sources
+    live = types.ModuleType("sonartrack.systems.live")
+    live.run_live = run_live
+    monkeypatch.setitem(sys.modules, "sonartrack.io.stream", stream)
+    monkeypatch.setitem(sys.modules, "sonartrack.io.stream.sources", sources)
+    monkeypatch.setitem(sys.modules, "sonartrack.systems.live", live)
+
+
+def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
+    seen = {}
+
+    def run_live(samples, nav, settings, publish, *, checkpoint=None, stop=None, selected=None, **kw):
+        server = publish.__self__  # the console's publish
+        assert server.url.startswith("http://127.0.0.1:")
+        client = Client(server.url)
+        fake = FakeLive()
+        for _ in range(5):
+            for update in fake.step():
+                publish(update)
+        client.wait(lambda m: len(client.of_type("btr")) == 5)
+        client.send(json.dumps({"select": 2}))
+        client.wait(lambda m: client.of_type("selected"))
+        seen.update(selected=selected(), samples=samples, nav=nav, checkpoint=checkpoint, stopped=stop.is_set())
+        client.close()
+        raise KeyboardInterrupt
+
+    opened.clear()
+    _fake_modules(monkeypatch, run_live)
+    nav = tmp_path / "nav.csv"
+    nav.write_text("time_s,x_m,y_m,heading_deg\n")
+    status = main(["live", "--tcp", "127.0.0.1:5555", "--nav", str(nav), "--port", "0", "--spacing", "0.5",
+                   "--checkpoint", str(tmp_path / "state.ckpt")])
+    err = capsys.readouterr().err
+    assert status == 130
+    assert "interrupted: the live run stopped" in err and "state.ckpt" in err and "Traceback" not in err
+    assert seen["selected"] == 2 and not seen["stopped"]
+    assert type(seen["samples"]).__name__ == "TcpSampleSource" and seen["samples"].args == ("127.0.0.1", 5555)
+    assert type(seen["nav"]).__name__ == "FileNavSource"
+    assert all(s.closed for s in opened) and len(opened) == 2  # the sources are closed on the way out
