@@ -178,9 +178,9 @@ def _simulate_stream(kind: str, scene: Path | None, overrides: dict, print_confi
     streamer = SceneStreamer(settings, port=port or 0, nav_udp=nav_udp, speed=1.0 if speed is None else speed,
                              start_utc=make_layout(start_utc=given["start_utc"]).start_utc)
     nav = f", NMEA to udp://127.0.0.1:{nav_udp}" if nav_udp is not None else ""
-    typer.echo(f"simulate: streaming {scene_summary(settings)} on tcp://127.0.0.1:{streamer.port}{nav} at "
-               f"{streamer.speed:g}x real time; waiting for the live side to connect (Ctrl-C stops)")
-    try:
+    try:  # from the line that gives the port on: an interrupt gets the stream's own line
+        typer.echo(f"simulate: streaming {scene_summary(settings)} on tcp://127.0.0.1:{streamer.port}{nav} at "
+                   f"{streamer.speed:g}x real time; waiting for the live side to connect (Ctrl-C stops)")
         done = streamer.serve()
     except BaseException as exc:
         streamer.close()
