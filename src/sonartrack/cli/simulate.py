@@ -1,7 +1,9 @@
 """``sonartrack simulate``: a passive towed-array scene (recording, navigation, truth) and a sample input for
 every other command, written into ``--out`` (the simulate system; systems/simulate/files.py lists the files);
 with ``--kind active``, an active towed-array scene instead: pings, ping table, navigation and truth
-(systems/simulate/active_files.py; the input of ``sonartrack active``).
+(systems/simulate/active_files.py; the input of ``sonartrack active``). With ``--stream``, nothing is written: the
+passive scene is played as a recorder plays it, its samples over TCP and its navigation as NMEA over UDP, at real
+time x ``--speed`` (systems/simulate/stream.py), for ``sonartrack live``.
 
 The scene's settings are the system's tree, :class:`sonartrack.sim.scene.PassiveSceneSettings` (or, with
 ``--kind active``, :class:`sonartrack.sim.active_scene.ActiveSceneSettings`): defaults, then the ``--scene`` TOML
@@ -37,6 +39,17 @@ def _help(name: str) -> str:
 PASSIVE_ONLY = {"only": "all", "format": "wav", "split_s": None, "gap_s": None, "nmea": False, "start_utc": None,
                 "manifest": False}
 
+#: the options of --stream (systems/simulate/stream.py); given without --stream, they are refused
+StreamOpt = Annotated[bool, typer.Option("--stream", help="Play the passive scene as a recorder would instead of "
+                                                          "writing it: samples over TCP on 127.0.0.1 (--port), the "
+                                                          "ship's NMEA over UDP (--nav-udp), at real time x --speed; "
+                                                          "the clock starts when the live side connects.")]
+PortOpt = Annotated[int | None, typer.Option(help="With --stream: TCP port of the samples on 127.0.0.1 (0, the "
+                                                  "default: a free port, printed).")]
+NavUdpOpt = Annotated[int | None, typer.Option(help="With --stream: UDP port on 127.0.0.1 the ship's NMEA 0183 "
+                                                    "(GGA, RMC, HDT, every second) is sent to.")]
+SpeedOpt = Annotated[float | None, typer.Option(help="With --stream: play at real time x this factor (default 1).")]
+
 
 def simulate_cmd(
     kind: Annotated[str, typer.Option(help="passive: a towed-array recording and sample inputs; active: pings of a "
@@ -65,27 +78,42 @@ def simulate_cmd(
                                                        "and nav.nmea; default 2024-05-17T12:00:00Z.")] = None,
     manifest: Annotated[bool, typer.Option("--manifest", help="Also write manifest.csv: this recording's line of a "
                                                               "survey manifest (sonartrack survey).")] = False,
+    stream: StreamOpt = False, port: PortOpt = None, nav_udp: NavUdpOpt = None, speed: SpeedOpt = None,
 ) -> None:
     """Simulate a passive sonar scene: N-channel WAV, navigation, truth, and sample inputs for every command
     (--kind active: an active scene's pings, ping table, navigation and truth)."""
     from sonartrack.core.errors import require
 
     require(kind in ("passive", "active"), f"--kind {kind}: choose passive or active")
+    given = dict(only=only, format=format, split_s=split_s, gap_s=gap_s, nmea=nmea, start_utc=start_utc,
+                 manifest=manifest)
+    if stream:
+        return _simulate_stream(kind, scene, dict(duration_s=duration_s, seed=seed, propagation=propagation),
+                                print_config, given, (port, nav_udp, speed))
+    bad = [k for k, v in dict(port=port, nav_udp=nav_udp, speed=speed).items() if v is not None]
+    require(not bad, f"--{bad[0].replace('_', '-') if bad else ''} is an option of --stream: add --stream, or leave "
+                     "it out")
     if kind == "active":
-        given = dict(only=only, format=format, split_s=split_s, gap_s=gap_s, nmea=nmea, start_utc=start_utc,
-                     manifest=manifest)
         return _simulate_active(scene, duration_s, seed, propagation, print_config, out,
                                 [k for k, v in given.items() if v != PASSIVE_ONLY[k]])
+    _simulate_passive(scene, dict(duration_s=duration_s, seed=seed, propagation=propagation), print_config, out,
+                      given)
+
+
+def _simulate_passive(scene: Path | None, overrides: dict, print_config: bool, out: str, given: dict) -> None:
+    """The passive scene's settings, then its files (systems/simulate/files.py)."""
     from sonartrack.io.run_outputs import check_out_path, discard_on_failure
     from sonartrack.systems.simulate.files import check_only, check_recording_fits, shipped_scene_path, write_scene
     from sonartrack.systems.simulate.recording_layout import describe_layout, make_layout
 
+    only = given["only"]
     path = shipped_scene_path(scene) if scene is not None else None
-    settings = resolve(PassiveSceneSettings, path, duration_s=duration_s, seed=seed, propagation=propagation)
+    settings = resolve(PassiveSceneSettings, path, **overrides)
     if print_config:
         print_config_and_exit(settings)
     check_only(only)
-    layout = make_layout(format, split_s, gap_s, nmea, start_utc, manifest)
+    layout = make_layout(given["format"], given["split_s"], given["gap_s"], given["nmea"], given["start_utc"],
+                         given["manifest"])
     folder = check_out_path(out)
     check_recording_fits(settings, only, folder, layout)
     from sonartrack.cli._progress import TrialProgress, make_progress
@@ -125,6 +153,53 @@ def _simulate_active(scene: Path | None, duration_s: float | None, seed: int | N
         raise _as_interrupt(exc, folder)  # noqa: B904 (an interrupt gets simulate's line; anything else goes on)
     typer.echo(f"simulate: {summary}; wrote {len(paths)} files in {folder} (sonartrack active --pings {folder} "
                f"--nav {folder / 'nav.csv'} --spacing {settings.spacing_m:g})")
+
+
+def _simulate_stream(kind: str, scene: Path | None, overrides: dict, print_config: bool, given: dict,
+                     wire: tuple) -> None:
+    """``--stream``: the passive scene's settings, then the scene played over TCP and UDP until its end or Ctrl-C
+    (systems/simulate/stream.py); nothing is written."""
+    from sonartrack.core.errors import require
+    from sonartrack.systems.simulate.files import shipped_scene_path
+    from sonartrack.systems.simulate.recording_layout import make_layout
+
+    require(kind == "passive", "--stream plays the passive scene only (active pings are not streamed yet): leave out "
+                               "--kind active")
+    extra = [k for k, v in given.items() if k != "start_utc" and v != PASSIVE_ONLY[k]]
+    require(not extra, f"--{extra[0].replace('_', '-') if extra else ''} shapes the files simulate writes; --stream "
+                       "writes none: leave it out")
+    settings = resolve(PassiveSceneSettings, shipped_scene_path(scene) if scene is not None else None, **overrides)
+    if print_config:
+        print_config_and_exit(settings)
+    from sonartrack.systems.simulate.run import scene_summary
+    from sonartrack.systems.simulate.stream import SceneStreamer
+
+    port, nav_udp, speed = wire
+    streamer = SceneStreamer(settings, port=port or 0, nav_udp=nav_udp, speed=1.0 if speed is None else speed,
+                             start_utc=make_layout(start_utc=given["start_utc"]).start_utc)
+    nav = f", NMEA to udp://127.0.0.1:{nav_udp}" if nav_udp is not None else ""
+    try:  # from the line that gives the port on: an interrupt gets the stream's own line
+        typer.echo(f"simulate: streaming {scene_summary(settings)} on tcp://127.0.0.1:{streamer.port}{nav} at "
+                   f"{streamer.speed:g}x real time; waiting for the live side to connect (Ctrl-C stops)")
+        done = streamer.serve()
+    except BaseException as exc:
+        streamer.close()
+        raise _stream_interrupt(exc)  # noqa: B904 (an interrupt gets the stream's line; anything else goes on)
+    typer.echo(f"simulate: streamed {done.seconds:g} s of the scene ({done.blocks} blocks, {done.sentences} NMEA "
+               f"sentences) to {done.connections} connection(s)")
+
+
+def _stream_interrupt(exc: BaseException) -> BaseException:
+    """An interrupt of ``--stream`` as its own line (nothing was written, so nothing to remove); else ``exc``."""
+    from sonartrack.cli import Interrupted, interrupt_of
+
+    intr = interrupt_of(exc)
+    if intr is None:
+        return exc
+    out = Interrupted(getattr(intr, "signum", 2), "interrupted: simulate --stream stopped (it writes no files); run "
+                                                  "the same command again to play the scene from the start")
+    out.__suppress_context__ = True
+    return out
 
 
 def _as_interrupt(exc: BaseException, folder: Path) -> BaseException:
