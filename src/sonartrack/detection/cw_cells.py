@@ -44,6 +44,7 @@ hold the sea's Doppler are an LFM's), and persistent clutter points, which sit o
 from __future__ import annotations
 
 import functools
+
 import numpy as np
 
 from sonartrack.core.errors import require
@@ -201,7 +202,7 @@ def go_pfa(alpha: float, ranks: tuple[tuple[int, int], ...]) -> float:
     float
         alpha int exp(-alpha m) prod_i F_i(m) dm (trapezoid on a grid fine against 1 / alpha and the CDFs).
     """
-    m = np.linspace(0.0, 40.0 / max(alpha, 1e-3) + 8.0, 200_001)
+    m = np.linspace(0.0, 40.0 / max(alpha, 1e-3) + 8.0, 20_001)
     f = np.exp(-alpha * m)
     for n, k in ranks:
         f = f * os_cdf(m, n, k)
@@ -226,7 +227,7 @@ def go_threshold(pfa: float, ranks: tuple[tuple[int, int], ...]) -> float:
     """
     require(0.0 < pfa < 1.0, f"the false-alarm rate must be in (0, 1), got {pfa}")
     lo, hi = np.log(1e-3), np.log(1e6)
-    for _ in range(80):
+    for _ in range(48):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if go_pfa(float(np.exp(mid)), ranks) > pfa else (lo, mid)
     return float(np.exp(0.5 * (lo + hi)))
@@ -370,8 +371,8 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
     PingCells
         As detection/cells.py's, the statistic s = y / max(mu_f, mu_e, mu_l), 0 in the notch.
     """
-    from sonartrack.acoustics.matched_filter import doppler_to_range_rate
     from sonartrack.acoustics.active_beams import cone_grid_deg
+    from sonartrack.acoustics.matched_filter import doppler_to_range_rate
     from sonartrack.detection.cells import PingCells, matched_cells
 
     require(waveform.kind == "cw", "the CW front end takes a CW pulse")
