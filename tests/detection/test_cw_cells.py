@@ -157,3 +157,14 @@ def test_mftd_on_cw_pings_finds_the_target_delay_and_doppler():
     assert abs(last.range_rate_mps[k] - rate) < 0.5
     assert abs(last.cone_deg[k] - cone) < 3.0
     assert not np.any(last.delay_cell == 0)
+
+
+def test_doppler_estimate_alone_has_rohlings_os_threshold():
+    """With no delay estimate the normaliser is one OS-CFAR across Doppler: the integral's threshold is Rohling's
+    closed form (detection/cfar.py)."""
+    from sonartrack.detection.cfar import os_threshold
+
+    s = CwNormaliserSettings(delay_reference=None)
+    assert cw_ranks(s) == ((12, 9),)
+    for pfa in (1e-3, 1e-5):
+        np.testing.assert_allclose(cw_threshold(pfa, s), os_threshold(pfa, 12, 9), rtol=2e-3)

@@ -60,8 +60,9 @@ class CwNormaliserSettings(Settings):
     doppler_reference: int = setting(6, "reference cells each side across Doppler, in resolution cells", unit="1",
                                      ge=1, le=64)
     delay_guard: int = setting(1, "guard cells each side along delay, in pulse lengths", unit="1", ge=0, le=16)
-    delay_reference: int = setting(4, "reference cells each side along delay, in pulse lengths (short: the "
-                                      "reverberation falls with delay)", unit="1", ge=1, le=64)
+    delay_reference: int | None = setting(4, "reference cells each side along delay, in pulse lengths (short: the "
+                                             "reverberation falls with delay); not set: the Doppler estimate alone",
+                                          unit="1", ge=1, le=64)
     os_rank: float = setting(0.75, "order statistic of both estimates: rank k as a fraction of N", unit="1", gt=0,
                              le=1)
     ridge_notch_mps: float | None = setting(
@@ -161,6 +162,8 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
             f"the CW Doppler bank holds {n_dop} resolution cells, fewer than the normaliser's half window "
             f"({s.doppler_guard + s.doppler_reference}): raise max_range_rate_mps or lower doppler_reference")
     mu_f = noise_estimate(y, s.axis_cfar(s.doppler_guard * doppler_step, s.doppler_reference), doppler_step)
+    if s.delay_reference is None:
+        return mu_f
     k_t = cw_ranks(s)[1][1]
     mu_t = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride).max(axis=0)
     return np.maximum(mu_f, np.moveaxis(mu_t, -1, 1))
@@ -248,6 +251,8 @@ def cw_ranks(settings: CwNormaliserSettings) -> tuple[tuple[int, int], ...]:
     """
     s = settings
     f = s.axis_cfar(s.doppler_guard, s.doppler_reference)
+    if s.delay_reference is None:
+        return ((f.n_reference, f.rank),)
     n_t = s.delay_reference
     k_t = int(min(max(round(s.os_rank * n_t), 1), n_t))
     return (f.n_reference, f.rank), (n_t, k_t), (n_t, k_t)
