@@ -368,12 +368,14 @@ class _Chain:
     def __init__(self, ping_table, geometry: ActiveGeometry, settings: ActiveSettings):
         from sonartrack.acoustics.active_beams import LineArray
         from sonartrack.detection.cells import detection_threshold
+        from sonartrack.detection.cw_cells import cw_threshold
 
         s = self.settings = settings.checked(int(ping_table.channels[0]))
         self.table, self.geometry = ping_table, geometry
         self.array = LineArray(int(s.elements), float(s.spacing_m))
         self.front_end = s.front_end_settings()
-        self.threshold = detection_threshold(self.front_end)
+        self.cw = len(ping_table) > 0 and ping_table.waveform(0).kind == "cw"
+        self.threshold = cw_threshold(s.pfa, s.cw) if self.cw else detection_threshold(self.front_end)
         self.period = ping_interval(ping_table, s) if s.detector == "mftd" else None
         check_spacing(s, ping_table)
         check_memory(s, ping_table, self.period)
@@ -387,6 +389,7 @@ class _Chain:
         self.n_detections = 0
 
     def _start(self, cells: PingCells) -> None:
+        from sonartrack.detection.cw_cells import cw_ranks
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
 
         s = self.settings
@@ -394,20 +397,34 @@ class _Chain:
         if s.detector == "mftd":
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
             self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
-                                 cfar=self.front_end.cfar)
+                                 cfar=cw_ranks(s.cw) if self.cw else self.front_end.cfar)
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability)
 
+    def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
+        """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser
+        across Doppler and delay, the reverberation ridge of each beam notched from the navigation)."""
+        from sonartrack.acoustics.active_beams import cone_grid_deg
+        from sonartrack.detection.cells import ping_front_end
+        from sonartrack.detection.cw_cells import cw_ping_cells, ridge_range_rates
+
+        w, fs = self.table.waveform(i), float(self.table.fs_hz[i])
+        if w.kind != "cw":
+            return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number)
+        g, cone = self.geometry, cone_grid_deg(self.front_end.beams)
+        ridge = ridge_range_rates(cone, float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
+        return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
+                             ridge_mps=ridge)
+
     def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
-        from sonartrack.detection.cells import detect_ping, ping_front_end
+        from sonartrack.detection.cells import detect_ping
 
         s, tm = self.settings, self.timer
         require(samples.shape[0] == s.elements, f"ping {number} has {samples.shape[0]} channels, the array "
                                                 f"{s.elements}: give the pings of one array")
-        cells = tm.run("front end", ping_front_end, samples, float(self.table.fs_hz[i]), self.table.waveform(i),
-                       self.array, self.front_end, time_s=time_s, ping=number)
+        cells = tm.run("front end", self._front_end, i, number, time_s, samples)
         if self.axes is None:
             self._start(cells)
         single = tm.run("single-ping detection", detect_ping, cells, self.threshold)

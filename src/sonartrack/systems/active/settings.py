@@ -20,6 +20,7 @@ from typing import Literal
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, derived_settings, setting
 from sonartrack.detection.cells import FrontEndSettings
+from sonartrack.detection.cw_cells import CwNormaliserSettings
 from sonartrack.detection.ping_mftd import PingMftdSettings
 from sonartrack.systems.active.contacts import ContactSettings
 from sonartrack.tracking.settings import PositionTrackerSettings
@@ -96,6 +97,9 @@ class ActiveSettings(Settings):
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
     front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,
                                                 doc="beams, matched filter and CFAR of each ping")
+    cw: CwNormaliserSettings = setting(default_factory=CwNormaliserSettings,
+                                       doc="a CW ping's normaliser across Doppler and delay, and its reverberation "
+                                           "ridge notch (detection/cw_cells.py)")
     mftd: ActiveMftdSettings = setting(default_factory=ActiveMftdSettings, doc="MFTD across pings (paper P1)")
     contacts: ContactSettings = setting(default_factory=ContactSettings, doc="bistatic contact input errors (P4)")
     tracker: ActiveTrackerSettings = setting(default_factory=ActiveTrackerSettings,

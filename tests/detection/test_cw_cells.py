@@ -1,0 +1,170 @@
+"""The CW front end (detection/cw_cells.py) and the MFTD across CW pings (detection/ping_mftd.py) on pings written
+here from the equations, not by sim/.
+
+The generator: element n of a uniform line array sits s_n = ((N - 1)/2 - n) d ahead of the centre (element 0 the
+front); a plane-wave echo from cone angle theta, leading edge at the centre at travel time t0, Doppler f_d, reaches
+element n at t_n = t0 - s_n cos(theta) / c. A CW of length tau at carrier f_c, received at f_c + f_d, has the
+complex envelope at f_c
+
+    x_n(t) = a exp(2 pi i f_d (t - t_n)) exp(-2 pi i f_c t_n),   t_n <= t < t_n + tau,
+
+plus complex white noise of unit variance per sample.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonartrack.acoustics.line_array import LineArray
+from sonartrack.acoustics.matched_filter import Waveform
+from sonartrack.core.errors import InputError
+from sonartrack.detection.cells import FrontEndSettings, detect_ping
+from sonartrack.detection.cfar import os_mean_factor
+from sonartrack.detection.cw_cells import (
+    CwNormaliserSettings,
+    cw_noise_estimate,
+    cw_ping_cells,
+    cw_ranks,
+    cw_threshold,
+    go_pfa,
+    ridge_notch,
+    ridge_range_rates,
+)
+from sonartrack.detection.ping_mftd import CellAxes, PingMftd, PingMftdSettings
+
+FS, FC, TAU, C, N, D = 200.0, 1500.0, 1.0, 1500.0, 16, 0.5
+
+
+def cw_ping(rng, echoes, window_s=30.0, noise=1.0):
+    """(N, samples) complex baseband of CW echoes (t0 s, cone deg, f_d Hz, amplitude) in white noise (module doc)."""
+    t = np.arange(int(window_s * FS)) / FS
+    s = ((N - 1) / 2.0 - np.arange(N)) * D
+    x = noise * (rng.standard_normal((N, t.size)) + 1j * rng.standard_normal((N, t.size))) / np.sqrt(2.0)
+    for t0, cone_deg, fd, a in echoes:
+        tn = t0 - s * np.cos(np.deg2rad(cone_deg)) / C
+        on = (t[None] >= tn[:, None]) & (t[None] < tn[:, None] + TAU)
+        x += on * a * np.exp(2j * np.pi * fd * (t[None] - tn[:, None])) * np.exp(-2j * np.pi * FC * tn)[:, None]
+    return x.astype(np.complex64)
+
+
+def test_go_threshold_matches_monte_carlo_of_sorted_exponentials():
+    """P(y / max_i x_(k_i)/c_k_i > alpha) by sorting exponentials (not by the Beta law or the integral)."""
+    ranks = ((12, 9), (4, 3), (4, 3))
+    rng = np.random.default_rng(3)
+    n = 400_000
+    m = np.zeros(n)
+    for nn, k in ranks:
+        m = np.maximum(m, np.sort(rng.exponential(1.0, (n, nn)), axis=1)[:, k - 1] / os_mean_factor(nn, k))
+    y = rng.exponential(1.0, n)
+    for alpha in (3.0, 8.0):
+        p = go_pfa(alpha, ranks)
+        measured = float(np.mean(y / m > alpha))
+        assert abs(measured - p) < 5 * np.sqrt(p / n) + 1e-4, (alpha, p, measured)
+
+
+def test_normaliser_keeps_its_false_alarm_rate_in_homogeneous_noise():
+    s = CwNormaliserSettings()
+    rng = np.random.default_rng(5)
+    y = rng.exponential(1.0, (40, 120, 61)).astype(np.float32)
+    stat = y / cw_noise_estimate(y, s, 4, 2)
+    pfa = 1e-3
+    rate = float(np.mean(stat > cw_threshold(pfa, s)))
+    assert 0.6 * pfa < rate < 1.5 * pfa, rate
+    assert cw_ranks(s)[0] == (12, 9)
+
+
+def test_normaliser_does_not_alarm_on_a_steeply_falling_background():
+    """Reverberation falling 10 dB a second (the first seconds after the blanking): the two-sided delay estimate
+    alarmed at the first cells; the greatest-of with the earlier cells does not."""
+    rng = np.random.default_rng(8)
+    delay = np.arange(120) * 0.25
+    level = 10.0 ** (-(delay - delay[0]))[None, :, None] * 1e4 + 1.0
+    y = (rng.exponential(1.0, (30, 120, 61)) * level).astype(np.float32)
+    stat = y / cw_noise_estimate(y, CwNormaliserSettings(), 4, 2)
+    assert float(np.mean(stat[:, 4:12] > cw_threshold(1e-3, CwNormaliserSettings()))) < 5e-3
+
+
+def test_ridge_rates_and_notch_by_hand():
+    """Array heading north, source and receiver both at 2 m/s north: a stationary scatterer ahead closes at 4 m/s
+    (rdot = -4), abeam 0, at cone 60 deg -4 cos 60 = -2 on both sides; heading east, cone 90: starboard is south,
+    port north, both 0 for an eastward motion."""
+    r = ridge_range_rates([0.0, 60.0, 90.0, 180.0], 0.0, [0.0, 2.0], [0.0, 2.0])
+    np.testing.assert_allclose(r, [[-4, -4], [-2, -2], [0, 0], [4, 4]], atol=1e-12)
+    r = ridge_range_rates([90.0], np.pi / 2, [0.0, 1.0], [0.0, 1.0])  # moving north with the axis east
+    np.testing.assert_allclose(r, [[2.0, -2.0]], atol=1e-12)  # starboard (south) opens, port (north) closes
+    notch = ridge_notch(np.array([-3.0, -2.5, -1.0, 0.0]), np.array([[-2.0, -2.0]]), 1.0)
+    assert notch.tolist() == [[True, True, True, False]]
+
+
+@pytest.mark.parametrize("t0, cone, fd", [(12.37, 63.0, 3.3), (20.81, 118.0, -6.1)])
+def test_detection_offsets_against_an_independent_ping(t0, cone, fd):
+    """A CW echo written from its equation is detected at its delay, cone angle and Doppler."""
+    rng = np.random.default_rng(11)
+    x = cw_ping(rng, [(t0, cone, fd, 0.3)])
+    fe = FrontEndSettings()
+    cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, CwNormaliserSettings())
+    det = detect_ping(cells, cw_threshold(fe.pfa, CwNormaliserSettings()))
+    near = np.abs(det.travel_time_s - t0) < 1.0
+    assert near.sum() >= 1
+    k = np.argmax(np.where(near, det.statistic, -np.inf))
+    assert abs(det.travel_time_s[k] - t0) < 0.1  # quarter-pulse cells refined by the parabola
+    assert abs(det.cone_deg[k] - cone) < 1.5
+    assert abs(det.doppler_hz[k] - fd) < 0.2  # filters 0.5 Hz apart, refined
+    np.testing.assert_allclose(det.range_rate_mps[k], -C * det.doppler_hz[k] / FC)
+    assert len(det) <= 12  # the echo and noise peaks: Pfa 1e-5 x ~4e5 cells = 4 expected, P(> 11 more) < 1e-3
+
+
+def test_notch_removes_the_ridge_cells_only():
+    rng = np.random.default_rng(2)
+    x = cw_ping(rng, [(10.0, 90.0, 0.2, 0.3), (15.0, 90.0, -5.0, 0.3)])
+    fe = FrontEndSettings()
+    ridge = np.zeros((fe.beams, 2))  # the sea's Doppler 0 in every beam
+    s = CwNormaliserSettings()
+    cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s, ridge_mps=ridge)
+    det = detect_ping(cells, cw_threshold(fe.pfa, s))
+    assert not (np.abs(det.travel_time_s - 10.0) < 1.0).any()  # 0.2 m/s from the ridge: notched
+    assert (np.abs(det.travel_time_s - 15.0) < 0.1).any()  # 5 m/s from it: kept
+    assert np.all(cells.statistic[:, :, np.abs(cells.range_rate_mps) <= 1.0] == 0)
+
+
+def test_too_short_a_bank_is_a_clear_error():
+    y = np.ones((2, 40, 9), np.float32)
+    with pytest.raises(InputError, match="Doppler bank"):
+        cw_noise_estimate(y, CwNormaliserSettings(), 4, 2)
+
+
+def test_mftd_on_cw_pings_finds_the_target_delay_and_doppler():
+    """Issue 34: every MFTD detection of CW pings sat at the first searched delay; here the target's delay and
+    Doppler are found."""
+    T, rate, t_first, cone = 30.0, -4.0, 14.0, 75.0  # bistatic range rate -4 m/s: f_d = +4 Hz, -0.08 s a ping
+    fd = -FC * rate / C
+    rng = np.random.default_rng(21)
+    fe, s = FrontEndSettings(beams=31, max_range_rate_mps=8.0), CwNormaliserSettings()  # small: a fast test
+    mftd, out = None, []
+    for k in range(4):
+        t0 = t_first + k * T * rate / C
+        x = cw_ping(rng, [(t0, cone, fd, 0.08)], window_s=20.0)
+        cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s, time_s=k * T, ping=k)
+        if mftd is None:
+            mftd = PingMftd(CellAxes.of(cells), T, 1e-6, C, PingMftdSettings(calibration_trials=200), cfar=cw_ranks(s))
+        out.append(mftd.push(cells))
+    last, t_last = out[-1], t_first + 3 * T * rate / C
+    assert len(last) >= 1
+    k = int(np.argmax(last.statistic))
+    assert abs(last.travel_time_s[k] - t_last) < 0.3  # a pooled cell is two quarter-pulse delays
+    assert abs(last.doppler_hz[k] - fd) < 0.5  # one filter
+    assert abs(last.range_rate_mps[k] - rate) < 0.5
+    assert abs(last.cone_deg[k] - cone) < 3.0
+    assert not np.any(last.delay_cell == 0)
+
+
+def test_doppler_estimate_alone_has_rohlings_os_threshold():
+    """With no delay estimate the normaliser is one OS-CFAR across Doppler: the integral's threshold is Rohling's
+    closed form (detection/cfar.py)."""
+    from sonartrack.detection.cfar import os_threshold
+
+    s = CwNormaliserSettings(delay_reference=None)
+    assert cw_ranks(s) == ((12, 9),)
+    for pfa in (1e-3, 1e-5):
+        np.testing.assert_allclose(cw_threshold(pfa, s), os_threshold(pfa, 12, 9), rtol=2e-3)
