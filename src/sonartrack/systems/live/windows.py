@@ -88,8 +88,6 @@ class WindowAssembler:
             self.next_index += take
             if self.fill == self.n:
                 out.append(self._emit())
-        if end > first_index:
-            self.touched = True
         return out
 
     def _emit(self) -> tuple[int, np.ndarray | None]:
