@@ -79,9 +79,9 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     ----------
     samples : iterable
         The sample source (io/stream): ``header`` (known once it yields), SampleBlock and StreamEvent items.
-    nav : iterable or None
-        The navigation source: NavFix and StreamEvent items (None: none; ``options`` may give ``nav``, a known
-        Navigation).
+    nav : iterable, Navigation or None
+        The navigation source (NavFix and StreamEvent items), or a known Navigation (a finished recording replayed
+        with its navigation table), or None.
     settings : PassiveSettings
         The chain's settings.
     publish : callable
@@ -97,43 +97,62 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     ready : callable, optional
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
     **options
-        LivePassive's keywords (history_s, nav, tow_length_m, nav_timeout_s).
+        LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
     Returns
     -------
     PassiveResult or None
         The final result; None when the stream ended before one window.
     """
+    from sonartrack.io.navigation import Navigation
+
+    if isinstance(nav, Navigation):
+        nav, options = None, {**options, "nav": nav}
     stop = stop or threading.Event()
-    done, live_ref, threads = threading.Event(), [None], []
-    threads.append(_nav_thread(nav, live_ref, publish, done))
-    live, last_checkpoint = None, time.monotonic()
+    done, live_ref = threading.Event(), [None]
+    threads = [_nav_thread(nav, live_ref, publish, done)]
     try:
         for item in samples:
             if stop.is_set():
                 break
-            if live is None:
-                live, restored = _build(samples, settings, checkpoint, options)
-                live_ref[0] = live
-                for u in live.history() if restored else []:
-                    publish(u)
-                threads.append(_refresh_thread(live, publish, refresh_s, done))
-                if ready is not None:
-                    ready(live)
-            updates = live.push_block(item) if isinstance(item, SampleBlock) else \
-                live.note(item) if isinstance(item, StreamEvent) else []
-            for u in updates:
-                publish(u)
-            if checkpoint is not None and time.monotonic() - last_checkpoint > checkpoint_s:
-                live.checkpoint(checkpoint)
-                last_checkpoint = time.monotonic()
+            if live_ref[0] is None:
+                threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done,
+                                      ready))
+            _take(live_ref[0], item, publish)
+            if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
+                live_ref[0].checkpoint(checkpoint)
+                live_ref[1] = time.monotonic()
     except KeyboardInterrupt:
         pass
     finally:
         done.set()
         for th in threads:
-            if th is not None and th is not threading.current_thread():
+            if th is not None:
                 th.join(timeout=5.0)
+    return _end(live_ref[0], checkpoint, publish)
+
+
+def _start(samples, settings, checkpoint, options, live_ref: list, publish, refresh_s: float, done, ready):
+    """Build the chain (restored: its display history published), start its refresh thread (returned)."""
+    live, restored = _build(samples, settings, checkpoint, options)
+    live_ref[:] = [live, time.monotonic()]
+    for u in live.history() if restored else []:
+        publish(u)
+    if ready is not None:
+        ready(live)
+    return _refresh_thread(live, publish, refresh_s, done)
+
+
+def _take(live: LivePassive, item, publish) -> None:
+    """One item of the sample source through the chain, its updates published."""
+    updates = live.push_block(item) if isinstance(item, SampleBlock) else \
+        live.note(item) if isinstance(item, StreamEvent) else []
+    for u in updates:
+        publish(u)
+
+
+def _end(live: LivePassive | None, checkpoint, publish) -> PassiveResult | None:
+    """The last checkpoint, the final result and its targets."""
     if live is None:
         return None
     if checkpoint is not None:
