@@ -1079,6 +1079,7 @@ class RecordBuilder:
         self.levels, self.ts, self.bs, self.amps = [], [], [], []
 
     def add(self, row: np.ndarray, angle: np.ndarray, height: np.ndarray) -> None:
+        """Append the next window's row z (B,) and its peaks (angles in deg, heights)."""
         self.ts.append(np.full(len(angle), (self.k + 0.5) * self.s.window_s))
         self.bs.append(angle)
         self.amps.append(height)
@@ -1088,6 +1089,7 @@ class RecordBuilder:
         self.k += 1
 
     def record(self, lofar: LofarGram | None) -> BearingTimeRecord:
+        """The record of the windows added, with ``lofar`` as its gram."""
         s, cone = self.s, self.s.cone_deg
         level = np.stack(self.levels) if self.levels else np.zeros((0, cone.size), dtype=np.float32)
         cat = (lambda parts: np.concatenate(parts)) if self.ts else (lambda parts: np.zeros(0))
