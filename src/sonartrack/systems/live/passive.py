@@ -37,8 +37,9 @@ from sonartrack.systems.live.windows import RingSpill, WindowAssembler
 from sonartrack.systems.passive.chain import PassiveCore, PassiveResult
 from sonartrack.systems.passive.settings import PassiveSettings
 
-#: windows the tonal ring holds beyond the history (a refresh reading while the stream writes)
-SPILL_MARGIN_WINDOWS = 64
+#: windows the tonal ring holds beyond the history: a refresh reads the oldest while the stream writes new ones
+#: (10 minutes at 1 s windows; a slot overwritten before it was read reads as a blank window)
+SPILL_MARGIN_WINDOWS = 600
 #: events kept for the health update
 HEALTH_EVENTS = 20
 

@@ -158,6 +158,8 @@ class RingSpill:
             if len(data) != buf.nbytes:
                 raise OSError("live tonal spill: a slot ended early")
             buf[...] = np.frombuffer(data, dtype=self._dtype).reshape(self._shape)
+            if k < self.first_window:  # overwritten while read (a refresh slower than the ring's margin): blank
+                buf[...] = 0
             yield RectWindow(buf, self.n_samples)
 
     def close(self) -> None:
