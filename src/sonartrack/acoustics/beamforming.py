@@ -846,10 +846,13 @@ def resolve_peaks_batch(z: np.ndarray, angles_deg: list[np.ndarray], pattern: Be
     ang, valid, counts = _padded_angles(angles_deg)
     if ang.shape[1] == 0:
         return [np.asarray(a, dtype=float).copy() for a in angles_deg]
-    for _ in range(iterations if ang.shape[1] > 1 else 1):
+    # a window with one peak has nothing to take out: one pass, whatever its batch holds, so that a window's angles
+    # are the same batched or alone (the live chain's windows come one at a time: systems/live/)
+    again = valid & (np.array(counts, dtype=int) > 1)[:, None]
+    for it in range(iterations if ang.shape[1] > 1 else 1):
         resp, amp = _fit(z, ang, valid, pattern)
         residual = (z - (resp @ amp[..., None])[..., 0])[:, :, None] + resp * amp[:, None, :]
-        ang = np.where(valid, _vertices(residual, ang, pattern), 0.0)
+        ang = np.where(valid if it == 0 else again, _vertices(residual, ang, pattern), ang)
     return [ang[i, :c] for i, c in enumerate(counts)]
 
 
@@ -1028,31 +1031,65 @@ def _other_batches(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
             yield split_array_powers(batch[0], fs_hz, array, s, band)[None]
 
 
-class _RecordBuilder:
-    """The bearing-time record's rows and peaks, window by window (``progress`` called with k after window k)."""
+class FrontEnd:
+    """The front end window by window: beam powers, the normaliser and the peaks of each window as it comes, with the
+    LOFAR accumulator and the spectra sink fed from the same transforms (:func:`bearing_time_record` runs it over a
+    whole recording; the live chain, systems/live/, over the windows of a stream as they complete). A window's row
+    and peaks do not depend on the windows batched with it (to rounding: the batched products)."""
 
-    def __init__(self, s: BeamformerSettings, progress: Callable[[int], None] | None,
-                 pattern: BeamPattern | None = None):
-        self.s, self.progress, self.k, self.pattern = s, progress, 0, pattern
-        self.levels, self.ts, self.bs, self.amps = [], [], [], []
+    def __init__(self, fs_hz: float, array: LineArray, settings: BeamformerSettings, *, band: Band | None = None,
+                 mvdr=None, narrowband: LofarSettings | None = None, spectra_sink: SpectraSink | None = None):
+        s = self.settings = settings
+        self.fs_hz, self.array, self.mvdr, self.sink = float(fs_hz), array, mvdr, spectra_sink
+        self.band = front_end_band(array, s, fs_hz) if band is None else band
+        self.n_samples = int(round(s.window_s * fs_hz))
+        self.lofar = None if narrowband is None else LofarAccumulator(fs_hz, array, narrowband, self.n_samples)
+        self.octave = alias_free_octave(array, s, fs_hz, self.band) if s.method == "cbf" else None
+        # the pattern is the CBF's over one band (the octave's sum of two statistics has another shape)
+        exact = s.peak_interpolation == "pattern" and s.method == "cbf" and self.octave is None
+        self.pattern = beam_pattern(array, s, fs_hz, self.band) if exact else None
 
-    def add(self, z: np.ndarray) -> None:
-        picked = pick_beam_peaks_rows(z, self.s.cone_deg, self.s)
+    def windows(self, blocks: Iterable[np.ndarray]):
+        """(z (B,), peak angles (deg), peak heights) of each window of ``blocks`` (N, window_s fs), in order, read as
+        they are asked for (CBF windows batched by ``BATCH_WINDOWS``)."""
+        s = self.settings
+        if s.method == "cbf":
+            batches = _cbf_batches(blocks, self.fs_hz, self.array, s, self.band, self.octave, self.lofar, self.sink)
+        else:
+            batches = _other_batches(blocks, self.fs_hz, self.array, s, self.band, self.mvdr, self.lofar)
+        for power in batches:
+            z = normalise_across_bearing(power, s)
+            yield from ((row, a, h) for row, (a, h) in zip(z, self._peaks(z), strict=True))
+
+    def _peaks(self, z: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        picked = pick_beam_peaks_rows(z, self.settings.cone_deg, self.settings)
         if self.pattern is not None:  # the batch's windows refined at once (resolve_peaks_batch)
             angles = resolve_peaks_batch(z, [a for a, _ in picked], self.pattern)
             picked = [(a, h) for a, (_, h) in zip(angles, picked, strict=True)]
-            if self.s.hidden_peaks:
-                picked = add_hidden_peaks(z, picked, self.pattern, self.s)
-        for row, (angle, height) in zip(z, picked, strict=True):
-            self.ts.append(np.full(len(angle), (self.k + 0.5) * self.s.window_s))
-            self.bs.append(angle)
-            self.amps.append(height)
-            self.levels.append(row.astype(np.float32))
-            if self.progress is not None:
-                self.progress(self.k)
-            self.k += 1
+            if self.settings.hidden_peaks:
+                picked = add_hidden_peaks(z, picked, self.pattern, self.settings)
+        return picked
+
+
+class RecordBuilder:
+    """The bearing-time record's rows and peaks, window by window (``progress`` called with k after window k)."""
+
+    def __init__(self, s: BeamformerSettings, progress: Callable[[int], None] | None):
+        self.s, self.progress, self.k = s, progress, 0
+        self.levels, self.ts, self.bs, self.amps = [], [], [], []
+
+    def add(self, row: np.ndarray, angle: np.ndarray, height: np.ndarray) -> None:
+        """Append the next window's row z (B,) and its peaks (angles in deg, heights)."""
+        self.ts.append(np.full(len(angle), (self.k + 0.5) * self.s.window_s))
+        self.bs.append(angle)
+        self.amps.append(height)
+        self.levels.append(row.astype(np.float32))
+        if self.progress is not None:
+            self.progress(self.k)
+        self.k += 1
 
     def record(self, lofar: LofarGram | None) -> BearingTimeRecord:
+        """The record of the windows added, with ``lofar`` as its gram."""
         s, cone = self.s, self.s.cone_deg
         level = np.stack(self.levels) if self.levels else np.zeros((0, cone.size), dtype=np.float32)
         cat = (lambda parts: np.concatenate(parts)) if self.ts else (lambda parts: np.zeros(0))
@@ -1099,18 +1136,8 @@ def bearing_time_record(blocks: Iterable[np.ndarray], fs_hz: float, array: LineA
         Window centres time_s = (k + 0.5) window_s (s), the beams' cone angles (deg), the normalised level z per
         window and beam, the peaks, and the LOFAR gram (or None).
     """
-    s = settings
-    band = front_end_band(array, s, fs_hz) if band is None else band
-    nw = int(round(s.window_s * fs_hz))
-    lofar = None if narrowband is None else LofarAccumulator(fs_hz, array, narrowband, nw)
-    octave = alias_free_octave(array, s, fs_hz, band) if s.method == "cbf" else None
-    if s.method == "cbf":
-        batches = _cbf_batches(blocks, fs_hz, array, s, band, octave, lofar, spectra_sink)
-    else:
-        batches = _other_batches(blocks, fs_hz, array, s, band, mvdr, lofar)
-    # the pattern is the CBF's over one band (the octave's sum of two statistics has another shape)
-    exact = s.peak_interpolation == "pattern" and s.method == "cbf" and octave is None
-    rows = _RecordBuilder(s, progress, beam_pattern(array, s, fs_hz, band) if exact else None)
-    for power in batches:
-        rows.add(normalise_across_bearing(power, s))
-    return rows.record(None if lofar is None else lofar.gram(s.window_s))
+    fe = FrontEnd(fs_hz, array, settings, band=band, mvdr=mvdr, narrowband=narrowband, spectra_sink=spectra_sink)
+    rows = RecordBuilder(settings, progress)
+    for row in fe.windows(blocks):
+        rows.add(*row)
+    return rows.record(None if fe.lofar is None else fe.lofar.gram(settings.window_s))

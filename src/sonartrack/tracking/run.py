@@ -199,24 +199,78 @@ def track_peaks(time_s, bearing_deg, amplitude, settings: BearingTrackerSettings
     BearingTracks
         One row per live track per scan.
     """
-    trk = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True,
-                          array_turn=nav is not None, resolution_deg=resolution_deg)
-    fold = settings is not None and settings.endfire_fold
     b, a = np.asarray(bearing_deg, float), np.asarray(amplitude, float)
     scans = scan_slices(time_s)
     turn = np.zeros(len(scans))
     if nav is not None and scans:
         turn[1:] = np.diff(np.rad2deg(nav.array_at(np.array([t for t, _ in scans]))[1]))
-    cols: dict[str, list] = {c: [] for c in [*PEAK_TRACK_COLUMNS, "unfolded_deg"]}
-    for (t, rows), dh in zip(scans, turn, strict=True):
-        snap = trk.step(t, b[rows], amplitude=a[rows], array_turn_deg=dh)
-        x = fold_cone_state(snap.x)[0] if fold else snap.x
-        for c, v in (("time_s", np.full(len(snap.x), t)), ("track_id", snap.track_id),
-                     ("bearing_deg", x[:, 0]), ("bearing_rate_deg_s", x[:, 1]),
-                     ("bearing_std_deg", np.sqrt(snap.P[:, 0, 0])),
-                     ("strength", snap.attrs.get("strength", np.zeros(0))), ("confirmed", snap.confirmed),
-                     ("unfolded_deg", snap.x[:, 0])):
-            cols[c].append(v)
-    empty = {"track_id": np.zeros(0, np.int64), "confirmed": np.zeros(0, bool)}
-    out = [_stack(cols[c], empty.get(c, np.zeros(0))) for c in PEAK_TRACK_COLUMNS]
-    return BearingTracks(*out, _stack(cols["unfolded_deg"], np.zeros(0)) if fold else None)
+    trk = PeakTracker(settings, amplitude_aided=amplitude_aided, array_turn=nav is not None,
+                      resolution_deg=resolution_deg)
+    rows = [trk.step(t, b[r], a[r], dh) for (t, r), dh in zip(scans, turn, strict=True)]
+    return trk.tracks(rows)
+
+
+class PeakTracker:
+    """:func:`track_peaks`'s tracker stepped one scan at a time (the live chain steps it as each window's peaks
+    arrive, systems/live/; :func:`track_peaks` steps it over a whole record): the same tracker, the same rows.
+
+    Parameters
+    ----------
+    settings : BearingTrackerSettings, optional
+        Tracker settings (default: the paper's).
+    amplitude_aided : bool
+        JPDA_A when true, plain JPDA when false.
+    array_turn : bool
+        Predict the array's heading change given to :meth:`step` (tracking/own_motion.py).
+    resolution_deg : float, optional
+        As :func:`track_peaks`.
+    """
+
+    def __init__(self, settings: BearingTrackerSettings | None = None, *, amplitude_aided: bool = True,
+                 array_turn: bool = False, resolution_deg: float | None = None):
+        self.tracker = bearing_tracker(settings, amplitude_aided=amplitude_aided, adaptive_strength=True,
+                                       array_turn=array_turn, resolution_deg=resolution_deg)
+        self.fold = settings is not None and settings.endfire_fold
+
+    def step(self, time_s: float, bearing_deg: np.ndarray, amplitude: np.ndarray,
+             array_turn_deg: float = 0.0) -> dict[str, np.ndarray]:
+        """One scan: the peaks of time ``time_s`` (s) in, one row per live track out.
+
+        Parameters
+        ----------
+        time_s : float
+            The scan's time (s), after the previous scan's.
+        bearing_deg, amplitude : ndarray (k,)
+            The scan's peaks: cone angles (deg) and amplitudes.
+        array_turn_deg : float
+            The array's heading change since the previous scan (deg; 0 at the first).
+
+        Returns
+        -------
+        dict of str to ndarray
+            The scan's rows: PEAK_TRACK_COLUMNS and ``unfolded_deg`` (the tracker's phi), one per live track.
+        """
+        snap = self.tracker.step(time_s, np.asarray(bearing_deg, float), amplitude=np.asarray(amplitude, float),
+                                 array_turn_deg=array_turn_deg)
+        x = fold_cone_state(snap.x)[0] if self.fold else snap.x
+        return {"time_s": np.full(len(snap.x), time_s), "track_id": snap.track_id, "bearing_deg": x[:, 0],
+                "bearing_rate_deg_s": x[:, 1], "bearing_std_deg": np.sqrt(snap.P[:, 0, 0]),
+                "strength": snap.attrs.get("strength", np.zeros(0)), "confirmed": snap.confirmed,
+                "unfolded_deg": snap.x[:, 0]}
+
+    def tracks(self, rows: list[dict[str, np.ndarray]]) -> BearingTracks:
+        """The rows of a run of scans (:meth:`step`'s, in scan order) as one record.
+
+        Parameters
+        ----------
+        rows : list of dict
+            The scans' rows.
+
+        Returns
+        -------
+        BearingTracks
+            One row per live track per scan (``unfolded_deg`` when the tracker folds at endfire).
+        """
+        empty = {"track_id": np.zeros(0, np.int64), "confirmed": np.zeros(0, bool)}
+        cols = [_stack([r[c] for r in rows], empty.get(c, np.zeros(0))) for c in PEAK_TRACK_COLUMNS]
+        return BearingTracks(*cols, _stack([r["unfolded_deg"] for r in rows], np.zeros(0)) if self.fold else None)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sonartrack.acoustics.beamforming import BearingTimeRecord, bearing_time_record
+from sonartrack.acoustics.beamforming import BearingTimeRecord, RecordBuilder
 from sonartrack.acoustics.lofar import LofarGram
 from sonartrack.acoustics.xcorr_bearing import PeakRecord
 from sonartrack.detection.btr_mftd import BtrDetections
@@ -134,24 +134,120 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
     s, settings = stages, stages.settings
     # the tonal band's spectra kept from the front end's transforms (systems/passive/tonal_pass.py SpectraSpill)
     spill = SpectraSpill(int(round(settings.window_s * s.fs_hz)), s.fs_hz, s.tonal)
-    btr = bearing_time_record(blocks(), s.fs_hz, s.array, s.front_end, band=s.band,
-                              progress=_Stage(progress, "beamforming", n_windows), mvdr=settings.mvdr,
-                              narrowband=settings.narrowband if settings.narrowband.enabled else None,
-                              spectra_sink=spill if spill.bins is not None else None)
+    core = PassiveCore(s, spill)
+    rows = RecordBuilder(s.front_end, _Stage(progress, "beamforming", n_windows))
+    scans = []
+    for row in core.front.windows(blocks()):
+        t = (rows.k + 0.5) * settings.window_s
+        rows.add(*row)
+        if not settings.btr_mftd.enabled:  # with the MFTD the tracker waits for its detections (below)
+            scans += core.scan(t, row[1], row[2], nav)
+    btr = rows.record(core.gram())
     pk, mftd = btr.peaks, None
     if settings.btr_mftd.enabled:
         pk, mftd = _with_mftd_peaks(btr, s)
     # the array's turns predicted from the navigation, and two ships within a beam seen as one merged peak
     # (tracking/own_motion.py, tracking/resolution.py): identities kept through crossings and turns
     tracks = track_peaks(pk.time_s, pk.bearing_deg, pk.amplitude, s.tracker, nav=nav,
-                         resolution_deg=s.min_separation_deg)
+                         resolution_deg=s.min_separation_deg) if mftd is not None else core.tracker.tracks(scans)
+    tonal = spill.windows if spill.usable(n_windows) else blocks
+    try:
+        return finish_passive(btr, tracks, nav, s, n_windows, tonal, blocks=blocks, progress=progress,
+                              plain_jpda=plain_jpda, mftd=(pk, mftd) if mftd is not None else None)
+    finally:
+        spill.close()
+
+
+class PassiveCore:
+    """The chain's windowed part: each window's front end (stage 1, with the LOFAR accumulator and the tonal
+    spill fed from its transforms) and the tracker's scan on its peaks (stage 2). :func:`run_passive` drives it over
+    a recording, the live chain (systems/live/) over a stream's windows as they complete: one core, so the two give
+    the same tracks (to the rounding of the front end's batched products, ~1e-13 deg).
+
+    Parameters
+    ----------
+    stages : PassiveStages
+        The chain's settings.
+    spill : SpectraSpill or None
+        Where the front end hands the tonal band's spectra (systems/passive/tonal_pass.py), or None.
+    """
+
+    def __init__(self, stages: PassiveStages, spill=None):
+        from sonartrack.acoustics.beamforming import FrontEnd
+        from sonartrack.tracking.run import PeakTracker
+
+        s, settings = stages, stages.settings
+        self.stages = s
+        self.front = FrontEnd(s.fs_hz, s.array, s.front_end, band=s.band, mvdr=settings.mvdr,
+                              narrowband=settings.narrowband if settings.narrowband.enabled else None,
+                              spectra_sink=spill if spill is not None and spill.bins is not None else None)
+        self.tracker = PeakTracker(s.tracker, array_turn=True, resolution_deg=s.min_separation_deg)
+        #: the array's heading (deg) at the last scan (None before the first)
+        self.heading_deg: float | None = None
+
+    def scan(self, time_s: float, angle_deg: np.ndarray, height: np.ndarray, nav) -> list[dict]:
+        """The tracker's scan on one window's peaks (none: a window without peaks is no scan, as
+        :func:`~sonartrack.tracking.run.track_peaks` has it): [its rows] or [].
+
+        Parameters
+        ----------
+        time_s : float
+            The window's centre (s).
+        angle_deg, height : ndarray
+            Its peaks.
+        nav : Navigation or float
+            The navigation (the array's heading is read at ``time_s``), or that heading itself (deg).
+        """
+        if not len(angle_deg):
+            return []
+        h = float(nav) if isinstance(nav, float | int) else float(np.rad2deg(nav.array_at(np.array([time_s]))[1])[0])
+        turn = 0.0 if self.heading_deg is None else h - self.heading_deg
+        self.heading_deg = h
+        return [self.tracker.step(time_s, angle_deg, height, turn)]
+
+    def gram(self) -> LofarGram | None:
+        """The LOFAR gram of the complete integration periods so far (None: none, or no narrowband)."""
+        return None if self.front.lofar is None else self.front.lofar.gram(self.stages.settings.window_s)
+
+
+def finish_passive(btr: BearingTimeRecord, tracks: BearingTracks, nav: Navigation, stages: PassiveStages,
+                   n_windows: int, tonal_windows: Callable[[], Iterable], *, first_window: int = 0, blocks=None,
+                   progress=None, plain_jpda: bool = False, mftd=None) -> PassiveResult:
+    """Stages 3-5 on the windowed part's record and tracks (module doc): measurements, tonal lines, joins,
+    narrowband lines and sources, side and TMA per target.
+
+    Parameters
+    ----------
+    btr : BearingTimeRecord
+        The record (its peaks and LOFAR gram) of windows ``first_window`` on.
+    tracks : BearingTracks
+        The tracker's rows.
+    nav : Navigation
+        The navigation.
+    stages : PassiveStages
+        The settings.
+    n_windows : int
+        Windows processed since the first (the duration is n_windows window_s).
+    tonal_windows : callable
+        Returns the windows (or their spectra, SpectraSpill.windows) from ``first_window`` on, for the tonal pass.
+    first_window : int
+        The index of the first window the record, the gram and ``tonal_windows`` hold (the live chain keeps a
+        bounded history).
+    blocks : callable, optional
+        The recording's windows, for a narrowband pass of its own when the front end made no gram.
+    progress, plain_jpda
+        As :func:`run_passive`.
+    mftd : (PeakRecord, BtrDetections), optional
+        The peaks with the bearing-time MFTD's detections, and those detections.
+    """
+    s, settings = stages, stages.settings
+    pk = btr.peaks if mftd is None else mftd[0]
     meas = merge_duplicates(track_measurements(tracks, pk, settings.max_peak_offset_deg), settings.max_peak_offset_deg)
     meas = drop_unresolved(meas, s.min_separation_deg, nav=nav)
     # the tonal pass runs on the fragments, so that their lines take part in the join (two ships' fragments
     # with lines apart are not joined); a joined target's line is its fragments' lines
-    tonal_of = _fragment_tonals(spill.windows if spill.usable(n_windows) else blocks,
-                                [m for m in meas if _long_enough(m, settings)], s, n_windows, progress)
-    spill.close()
+    tonal_of = _fragment_tonals(tonal_windows, [m for m in meas if _long_enough(m, settings)], s,
+                                n_windows - first_window, progress, first_window)
     meas = join_fragments(meas, nav, min_fragment_s=settings.min_track_s, tonals=tonal_of)
     long_enough = [m for m in meas if _long_enough(m, settings)]
     short = [m.track_id for m in meas if m not in long_enough]
@@ -164,7 +260,8 @@ def run_passive(blocks: Callable[[], Iterable[np.ndarray]], n_windows: int, nav:
         else None
     notes = tuple(f"warning: target {tg.target_id}: {w}" for tg in targets for w in tg.ml.warnings
                   if w.startswith(UNSUPPORTED_RANGE))
-    result = PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes, mftd)
+    result = PassiveResult(btr, tracks, targets, short, n_windows * settings.window_s, s, nav, jpda, notes,
+                           None if mftd is None else mftd[1])
     return result if nb is None else _with_narrowband(result, nb, roles, len(records))
 
 
@@ -175,13 +272,13 @@ def _long_enough(m: TrackMeasurements, settings: PassiveSettings) -> bool:
 
 
 def _fragment_tonals(blocks, frags: list[TrackMeasurements], s: PassiveStages, n_windows: int,
-                     progress) -> dict:
+                     progress, first_window: int = 0) -> dict:
     """track id -> its tonal line on its own beam (systems/passive/tonal_pass.py, one pass over the recording)
     or None; no pass when there is no fragment."""
     if not frags:
         return {}
     tonals = measure_tonals(blocks(), s.fs_hz, s.array, frags, s.tonal, n_windows,
-                            progress=_Stage(progress, "tonal lines", n_windows))
+                            progress=_Stage(progress, "tonal lines", n_windows), first_window=first_window)
     return {m.track_id: t for m, t in zip(frags, tonals, strict=True)}
 
 
@@ -234,7 +331,7 @@ def _narrowband(blocks, btr: BearingTimeRecord, s: PassiveStages, n_windows: int
 
     cfg = s.settings.narrowband
     gram = getattr(btr, "lofar", None)
-    if gram is None and n_windows >= cfg.integration:  # else not one integration period: no lines
+    if gram is None and blocks is not None and n_windows >= cfg.integration:  # else no period (or no samples): no lines
         stage = _Stage(progress, "narrowband", n_windows)
         counted = (stage(k) or b for k, b in enumerate(blocks()))  # stage() returns None: the block passes through
         gram = lofar_gram(counted, s.fs_hz, s.array, cfg, s.settings.window_s)

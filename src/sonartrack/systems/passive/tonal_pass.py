@@ -161,7 +161,7 @@ class SpectraSpill:
 
 def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
                    measurements: list[TrackMeasurements], settings: TonalSettings, n_windows: int,
-                   progress: Callable[[int], None] | None = None) -> list[TonalTrack | None]:
+                   progress: Callable[[int], None] | None = None, first_window: int = 0) -> list[TonalTrack | None]:
     """The tonal line of each track, measured on its own beam in a second pass over the recording (module doc).
 
     Parameters
@@ -182,16 +182,19 @@ def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
         Number of windows to read.
     progress : callable, optional
         Called with k after window k.
+    first_window : int
+        The index of the first window ``blocks`` gives (the live chain keeps the last hour's spectra: systems/live/);
+        ``n_windows`` are read from it.
 
     Returns
     -------
     list of (TonalTrack or None)
         Per track, its tonal line, or None where it carries none.
     """
-    live = live_cones(measurements, settings.window_s, n_windows)
+    live = live_cones(measurements, settings.window_s, first_window + n_windows)
     acc: list[TonalAccumulator | None] = [None] * len(measurements)
-    for k, block in enumerate(blocks):
-        if k >= n_windows:
+    for k, block in enumerate(blocks, start=first_window):
+        if k >= first_window + n_windows:
             break
         idx, cones = live[k]
         if len(idx):

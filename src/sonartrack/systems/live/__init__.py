@@ -1,0 +1,22 @@
+"""The passive chain on a live stream: window by window, bounded state, checkpoints (issue 31).
+
+    from sonartrack.systems.live import LivePassive, run_live
+
+Modules: passive.py (:class:`LivePassive`: the file chain's windowed core on a stream's windows, the finishing
+stages on its bounded history), windows.py (blocks -> windows, the tonal spectra ring), navigation.py (fixes ->
+Navigation, coasting), updates.py (the display updates), checkpoint.py (versioned, atomic checkpoints), run.py
+(:func:`run_live`: the loop with its refresh and navigation threads).
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {"LivePassive": "sonartrack.systems.live.passive", "run_live": "sonartrack.systems.live.run"}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'sonartrack.systems.live' has no attribute {name!r}")

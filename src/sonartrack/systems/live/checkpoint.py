@@ -1,0 +1,76 @@
+"""Checkpoints of the live chain: its state in one versioned file, written atomically (io/atomic.py).
+
+The file is a pickle of a dict: ``format`` and ``version`` (:data:`CHECKPOINT_VERSION`; a file of another format or
+version is refused with what to do), the settings (as their dict), the stream header, the options, and the state:
+the window assembler (with the part-filled window's samples), the tracker (its live tracks), the LOFAR accumulator's
+open period, the history deques (bearing-time rows, tracker rows, LOFAR periods), the waiting scans, the navigation
+fixes, the selected track and the health counters. Not kept: the tonal band's spectra ring (0.4 GB an hour, on
+disk): after a restore the tonal pass reads the windows since the restore (a target's tonal may then rest on fewer
+windows than a file run's).
+
+A checkpoint is read only from a path the operator gave (pickle runs code from the file: never load one from an
+untrusted source).
+"""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+from sonartrack.core.errors import InputError, require
+from sonartrack.io.atomic import atomic_path
+
+#: the checkpoint's format name and version (bumped when the state's layout changes)
+CHECKPOINT_FORMAT = "sonartrack-live-passive"
+CHECKPOINT_VERSION = 1
+#: the chain's attributes a checkpoint keeps as they are
+_STATE = ("rows", "scans", "pending", "periods", "k_first", "k_next", "n_periods", "selected", "events", "gaps",
+          "last_targets", "_no_heading")
+
+
+def write_checkpoint(live, path) -> Path:
+    """Write ``live``'s state (module doc) to ``path`` atomically; returns the path."""
+    state = {name: getattr(live, name) for name in _STATE}
+    state |= {"assembler": live.assembler.state(), "nav": live.nav.state(), "tracker": live.core.tracker,
+              "heading_deg": live.core.heading_deg, "lofar": _lofar_state(live.core.front.lofar)}
+    doc = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
+           "settings": live.settings.model_dump(mode="json"), "header": live.header, "history_s": live.history_s,
+           "options": live.options, "fixed_nav": live.fixed_nav, "state": state}
+    p = Path(path)
+    with atomic_path(p) as tmp:
+        tmp.write_bytes(pickle.dumps(doc, protocol=pickle.HIGHEST_PROTOCOL))
+    return p
+
+
+def _lofar_state(acc) -> dict | None:
+    return None if acc is None else {"sum": acc._sum, "count": acc._count}  # noqa: SLF001 - the open period
+
+
+def read_checkpoint(cls, path):
+    """The chain of a checkpoint file (module doc): InputError when it is missing, unreadable, or of another
+    format or version."""
+    from sonartrack.systems.passive.settings import PassiveSettings
+
+    p = Path(path)
+    require(p.is_file(), f"checkpoint {p} not found: give the file a live run wrote with --checkpoint")
+    try:
+        doc = pickle.loads(p.read_bytes())  # noqa: S301 - the operator's own file (module doc)
+    except Exception as exc:  # noqa: BLE001 - any damage reads as one message
+        raise InputError(f"checkpoint {p} is unreadable ({type(exc).__name__}): delete it to start afresh") from None
+    require(isinstance(doc, dict) and doc.get("format") == CHECKPOINT_FORMAT,
+            f"{p} is no live passive checkpoint: give the file a live run wrote, or delete it to start afresh")
+    require(doc.get("version") == CHECKPOINT_VERSION,
+            f"checkpoint {p} is version {doc.get('version')}, this sonartrack reads version {CHECKPOINT_VERSION}: "
+            "delete it to start afresh")
+    live = cls(PassiveSettings.model_validate(doc["settings"]), doc["header"], history_s=doc["history_s"],
+               nav=doc["fixed_nav"], **doc["options"])
+    state = doc["state"]
+    for name in _STATE:
+        setattr(live, name, state[name])
+    live.assembler.restore(state["assembler"])
+    live.nav.restore(state["nav"])
+    live.core.tracker, live.core.heading_deg = state["tracker"], state["heading_deg"]
+    if state["lofar"] is not None:
+        live.core.front.lofar._sum, live.core.front.lofar._count = state["lofar"]["sum"], state["lofar"]["count"]  # noqa: SLF001
+    live.spill.skip_to(live.k_next)
+    return live

@@ -1,0 +1,163 @@
+"""The live loop: a sample source and a navigation source in, display updates out, the slow stages on a schedule.
+
+:func:`run_live` reads the sample source on the calling thread (each block's updates published at once), the
+navigation source on a thread of its own (fixes handed to the chain under its lock), and runs
+:meth:`~sonartrack.systems.live.passive.LivePassive.refresh` on a worker thread every ``refresh_s`` -- or, when a
+refresh takes longer than a tenth of that, every ten refresh times, so that the slow stages never take more than
+about a tenth of a core from the windows. With ``checkpoint`` the chain starts from that file when it exists (its
+display history published first) and writes it every ``checkpoint_s`` and at the end (Ctrl-C included: the
+caller's ``stop`` event, or KeyboardInterrupt).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from sonartrack.io.stream.types import NavFix, SampleBlock, StreamEvent
+from sonartrack.systems.live.passive import LivePassive
+from sonartrack.systems.passive.chain import PassiveResult
+from sonartrack.systems.passive.settings import PassiveSettings
+
+#: a refresh may take this share of the time between refreshes at most (the schedule stretches)
+REFRESH_SHARE = 0.1
+
+
+def _nav_thread(nav, live_ref: list, publish, stop: threading.Event) -> threading.Thread | None:
+    """Read the navigation source on a thread: fixes to the chain (once built), events to the health."""
+    if nav is None:
+        return None
+
+    def run():
+        for item in nav:
+            if stop.is_set():
+                break
+            live = live_ref[0]
+            if live is None:
+                continue
+            if isinstance(item, NavFix):
+                live.push_nav(item)
+            elif isinstance(item, StreamEvent):
+                for u in live.note(item):
+                    publish(u)
+
+    th = threading.Thread(target=run, name="live-nav", daemon=True)
+    th.start()
+    return th
+
+
+def _refresh_thread(live: LivePassive, publish, refresh_s: float, stop: threading.Event) -> threading.Thread:
+    """Refresh the targets on a schedule (module doc)."""
+    def run():
+        wait = refresh_s
+        while not stop.wait(wait):
+            t0 = time.perf_counter()
+            for u in live.refresh():
+                publish(u)
+            wait = max(refresh_s, (time.perf_counter() - t0) / REFRESH_SHARE)
+
+    th = threading.Thread(target=run, name="live-refresh", daemon=True)
+    th.start()
+    return th
+
+
+def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
+    """The chain: restored from ``checkpoint`` when that file exists, else new on the source's header."""
+    if checkpoint is not None and Path(checkpoint).is_file():
+        return LivePassive.restore(checkpoint), True
+    return LivePassive(settings, samples.header, **options), False
+
+
+def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], None], *, refresh_s: float = 10.0,
+             checkpoint=None, stop: threading.Event | None = None, checkpoint_s: float = 60.0,
+             ready: Callable[[LivePassive], None] | None = None, **options) -> PassiveResult | None:
+    """Run the live chain until the sample source ends or ``stop`` is set (module doc).
+
+    Parameters
+    ----------
+    samples : iterable
+        The sample source (io/stream): ``header`` (known once it yields), SampleBlock and StreamEvent items.
+    nav : iterable, Navigation or None
+        The navigation source (NavFix and StreamEvent items), or a known Navigation (a finished recording replayed
+        with its navigation table), or None.
+    settings : PassiveSettings
+        The chain's settings.
+    publish : callable
+        Takes each display update (thread-safe: called from this thread and the refresh and navigation threads).
+    refresh_s : float
+        Seconds between refreshes of the targets.
+    checkpoint : path, optional
+        Checkpoint file (module doc).
+    stop : threading.Event, optional
+        Set to end the run (the result is still made).
+    checkpoint_s : float
+        Seconds between checkpoints.
+    ready : callable, optional
+        Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
+    **options
+        LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
+
+    Returns
+    -------
+    PassiveResult or None
+        The final result; None when the stream ended before one window.
+    """
+    from sonartrack.io.navigation import Navigation
+
+    if isinstance(nav, Navigation):
+        nav, options = None, {**options, "nav": nav}
+    stop = stop or threading.Event()
+    done, live_ref = threading.Event(), [None]
+    threads = [_nav_thread(nav, live_ref, publish, done)]
+    try:
+        for item in samples:
+            if stop.is_set():
+                break
+            if live_ref[0] is None:
+                threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done,
+                                      ready))
+            _take(live_ref[0], item, publish)
+            if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
+                live_ref[0].checkpoint(checkpoint)
+                live_ref[1] = time.monotonic()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        done.set()
+        for th in threads:
+            if th is not None:
+                th.join(timeout=5.0)
+    return _end(live_ref[0], checkpoint, publish)
+
+
+def _start(samples, settings, checkpoint, options, live_ref: list, publish, refresh_s: float, done, ready):
+    """Build the chain (restored: its display history published), start its refresh thread (returned)."""
+    live, restored = _build(samples, settings, checkpoint, options)
+    live_ref[:] = [live, time.monotonic()]
+    for u in live.history() if restored else []:
+        publish(u)
+    if ready is not None:
+        ready(live)
+    return _refresh_thread(live, publish, refresh_s, done)
+
+
+def _take(live: LivePassive, item, publish) -> None:
+    """One item of the sample source through the chain, its updates published."""
+    updates = live.push_block(item) if isinstance(item, SampleBlock) else \
+        live.note(item) if isinstance(item, StreamEvent) else []
+    for u in updates:
+        publish(u)
+
+
+def _end(live: LivePassive | None, checkpoint, publish) -> PassiveResult | None:
+    """The last checkpoint, the final result and its targets."""
+    if live is None:
+        return None
+    if checkpoint is not None:
+        live.checkpoint(checkpoint)
+    result = live.finish() if live.rows else None
+    for u in live.refresh() if result is not None else []:
+        publish(u)
+    return result
