@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 import types
 from pathlib import Path
 
@@ -63,9 +64,19 @@ def _fake_modules(monkeypatch, run_live) -> None:
 def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
     seen = {}
 
-    def run_live(samples, nav, settings, publish, *, checkpoint=None, stop=None, selected=None, **kw):
+    class Chain:  # the live chain's face the console uses: select(track) -> that track's LOFAR rows
+        def __init__(self):
+            self.selected = None
+
+        def select(self, track):
+            self.selected = track
+            return []
+
+    def run_live(samples, nav, settings, publish, *, checkpoint=None, stop=None, ready=None, **kw):
         server = publish.__self__  # the console's publish
         assert server.url.startswith("http://127.0.0.1:")
+        chain = Chain()
+        ready(chain)
         client = Client(server.url)
         fake = FakeLive()
         for _ in range(5):
@@ -74,7 +85,10 @@ def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
         client.wait(lambda m: len(client.of_type("btr")) == 5)
         client.send(json.dumps({"select": 2}))
         client.wait(lambda m: client.of_type("selected"))
-        seen.update(selected=selected(), samples=samples, nav=nav, checkpoint=checkpoint, stopped=stop.is_set())
+        deadline = time.monotonic() + 10
+        while chain.selected is None and time.monotonic() < deadline:  # the callback runs on its own thread
+            time.sleep(0.02)
+        seen.update(selected=chain.selected, samples=samples, nav=nav, checkpoint=checkpoint, stopped=stop.is_set())
         client.close()
         raise KeyboardInterrupt
 

@@ -117,9 +117,22 @@ def _open_sources(plan: dict):
         samples = sources.FolderSampleSource(plan["folder"])
     else:
         samples = sources.ReplaySampleSource(plan["wav"], speed=plan["speed"])
-    navigation = (sources.UdpNmeaSource(plan["nav_udp"]) if plan["nav_udp"] is not None
-                  else sources.FileNavSource(plan["nav"]))
+    if plan["nav_udp"] is not None:
+        navigation = sources.UdpNmeaSource(plan["nav_udp"])
+    elif plan["wav"] is not None:
+        navigation = _replayed_navigation(plan["wav"], plan["nav"])
+    else:
+        navigation = sources.FileNavSource(plan["nav"])
     return samples, navigation
+
+
+def _replayed_navigation(wav: Path, nav: Path):
+    """A finished recording's navigation, read and placed on its time axis as ``passive`` reads it (the replay
+    then gives the chain the same navigation the file run has)."""
+    from sonartrack.io.recording_sequence import open_sequence
+    from sonartrack.systems.passive.files import read_recording_navigation
+
+    return read_recording_navigation(nav, open_sequence(wav)).nav
 
 
 def _run(plan: dict, settings, server, *, checkpoint):
@@ -132,11 +145,12 @@ def _run(plan: dict, settings, server, *, checkpoint):
     stop = threading.Event()
     try:
         return run_live(samples, navigation, settings, server.publish, checkpoint=checkpoint, stop=stop,
-                        selected=lambda: server.selected)
+                        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]))
     finally:
         stop.set()
         for source in (samples, navigation):
-            source.close()
+            if hasattr(source, "close"):
+                source.close()
 
 
 def _interrupted(exc: KeyboardInterrupt, checkpoint: Path | None) -> KeyboardInterrupt:

@@ -206,7 +206,11 @@
     const xs = [], ys = [];
     const add = (x, y) => { if (x !== null && y !== null && isFinite(x) && isFinite(y)) { xs.push(x); ys.push(y); } };
     S.own.slice(-600).forEach((o) => add(o.x_m, o.y_m));
-    for (const r of (S.targets ? S.targets.rows : [])) { add(r.x_m, r.y_m); if (r.mirror) add(r.mirror.x_m, r.mirror.y_m); }
+    // only positions with a determined range: an undetermined one is a bearing line, its x, y meaningless
+    for (const r of (S.targets ? S.targets.rows : [])) {
+      if (r.range_m === null || r.range_m === undefined || r.reason) continue;
+      add(r.x_m, r.y_m); if (r.mirror) add(r.mirror.x_m, r.mirror.y_m);
+    }
     if (!xs.length) return null;
     let x0 = Math.min(...xs), x1 = Math.max(...xs), y0 = Math.min(...ys), y1 = Math.max(...ys);
     const pad = Math.max(500, 0.12 * Math.max(x1 - x0, y1 - y0));

@@ -96,6 +96,7 @@ class LivePassive:
         self.n_periods = 0
         self.selected: int | None = None
         self.events: deque = deque(maxlen=HEALTH_EVENTS)
+        self.new_events: list[str] = []  # not yet in a health update (the console logs each event once)
         self.gaps = 0
         self.latency_s: deque = deque(maxlen=1000)
         self.last_targets: dict | None = None
@@ -120,6 +121,7 @@ class LivePassive:
         to the health update."""
         with self.lock:
             self.events.append(f"{event.kind}: {event.detail}")
+            self.new_events.append(self.events[-1])
             out = []
             if event.kind == "gap" and event.first_index is not None and event.count:
                 self.gaps += 1
@@ -235,12 +237,14 @@ class LivePassive:
                 first * self.window_s:
             self.periods.popleft()
 
-    def _health(self) -> dict:
+    def _health(self, every_event: bool = False) -> dict:
+        """The health update: its ``events`` the ones since the last (``every_event``: the recent ones kept)."""
         lat = np.array(self.latency_s) if self.latency_s else np.zeros(1)
+        events, self.new_events = (list(self.events) if every_event else self.new_events), []
         coasting = self.fixed_nav is None and self.nav.coasting
         return {"type": "health", "t_s": self.k_next * self.window_s, "rate_hz": float(self.header.rate_hz),
                 "latency_s": float(lat[-1]), "latency_median_s": float(np.median(lat)),
-                "latency_p99_s": float(np.quantile(lat, 0.99)), "gaps": self.gaps, "events": list(self.events),
+                "latency_p99_s": float(np.quantile(lat, 0.99)), "gaps": self.gaps, "events": events,
                 "nav": "coasting" if coasting else "ok",
                 "warning": "navigation dropout: ownship coasting" if coasting else None}
 
@@ -264,7 +268,7 @@ class LivePassive:
                                          else 0.0, self.scans[-1][1]))
             out += [self.last_targets] if self.last_targets is not None else []
             own = self._ownship()
-            return out + ([own] if own is not None else []) + [self._health()]
+            return out + ([own] if own is not None else []) + [self._health(every_event=True)]
 
     def _ownship(self) -> dict | None:
         nav = self.fixed_nav if self.fixed_nav is not None else self.nav.navigation()

@@ -110,15 +110,20 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         nav, options = None, {**options, "nav": nav}
     stop = stop or threading.Event()
     done, live_ref = threading.Event(), [None]
-    threads = [_nav_thread(nav, live_ref, publish, done)]
+    threads, early = [_nav_thread(nav, live_ref, publish, done)], []
     try:
         for item in samples:
             if stop.is_set():
                 break
+            if live_ref[0] is None and getattr(samples, "header", None) is None:
+                early.append(item)  # a TCP source's events before its header frame: the chain needs the header
+                continue
             if live_ref[0] is None:
                 threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done,
                                       ready))
-            _take(live_ref[0], item, publish)
+            for it in [*early, item]:
+                _take(live_ref[0], it, publish)
+            early = []
             if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
                 live_ref[0].checkpoint(checkpoint)
                 live_ref[1] = time.monotonic()
