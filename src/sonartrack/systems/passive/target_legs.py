@@ -7,14 +7,15 @@ sigma`). The zig test's threshold is calibrated on white bearings 20-60 s apart 
 fits on thousands of bearings cost minutes; so the test runs on block means over :data:`LEG_BLOCK_S` (the chain's
 residual block, tma/record_checks.py ``RESIDUAL_BLOCK_S``): per block, at its weighted mean time t_b,
 
-    z_b = h_cv(t_b) + sum_n w_n e_n / sum_n w_n,   w_n = 1 / r_n^2,   sigma_b^2 = sigma_u^2 kappa / sum_n w_n + f^2
+    z_b = h_cv(t_b) + sum_n w_n e_n / sum_n w_n,   w_n = 1 / r_n^2,   sigma_b^2 = (sigma_u^2 kappa + f^2 m) / sum_n w_n
 
 with e_n the residuals of the chain's noise-law CV fit (:func:`~.targets.u_weighted_fit`), h_cv(t_b) its bearing from
 the array's position at t_b (so that the bearing's curvature over the block does not enter the mean) and kappa the
 correlation inflation of the weighted residuals (tma/solve.py ``correlation_inflation``, as the ML's covariance
-states it; an AR(1) error's block mean has variance sigma^2 kappa / m) and f the front end's bias floor
-:data:`BLOCK_BIAS_FLOOR_RAD`. The test's false-alarm rate is the chain's
-``zig_false_alarm_per_hour`` setting. A record of fewer than 8 blocks (240 s) is not tested. Where the test finds a
+states it; an AR(1) error's block mean has variance sigma^2 kappa / m), m the block's bearings and f the front
+end's bias floor :data:`BLOCK_BIAS_FLOOR_RAD` (a bias b_n = f r_n common to the block adds f^2 m / sum w_n). The
+test's false-alarm rate is the chain's ``zig_false_alarm_per_hour`` setting. A record of fewer than 8 blocks (240 s)
+is not tested. Where the test finds a
 zig, the CV fit's sigma_u and kappa hold the zig's misfit too (the 2-leg world of tests/systems/passive/
 test_target_legs.py: the legs' range sd 2.3 km for an error of 0.05 km); so the noise is measured again about the
 legs (sigma_u^2 = sum (e_n / r_n)^2 / (n - P), P the legs' parameters and change times), the block means taken about
@@ -50,12 +51,12 @@ from sonartrack.tma.zig import Zig, detect_zigs
 
 #: the block over which the chain's bearings are averaged for the zig test (module doc)
 LEG_BLOCK_S = RESIDUAL_BLOCK_S
-#: the least sd of a block mean (rad): the front end's sub-beam peak positions carry a bias that varies with the
-#: cone angle's place between beams and with other ships' lobes (acoustics/beamforming.py: 0.13 deg rms, correlated
-#: over tens of scans, on the passive-chain study), which averaging over a block does not remove. On the shipped
-#: zigzag scene (seed 5) the merchant's block means about its constant-velocity ML swung by +-0.06 deg over 100-200 s
-#: after the turn, 10 of their white-noise sds (0.007 deg, sigma_u 0.02 deg): five false zigs. The floor is added in
-#: quadrature (module doc)
+#: the least sd of a block mean at broadside (rad; r_n times it off broadside, as the line array's noise law): the
+#: front end's sub-beam peak positions carry a bias that varies with the cone angle's place between beams and with
+#: other ships' lobes (acoustics/beamforming.py: 0.13 deg rms, correlated over tens of scans, on the passive-chain
+#: study), which averaging over a block does not remove. On the shipped zigzag scene (seed 5) the merchant's block
+#: means about its constant-velocity ML swung by +-0.06 deg over 100-200 s after the turn, 10 of their white-noise
+#: sds (0.007 deg, sigma_u 0.02 deg): five false zigs. Added in quadrature (module doc)
 BLOCK_BIAS_FLOOR_RAD = float(np.deg2rad(0.05))
 #: fewest blocks the zig test runs on (tma/zig.py :func:`~sonartrack.tma.zig.detect_zigs` needs 8)
 MIN_LEG_BLOCKS = 8
@@ -131,7 +132,8 @@ def block_means(t, z, xy, relative_sigma, position_m, sigma_u: float, block_s: f
     own = np.column_stack([np.interp(tb, t, xy[:, 0]), np.interp(tb, t, xy[:, 1])])
     pb = position_m(tb)
     zb = wrap_angle(np.arctan2(pb[:, 0] - own[:, 0], pb[:, 1] - own[:, 1]) + np.bincount(idx, w * e) / sw)
-    return tb, zb, own, np.sqrt(sigma_u**2 * kappa / sw + BLOCK_BIAS_FLOOR_RAD**2)
+    count = np.bincount(idx)
+    return tb, zb, own, np.sqrt((sigma_u**2 * kappa + BLOCK_BIAS_FLOOR_RAD**2 * count) / sw)
 
 
 def _residuals(t, z, xy, position_m) -> np.ndarray:
@@ -157,6 +159,9 @@ def legs_rows(fit: LegFit, t, record, ownship, settings) -> TmaResult:
     L = np.stack([_state_map(fit.params, c, fit.t0_s, ti, fit.refined) for ti in t])
     with np.errstate(invalid="ignore"):
         cov = L @ fit.covariance @ np.swapaxes(L, 1, 2)
+        # the current leg's widening for a zig the test may have missed (tma/missed_zig.py), on its rows
+        end = _state_map(fit.params, c, fit.t0_s, fit.t_end_s, fit.refined)
+        cov[k == len(c)] += fit.legs[-1].state_cov - end @ fit.covariance @ end.T
     solution = TmaSolution(time_s=np.asarray(t, float), state=np.column_stack([pos, vel]), covariance=cov,
                            method="legs")
     return TmaResult(solution=solution, record=record, ownship=ownship, settings=settings)
