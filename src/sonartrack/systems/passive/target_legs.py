@@ -28,6 +28,16 @@ the block residuals' scale when they exceed their stated noise, undetermined bey
 ``max_range_sd_fraction`` of its range is undetermined), and every constant-velocity answer of the target (the ML
 and, through :func:`~sonartrack.tma.record_verdict.batch_held`, the IMM-MGEKF held to it) is not determined, reason
 ``target manoeuvred: zig at T s (A-B)`` (:data:`~sonartrack.tma.verdict.MANOEUVRED`). Without one: nothing changes.
+
+Checks. The legs' rows pass what the chain's ML passes (systems/passive/targets.py :func:`~.targets.legs_checked`):
+the ML's side verdict (side jackknife, axis crossings, side not yet decided) and a cone angle fixed to the array
+hold for them too; the legs are refitted with each tenth of the record left out (:func:`legs_jackknife`: a block
+another source's, a block they rest on, or a spread their covariance does not cover). A leg fit whose residuals
+reject it (a zig missed) or that has a leg no ship sails is not determined, and the current leg's covariance
+holds the zig the test may have missed (tma/missed_zig.py). A zig found where the track visits the array's axis
+(:func:`~sonartrack.tma.sides.crossing_events`) is tested against a crossing there (:func:`crossing_explains`):
+the tracker's cone angle, clipped or jittering at endfire, turns a crossing into the mirror's bearings, which the
+test reads as a zig; when the crossing explains the bearings as well, the zig is not counted (``crossings``).
 """
 
 from __future__ import annotations
@@ -248,14 +258,7 @@ def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaRe
     record = (t, chosen, xy, relative_sigma)
     try:
         with np.errstate(all="ignore"):
-            blocks = block_means(*record, lambda tt: cv_fit.state_at(tt)[0][:, :2], sigma_u)
-            report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
-            if report.zigs and report.legs is not None:  # the noise again, about the legs (module doc)
-                track = report.legs.position_at
-                sigma_legs = measured_sigma_u(*record, lambda tt: track(tt)[0], len(report.legs.params)
-                                              + len(report.zigs), sigma_floor_rad)
-                blocks = block_means(*record, lambda tt: track(tt)[0], sigma_legs)
-                report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
+            report, blocks = _two_pass_report(record, cv_fit, sigma_u, false_alarm_per_hour, sigma_floor_rad)
             crossed = ()
             if report.zigs and report.legs is not None and other is not None and len(axis_visits_s):
                 report, crossed = _without_crossings(report, blocks, record, np.asarray(other, float),
@@ -268,6 +271,20 @@ def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaRe
     rows = legs_rows(report.legs, t, ml.record, ml.ownship, ml.settings)
     rows = _checked_rows(rows, report.legs, max_range_sd_fraction)
     return TargetLegs(report.zigs, report.legs, rows, "", blocks=blocks, crossings=crossed)
+
+
+def _two_pass_report(record, cv_fit, sigma_u: float, false_alarm_per_hour: float, sigma_floor_rad: float):
+    """(the zig report, the block means it ran on): the test on the block means about the CV fit, and where it finds
+    a zig, again on the block means about the legs with the noise measured about them (module doc)."""
+    blocks = block_means(*record, lambda tt: cv_fit.state_at(tt)[0][:, :2], sigma_u)
+    report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
+    if report.zigs and report.legs is not None:
+        track = report.legs.position_at
+        sigma_legs = measured_sigma_u(*record, lambda tt: track(tt)[0], len(report.legs.params) + len(report.zigs),
+                                      sigma_floor_rad)
+        blocks = block_means(*record, lambda tt: track(tt)[0], sigma_legs)
+        report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
+    return report, blocks
 
 
 def crossing_explains(blocks, legs: LegFit, change_times_s, record, other, visit_s: float, sigma_u: float,
