@@ -24,7 +24,8 @@ On each record (:func:`run_trial`):
   that must also find the time does better;
 * the current leg: the joint leg fit's last leg (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times
   refined) at the last bearing, determined when its range sd is below its range and the fit's own whiteness tests
-  pass (tma/legs.py: a missed zig leaves a leg whose residuals reject it), its position error against the
+  pass (tma/legs.py: a missed zig leaves a leg whose residuals reject it; its covariance holds a zig the test may
+  have missed, tma/missed_zig.py, trial version 6), its position error against the
   Cramer-Rao bound of the true legs with the change
   times unknown (:func:`~sonartrack.tma.legs.crb_legs`), and against its own covariance;
 * the constant-velocity verdict: an independent chi-square test of the constant-velocity ML fit's residuals
@@ -51,7 +52,7 @@ from sonartrack.sim.manoeuvre_scene import OWN_PATTERNS, ManoeuvreSceneSettings
 STUDY_ID = "manoeuvring-target"
 TITLE = "Targets that zig: zig detection, leg-wise TMA, the constant-velocity verdict and observer advice"
 PAPER = "sonartrack's own (issue 30): sequential GLR zigs, leg-wise ML with its CRB, Fisher-information advice"
-TRIAL_VERSION = 5
+TRIAL_VERSION = 6
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 100

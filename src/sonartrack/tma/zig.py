@@ -74,6 +74,7 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only, pseudo_linear_estimate
 from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, change_time_profile, fit_legs
+from sonartrack.tma.missed_zig import MISSED_ZIG_DV_SD_MPS, with_missed_zig
 
 #: c in the threshold's tail form p = c sqrt(dt / 1 s) (h / 2)^2 exp(-h / 2) (module doc), fitted to simulated CV
 #: records
@@ -333,7 +334,8 @@ def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *
 
 def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *,
                 false_alarm_per_hour: float = DEFAULT_FALSE_ALARM_PER_HOUR,
-                window_s: float = 1800.0, fit: bool = True) -> ZigReport:
+                window_s: float = 1800.0, fit: bool = True,
+                missed_zig_dv_sd_mps: float | None = MISSED_ZIG_DV_SD_MPS) -> ZigReport:
     """Find a target's zigs from its bearings and the ownship's positions, and fit its legs (module doc).
 
     Parameters
@@ -353,6 +355,9 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *,
     fit : bool
         Fit the legs over the whole record (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times
         refined).
+    missed_zig_dv_sd_mps : float or None
+        The current leg's covariance widened for a zig the test may have missed, of this prior sd (m/s per axis;
+        tma/missed_zig.py :func:`~sonartrack.tma.missed_zig.with_missed_zig`); None: the fit's own covariance.
 
     Returns
     -------
@@ -378,6 +383,8 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *,
         try:
             legs = fit_legs(t, z, own, sig, [zg.time_s for zg in zigs], refine=True)
             zigs = _refined_zigs(t, z, own, sig, zigs, legs)
+            if missed_zig_dv_sd_mps:
+                legs = with_missed_zig(legs, t, own, sig, h, dv_sd_mps=missed_zig_dv_sd_mps)
         except InputError as err:
             message = f"legs not fitted: {err}"
     return ZigReport(zigs=zigs, legs=legs, threshold=h, false_alarm_per_hour=float(false_alarm_per_hour),

@@ -7,13 +7,15 @@ sigma`). The zig test's threshold is calibrated on white bearings 20-60 s apart 
 fits on thousands of bearings cost minutes; so the test runs on block means over :data:`LEG_BLOCK_S` (the chain's
 residual block, tma/record_checks.py ``RESIDUAL_BLOCK_S``): per block, at its weighted mean time t_b,
 
-    z_b = h_cv(t_b) + sum_n w_n e_n / sum_n w_n,      w_n = 1 / r_n^2,      sigma_b = sigma_u sqrt(kappa / sum_n w_n)
+    z_b = h_cv(t_b) + sum_n w_n e_n / sum_n w_n,   w_n = 1 / r_n^2,   sigma_b^2 = (sigma_u^2 kappa + f^2 m) / sum_n w_n
 
 with e_n the residuals of the chain's noise-law CV fit (:func:`~.targets.u_weighted_fit`), h_cv(t_b) its bearing from
 the array's position at t_b (so that the bearing's curvature over the block does not enter the mean) and kappa the
 correlation inflation of the weighted residuals (tma/solve.py ``correlation_inflation``, as the ML's covariance
-states it; an AR(1) error's block mean has variance sigma^2 kappa / m). The test's false-alarm rate is the chain's
-``zig_false_alarm_per_hour`` setting. A record of fewer than 8 blocks (240 s) is not tested. Where the test finds a
+states it; an AR(1) error's block mean has variance sigma^2 kappa / m), m the block's bearings and f the front
+end's bias floor :data:`BLOCK_BIAS_FLOOR_RAD` (a bias b_n = f r_n common to the block adds f^2 m / sum w_n). The
+test's false-alarm rate is the chain's ``zig_false_alarm_per_hour`` setting. A record of fewer than 8 blocks (240 s)
+is not tested. Where the test finds a
 zig, the CV fit's sigma_u and kappa hold the zig's misfit too (the 2-leg world of tests/systems/passive/
 test_target_legs.py: the legs' range sd 2.3 km for an error of 0.05 km); so the noise is measured again about the
 legs (sigma_u^2 = sum (e_n / r_n)^2 / (n - P), P the legs' parameters and change times), the block means taken about
@@ -26,6 +28,16 @@ the block residuals' scale when they exceed their stated noise, undetermined bey
 ``max_range_sd_fraction`` of its range is undetermined), and every constant-velocity answer of the target (the ML
 and, through :func:`~sonartrack.tma.record_verdict.batch_held`, the IMM-MGEKF held to it) is not determined, reason
 ``target manoeuvred: zig at T s (A-B)`` (:data:`~sonartrack.tma.verdict.MANOEUVRED`). Without one: nothing changes.
+
+Checks. The legs' rows pass what the chain's ML passes (systems/passive/targets.py :func:`~.targets.legs_checked`):
+the ML's side verdict (side jackknife, axis crossings, side not yet decided) and a cone angle fixed to the array
+hold for them too; the legs are refitted with each tenth of the record left out (:func:`legs_jackknife`: a block
+another source's, a block they rest on, or a spread their covariance does not cover). A leg fit whose residuals
+reject it (a zig missed) or that has a leg no ship sails is not determined, and the current leg's covariance
+holds the zig the test may have missed (tma/missed_zig.py). A zig found where the track visits the array's axis
+(:func:`~sonartrack.tma.sides.crossing_events`) is tested against a crossing there (:func:`crossing_explains`):
+the tracker's cone angle, clipped or jittering at endfire, turns a crossing into the mirror's bearings, which the
+test reads as a zig; when the crossing explains the bearings as well, the zig is not counted (``crossings``).
 """
 
 from __future__ import annotations
@@ -37,10 +49,11 @@ import numpy as np
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError
 from sonartrack.core.gaussian import chi2_quantile
-from sonartrack.tma.legs import LegFit, _state_map
+from sonartrack.tma.legs import LegFit, _state_map, fit_legs, leg_bearing_model
 from sonartrack.tma.record_checks import MAX_RESIDUAL_SCALE, RESIDUAL_ALPHA, RESIDUAL_BLOCK_S
 from sonartrack.tma.record_verdict import undetermined
 from sonartrack.tma.records import TmaSolution
+from sonartrack.tma.sides import VISIT_GAP_S, SideJackknife, fit_cv_target, time_blocks
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation
 from sonartrack.tma.verdict import INCONSISTENT_RESIDUALS, MANOEUVRED, UNOBSERVABLE, with_reasons
@@ -48,6 +61,13 @@ from sonartrack.tma.zig import Zig, detect_zigs
 
 #: the block over which the chain's bearings are averaged for the zig test (module doc)
 LEG_BLOCK_S = RESIDUAL_BLOCK_S
+#: the least sd of a block mean at broadside (rad; r_n times it off broadside, as the line array's noise law): the
+#: front end's sub-beam peak positions carry a bias that varies with the cone angle's place between beams and with
+#: other ships' lobes (acoustics/beamforming.py: 0.13 deg rms, correlated over tens of scans, on the passive-chain
+#: study), which averaging over a block does not remove. On the shipped zigzag scene (seed 5) the merchant's block
+#: means about its constant-velocity ML swung by +-0.06 deg over 100-200 s after the turn, 10 of their white-noise
+#: sds (0.007 deg, sigma_u 0.02 deg): five false zigs. Added in quadrature (module doc)
+BLOCK_BIAS_FLOOR_RAD = float(np.deg2rad(0.05))
 #: fewest blocks the zig test runs on (tma/zig.py :func:`~sonartrack.tma.zig.detect_zigs` needs 8)
 MIN_LEG_BLOCKS = 8
 
@@ -62,6 +82,11 @@ class TargetLegs:
     fit: LegFit | None
     result: TmaResult | None
     message: str
+    #: the block means the legs were fitted on (times s, bearings rad, array centre (m, 2) m, sd rad), None without
+    #: a zig: what :func:`legs_jackknife` refits
+    blocks: tuple | None = None
+    #: zigs the test found at a visit of the array's axis that a crossing there explains as well (not counted)
+    crossings: tuple[Zig, ...] = ()
 
     def leg_of(self, time_s) -> np.ndarray:
         """The 0-based leg index at each time (0 everywhere without a zig): leg k runs up to its change time."""
@@ -117,7 +142,8 @@ def block_means(t, z, xy, relative_sigma, position_m, sigma_u: float, block_s: f
     own = np.column_stack([np.interp(tb, t, xy[:, 0]), np.interp(tb, t, xy[:, 1])])
     pb = position_m(tb)
     zb = wrap_angle(np.arctan2(pb[:, 0] - own[:, 0], pb[:, 1] - own[:, 1]) + np.bincount(idx, w * e) / sw)
-    return tb, zb, own, sigma_u * np.sqrt(kappa / sw)
+    count = np.bincount(idx)
+    return tb, zb, own, np.sqrt((sigma_u**2 * kappa + BLOCK_BIAS_FLOOR_RAD**2 * count) / sw)
 
 
 def _residuals(t, z, xy, position_m) -> np.ndarray:
@@ -143,6 +169,9 @@ def legs_rows(fit: LegFit, t, record, ownship, settings) -> TmaResult:
     L = np.stack([_state_map(fit.params, c, fit.t0_s, ti, fit.refined) for ti in t])
     with np.errstate(invalid="ignore"):
         cov = L @ fit.covariance @ np.swapaxes(L, 1, 2)
+        # the current leg's widening for a zig the test may have missed (tma/missed_zig.py), on its rows
+        end = _state_map(fit.params, c, fit.t0_s, fit.t_end_s, fit.refined)
+        cov[k == len(c)] += fit.legs[-1].state_cov - end @ fit.covariance @ end.T
     solution = TmaSolution(time_s=np.asarray(t, float), state=np.column_stack([pos, vel]), covariance=cov,
                            method="legs")
     return TmaResult(solution=solution, record=record, ownship=ownship, settings=settings)
@@ -162,6 +191,9 @@ def _checked_rows(result: TmaResult, fit: LegFit, max_range_sd_fraction: float) 
                                                      f"{scale:.3g}",))
     if not fit.converged:
         return undetermined(result, UNOBSERVABLE, "the leg-wise ML did not converge")
+    if fit.motion_note or not all(leg.determined for leg in fit.legs):  # a zig missed, or a leg no ship sails
+        reason = fit.motion_note or next(leg.reason for leg in fit.legs if not leg.determined)
+        return undetermined(result, reason.split(":")[0], f"legs: {reason}")
     cols = solution_columns(result.solution, result.ownship)
     with np.errstate(invalid="ignore"):
         loose = ~(cols["range_std_m"] <= max_range_sd_fraction * cols["range_m"])
@@ -182,8 +214,8 @@ def zig_text(zig: Zig) -> str:
 
 
 def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaResult, *,
-                false_alarm_per_hour: float, max_range_sd_fraction: float, sigma_floor_rad: float = 0.0
-                ) -> TargetLegs:
+                false_alarm_per_hour: float, max_range_sd_fraction: float, sigma_floor_rad: float = 0.0,
+                other=None, axis_visits_s=()) -> TargetLegs:
     """Zigs and legs of one target's record (module doc).
 
     Parameters
@@ -206,6 +238,12 @@ def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaRe
         A legs row whose range sd exceeds this fraction of its range is not determined.
     sigma_floor_rad : float
         The least sigma_u measured about the legs (the chain's ``SIGMA_U_FLOOR_RAD``).
+    other : ndarray (n,) or None
+        The mirror side's bearings (rad): with ``axis_visits_s``, a zig at a visit of the array's axis is tested
+        against a crossing there (:func:`crossing_explains`).
+    axis_visits_s : sequence of float
+        Times (s) of the track's visits of the array's axis (tma/sides.py
+        :func:`~sonartrack.tma.sides.crossing_events`).
 
     Returns
     -------
@@ -217,23 +255,153 @@ def target_legs(t, chosen, xy, relative_sigma, cv_fit, sigma_u: float, ml: TmaRe
         return TargetLegs((), None, None, "no constant-velocity fit to test")
     if t[-1] - t[0] < MIN_LEG_BLOCKS * LEG_BLOCK_S:
         return TargetLegs((), None, None, f"record shorter than {MIN_LEG_BLOCKS * LEG_BLOCK_S:.0f} s: no zig test")
+    record = (t, chosen, xy, relative_sigma)
     try:
         with np.errstate(all="ignore"):
-            report = detect_zigs(*block_means(t, chosen, xy, relative_sigma, lambda tt: cv_fit.state_at(tt)[0][:, :2],
-                                              sigma_u), false_alarm_per_hour=false_alarm_per_hour)
-            if report.zigs and report.legs is not None:  # the noise again, about the legs (module doc)
-                track = report.legs.position_at
-                sigma_legs = measured_sigma_u(t, chosen, xy, relative_sigma, lambda tt: track(tt)[0],
-                                              len(report.legs.params) + len(report.zigs), sigma_floor_rad)
-                report = detect_zigs(*block_means(t, chosen, xy, relative_sigma, lambda tt: track(tt)[0], sigma_legs),
-                                     false_alarm_per_hour=false_alarm_per_hour)
+            report, blocks = _two_pass_report(record, cv_fit, sigma_u, false_alarm_per_hour, sigma_floor_rad)
+            crossed = ()
+            if report.zigs and report.legs is not None and other is not None and len(axis_visits_s):
+                report, crossed = _without_crossings(report, blocks, record, np.asarray(other, float),
+                                                     np.asarray(axis_visits_s, float), sigma_u)
     except (InputError, np.linalg.LinAlgError, ValueError) as failure:
         return TargetLegs((), None, None, f"zig test not run: {failure}")
     if not report.zigs or report.legs is None:
-        return TargetLegs(report.zigs, None, None, report.message or "no zig")
+        note = f"; {len(crossed)} axis crossing(s) not counted as zigs" if crossed else ""
+        return TargetLegs(report.zigs, None, None, (report.message or "no zig") + note, crossings=crossed)
     rows = legs_rows(report.legs, t, ml.record, ml.ownship, ml.settings)
     rows = _checked_rows(rows, report.legs, max_range_sd_fraction)
-    return TargetLegs(report.zigs, report.legs, rows, "")
+    return TargetLegs(report.zigs, report.legs, rows, "", blocks=blocks, crossings=crossed)
+
+
+def _two_pass_report(record, cv_fit, sigma_u: float, false_alarm_per_hour: float, sigma_floor_rad: float):
+    """(the zig report, the block means it ran on): the test on the block means about the CV fit, and where it finds
+    a zig, again on the block means about the legs with the noise measured about them (module doc)."""
+    blocks = block_means(*record, lambda tt: cv_fit.state_at(tt)[0][:, :2], sigma_u)
+    report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
+    if report.zigs and report.legs is not None:
+        track = report.legs.position_at
+        sigma_legs = measured_sigma_u(*record, lambda tt: track(tt)[0], len(report.legs.params) + len(report.zigs),
+                                      sigma_floor_rad)
+        blocks = block_means(*record, lambda tt: track(tt)[0], sigma_legs)
+        report = detect_zigs(*blocks, false_alarm_per_hour=false_alarm_per_hour)
+    return report, blocks
+
+
+def crossing_explains(blocks, legs: LegFit, change_times_s, record, other, visit_s: float, sigma_u: float,
+                      threshold: float) -> bool:
+    """Whether a crossing of the array's axis at ``visit_s`` explains the record as well as the zig there does.
+
+    After a crossing the target's true bearings are the mirror's (the unfolded cone angle reflected about the axis
+    gives the other side's bearing), and a crossing the tracker did not follow -- its cone angle clipped at endfire,
+    or jittering through it -- turns the chosen side's bearings back: to the zig test a change of bearing rate, that
+    is, a zig. The alternative record takes the mirror's bearings after ``visit_s``; its block means (about its own
+    noise-law CV fit, with the same noise) are fitted by the legs without this zig (``change_times_s``: the others,
+    refined). The zig is the crossing's when that fit's cost exceeds the legs' own by less than the zig test's
+    threshold h: the zig is then no longer significant against the crossing (the GLR of the zig over the crossing
+    below h).
+
+    Parameters
+    ----------
+    blocks : tuple
+        The legs' block means (times s, bearings rad, array centre (m, 2) m, sd rad).
+    legs : LegFit
+        The leg fit on them (with the zig).
+    change_times_s : ndarray
+        The other zigs' times (s).
+    record : tuple
+        (times s, chosen side's bearings rad, array centre (n, 2) m, relative sigma) of the 1-s record.
+    other : ndarray (n,)
+        The mirror side's bearings (rad).
+    visit_s : float
+        The axis visit's time (s).
+    sigma_u : float
+        The bearing noise at broadside (rad).
+    threshold : float
+        The zig test's threshold h.
+
+    Returns
+    -------
+    bool
+        True when the crossing explains the bearings as well as the zig.
+    """
+    t, chosen, xy, rel = record
+    alt = np.where(t > visit_s, other, chosen)
+    fit = fit_cv_target(alt, t, xy, relative_sigma=rel)
+    if fit is None:
+        return False
+    alt_blocks = block_means(t, alt, xy, rel, lambda tt: fit.state_at(tt)[0][:, :2], sigma_u)
+    try:  # the same blocks of the same times: the legs' block sds
+        alt_fit = fit_legs(*alt_blocks[:3], blocks[3], change_times_s, refine=bool(len(change_times_s)),
+                           motion_alpha=None)
+    except InputError:
+        return False
+    return bool(alt_fit.objective - legs.objective < threshold)
+
+
+def _without_crossings(report, blocks, record, other, visits, sigma_u: float):
+    """(the report with the zigs a crossing explains left out and the legs refitted on the rest, those zigs)
+    (:func:`crossing_explains`; a zig is tested when an axis visit lies within ``VISIT_GAP_S`` of its interval)."""
+    kept, crossed = list(report.zigs), []
+    for zig in report.zigs:
+        lo, hi = min(zig.interval_s[0], zig.time_s) - VISIT_GAP_S, max(zig.interval_s[1], zig.time_s) + VISIT_GAP_S
+        near = visits[(visits >= lo) & (visits <= hi)]
+        rest = np.array([z.time_s for z in kept if z is not zig], float)
+        if len(near) and any(crossing_explains(blocks, report.legs, rest, record, other, v, sigma_u, report.threshold)
+                             for v in near):
+            kept.remove(zig)
+            crossed.append(zig)
+    if not crossed:
+        return report, ()
+    legs = None
+    if kept:
+        legs = fit_legs(*blocks, [z.time_s for z in kept], refine=True)
+    return replace(report, zigs=tuple(kept), legs=legs, message="" if kept else "no zig"), tuple(crossed)
+
+
+def legs_jackknife(blocks, fit: LegFit, t_end_s: float, n_blocks: int = 10) -> SideJackknife | None:
+    """The leg fit repeated with each of ``n_blocks`` stretches of the record's time left out (change times held):
+    the delete-a-block jackknife of the chain's CV ML (tma/sides.py :func:`~sonartrack.tma.sides.side_jackknife`)
+    for the legs. Returned as a :class:`~sonartrack.tma.sides.SideJackknife` (``log_lr`` NaN: no side decision):
+    each replicate's state at ``t_end_s`` (last leg's velocity), the jackknife covariance P_J of that state, and
+    each replicate's prediction of the block means it left out (rms difference, the prediction's rms sd). A
+    replicate that cannot be fitted (a leg left without bearings) has NaN. None: fewer than 3 stretches.
+    """
+    tb, zb, own, sb = (np.asarray(x, float) for x in blocks)
+    edges = time_blocks(tb, n_blocks)
+    g = len(edges) - 1
+    if g < 3:
+        return None
+    i = np.arange(len(tb))
+    reps = np.array([_leg_replicate(blocks, fit, t_end_s, (i < edges[j]) | (i >= edges[j + 1])) for j in range(g)])
+    state = reps[:, :4]
+    d = state - state.mean(axis=0)
+    return SideJackknife(np.full(g, np.nan), state, (g - 1) / g * d.T @ d, reps[:, 4], reps[:, 5])
+
+
+def _leg_replicate(blocks, fit: LegFit, t_end_s: float, keep) -> np.ndarray:
+    """[state at t_end (4), rms of the prediction of the left-out block means, its rms sd] of one replicate of
+    :func:`legs_jackknife`, NaN when the legs cannot be fitted without the block."""
+    tb, zb, own, sb = blocks
+    c = np.asarray(fit.change_times_s, float)
+    out = np.full(6, np.nan)
+    tk = tb[keep]
+    start = np.r_[fit.position_at(tk[:1])[0][0], np.asarray(fit.params[2:], float)]
+    try:
+        with np.errstate(all="ignore"):
+            rep = fit_legs(tk, zb[keep], own[keep], sb[keep], c, refine=False, params_init=start, motion_alpha=None)
+    except (InputError, np.linalg.LinAlgError, ValueError):
+        return out
+    if not (rep.converged and np.all(np.isfinite(rep.params))):
+        return out
+    out[:2] = rep.position_at([t_end_s])[0][0]
+    out[2:4] = rep.params[-2:]
+    h, J, _ = leg_bearing_model(rep.params, c, tb[~keep], own[~keep], rep.t0_s)
+    scale = max(rep.objective / max(rep.dof, 1), 1.0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        v = np.einsum("ni,ij,nj->n", J, rep.covariance[:J.shape[1], :J.shape[1]] * scale, J)
+    out[4] = float(np.sqrt(np.mean(wrap_angle(zb[~keep] - h) ** 2)))
+    out[5] = float(np.sqrt(np.mean(v)))
+    return out
 
 
 def with_legs_verdict(result: TmaResult, legs: TargetLegs) -> TmaResult:

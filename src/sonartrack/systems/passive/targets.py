@@ -64,7 +64,7 @@ from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.io.navigation import Navigation
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
-from sonartrack.systems.passive.target_legs import TargetLegs, target_legs, with_legs_verdict
+from sonartrack.systems.passive.target_legs import TargetLegs, legs_jackknife, target_legs, with_legs_verdict
 from sonartrack.tma.record_checks import (
     MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
@@ -88,6 +88,7 @@ from sonartrack.tma.sides import (
     SideDecision,
     axis_end_stretches,
     crossing_alternative,
+    crossing_events,
     fit_cv_target,
     mirror_bearings_rad,
     near_axis_times,
@@ -104,6 +105,7 @@ from sonartrack.tma.verdict import (
     INCONSISTENT_RESIDUALS,
     NOT_ONE_TARGET,
     SIDE_UNRESOLVED,
+    UNOBSERVABLE,
     with_reasons,
 )
 
@@ -641,7 +643,7 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
     ml = axis_checked(ml, side, (t, chosen, other, xy, cone), min_log_lr, stages.min_separation_deg)
     ml = side_checked(ml, side, since, causal=False)
     ml = ml if left_out is None else replace(ml, warnings=ml.warnings + (left_out,))
-    ml, legs = _with_legs(ml, side, since, (t, chosen, xy, rel, fit, sigma_ml), stages)
+    ml, legs = _with_legs(ml, side, since, (t, chosen, xy, rel, fit, sigma_ml, other, cone), stages)
     mirror = solve_tma(rec_other, sensor, side_settings, ml_fit=other_fit, unobservable="flag", record_checks=False)
     imm_tonal = _imm_tonal(t, chosen, tonal, stages)
     seq = side_checked(_sequential(t, chosen, imm_tonal, sensor, side.sigma_bearing_rad, stages), side, since,
@@ -653,18 +655,58 @@ def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None,
 def _with_legs(ml: TmaResult, side: SideDecision, since: float, record, stages: PassiveStages
                ) -> tuple[TmaResult, TargetLegs | None]:
     """(the ML, every row not determined when the record has a zig; the zigs and legs of the side-resolved record,
-    systems/passive/target_legs.py, the legs' rows side-checked as the ML's; None when the side is not resolved: no
-    true bearings to test). ``record``: (times s, chosen side's bearings rad, array centre (n, 2) m, relative sigma,
-    the noise-law CV fit, its sigma_u rad)."""
+    systems/passive/target_legs.py; None when the side is not resolved: no true bearings to test). ``record``:
+    (times s, chosen side's bearings rad, array centre (n, 2) m, relative sigma, the noise-law CV fit, its sigma_u
+    rad, the mirror's bearings rad, the cone angles rad the side was decided on). A zig at a visit of the array's
+    axis that a crossing there explains as well is not counted. The legs' rows pass the checks the ML passes
+    (:func:`legs_checked`)."""
     if side.side == "unresolved":
         return ml, None
-    t, chosen, xy, rel, fit, sigma_u = record
+    t, chosen, xy, rel, fit, sigma_u, other, cone = record
     s = stages.settings
+    visits = [when for when, _ in crossing_events(t, cone)]
     legs = target_legs(t, chosen, xy, rel, fit, sigma_u, ml, false_alarm_per_hour=s.zig_false_alarm_per_hour,
-                       max_range_sd_fraction=s.verdict.max_range_sd_fraction, sigma_floor_rad=SIGMA_U_FLOOR_RAD)
+                       max_range_sd_fraction=s.verdict.max_range_sd_fraction, sigma_floor_rad=SIGMA_U_FLOOR_RAD,
+                       other=other, axis_visits_s=visits)
     if legs.result is None:
         return ml, legs
-    return with_legs_verdict(ml, legs), replace(legs, result=side_checked(legs.result, side, since, causal=False))
+    rows = legs_checked(legs, ml, t[-1], stages.min_separation_deg)
+    return with_legs_verdict(ml, legs), replace(legs, result=side_checked(rows, side, since, causal=False))
+
+
+#: the ML's reasons that hold for the legs' rows too: they are about the side and the source, not the motion
+SHARED_REASONS = (SIDE_UNRESOLVED, FIXED_CONE)
+
+
+def legs_checked(legs: TargetLegs, ml: TmaResult, t_end_s: float, beamwidth_deg: float) -> TmaResult:
+    """The legs' rows with the checks the chain's ML passes (:func:`solve_target`): a row whose ML row is not
+    determined for the side (:func:`jackknife_checked`'s side test, :func:`axis_checked`, :func:`side_checked`) or a
+    cone angle fixed to the array (:data:`SHARED_REASONS`) takes the ML's reason; then the delete-a-block jackknife
+    of the legs (systems/passive/target_legs.py :func:`~.target_legs.legs_jackknife`, change times held): a block
+    the rest predicts more than a beamwidth and 3 sds away is another source's (reason
+    :data:`~sonartrack.tma.verdict.NOT_ONE_TARGET`), a block without which the legs cannot be fitted leaves them
+    resting on it (:data:`~sonartrack.tma.verdict.UNOBSERVABLE`), and otherwise the covariance is widened to cover
+    the replicates' spread (:func:`_jackknife_widened`)."""
+    rows = legs.result
+    reasons = ml.solution.reasons()
+    shared = np.where(np.isin(reasons, SHARED_REASONS), reasons, "")
+    if (shared != "").any():
+        rows = replace(rows, solution=with_reasons(rows.solution, shared), warnings=rows.warnings + (
+            f"legs: {shared[shared != ''][-1]}, as the constant-velocity ML",))
+    if not rows.solution.range_flags().any() or legs.blocks is None:
+        return rows
+    jk = legs_jackknife(legs.blocks, legs.fit, t_end_s)
+    if jk is None:
+        return rows
+    span = f"of the record's {len(jk.log_lr)} stretches of time"
+    if not np.all(np.isfinite(jk.state)):
+        j = int(np.flatnonzero(~np.all(np.isfinite(jk.state), axis=1))[0])
+        return _undetermined(rows, UNOBSERVABLE, f"without the {ordinal(j + 1)} {span} the legs cannot be fitted: "
+                             "they rest on it")
+    foreign = _foreign_block_note(jk, beamwidth_deg, span, "another source's or the mirror's")
+    if foreign is not None:
+        return _undetermined(rows, NOT_ONE_TARGET, foreign)
+    return _jackknife_widened(rows, jk.covariance, len(jk.log_lr), span)
 
 
 def _side_of(m: TrackMeasurements, t, heading, xy, min_log_lr: float) -> tuple[SideDecision, np.ndarray]:
