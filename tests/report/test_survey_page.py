@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import os
 import re
 import shutil
@@ -174,3 +175,51 @@ def test_the_filters_run_in_headless_chromium(survey, tmp_path):
     _browse(page.as_uri(), tmp_path, f"--screenshot={shot}")
     assert shot.stat().st_size > 50_000  # the page drawn (a blank page is a few kB)
     print(f"screenshot: {shot}")
+
+
+def _hand_made(name: str, hours: float, n: int, start=None):
+    """A recording going north-east at 5 m/s for ``hours`` with ``n`` fixes and one target 2 km east of it, whose
+    range is determined in the second half only (hand-made: no chain)."""
+    from sonartrack.report.survey_positions import RecordingPositions, TargetPath
+
+    t = np.linspace(0.0, hours * 3600.0, n)
+    x, y = 5.0 * t / 1e3 / math.sqrt(2), 5.0 * t / 1e3 / math.sqrt(2)
+    known = np.where(t > t[-1] / 2, 1.0, np.nan)
+    return RecordingPositions(name, "local", start, t, x, y, [TargetPath(1, t, (x + 2.0) * known, y * known, "port",
+                                                                         90.0)])
+
+
+def test_a_long_track_is_thinned_in_pieces_that_join():
+    from sonartrack.report.figures.survey_map import MAX_POINTS, PIECES, survey_map_svg
+
+    rec = _hand_made("long", 10.0, 100_001)
+    svg, items = survey_map_svg([rec], [0.0], 36_000.0)
+    own = [e for e in items if e["kind"] == "ownship"]
+    assert len(own) == PIECES and all(a["t1"] == b["t0"] for a, b in zip(own, own[1:], strict=False))
+    assert own[0]["t0"] == 0.0 and own[-1]["t1"] == 36_000.0
+    target = [e for e in items if e["kind"] == "target"]
+    assert target[0]["t0"] >= 18_000.0 and len(target) == PIECES // 2  # drawn where its position is known
+    vertices = sum(len(re.findall(r"[ML] ", m)) for m in re.findall(r'<path d="([^"]*)"', svg))
+    assert MAX_POINTS < vertices < 3 * (MAX_POINTS + PIECES) and len(svg) < 1_000_000  # thinned, not emptied
+
+
+def test_without_any_start_the_time_axis_is_hours_from_each_start():
+    from datetime import UTC, datetime
+
+    from sonartrack.report.survey_map_section import map_section, time_axis
+
+    recs = [_hand_made("a", 1.0, 50), _hand_made("b", 2.0, 50)]
+    assert time_axis(recs) == ("relative", None, [0.0, 0.0], 7200.0)
+    start = datetime(2024, 1, 1, 12, tzinfo=UTC)
+    recs[1] = _hand_made("b", 2.0, 50, start)
+    mode, origin, offsets, span = time_axis(recs)
+    assert (mode, origin, offsets, span) == ("utc", start, [None, 0.0], 7200.0)
+    assert "a (no UTC start: not filtered by time)" in map_section(recs)
+
+
+def test_a_navigation_that_cannot_be_read_is_said_not_drawn(tmp_path):
+    status = {"name": "leg1", "status": "ok", "navigation": str(tmp_path / "gone.nmea"), "start_utc": None,
+              "duration_s": 10.0}
+    p = recording_positions(tmp_path, status)
+    assert p.time_s.size == 0 and p.note.startswith("leg1: ownship and targets not drawn: navigation file not found")
+    assert recording_positions(tmp_path, {**status, "status": "failed"}) is None

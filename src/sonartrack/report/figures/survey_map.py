@@ -21,6 +21,8 @@ import numpy as np
 
 #: pieces of each track over the survey's whole time span (the time filter's resolution)
 PIECES = 60
+#: the most points drawn of one line (ownship or target track; a longer one is thinned evenly)
+MAX_POINTS = 1500
 #: the shortest line of bearing drawn for a target without a position (km)
 MIN_STROBE_KM = 2.0
 #: the recordings' colours, in turn (matplotlib's tab10)
@@ -97,14 +99,24 @@ def _draw_bearing_only(ax, els: _Elements, k: int, rec, tg, when) -> None:
     els.add(text, "bearing-label", k, *span)
 
 
+def _draw_pieces(ax, els: _Elements, tag: tuple, t_s, east, north, ok, timing: tuple, style: dict) -> None:
+    """A line (``tag``: kind, recording, time map) in its time pieces (``timing``: the recording's offset and the
+    piece length, s), thinned to at most :data:`MAX_POINTS` drawn points (the pieces' ends kept, so they join)."""
+    kind, k, when = tag
+    step = max(1, math.ceil(int(np.count_nonzero(ok)) / MAX_POINTS))
+    for a, b in _runs(t_s + timing[0], ok, timing[1]):
+        i = np.unique(np.r_[np.arange(a, b, step), b])
+        (line,) = ax.plot(east[i], north[i], **style)
+        els.add(line, kind, k, when(t_s[a]), when(t_s[b]))
+
+
 def _draw_recording(ax, els: _Elements, k: int, rec, offset_s, piece_s: float) -> None:
     color = recording_color(k)
     shift = 0.0 if offset_s is None else offset_s
     when = (lambda t: None) if offset_s is None else (lambda t: t + shift)
-    t = rec.time_s + shift
-    for a, b in _runs(t, np.ones(t.size, bool), piece_s):
-        (line,) = ax.plot(rec.east[a:b + 1], rec.north[a:b + 1], color=color, lw=2.4, solid_capstyle="round")
-        els.add(line, "ownship", k, when(rec.time_s[a]), when(rec.time_s[b]))
+    own = {"color": color, "lw": 2.4, "solid_capstyle": "round"}
+    _draw_pieces(ax, els, ("ownship", k, when), rec.time_s, rec.east, rec.north, np.ones(rec.time_s.size, bool),
+                 (shift, piece_s), own)
     if rec.time_s.size:
         span = (when(rec.time_s[0]), when(rec.time_s[-1]))
         (start,) = ax.plot(rec.east[:1], rec.north[:1], marker="^", ms=8, color=color, mec="k", mew=0.6, ls="none")
@@ -117,10 +129,8 @@ def _draw_recording(ax, els: _Elements, k: int, rec, offset_s, piece_s: float) -
         if not ok.any():
             _draw_bearing_only(ax, els, k, rec, tg, when)
             continue
-        tt = tg.time_s + shift
-        for a, b in _runs(tt, ok, piece_s):
-            (line,) = ax.plot(tg.east[a:b + 1], tg.north[a:b + 1], color=color, lw=1.0, ls="--")
-            els.add(line, "target", k, when(tg.time_s[a]), when(tg.time_s[b]))
+        _draw_pieces(ax, els, ("target", k, when), tg.time_s, tg.east, tg.north, ok, (shift, piece_s),
+                     {"color": color, "lw": 1.0, "ls": "--"})
         i = np.flatnonzero(ok)
         span = (when(tg.time_s[i[0]]), when(tg.time_s[i[-1]]))
         (end,) = ax.plot(tg.east[i[-1]:i[-1] + 1], tg.north[i[-1]:i[-1] + 1], marker="o", ms=6, color=color,
