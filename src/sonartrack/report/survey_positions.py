@@ -59,6 +59,13 @@ class RecordingPositions:
     note: str = ""
 
 
+def _over(t_s: np.ndarray, span_s: float) -> tuple[int, int]:
+    """The slice of the navigation's samples over the recording [0, span_s] and the one on each side of it, so that
+    the drawn track spans the recording whole."""
+    inside = np.flatnonzero((t_s >= 0) & (t_s <= span_s))
+    return (max(inside[0] - 1, 0), min(inside[-1] + 2, t_s.size)) if inside.size else (0, 0)
+
+
 def _utc_track(path: Path, kind: str):
     """The UTC log as the chain read it: its track with the jumping fixes dropped (module doc)."""
     from sonartrack.io.nav_checks import drop_position_jumps
@@ -100,9 +107,7 @@ def _latlon(folder: Path, name: str, nav: Path, kind: str, start: datetime, span
     track = _utc_track(nav, kind)
     proj = LocalProjection(float(track.lat_deg[0]), float(track.lon_deg[0]))
     t = track.time_unix_s - start.timestamp()
-    # the fixes over the recording, and the one on each side of it, so that the drawn track spans it whole
-    inside = np.flatnonzero((t >= 0) & (t <= span_s))
-    lo, hi = (max(inside[0] - 1, 0), min(inside[-1] + 2, t.size)) if inside.size else (0, 0)
+    lo, hi = _over(t, span_s)
 
     def to_latlon(x_m, y_m):
         lat, lon = proj.latlon(x_m, y_m)
@@ -112,11 +117,12 @@ def _latlon(folder: Path, name: str, nav: Path, kind: str, start: datetime, span
                               _targets(folder, to_latlon))
 
 
-def _local(folder: Path, name: str, nav: Path, start: datetime | None) -> RecordingPositions:
+def _local(folder: Path, name: str, nav: Path, start: datetime | None, span_s: float) -> RecordingPositions:
     from sonartrack.io.navigation import read_navigation
 
     n = read_navigation(nav)
-    return RecordingPositions(name, "local", start, n.time_s, n.x_m / 1e3, n.y_m / 1e3,
+    lo, hi = _over(n.time_s, span_s)
+    return RecordingPositions(name, "local", start, n.time_s[lo:hi], n.x_m[lo:hi] / 1e3, n.y_m[lo:hi] / 1e3,
                               _targets(folder, lambda x, y: (x / 1e3, y / 1e3)),
                               note=f"{name}: navigation {nav.name} is in a local frame (x east, y north from its own "
                                    "origin), not in latitude and longitude: drawn in km on the local panel")
@@ -147,9 +153,10 @@ def recording_positions(folder, status: dict) -> RecordingPositions | None:
     nav = Path(str(status.get("navigation", "")))
     try:
         kind = navigation_kind(nav)
+        span_s = float(status.get("duration_s", 0.0))
         if kind != "table" and start is not None:
-            return _latlon(folder, name, nav, kind, start, float(status.get("duration_s", 0.0)))
-        return _local(folder, name, nav, start)
+            return _latlon(folder, name, nav, kind, start, span_s)
+        return _local(folder, name, nav, start, span_s)
     except (InputError, OSError, ValueError) as e:
         why = " ".join(str(e).split())
         empty = np.zeros(0)
