@@ -142,17 +142,21 @@ class ContactTracker:
     merge_probability : float or None
         Gate probability of the track-to-track test (tracking/duplicates.py) by which a track that follows the
         same target as a confirmed one is deleted after each scan; None: no merging.
+    turns : TurnModes or None
+        Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
+        None: the settings' CV modes only.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
-                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None):
+                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
+                 turns=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
 
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
-        self.tracker = position_tracker(settings)
+        self.tracker = position_tracker(settings, turns=turns)
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
@@ -283,7 +287,7 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     settings : ActiveSettings
         The chain (sound speed, contact errors, gate, tracker).
     tracker : PositionTrackerSettings, optional
-        Another tracker than ``settings``'s (e.g. one IPDA mode).
+        Another tracker than ``settings``'s (e.g. one IPDA mode), without the settings' turn modes.
     rate_sd_mps : float
         Standard deviation of a measured range rate (m/s).
     beam_step_deg : float, optional
@@ -301,7 +305,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
-                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability)
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability,
+                         turns=settings.turn_modes() if tracker is None else None)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -401,7 +406,7 @@ class _Chain:
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
-                                      s.side_turn_deg, s.merge_probability)
+                                      s.side_turn_deg, s.merge_probability, turns=s.turn_modes())
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser
