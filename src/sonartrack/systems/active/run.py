@@ -404,8 +404,9 @@ class _Chain:
         s, tm = self.settings, self.timer
         require(samples.shape[0] == s.elements, f"ping {number} has {samples.shape[0]} channels, the array "
                                                 f"{s.elements}: give the pings of one array")
+        direct_s = float(np.hypot(*(self.geometry.tx_at(time_s) - self.geometry.rx_at(time_s)))) / s.sound_speed_mps
         cells = tm.run("front end", ping_front_end, samples, float(self.table.fs_hz[i]), self.table.waveform(i),
-                       self.array, self.front_end, time_s=time_s, ping=number)
+                       self.array, self.front_end, time_s=time_s, ping=number, direct_arrival_s=direct_s)
         if self.axes is None:
             self._start(cells)
         single = tm.run("single-ping detection", detect_ping, cells, self.threshold)
