@@ -23,7 +23,7 @@ assumptions the chain was tuned on. The world:
   patches are random scatterers); a patch of area dA on the bistatic ellipse has mean power
   SL - TL(r_T) - TL(r_R) + S + 10 log10(dA) (S the scattering strength, dB re 1 m^2 / m^2), and amplitude
   sqrt(texture) x complex Gaussian (Rayleigh speckle, fresh each ping). The texture is 1 (Rayleigh) or Gamma(nu,
-  1/nu) per square of ``patch_m`` in the world (K-distributed with shape nu: Ward, Tough & Watts, Sea Clutter,
+  1/nu) per square of ``patch_m`` in the world (``patch_m`` <= 0: per patch, i.e. per scatterer) (K-distributed with shape nu: Ward, Tough & Watts, Sea Clutter,
   ch. 4; Watts 1987), drawn fresh each ping or fixed in the world (``texture_fixed``). Patches are still: their
   Doppler is the platforms'. Level falls with range as the sonar equation says (~ r^-3).
   Element delays of a patch are the plane-wave ones, T_n = T - s_n cos(theta) / c, the envelope delay rounded to a
@@ -265,6 +265,8 @@ def texture(w: World, xy: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Gamma(nu, 1/nu) per ``patch_m`` square of the world (1 for Rayleigh); fixed in the world or fresh per ping."""
     if w.texture_shape is None:
         return np.ones(len(xy))
+    if w.patch_m <= 0:  # every scatterer its own texture: a few per resolution cell, a heavy tail uncorrelated in range
+        return rng.gamma(w.texture_shape, 1.0 / w.texture_shape, len(xy))
     cell = np.floor(xy / w.patch_m).astype(np.int64)
     uniq, inv = np.unique(cell, axis=0, return_inverse=True)
     if w.texture_fixed:

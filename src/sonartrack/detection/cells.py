@@ -71,6 +71,10 @@ class FrontEndSettings(Settings):
              "from the navigation, its end one pulse later (module doc; not set: only blank_s)", unit="s", ge=0, le=10)
     pfa: float = setting(1e-5, "false-alarm probability per cell of the single-ping threshold", unit="1",
                          gt=0, lt=1)
+    heavy_tail: bool = setting(True, "each ping's OS-normalised statistic is mapped onto its law in exponential noise "
+                                     "through the K distribution whose shape fits its tail, per Doppler cell "
+                                     "(detection/normalise.py): thresholds set for exponential noise then keep their "
+                                     "false-alarm rate in spiky reverberation (OS CFAR only)", unit="")
     cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
 
 
@@ -91,7 +95,8 @@ class PingCells:
     from transmission to the array centre (s); ``doppler_hz`` (J,) Doppler cells (Hz; [0.] for an LFM) and
     ``range_rate_mps`` (J,) the bistatic range rates they stand for (m/s; NaN for an LFM, which measures none);
     ``time_s`` the transmit time (s); ``ping`` the ping's number; ``level`` (B, D, J) float32 the CFAR's noise
-    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s)."""
+    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s); ``k_shape`` (J,) the K
+    shape fitted to each Doppler cell's statistic before it was mapped onto the exponential law (inf: none)."""
 
     ping: int
     time_s: float
@@ -102,6 +107,7 @@ class PingCells:
     statistic: np.ndarray
     doppler_measured: bool
     level: np.ndarray | None = None
+    k_shape: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -255,12 +261,43 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     mu = noise_estimate(y, settings.cfar, cfar_stride(waveform, fs_hz, delay))
     stat = np.zeros((power.shape[0], int(keep.sum()), power.shape[2]), np.float32)
     level = np.zeros_like(stat)
-    stat[:, live] = np.moveaxis(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), -1, 1)
-    level[:, live] = np.moveaxis(mu, -1, 1)
+    s_live, shapes = heavy_tail_statistic(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), settings)
+    stat[:, live] = np.moveaxis(s_live, -1, 1)
+    level[:, live] = np.moveaxis(np.divide(y, s_live, out=mu.copy(), where=s_live > 0), -1, 1)  # s level = power
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
             if waveform.measures_doppler else np.full(doppler.shape, np.nan))
     return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate, stat,
-                     waveform.measures_doppler, level)
+                     waveform.measures_doppler, level, shapes)
+
+
+def heavy_tail_statistic(stat: np.ndarray, settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray]:
+    """The OS-normalised statistic (B, J, D) mapped per Doppler cell through the K law of its fitted shape
+    (detection/normalise.py :func:`k_shape_from_exceedance`, :func:`k_to_exponential`), and the shapes (J,) (inf:
+    exponential, left as it is; all inf when ``heavy_tail`` is off or the CFAR is CA).
+
+    Parameters
+    ----------
+    stat : ndarray (B, J, D)
+        s = y / mu of the searched cells.
+    settings : FrontEndSettings
+        ``heavy_tail`` and the CFAR (N, k).
+
+    Returns
+    -------
+    tuple
+        (mapped statistic (B, J, D) float32, K shape per Doppler cell (J,)).
+    """
+    from sonartrack.detection.normalise import k_shape_from_exceedance, k_to_exponential
+
+    shapes = np.full(stat.shape[1], np.inf)
+    if not settings.heavy_tail or settings.cfar.method != "os":
+        return stat, shapes
+    n, k = settings.cfar.n_reference, settings.cfar.rank
+    out = np.array(stat, dtype=np.float32, copy=True)
+    for j in range(stat.shape[1]):
+        shapes[j] = k_shape_from_exceedance(stat[:, j], n, k)
+        out[:, j] = k_to_exponential(stat[:, j], shapes[j], n, k)
+    return out, shapes
 
 
 def blast_gate_s(settings: FrontEndSettings, waveform: Waveform, direct_arrival_s: float | None) -> float:
