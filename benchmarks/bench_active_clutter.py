@@ -9,10 +9,10 @@ Poisson 95 % interval (Garwood 1936). Acquisition: a target of 15 dB echo-to-bac
 appears at a ping (``start_s``) within the window; the delay is the number of pings from its first echo to the first
 ping at which a confirmed track lies within 500 m of it (1 = confirmed on its first ping).
 
-``--settings old`` runs the chain as it was before issue 34 (the settings of systems/active/settings.py at that time:
-no blanking by the navigation, no clutter map, confirmation at existence 0.99); ``new`` the defaults. Run:
+The chain measured is the one on the path, with its default settings; "before" is measured by putting the code
+before issue 34 first on the path (``git archive 9db87d5 src | tar -x -C /tmp/base``). Run:
 
-    PYTHONPATH=src:tests python benchmarks/bench_active_clutter.py [--hours 1] [--settings both] [--models all]
+    PYTHONPATH=src python benchmarks/bench_active_clutter.py [--hours 1] [--label new] [--models all]
 """
 
 from __future__ import annotations
@@ -30,13 +30,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from worlds.active_pings import Target, World, nav_rows, ping, ping_table_rows  # noqa: E402
 
 #: the clutter models: name -> World fields (reverberation only)
+SPIKY = {"patch_m": 0.0, "sectors": 40}  # a texture per scatterer, a few scatterers per beam-delay cell
 MODELS = {
     "rayleigh": {},
-    "K nu=2": {"texture_shape": 2.0},
-    "K nu=1": {"texture_shape": 1.0},
-    "K nu=0.5": {"texture_shape": 0.5},
+    "K nu=2": {"texture_shape": 2.0, **SPIKY},
+    "K nu=1": {"texture_shape": 1.0, **SPIKY},
+    "K nu=0.5": {"texture_shape": 0.5, **SPIKY},
+    "K nu=0.5 patches": {"texture_shape": 0.5},
     "rayleigh+blast": {"blast": True},
-    "K nu=1+blast+points": {"texture_shape": 1.0, "blast": True,
+    "K nu=1+blast+points": {"texture_shape": 1.0, **SPIKY, "blast": True,
                             "clutter_xy": ((2500.0, 4000.0), (-3000.0, 2000.0), (1500.0, -4000.0), (-2000.0, 6000.0),
                                            (3500.0, 500.0), (-4000.0, -1500.0))},
 }
@@ -107,28 +109,11 @@ def acquisition_delay(result, truth: list[dict], gate_m: float = 500.0) -> int |
     return None
 
 
-def chain_settings(which: str):
-    """The chain's settings: ``new`` the defaults, ``old`` those before issue 34 (module doc)."""
+def chain_settings():
+    """The chain's default settings (the code measured is the one on the path: module doc)."""
     from sonartrack.systems.active.settings import ActiveSettings
 
-    s = ActiveSettings(spacing_m=0.5)
-    if which == "old":
-        s = old_settings(s)
-    return s
-
-
-def old_settings(s):
-    """The settings of the chain before issue 34 where they changed (module doc)."""
-    upd: dict = {}
-    fields = type(s).model_fields
-    if "blast_guard_s" in fields:
-        upd["blast_guard_s"] = None
-    if "clutter_map" in fields:
-        upd["clutter_map"] = False
-    tr = s.tracker.model_copy(update={"confirm_threshold": 0.99, **({"false_track_rate_per_h": None} if
-                                      "false_track_rate_per_h" in type(s.tracker).model_fields else {})})
-    upd["tracker"] = tr
-    return s.model_copy(update=upd)
+    return ActiveSettings(spacing_m=0.5)
 
 
 def measure_false(models, hours: float, which: str, seed0: int = 3400) -> dict:
@@ -136,7 +121,7 @@ def measure_false(models, hours: float, which: str, seed0: int = 3400) -> dict:
     for j, name in enumerate(models):
         w = base_world(hours, seed0 + j, **MODELS[name])
         t0 = time.perf_counter()
-        res, _ = run_world(w, chain_settings(which))
+        res, _ = run_world(w, chain_settings())
         k = confirmed_tracks(res)
         h = w.pings * w.interval_s / 3600.0
         lo, hi = poisson_interval(k)
@@ -155,7 +140,7 @@ def measure_acquisition(which: str, runs: int, swerling: bool, seed0: int = 3500
         tgt = Target(rad * np.sin(ang), rad * np.cos(ang), *(2.0 * rng.standard_normal(2)), ebr_db=15.0,
                      start_s=90.0, swerling=swerling)
         w = replace(base_world(0.1, seed0 + r, texture_shape=1.0), pings=14, targets=(tgt,))
-        res, truth = run_world(w, chain_settings(which))
+        res, truth = run_world(w, chain_settings())
         delays.append(acquisition_delay(res, truth))
     return delays
 
@@ -163,12 +148,12 @@ def measure_acquisition(which: str, runs: int, swerling: bool, seed0: int = 3500
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--hours", type=float, default=1.0)
-    ap.add_argument("--settings", default="both", choices=["old", "new", "both"])
+    ap.add_argument("--label", default="new")
     ap.add_argument("--models", default="all")
     ap.add_argument("--acq-runs", type=int, default=10)
     a = ap.parse_args()
     models = list(MODELS) if a.models == "all" else a.models.split(",")
-    for which in (["old", "new"] if a.settings == "both" else [a.settings]):
+    for which in [a.label]:
         print(f"false confirmed tracks, reverberation only ({which} chain):")
         measure_false(models, a.hours, which)
         for sw in (False, True):

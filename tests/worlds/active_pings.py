@@ -23,9 +23,9 @@ assumptions the chain was tuned on. The world:
   patches are random scatterers); a patch of area dA on the bistatic ellipse has mean power
   SL - TL(r_T) - TL(r_R) + S + 10 log10(dA) (S the scattering strength, dB re 1 m^2 / m^2), and amplitude
   sqrt(texture) x complex Gaussian (Rayleigh speckle, fresh each ping). The texture is 1 (Rayleigh) or Gamma(nu,
-  1/nu) per square of ``patch_m`` in the world (``patch_m`` <= 0: per patch, i.e. per scatterer) (K-distributed with shape nu: Ward, Tough & Watts, Sea Clutter,
-  ch. 4; Watts 1987), drawn fresh each ping or fixed in the world (``texture_fixed``). Patches are still: their
-  Doppler is the platforms'. Level falls with range as the sonar equation says (~ r^-3).
+  1/nu) per square of ``patch_m`` in the world (``patch_m`` <= 0: per patch, i.e. per scatterer) (K-distributed
+  with shape nu: Ward, Tough & Watts, Sea Clutter, ch. 4; Watts 1987), drawn fresh each ping or fixed in the world
+  (``texture_fixed``). Patches are still: their Doppler is the platforms'. Level falls with range (~ r^-3).
   Element delays of a patch are the plane-wave ones, T_n = T - s_n cos(theta) / c, the envelope delay rounded to a
   sample; echoes are grouped by Doppler on a grid ``doppler_step_hz`` apart (nearest node).
 * Persistent clutter points: fixed in the world, target strength ``clutter_ts_db``, echoing every ping.
@@ -133,7 +133,7 @@ def ship_heading(w: World, t) -> np.ndarray:
 
 
 def ship_xy(w: World, t) -> np.ndarray:
-    """Ship position (m) at t: the heading integrated (0.05 s trapezoid from the earliest time asked, origin at t = 0)."""
+    """Ship position (m) at t: the heading integrated (0.05 s trapezoid; origin at t = 0)."""
     t = np.atleast_1d(np.asarray(t, float))
     t0 = min(float(t.min()), 0.0)
     grid = np.arange(t0, max(float(t.max()), 0.0) + 0.1, 0.05)

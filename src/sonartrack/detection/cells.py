@@ -95,8 +95,8 @@ class PingCells:
     from transmission to the array centre (s); ``doppler_hz`` (J,) Doppler cells (Hz; [0.] for an LFM) and
     ``range_rate_mps`` (J,) the bistatic range rates they stand for (m/s; NaN for an LFM, which measures none);
     ``time_s`` the transmit time (s); ``ping`` the ping's number; ``level`` (B, D, J) float32 the CFAR's noise
-    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s); ``k_shape`` (J,) the K
-    shape fitted to each Doppler cell's statistic before it was mapped onto the exponential law (inf: none)."""
+    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s); ``k_shape`` (J,) the
+    K shape fitted to each Doppler cell's statistic before it was mapped onto the exponential law (inf: none)."""
 
     ping: int
     time_s: float

@@ -341,8 +341,8 @@ def _k_law(nu: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def k_os_pfa(alpha, nu: float, n: int, k: int):
-    """Pfa of OS-CFAR (s = y / (x_(k) / c_k) >= alpha) when the cell y and its N references are independent K-distributed
-    intensities of shape nu (a gamma(nu) texture times an exponential speckle, independent cell to cell).
+    """Pfa of OS-CFAR (s = y / (x_(k) / c_k) >= alpha) when the cell y and its N references are independent
+    K-distributed intensities of shape nu (a gamma(nu) texture times an exponential speckle, independent cell to cell).
 
     The K intensity of unit mean has (Jakeman & Pusey 1976; Ward, Tough & Watts, Sea Clutter, eq. 4.11; Watts 1987)
 
