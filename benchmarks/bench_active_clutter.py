@@ -40,7 +40,7 @@ MODELS = {
     "rayleigh+blast": {"blast": True},
     "K nu=1+blast+points": {"texture_shape": 1.0, **SPIKY, "blast": True,
                             "clutter_xy": ((2500.0, 4000.0), (-3000.0, 2000.0), (1500.0, -4000.0), (-2000.0, 6000.0),
-                                           (3500.0, 500.0), (-4000.0, -1500.0))},
+                                           (3500.0, 500.0), (-4000.0, -1500.0)), "clutter_ts_db": 35.0},
 }
 
 

@@ -95,8 +95,7 @@ class PingCells:
     from transmission to the array centre (s); ``doppler_hz`` (J,) Doppler cells (Hz; [0.] for an LFM) and
     ``range_rate_mps`` (J,) the bistatic range rates they stand for (m/s; NaN for an LFM, which measures none);
     ``time_s`` the transmit time (s); ``ping`` the ping's number; ``level`` (B, D, J) float32 the CFAR's noise
-    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s); ``k_shape`` (J,) the
-    K shape fitted to each Doppler cell's statistic before it was mapped onto the exponential law (inf: none)."""
+    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s)."""
 
     ping: int
     time_s: float
@@ -107,7 +106,6 @@ class PingCells:
     statistic: np.ndarray
     doppler_measured: bool
     level: np.ndarray | None = None
-    k_shape: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -261,13 +259,13 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     mu = noise_estimate(y, settings.cfar, cfar_stride(waveform, fs_hz, delay))
     stat = np.zeros((power.shape[0], int(keep.sum()), power.shape[2]), np.float32)
     level = np.zeros_like(stat)
-    s_live, shapes = heavy_tail_statistic(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), settings)
+    s_live, _ = heavy_tail_statistic(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), settings)
     stat[:, live] = np.moveaxis(s_live, -1, 1)
     level[:, live] = np.moveaxis(np.divide(y, s_live, out=mu.copy(), where=s_live > 0), -1, 1)  # s level = power
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
             if waveform.measures_doppler else np.full(doppler.shape, np.nan))
     return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate, stat,
-                     waveform.measures_doppler, level, shapes)
+                     waveform.measures_doppler, level)
 
 
 def heavy_tail_statistic(stat: np.ndarray, settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray]:

@@ -145,7 +145,8 @@ class ContactTracker:
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
-                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None):
+                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
+                 clutter_map=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -156,6 +157,7 @@ class ContactTracker:
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
+        self.clutter_map = clutter_map
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
@@ -193,6 +195,19 @@ class ContactTracker:
                 keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
         return keep
 
+    def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
+        ping goes only to the confirmed tracks whose gate holds it (True: not withheld)."""
+        keep = np.ones(len(contacts), bool)
+        if self.clutter_map is None:
+            return keep
+        clutter = self.clutter_map.update(contacts.xy, contacts.R)
+        if clutter.any():
+            x, P, _ = self._predicted_confirmed(t_s)
+            held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
+            keep &= ~clutter | held
+        return keep
+
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
@@ -207,9 +222,9 @@ class ContactTracker:
         Returns
         -------
         numpy.ndarray
-            (m,) bool verdict per contact.
+            (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts)
+        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
@@ -299,11 +314,31 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
-                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability)
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, clutter_map_of(settings))
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
     return contacts, keep, trk.result()
+
+
+def clutter_map_of(settings: ActiveSettings):
+    """The chain's clutter map (detection/clutter_map.py), or None when ``clutter_map_pings`` is not set.
+
+    Parameters
+    ----------
+    settings : ActiveSettings
+        ``clutter_map_pings`` and ``clutter_map_hits``.
+
+    Returns
+    -------
+    ClutterMap or None
+        A fresh map.
+    """
+    from sonartrack.detection.clutter_map import ClutterMap
+
+    if settings.clutter_map_pings is None:
+        return None
+    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings))
 
 
 def geometry_of(nav) -> ActiveGeometry:
@@ -396,7 +431,7 @@ class _Chain:
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
-                                      s.side_turn_deg, s.merge_probability)
+                                      s.side_turn_deg, s.merge_probability, clutter_map_of(s))
 
     def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
         from sonartrack.detection.cells import detect_ping, ping_front_end
