@@ -28,7 +28,8 @@ def result(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("clutter-world")
     write_world(WORLD, folder)
-    return run_active_files(folder, folder / "nav.csv", ActiveSettings(spacing_m=WORLD.spacing_m))
+    settings = ActiveSettings(spacing_m=WORLD.spacing_m, clutter_map_pings=8, clutter_map_hits=3)
+    return run_active_files(folder, folder / "nav.csv", settings)
 
 
 def test_the_world_has_a_loud_blast():
