@@ -14,7 +14,9 @@ temporaries and reading only the G gated pairs (never an (n, r, m) array). The g
 products K_g H P-_t of 2-D measurements are computed in the loop too, as NumPy's matmul computes them
 on this machine (its BLAS accumulates c = a_0 b_0, then c = fma(a_1, b_1, c)); :func:`gains_match_numpy`
 checks that once per process on random matrices, and where it does not hold (another BLAS, no FMA)
-the wrapper takes NumPy's products instead, as before.
+the wrapper takes NumPy's products instead, as before. With scalar measurements (k = 1, the bearing
+tracker) every entry of K_g and K_g H P-_t is a single product, which any matmul gives exactly, so those are
+computed in the loop too (:func:`_pair_sums_k1`).
 
 :func:`dense_row_sums` gives the PDA weights' sums over measurements, sum_m p_rm / rho_m, from the
 gated pairs alone with exactly NumPy's result for the dense (n, r, m) row sum (its pairwise summation:
