@@ -19,6 +19,8 @@ Track strength (eq. 9): z_hat(k) = 0.7 z_hat(k-1) + 0.3 max_j z(k, j) over the t
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 #: eq. 9 smoothing and initial strength
@@ -45,10 +47,16 @@ def detection_probability_above(pd0, strength, sigma_a, threshold):
     ndarray
         Thresholded P_D, broadcast shape of the inputs.
     """
+    z = (np.asarray(strength, dtype=float) - threshold) / np.asarray(sigma_a, dtype=float)
+    return np.asarray(pd0, dtype=float) * _ndtr()(z)
+
+
+@functools.cache
+def _ndtr():
+    """scipy.special.ndtr, imported on first use (``import sonartrack`` stays fast), then looked up once."""
     from scipy.special import ndtr
 
-    z = (np.asarray(strength, dtype=float) - threshold) / np.asarray(sigma_a, dtype=float)
-    return np.asarray(pd0, dtype=float) * ndtr(z)
+    return ndtr
 
 
 def amplitude_log_ratio(amplitudes, strength, sigma_a, alpha, threshold) -> np.ndarray:

@@ -25,6 +25,7 @@ position), with the NumPy evaluation's results bit for bit; only the gated pairs
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -227,6 +228,14 @@ def position_likelihoods(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: f
     return Likelihoods(pair_log_ratio, gated, float(pd), 1.0 - pd * pg, ti, mi, nu, S_inv)
 
 
+@functools.cache
+def _erf():
+    """scipy.special.erf, imported on first use (``import sonartrack`` stays fast) and then looked up once."""
+    from scipy.special import erf
+
+    return erf
+
+
 def window_likelihoods(x_pred, P_pred, z, sigma, *, gate_width: float, pd_hit, pd_miss, clutter_density,
                        log_ratio_extra=None) -> Likelihoods:
     """Likelihood ratios of scalar (bearing) measurements with a window gate |nu| <= V / 2 (paper P0).
@@ -259,13 +268,13 @@ def window_likelihoods(x_pred, P_pred, z, sigma, *, gate_width: float, pd_hit, p
     Likelihoods
         Gated pairs and every pair's log ratio (``dense_log_ratio`` is filled).
     """
-    from scipy.special import erf
-
+    erf = _erf()
     z = np.asarray(z, float).reshape(-1)
     S = P_pred[:, :, 0, 0] + np.asarray(sigma, float)[:, None] ** 2  # (n, r): the same for every peak
     nu = z[None, None, :] - x_pred[:, :, None, 0]  # (n, r, m)
     half = gate_width / 2
-    gated = (np.abs(nu) <= half).any(axis=1)
+    inside = np.abs(nu) <= half
+    gated = inside[:, 0] if inside.shape[1] == 1 else inside.any(axis=1)  # one mode: the reduction is that mode
     S_inv = 1.0 / S
     log_ratio = gaussian_log_ratio(np.log(S)[..., None], nu * S_inv[..., None] * nu, 1, np.log(clutter_density))
     if log_ratio_extra is not None:

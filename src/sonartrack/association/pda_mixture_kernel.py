@@ -14,7 +14,9 @@ temporaries and reading only the G gated pairs (never an (n, r, m) array). The g
 products K_g H P-_t of 2-D measurements are computed in the loop too, as NumPy's matmul computes them
 on this machine (its BLAS accumulates c = a_0 b_0, then c = fma(a_1, b_1, c)); :func:`gains_match_numpy`
 checks that once per process on random matrices, and where it does not hold (another BLAS, no FMA)
-the wrapper takes NumPy's products instead, as before.
+the wrapper takes NumPy's products instead, as before. With scalar measurements (k = 1, the bearing
+tracker) every entry of K_g and K_g H P-_t is a single product, which any matmul gives exactly, so those are
+computed in the loop too (:func:`_pair_sums_k1`).
 
 :func:`dense_row_sums` gives the PDA weights' sums over measurements, sum_m p_rm / rho_m, from the
 gated pairs alone with exactly NumPy's result for the dense (n, r, m) row sum (its pairwise summation:
@@ -153,6 +155,31 @@ def _pair_sums_cv2(P_pred, beta_pair, ti, S_inv, nu):  # pragma: no cover - comp
                 for j in range(4):
                     khp = _dot2(ki0, ki1, P_t[j, 0], P_t[j, 1])
                     aP[i, j] += ((P_t[i, j] - khp) + dxi * K[j][2]) * b
+    return acc_x, acc_P
+
+
+@nb.njit(cache=True)
+def _pair_sums_k1(P_pred, beta_pair, ti, S_inv, nu):  # pragma: no cover - compiled
+    """:func:`_pair_sums` for scalar measurements (the bearing tracker) with K_g = P-_t H^T s_g and K_g H P-_t
+    computed in the loop: with one measurement dimension each of their entries is a single product, which is what
+    NumPy's matmul gives, so the sums are the general path's bit for bit (without its gathers and temporaries)."""
+    n, r, d = P_pred.shape[0], P_pred.shape[1], P_pred.shape[2]
+    acc_x = np.zeros((n, r, d))
+    acc_P = np.zeros((n, r, d, d))
+    gain, dx = np.empty(d), np.empty(d)
+    for g in range(len(ti)):
+        t = ti[g]
+        for q in range(r):
+            b, s_inv, v = beta_pair[g, q], S_inv[g, q, 0, 0], nu[g, q, 0]
+            for i in range(d):
+                gain[i] = P_pred[t, q, i, 0] * s_inv
+                s = 0.0  # as _pair_sums: the reference's einsum sums into a zeroed output
+                s += gain[i] * v
+                dx[i] = s
+                acc_x[t, q, i] += b * s
+            for i in range(d):
+                for j in range(d):
+                    acc_P[t, q, i, j] += ((P_pred[t, q, i, j] - gain[i] * P_pred[t, q, j, 0]) + dx[i] * dx[j]) * b
     return acc_x, acc_P
 
 
@@ -363,6 +390,8 @@ def pda_mixture_update_pairs(x_pred, P_pred, lik: Likelihoods, beta0, beta_pair)
     beta0, beta_pair = np.ascontiguousarray(beta0, dtype=float), np.ascontiguousarray(beta_pair, dtype=float)
     if k == 2 and P_pred.shape[-1] == 4 and gains_match_numpy():
         acc_x, acc_P = _pair_sums_cv2(P_pred, beta_pair, ti, np.ascontiguousarray(lik.S_inv), lik.nu)
+    elif k == 1:
+        acc_x, acc_P = _pair_sums_k1(P_pred, beta_pair, ti, np.ascontiguousarray(lik.S_inv), lik.nu)
     else:
         PHt = P_pred[ti][..., :, :k]  # P H^T for H = [I 0], per pair (G, r, d, k)
         K = PHt @ lik.S_inv

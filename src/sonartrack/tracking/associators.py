@@ -65,9 +65,15 @@ class JPDA:
             beta0 (n, 1), beta (n, 1, m), and no log Lambda (None).
         """
         n, r, _ = lik.shape
-        log_pd = np.broadcast_to(np.log(lik.pd), (n,))
-        ll = np.where(lik.gated, log_pd[:, None] + lik.log_ratio[:, 0], -np.inf)
-        log_miss = np.log(np.clip(np.broadcast_to(lik.miss, (n, r))[:, 0], 1e-12, 1.0))
+        # the same values as broadcasting P_D and the miss weight to (n,) and np.clip, without their call overhead
+        # (a few tracks a scan: the per-call cost is most of the time here)
+        log_pd = np.log(np.asarray(lik.pd, float))
+        ll = np.where(lik.gated, (log_pd[:, None] if log_pd.ndim else log_pd) + lik.log_ratio[:, 0], -np.inf)
+        miss = np.asarray(lik.miss, float)
+        # one value, or (n, r) (the measurement parts' shapes), or anything that broadcasts to (n, r): mode 0
+        miss = np.full(n, miss) if miss.ndim == 0 else miss[:, 0] if miss.shape == (n, r) else \
+            np.broadcast_to(miss, (n, r))[:, 0]
+        log_miss = np.log(np.minimum(np.maximum(miss, 1e-12), 1.0))
         beta = np.exp(jpda_log_weights(ll, log_miss))
         return AssociationWeights(beta[:, :1], beta[:, None, 1:], None)
 

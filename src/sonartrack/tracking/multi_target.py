@@ -35,6 +35,7 @@ tests/tracking/test_load_numerics.py; timing in benchmarks/bench_tracker_load.py
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -194,9 +195,15 @@ class MultiTargetTracker:
             amplitude = np.asarray(amplitude, float).reshape(-1)
             if len(amplitude) != len(z):
                 raise InputError(f"scan at t = {time_s} s has {len(z)} measurements but {len(amplitude)} amplitudes")
-        finite = np.isfinite(z).all() and (R is None or np.isfinite(R).all())
-        if not finite or (amplitude is not None and not np.isfinite(amplitude).all()):
+        finite = _all_finite(z) and (R is None or _all_finite(R))
+        if not finite or (amplitude is not None and not _all_finite(amplitude)):
             raise InputError(f"scan at t = {time_s} s has NaN or infinite measurements: remove or fix those rows")
         if self._time is not None and not time_s > self._time:
             raise InputError(f"scan times must increase (got {time_s} s after {self._time} s)")
         return Scan(float(time_s), z, R, amplitude)
+
+
+def _all_finite(a: np.ndarray) -> bool:
+    """Whether every entry of ``a`` is finite. A NaN or infinite entry makes the sum NaN or infinite, so a finite
+    sum (one reduction) settles it; only a non-finite one (such an entry, or an overflow) is checked entry by entry."""
+    return math.isfinite(a.sum()) or bool(np.isfinite(a).all())
