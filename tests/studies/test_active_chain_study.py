@@ -4,7 +4,11 @@ contract."""
 import numpy as np
 import pytest
 
+from sonartrack.core.random import trial_rng
+from sonartrack.sim.active_scene import ActiveSceneSettings
 from sonartrack.studies import active_chain as ac
+from sonartrack.studies.active_chain_claims import _held_detectable, _wilson
+from sonartrack.studies.active_chain_family import FamilySettings, draw_scene, is_clutter, target_names
 from sonartrack.systems.active.contacts import ActiveGeometry
 from sonartrack.systems.active.run import ActiveTracks
 from sonartrack.tracking.run import PositionTracks
@@ -51,7 +55,11 @@ def test_snr50_recovers_a_logistic_curve():
 
 @pytest.fixture(scope="module")
 def quick_trial():
-    config = ac.Config.quick()
+    """The quick scene with the family pinned to its base (LFM, 16 x 0.5 m, 1500 Hz, no added clutter): the chain's
+    behaviour there is known; the family's draws are tested on their own below."""
+    base = FamilySettings(pulses=["lfm"], reverb_models=["k"], elements=[16], spacings_m=[0.5], carriers_hz=[1500.0],
+                          bandwidths_hz=[100.0], tows_m=[[300.0, 450.0]], reverb_levels_db=[0.0], clutter_points=[0])
+    config = ac.Config.quick().model_copy(update={"family": base})
     return config, ac.run_trial(config, np.random.default_rng(3))
 
 
@@ -64,7 +72,7 @@ def test_quick_trial_fills_the_contract(quick_trial):
     summary = ac.summarize(stacked, config)
     claims = ac.claims(summary, config)
     assert [c.id for c in claims] == ["mftd-earlier-longer", "imm-beats-ipda", "side-resolved", "false-tracks",
-                                      "rmse-bound"]
+                                      "rmse-bound", "held-detectable"]
     # the strong target is held by the chain for most of the scene, within a few hundred metres
     assert summary["hold"]["mftd_imm"]["strong"][0] > 0.5
     assert summary["rmse_after_m"]["mftd_imm"]["strong"] < 500.0
@@ -80,6 +88,10 @@ def test_quick_trial_fills_the_contract(quick_trial):
     assert np.all(np.diff(trial["hit_mftd_lv"].sum(axis=(1, 2))) <= 0)
     assert summary["gospa_m"]["mftd_imm"][0] >= 0 and summary["ospa_m"]["mftd_imm"][0] <= config.match_m
     assert set(summary["equal_false"]["level"]) == {"single", "mftd"}
+    # held on detectable pings: a fraction, and never more pings held than the whole-scene hold allows
+    assert trial["held_pings"].shape == (n_v, n_t, len(config.scene.ping_times_s))
+    np.testing.assert_allclose(trial["held_pings"].mean(axis=2), trial["hold"])
+    assert 0.0 <= summary["held_detectable"][0] <= 1.0
 
 
 def test_equal_false_gain_takes_each_detector_at_its_most_sensitive_threshold_under_the_rate():
@@ -100,3 +112,43 @@ def test_equal_false_gain_takes_each_detector_at_its_most_sensitive_threshold_un
     assert eq["level"] == {"single": 2, "mftd": 0}
     assert eq["gain_db"][0] == pytest.approx(14.0 - 8.0, abs=0.4)
     assert eq["gain_db"][1] < eq["gain_db"][0] < eq["gain_db"][2]
+
+
+def test_family_draws_cycle_pulse_and_model_and_respect_the_spacing_rule():
+    base, fam = ActiveSceneSettings(duration_s=300.0, ping_interval_s=10.0), FamilySettings()
+    seen = set()
+    for i in range(12):
+        scene, axes = draw_scene(base, fam, trial_rng(11, i), "maneuvering")
+        assert (fam.pulses[axes[0]], fam.reverb_models[axes[1]]) == (fam.pulses[i % 2], fam.reverb_models[(i // 2) % 3])
+        seen.add((axes[0], axes[1]))
+        w, d, n = scene.waveform, scene.spacing_m, scene.sonar.elements
+        half = 0.5 * w.bandwidth_hz if w.kind == "lfm" else 0.0
+        assert d < scene.sound_speed_mps / (w.carrier_hz + half)  # no grating lobe everywhere
+        assert n * d >= 0.5 * scene.sound_speed_mps / (w.carrier_hz - half)
+        assert scene.sample_rate_hz >= scene.occupied_band_hz
+        clutter = [t for t in scene.targets if is_clutter(t.name)]
+        assert len(clutter) == fam.clutter_points[axes[8]] and all(t.speed_kn == 0 for t in clutter)
+        assert target_names(scene) == target_names(base)
+        turned = [t for t in scene.targets if t.name == "maneuvering"][0]
+        assert 0.3 <= turned.turn_rate_deg_s <= 1.0 and 60.0 <= abs(turned.turn_deg) <= 180.0
+    assert len(seen) == 6
+    # the same trial index and seed draw the same scene
+    assert draw_scene(base, fam, trial_rng(11, 4), "maneuvering")[0] == draw_scene(base, fam, trial_rng(11, 4),
+                                                                                   "maneuvering")[0]
+
+
+def test_held_detectable_skips_acquisition_and_pools_targets():
+    det = np.zeros((1, 2, 10))
+    det[0, 0, 2:10] = 1  # target 0: 8 detectable pings, the first 2 its acquisition
+    det[0, 1, :] = 0     # target 1: never detectable, not counted
+    held = np.zeros((1, 4, 2, 10))
+    held[0, 0, 0, 4:7] = 1  # held on 3 of the 6 counted pings
+    held[0, 0, 1, :] = 1    # held while undetectable: not counted
+    assert _held_detectable({"detectable": det, "held_pings": held}, acquire=2)[0] == pytest.approx(0.5)
+    assert np.isnan(_held_detectable({"detectable": det * 0, "held_pings": held}, acquire=2)[0])
+
+
+def test_wilson_interval_hand_case():
+    # 9 of 10: Wilson 95 % interval [0.596, 0.982] (Agresti & Coull 1998's formula by hand)
+    p, lo, hi = _wilson(9, 10)
+    assert p == 0.9 and lo == pytest.approx(0.5958, abs=1e-3) and hi == pytest.approx(0.9821, abs=1e-3)
