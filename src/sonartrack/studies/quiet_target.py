@@ -468,7 +468,7 @@ def _sweep_trial(config: Config, rng) -> dict[str, np.ndarray]:
 
 def _default_trial(config: Config, seed: int) -> dict[str, np.ndarray]:
     """The default scene: the submarine's held fraction per front end and any, and its solution."""
-    from sonartrack.studies.passive_chain import longest_per_ship, match_targets, target_errors
+    from sonartrack.studies.passive_chain_measures import longest_per_ship, match_targets, target_errors
 
     scene = PassiveSceneSettings(seed=seed, duration_s=config.default_duration_s)
     result, nav = run_scene(config, scene)
