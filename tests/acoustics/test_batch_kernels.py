@@ -14,7 +14,8 @@ from scipy.ndimage import median_filter
 from sonartrack.acoustics.beamforming import BeamformerSettings, pick_beam_peaks, pick_beam_peaks_rows
 from sonartrack.acoustics.line_array import LineArray
 from sonartrack.acoustics.lofar import LofarAccumulator, LofarSettings
-from sonartrack.acoustics.tonal import TonalSettings, _hann_spectra, window_peak_bins
+from sonartrack.acoustics.tonal import TonalSettings, window_peak_bins
+from sonartrack.acoustics.tonal_spectra import _hann_spectra
 
 FS, C = 4000.0, 1500.0
 

@@ -8,12 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sonartrack.acoustics.beam_powers import _steering_matrix, _sum_over_products
 from sonartrack.acoustics.beamforming import (
     BeamformerSettings,
     _band_steering,
     _cbf_from_spectra,
-    _steering_matrix,
-    _sum_over_products,
     cbf_powers,
 )
 from sonartrack.acoustics.line_array import Band, LineArray

@@ -9,11 +9,11 @@ from sonartrack.acoustics.line_array import LineArray
 from sonartrack.acoustics.tonal import (
     TonalAccumulator,
     TonalSettings,
-    _hann_bias_table,
     beam_spectra,
     pick_line,
     spectral_peaks,
 )
+from sonartrack.acoustics.tonal_spectra import _hann_bias_table
 
 FS = 4000.0
 N_EL = 16

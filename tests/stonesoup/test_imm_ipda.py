@@ -25,12 +25,11 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater  # noq
 
 from sonartrack.association.gating import gate_threshold  # noqa: E402
 from sonartrack.core.errors import InputError  # noqa: E402
-from sonartrack.stonesoup.imm import (  # noqa: E402
+from sonartrack.stonesoup.imm import IMMPredictor, IMMState  # noqa: E402
+from sonartrack.stonesoup.imm_ipda import (  # noqa: E402
     IMMIPDAHypothesiser,
     IMMIPDATracker,
     IMMIPDAUpdater,
-    IMMPredictor,
-    IMMState,
     imm_ipda_tracker,
 )
 from sonartrack.stonesoup.tracks import CONFIRMED, EXISTENCE  # noqa: E402

@@ -12,7 +12,7 @@ into a Stone Soup tracker in place of Stone Soup's:
   ``metadata["amplitude"]``) -- stonesoup/amplitude.py;
 * :class:`IMMPredictor`, :class:`IMMUpdater` (mode probabilities on an :class:`IMMState`) and paper P4's
   IMM-IPDA: :class:`IMMIPDAHypothesiser`, :class:`IMMIPDAUpdater`, :class:`IMMIPDATracker`,
-  :func:`imm_ipda_tracker` -- stonesoup/imm.py;
+  :func:`imm_ipda_tracker` -- stonesoup/imm.py, imm_ipda.py;
 * :class:`MGEKFUpdater` (modified-gain EKF, paper P2) and the bearing + frequency measurement model
   :class:`BearingFrequency` with :class:`RelativeConstantVelocity` -- stonesoup/mgekf.py, models.py;
 * :class:`RangeParameterisedInitiator` -- a bearings-only initiator: Peach's range-parameterised EKF bank held
@@ -36,16 +36,12 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 from sonartrack.stonesoup.amplitude import AMPLITUDE, AmplitudeHypothesiser, JPDAWithAmplitude
 from sonartrack.stonesoup.bearings_initiator import RANGE_MIXTURE, RangeParameterisedInitiator
 from sonartrack.stonesoup.existence import ExistenceDeleter, ExistenceInitiator, confirmed_tracks
-from sonartrack.stonesoup.imm import (
+from sonartrack.stonesoup.imm import IMMPredictor, IMMState, IMMStatePrediction, IMMStateUpdate, IMMUpdater
+from sonartrack.stonesoup.imm_ipda import (
     IMMIPDAHypotheses,
     IMMIPDAHypothesiser,
     IMMIPDATracker,
     IMMIPDAUpdater,
-    IMMPredictor,
-    IMMState,
-    IMMStatePrediction,
-    IMMStateUpdate,
-    IMMUpdater,
     imm_ipda_tracker,
 )
 from sonartrack.stonesoup.ipda import IPDA, JIPDA, ExistenceMultipleHypothesis, IPDAHypothesiser

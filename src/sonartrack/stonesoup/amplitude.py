@@ -93,14 +93,8 @@ class AmplitudeHypothesiser(PDAHypothesiser):
 
         Parameters
         ----------
-        track : Track
-            The track (its last state the prior).
-        detections : set of Detection
-            The scan's detections.
-        timestamp : datetime.datetime
-            Time of the scan.
-        **kwargs
-            Passed to Stone Soup's ``PDAHypothesiser.hypothesise``.
+        track, detections, timestamp, **kwargs
+            As :meth:`sonartrack.stonesoup.ipda.IPDAHypothesiser.hypothesise`.
 
         Returns
         -------
@@ -133,14 +127,8 @@ class JPDAWithAmplitude(JPDA):
 
         Parameters
         ----------
-        tracks : set of Track
-            The live tracks.
-        detections : set of Detection
-            The scan's detections.
-        timestamp : datetime.datetime
-            Time of the scan.
-        **kwargs
-            Passed to the hypothesiser.
+        tracks, detections, timestamp, **kwargs
+            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
 
         Returns
         -------

@@ -68,7 +68,7 @@ def to_seconds(timestamp: datetime.datetime, epoch: datetime.datetime = EPOCH) -
     timestamp : datetime.datetime
         The time stamp.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
@@ -118,7 +118,7 @@ def detections_from_arrays(time_s, z, R=None, *, measurement_model=None, ndim_st
     clutter : array_like of bool, shape (k,), optional
         Rows that are clutter.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
@@ -156,7 +156,7 @@ def detections_from_contacts(contacts, *, ndim_state: int = 4, mapping: Sequence
     mapping : sequence of int
         State entries measured (default x and y of Stone Soup's [x, vx, y, vy]).
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
     **read_options
         Passed to ``read_contacts`` when a path is given.
 
@@ -188,12 +188,12 @@ def detections_from_peaks(peaks, *, bearing_sigma_deg: float | None = None, meas
     measurement_model : MeasurementModel, optional
         One model for every detection.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
     list of (datetime.datetime, set of Detection)
-        One scan per distinct time, measurements in rad.
+        The scans as :func:`detections_from_arrays` returns them, bearings in rad.
     """
     if not hasattr(peaks, "amplitude"):
         from sonartrack.io.peaks import read_peaks_csv
@@ -248,7 +248,7 @@ def tracks_from_snapshots(snapshots: Sequence[TrackSnapshot], *, order=STONESOUP
         For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
         reordering.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
@@ -307,10 +307,9 @@ def snapshot_from_tracks(tracks: Iterable, timestamp: datetime.datetime, *, orde
     timestamp : datetime.datetime
         The scan time.
     order : sequence of int or None
-        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
-        reordering.
+        As in :func:`tracks_from_snapshots`.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
@@ -345,12 +344,11 @@ def groundtruth_paths(time_s, states, *, order=STONESOUP_ORDER, ids: Sequence | 
     states : array_like, shape (n_targets, k, d) or (k, d)
         True states in our order ([x, y, vx, vy]: m, m/s).
     order : sequence of int or None
-        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
-        reordering.
+        As in :func:`tracks_from_snapshots`.
     ids : sequence, optional
         Path ids (default 0, 1, ...; stored as strings).
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------
@@ -378,10 +376,9 @@ def groundtruth_to_arrays(path: GroundTruthPath, *, order=STONESOUP_ORDER,
     path : GroundTruthPath
         The path.
     order : sequence of int or None
-        For each Stone Soup state entry, the sonartrack entry it holds (default :data:`STONESOUP_ORDER`); None: no
-        reordering.
+        As in :func:`tracks_from_snapshots`.
     epoch : datetime.datetime
-        The datetime of time_s = 0 (default :data:`EPOCH`).
+        As in :func:`to_timestamp`.
 
     Returns
     -------

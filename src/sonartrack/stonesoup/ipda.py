@@ -103,24 +103,22 @@ def _existence_prediction(multi) -> float:
     return float(multi.existence_prediction)
 
 
-class IPDA(DataAssociator):
-    """Integrated PDA, each track on its own (module doc; Musicki, Evans & Stankovic 1994)."""
+class _ExistenceAssociator(DataAssociator):
+    """An associator on an :class:`IPDAHypothesiser`'s hypotheses (IPDA and JIPDA)."""
 
     hypothesiser: IPDAHypothesiser = Property(doc="Hypothesiser that predicts the existence probability")
+
+
+class IPDA(_ExistenceAssociator):
+    """Integrated PDA, each track on its own (module doc; Musicki, Evans & Stankovic 1994)."""
 
     def associate(self, tracks, detections, timestamp, **kwargs):
         """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on the track.
 
         Parameters
         ----------
-        tracks : set of Track
-            The live tracks.
-        detections : set of Detection
-            The scan's detections.
-        timestamp : datetime.datetime
-            Time of the scan.
-        **kwargs
-            Passed to the hypothesiser.
+        tracks, detections, timestamp, **kwargs
+            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
 
         Returns
         -------
@@ -177,24 +175,16 @@ def jipda_log_weights(log_lik, log_miss, p_pred):
     return out, np.exp(log_exist)
 
 
-class JIPDA(DataAssociator):
+class JIPDA(_ExistenceAssociator):
     """Joint IPDA with exact marginals (module doc; Musicki & Evans 2004)."""
-
-    hypothesiser: IPDAHypothesiser = Property(doc="Hypothesiser that predicts the existence probability")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
         """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on each track.
 
         Parameters
         ----------
-        tracks : set of Track
-            The live tracks.
-        detections : set of Detection
-            The scan's detections.
-        timestamp : datetime.datetime
-            Time of the scan.
-        **kwargs
-            Passed to the hypothesiser.
+        tracks, detections, timestamp, **kwargs
+            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
 
         Returns
         -------

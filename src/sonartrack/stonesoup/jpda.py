@@ -86,14 +86,8 @@ def associate_exact(associator, tracks, detections, timestamp, **kwargs):
     ----------
     associator : DataAssociator
         Gives ``generate_hypotheses`` (its hypothesiser).
-    tracks : set of Track
-        The live tracks.
-    detections : set of Detection
-        The scan's detections.
-    timestamp : datetime.datetime
-        Time of the scan.
-    **kwargs
-        Passed to the hypothesiser.
+    tracks, detections, timestamp, **kwargs
+        As :meth:`JPDA.associate`.
 
     Returns
     -------

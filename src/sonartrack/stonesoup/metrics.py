@@ -159,10 +159,8 @@ def gospa_generator(c: float, p: float = 1.0, switching_penalty: float = 0.0, **
 
     Parameters
     ----------
-    c : float
-        Cut-off distance (m for position paths).
-    p : float
-        Order.
+    c, p : float
+        As :func:`ospa_generator`.
     switching_penalty : float
         Penalty of a track switch.
     **kwargs

@@ -226,10 +226,8 @@ class RelativeConstantVelocity(LinearGaussianTransitionModel, TimeVariantModel):
 
         Parameters
         ----------
-        time_interval : datetime.timedelta
-            The prediction interval T.
-        **kwargs
-            Not used (Stone Soup's signature).
+        time_interval, **kwargs
+            As :meth:`matrix`.
 
         Returns
         -------

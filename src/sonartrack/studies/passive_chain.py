@@ -50,10 +50,53 @@ from __future__ import annotations
 import numpy as np
 
 from sonartrack.core.settings import Settings, setting
-from sonartrack.core.units import KNOT_MPS
-from sonartrack.experiment.claims import Claim
 from sonartrack.sim.scene import PassiveSceneSettings, ShipSettings
+from sonartrack.studies.passive_chain_claims import (
+    AXIS_BEAMWIDTHS,
+    AXIS_REQUIRED,
+    CRB_FACTOR,
+    CRB_SHARE,
+    FALSE_PER_HOUR,
+    HOLD_REQUIRED,
+    IDENTITY_REQUIRED,
+    MAX_SDS,
+    claims,
+    summarize,
+)
+from sonartrack.studies.passive_chain_measures import (
+    DIVERGED_SPEED_MPS,
+    FAMILY_SHIPS,
+    OUTCOMES,
+    axis_crossings,
+    bearing_error_after,
+    correlated_crb_sd_m,
+    crossing_events,
+    crossing_outcome,
+    direction_separation,
+    diverged,
+    follower,
+    held_by_track,
+    identity_through,
+    match_targets,
+    normalised_errors,
+    running_median,
+    ship_names,
+    side_correct,
+    target_errors,
+    window_levels,
+    window_truth,
+)
 from sonartrack.systems.passive.settings import PassiveSettings
+
+#: the study's surface (studies/__init__.py's contract) and the measures and requirements the report and tests read
+#: here (defined in studies/passive_chain_measures.py and passive_chain_claims.py)
+__all__ = [
+    "CHUNK_SIZE", "PAPER", "QUICK_RUNS", "RUNS", "STUDY_ID", "TITLE", "TRIAL_VERSION", "Config", "claims",
+    "run_trial", "summarize", "draw_scene", "example_scene", "run_chain", "chain_settings", "navigation",
+    "AXIS_BEAMWIDTHS", "AXIS_REQUIRED", "CRB_FACTOR", "CRB_SHARE", "FALSE_PER_HOUR", "HOLD_REQUIRED",
+    "IDENTITY_REQUIRED", "MAX_SDS", "DIVERGED_SPEED_MPS", "FAMILY_SHIPS", "OUTCOMES", "ship_names",
+    "direction_separation", "identity_through", "running_median",
+]
 
 STUDY_ID = "passive-chain"
 TITLE = "The passive chain on a family of simulated towed-array scenes (our own study)"
@@ -65,29 +108,11 @@ RUNS = 32
 QUICK_RUNS = 2
 #: one trial per stored chunk: a trial takes tens of seconds, so an interruption loses at most one
 CHUNK_SIZE = 1
-HOLD_REQUIRED = 0.9
-IDENTITY_REQUIRED = 0.8
-AXIS_REQUIRED = 0.9
-AXIS_BEAMWIDTHS = 2.0
-CRB_FACTOR = 2.0
-CRB_SHARE = 0.9
-MAX_SDS = 5.0
-FALSE_PER_HOUR = 1.0
-#: windows of the running median of a ship's level at its cone angle (its SNR in the detector, :func:`window_truth`)
-SNR_MEDIAN_WINDOWS = 11
-#: the family's ships, in scene order (per-ship outputs are in this order)
-FAMILY_SHIPS = ("pair-near", "pair-far", "crosser", "loner")
 #: padded sizes of the per-trial event and solution outputs (the store keeps one shape per output)
 MAX_EVENTS = 8
 MAX_SOLUTIONS = 12
 #: the pair's cone-angle rates differ by at least this at their crossing (else they move together: no crossing)
 MIN_CROSSING_RATE_DEG_S = 0.06
-#: a target follows a ship over a span when at least this many of its peaks lie within match_deg of it
-MIN_FOLLOW_SCANS = 5
-#: a printed solution has diverged when its range is beyond this many times the true range, or its speed beyond
-#: the fastest ship a scene may hold, or it is not finite
-DIVERGED_RANGE_FACTOR = 5.0
-DIVERGED_SPEED_MPS = 60.0 * KNOT_MPS
 #: cut-offs of OSPA / GOSPA (p = 1; GOSPA's switching penalty half the cut-off)
 OSPA_CONE_DEG = 5.0
 OSPA_POSITION_M = 2000.0
@@ -144,10 +169,6 @@ def study_chain() -> PassiveSettings:
     """The chain of ``sonartrack passive`` with its defaults (the automatic band, acoustics/beamforming.py
     :class:`~sonartrack.acoustics.beamforming.BeamformerSettings`)."""
     return PassiveSettings()
-
-
-def ship_names(config: Config) -> list[str]:
-    return list(FAMILY_SHIPS)
 
 
 def chain_settings(config: Config, scene: PassiveSceneSettings | None = None) -> PassiveSettings:
@@ -299,354 +320,8 @@ def example_scene(config: Config) -> PassiveSceneSettings:
 # truth
 
 
-def running_median(x, width: int) -> np.ndarray:
-    """Centred running median along the last axis (edges: the nearest full window)."""
-    from numpy.lib.stride_tricks import sliding_window_view
-
-    x = np.asarray(x, float)
-    if x.shape[-1] < width:
-        return np.median(x, axis=-1, keepdims=True) * np.ones_like(x)
-    med = np.median(sliding_window_view(x, width, axis=-1), axis=-1)
-    pad = (width // 2, width - 1 - width // 2)
-    return np.pad(med, [(0, 0)] * (x.ndim - 1) + [pad], mode="edge")
-
-
-def window_levels(scene: PassiveSceneSettings, result):
-    """Per ship and window: the geometry, the true cone angle (deg) and the front end's normalised level at it
-    (linear between beams, running median over ``SNR_MEDIAN_WINDOWS`` windows: the ship's level, not a noise peak
-    that happens to fall on its cone angle)."""
-    from sonartrack.sim.passive_scene import scene_geometry
-
-    rec = result.record
-    tw = np.asarray(rec.time_s, float)
-    g = scene_geometry(scene, tw)
-    cone = np.rad2deg(g.cone_rad)
-    level = np.asarray(rec.level, float)
-    at_ship = np.array([[np.interp(cone[s, k], rec.cone_deg, level[k]) for k in range(len(tw))]
-                        for s in range(cone.shape[0])]).reshape(cone.shape)
-    return g, cone, running_median(at_ship, SNR_MEDIAN_WINDOWS)
-
-
-def window_truth(scene: PassiveSceneSettings, result):
-    """Per ship and window: the true cone angle (deg), and whether the ship is above the detection threshold.
-
-    Its SNR as the detector sees it is the front end's level at its true cone angle (:func:`window_levels`); it
-    counts when that level reaches the threshold and no other ship lies within one beam (direction-cosine separation
-    below the broadside beamwidth ``PassiveStages.min_separation_deg`` in rad, :func:`direction_separation`), where
-    the level would be the other ship's. A noise-limited formula (z = N SNR sqrt(bins)) would overrate a weak ship
-    next to loud ones: their sidelobes, not the noise, set the background spread of the normaliser. Returns
-    (geometry, cone (S, T), detectable (S, T))."""
-    g, cone, at_ship = window_levels(scene, result)
-    sep = direction_separation(cone[:, None, :], cone[None, :, :])
-    sep[np.arange(len(cone)), np.arange(len(cone))] = np.inf
-    alone = sep.min(axis=1) >= np.deg2rad(result.stages.min_separation_deg) if len(cone) > 1 \
-        else np.ones_like(at_ship, bool)
-    return g, cone, (at_ship >= result.settings.threshold) & alone
-
-
-def direction_separation(cone_a_deg, cone_b_deg) -> np.ndarray:
-    """|cos(a) - cos(b)|: two cone angles' separation in the direction cosine u = cos(theta), in which a line array's
-    beam has one width everywhere (about lambda / L; Van Trees 2002, sec. 2.4): two ships are resolved when this
-    reaches the broadside beamwidth in radians. In cone angle the beam widens as 1 / sin(theta) towards endfire,
-    so two ships 3 deg apart at 175 deg lie in one beam of an array that resolves 3 deg at broadside.
-
-    Parameters
-    ----------
-    cone_a_deg, cone_b_deg : array_like
-        Cone angles (deg), broadcast together.
-
-    Returns
-    -------
-    ndarray
-        The separation in u (dimensionless; compare with a beamwidth in rad).
-    """
-    return np.abs(np.cos(np.deg2rad(cone_a_deg)) - np.cos(np.deg2rad(cone_b_deg)))
-
-
-def crossing_events(cone_deg: np.ndarray, beamwidth_deg: float) -> list[tuple[int, int, int, int]]:
-    """Crossings: each maximal run of windows in which two ships lie within one beam of the array: their
-    direction-cosine separation (:func:`direction_separation`) below the broadside beamwidth, so that the run lasts
-    as long as the array cannot tell the two apart (longer near endfire, where the beam is wider in cone angle).
-
-    Parameters
-    ----------
-    cone_deg : ndarray (S, T)
-        True cone angles (deg).
-    beamwidth_deg : float
-        One beamwidth at broadside (deg).
-
-    Returns
-    -------
-    list of (a, b, k0, k1)
-        The two ships (a < b) and the first and last window of the run (inclusive).
-    """
-    out = []
-    for a in range(cone_deg.shape[0]):
-        for b in range(a + 1, cone_deg.shape[0]):
-            close = direction_separation(cone_deg[a], cone_deg[b]) < np.deg2rad(beamwidth_deg)
-            edges = np.diff(np.concatenate([[0], close.astype(int), [0]]))
-            out += [(a, b, int(k0), int(k1) - 1) for k0, k1 in zip(np.nonzero(edges == 1)[0],
-                                                                  np.nonzero(edges == -1)[0], strict=True)]
-    return out
-
-
-def axis_crossings(bearing_rad: np.ndarray, array_heading_rad: np.ndarray) -> list[tuple[int, int]]:
-    """Axis crossings: wherever a ship's true side (the sign of sin(bearing - array heading)) changes between
-    consecutive windows.
-
-    Parameters
-    ----------
-    bearing_rad : ndarray (S, T)
-        True bearings (rad, clockwise from north).
-    array_heading_rad : ndarray (T,)
-        The array's axis heading (rad).
-
-    Returns
-    -------
-    list of (int, int)
-        (ship, first window on the new side).
-    """
-    side = np.sin(np.asarray(bearing_rad) - np.asarray(array_heading_rad)[None]) >= 0.0
-    return [(int(s), int(k) + 1) for s, k in zip(*np.nonzero(side[:, 1:] != side[:, :-1]), strict=True)]
-
-
 # ---------------------------------------------------------------------------------------------------------------
 # judging
-
-
-def held_by_track(tracks, tw, cone_true_deg, match_deg: float) -> np.ndarray:
-    """(S, T) True where a confirmed track (of ``tracks``, a :class:`~sonartrack.tracking.run.BearingTracks`) lies
-    within ``match_deg`` of the ship's cone angle at window t."""
-    conf = np.asarray(tracks.confirmed).astype(bool)
-    k = np.searchsorted(tw, np.asarray(tracks.time_s, float)[conf])
-    cone = np.asarray(tracks.bearing_deg, float)[conf]
-    held = np.zeros(cone_true_deg.shape, bool)
-    for s in range(cone_true_deg.shape[0]):
-        near = np.abs(cone - cone_true_deg[s, np.clip(k, 0, len(tw) - 1)]) < match_deg
-        held[s, k[near & (k < len(tw))]] = True
-    return held
-
-
-def follower(measurements, tw, cone_true_deg, t_lo: float, t_hi: float, match_deg: float) -> int | None:
-    """The target following a ship over [t_lo, t_hi]: the one with the most peaks within ``match_deg`` of the
-    ship's true cone angle there, if at least ``MIN_FOLLOW_SCANS``.
-
-    Parameters
-    ----------
-    measurements : list of (time_s, cone_deg) arrays
-        Each target's peaks.
-    tw, cone_true_deg : ndarray (T,)
-        The windows' times (s) and the ship's true cone angle (deg) there.
-    t_lo, t_hi : float
-        The span (s).
-    match_deg : float
-        The match distance (deg).
-
-    Returns
-    -------
-    int or None
-        Index into ``measurements``.
-    """
-    best, hits_best = None, MIN_FOLLOW_SCANS - 1
-    for i, (t, cone) in enumerate(measurements):
-        t, cone = np.asarray(t, float), np.asarray(cone, float)
-        inside = (t >= t_lo) & (t <= t_hi)
-        hits = int(np.sum(np.abs(cone[inside] - np.interp(t[inside], tw, cone_true_deg)) < match_deg))
-        if hits > hits_best:
-            best, hits_best = i, hits
-    return best
-
-
-#: what became of two ships' targets through a crossing (:func:`crossing_outcome`)
-OUTCOMES = {1: "kept", 2: "swapped", 3: "jumped", 4: "lost", 5: "new target"}
-
-
-def crossing_outcome(measurements, tw, cone_a, cone_b, t0: float, t1: float, window_s: float,
-                     match_deg: float) -> float:
-    """What became of the two targets following ships a and b over ``window_s`` before a crossing [t0, t1], seen
-    over ``window_s`` after it (codes of ``OUTCOMES``): 1 kept (each ship followed by its own target), 2 swapped
-    (each followed by the other's), 3 jumped (one target follows the other ship, the rest not swapped: one record
-    joining two ships), 4 lost (a ship followed by no target), 5 a new target on a ship; NaN if the two ships are
-    not followed by two targets before it."""
-    before = [follower(measurements, tw, c, t0 - window_s, t0, match_deg) for c in (cone_a, cone_b)]
-    if None in before or before[0] == before[1]:
-        return float("nan")
-    after = [follower(measurements, tw, c, t1, t1 + window_s, match_deg) for c in (cone_a, cone_b)]
-    if after == before:
-        return 1.0
-    if after == before[::-1]:
-        return 2.0
-    if after[0] == before[1] or after[1] == before[0]:
-        return 3.0
-    return 4.0 if None in after else 5.0
-
-
-def identity_through(measurements, tw, cone_a, cone_b, t0: float, t1: float, window_s: float,
-                     match_deg: float) -> float:
-    """1 if the two targets following ships a and b over ``window_s`` before a crossing [t0, t1] follow the same
-    ships over ``window_s`` after it, 0 if not (swapped, merged, lost or a new target), NaN if the two ships are
-    not followed by two targets before it (:func:`crossing_outcome`)."""
-    code = crossing_outcome(measurements, tw, cone_a, cone_b, t0, t1, window_s, match_deg)
-    return code if np.isnan(code) else float(code == 1.0)
-
-
-def bearing_error_after(record_t, record_bearing_rad, truth_t, truth_bearing_rad, t_lo: float, t_hi: float) -> float:
-    """Median |true bearing - truth| of a record's bearings over [t_lo, t_hi].
-
-    Parameters
-    ----------
-    record_t, record_bearing_rad : ndarray (n,)
-        The record's times (s) and true bearings (rad).
-    truth_t, truth_bearing_rad : ndarray (T,)
-        The truth's times (s) and bearings (rad), interpolated (unwrapped) to the record's times.
-    t_lo, t_hi : float
-        The span (s).
-
-    Returns
-    -------
-    float
-        The median error (deg); NaN without a bearing in the span.
-    """
-    from sonartrack.core.angles import wrap_angle
-
-    t = np.asarray(record_t, float)
-    inside = (t >= t_lo) & (t <= t_hi)
-    if not inside.any():
-        return float("nan")
-    truth = np.interp(t[inside], truth_t, np.unwrap(truth_bearing_rad))
-    return float(np.rad2deg(np.median(np.abs(wrap_angle(np.asarray(record_bearing_rad)[inside] - truth)))))
-
-
-def diverged(state, covariance, array_xy, true_range_m: float) -> bool:
-    """Whether a solution's final row has gone away: not finite, a range beyond ``DIVERGED_RANGE_FACTOR`` x the
-    true range, or a speed beyond ``DIVERGED_SPEED_MPS``.
-
-    Parameters
-    ----------
-    state : array (4,)
-        [x, y, vx, vy] (m, m/s).
-    covariance : array (4, 4)
-        Its covariance.
-    array_xy : array (2,)
-        The array centre at the same time (m).
-    true_range_m : float
-        The true range (m).
-
-    Returns
-    -------
-    bool
-        True when diverged.
-    """
-    x, P = np.asarray(state, float), np.asarray(covariance, float)
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
-        return True
-    r = float(np.hypot(*(x[:2] - np.asarray(array_xy, float))))
-    return bool(r > DIVERGED_RANGE_FACTOR * true_range_m or np.hypot(x[2], x[3]) > DIVERGED_SPEED_MPS)
-
-
-def normalised_errors(state, covariance, truth_state) -> tuple[float, float]:
-    """NEES e^T P^-1 e of the 4-state (e = estimate - truth) and the Mahalanobis distance of the position error in
-    its own 2 x 2 covariance.
-
-    Parameters
-    ----------
-    state, truth_state : array (4,)
-        Estimate and truth [x, y, vx, vy] (m, m/s).
-    covariance : array (4, 4)
-        The estimate's covariance.
-
-    Returns
-    -------
-    (float, float)
-        NEES (chi-square(4) for a consistent estimator) and the position error in sds; NaN for a singular P.
-    """
-    e = np.asarray(state, float) - np.asarray(truth_state, float)
-    P = np.asarray(covariance, float)
-    try:
-        nees = float(e @ np.linalg.solve(P, e))
-        pos = float(np.sqrt(max(e[:2] @ np.linalg.solve(P[:2, :2], e[:2]), 0.0)))
-    except np.linalg.LinAlgError:
-        return float("nan"), float("nan")
-    return nees, pos
-
-
-def match_targets(result, scene, match_deg: float) -> dict[int, int]:
-    """target index -> ship index (the ship whose cone angle the target's peaks follow, median offset below
-    ``match_deg``); targets following no ship are absent (false targets)."""
-    from sonartrack.sim.passive_scene import scene_geometry
-
-    out = {}
-    for i, tg in enumerate(result.targets):
-        cone = np.rad2deg(scene_geometry(scene, tg.track.time_s).cone_rad)  # (S, n)
-        if cone.shape[0] == 0:
-            continue
-        off = np.median(np.abs(cone - np.asarray(tg.track.cone_deg)[None]), axis=1)
-        if off.min() < match_deg:
-            out[i] = int(np.argmin(off))
-    return out
-
-
-def longest_per_ship(result, matches: dict[int, int], n_ships: int) -> list[int | None]:
-    """For each ship, the index of its longest target (None if none follows it)."""
-    best: list[int | None] = [None] * n_ships
-    for i, s in matches.items():
-        if best[s] is None or result.targets[i].track.duration_s > result.targets[best[s]].track.duration_s:
-            best[s] = i
-    return best
-
-
-def ml_scans(tg) -> np.ndarray:
-    """Which of the target's scans (``tg.track``) its ML solution was fitted to: those its record holds (the
-    bearings + frequency ML's record keeps only the scans with a tonal frequency; bool (n,))."""
-    return np.isin(np.asarray(tg.track.time_s, float), np.asarray(tg.ml.record.time_s, float))
-
-
-def _crb_inputs(tg, scene, ship: int, nav):
-    """(times s, array positions m, the peaks' offsets from the true cone angle rad, true X0 at the first time, the
-    last row's time s) over the scans the target's ML was fitted to (:func:`ml_scans`)."""
-    from sonartrack.core.angles import wrap_angle
-    from sonartrack.sim.passive_scene import scene_geometry
-
-    on = ml_scans(tg)
-    t = np.asarray(tg.track.time_s, float)[on]
-    g = scene_geometry(scene, t)
-    offsets = wrap_angle(np.deg2rad(np.asarray(tg.track.cone_deg, float)[on]) - g.cone_rad[ship])
-    x0 = np.concatenate([g.ship_xy[ship, 0], g.ship_velocity[ship, 0]])
-    xy, _ = nav.array_at(t)
-    return t, xy, offsets, x0, float(tg.ml.solution.time_s[-1])
-
-
-def target_errors(tg, scene, ship: int, nav) -> tuple[float, float, float, float]:
-    """(final ML position error m, CRB position sd m at the same time, measured bearing sd deg, range determined)
-    of one target, judged on the data the ML was given: the scans of its record (:func:`ml_scans`) and the time of
-    its last row. The CRB (tma/batch_ml.py :func:`~sonartrack.tma.batch_ml.crb_position_sd_m`) is that of the
-    true constant-velocity track over those scans, with the bearing noise of the target's own peaks there (the sd
-    of their offsets from the true cone angle: the sensor's noise, whichever side the chain took), carried to the
-    last row's time; the error is the last row's position against the ship's at that time."""
-    from sonartrack.sim.passive_scene import scene_geometry
-    from sonartrack.tma.batch_ml import crb_position_sd_m
-
-    t, xy, offsets, x0, t_end = _crb_inputs(tg, scene, ship, nav)
-    sigma = float(np.std(offsets))
-    crb_sd = crb_position_sd_m(x0, t - t[0], xy, max(sigma, 1e-6), t_end - t[0])
-    truth_end = scene_geometry(scene, np.array([t_end])).ship_xy[ship, 0]
-    err = float(np.hypot(*(np.asarray(tg.ml.solution.state[-1, :2], float) - truth_end)))
-    return err, crb_sd, float(np.rad2deg(sigma)), float(tg.ml.solution.range_flags()[-1])
-
-
-def correlated_crb_sd_m(tg, scene, ship: int, nav) -> float:
-    """The CRB position sd of :func:`target_errors` for errors that are AR(1) in scan order with the lag-1
-    correlation of the peaks' own offsets from the truth (tma/solve.py
-    :func:`~sonartrack.tma.solve.lag1_correlation`; tma/batch_ml.py
-    :func:`~sonartrack.tma.batch_ml.fisher_information` with ``rho``). A reading of the ml-near-crb yardstick,
-    reported beside it: a second ship in the beam makes the errors slow (lag-1 correlation 0.5-0.95 on the study's
-    failures), and the white-noise CRB of the same sd then bounds an error no estimator can reach."""
-    from sonartrack.tma.batch_ml import crb_position_sd_m
-    from sonartrack.tma.solve import lag1_correlation
-
-    t, xy, offsets, x0, t_end = _crb_inputs(tg, scene, ship, nav)
-    return crb_position_sd_m(x0, t - t[0], xy, max(float(np.std(offsets)), 1e-6), t_end - t[0],
-                             rho=lag1_correlation(offsets))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -705,14 +380,6 @@ def _axis_outputs(config: Config, result, g, tw, cone) -> dict[str, np.ndarray]:
         spans.append(float(follower(meas, tw, cone[s], tc - 20.0 - w, tc - 20.0, tol) == i))
     return {"axis_error_deg": _padded(err, MAX_EVENTS), "axis_one_target": _padded(spans, MAX_EVENTS),
             "beamwidth_deg": np.array([result.stages.min_separation_deg])}
-
-
-def side_correct(side, time_s, truth_side) -> float:
-    """1 if a target's side decision (per segment between its axis crossings: ``side.side_at``) matches the true side
-    in at least 90 % of its scans, 0 if not, NaN if its side is unresolved."""
-    if side.side == "unresolved":
-        return float("nan")
-    return float(np.mean(side.side_at(time_s) == np.asarray(truth_side, object)) >= 0.9)
 
 
 def _solution_row(tg, scene, ship: int, nav) -> list[float]:
@@ -823,197 +490,3 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
 # summary and claims
 
 
-def _mean_interval(x) -> list[float]:
-    """[mean, low, high]: the mean over the finite values and its 95 % normal interval."""
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
-    if not len(x):
-        return [float("nan")] * 3
-    se = float(np.std(x, ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
-    m = float(np.mean(x))
-    return [m, m - 1.96 * se, m + 1.96 * se]
-
-
-def _share(ok) -> dict:
-    """{k, n, share, low, high}: successes among the finite values (1/0) with the 95 % Clopper-Pearson interval."""
-    from sonartrack.metrics.roc import binomial_share
-
-    return binomial_share(ok)
-
-
-def _poisson_upper(k: int, conf: float = 0.95) -> float:
-    from scipy.stats import chi2
-
-    return float(chi2.ppf(conf, 2 * (k + 1)) / 2.0)
-
-
-def _nees_summary(nees) -> dict:
-    """ANEES of n final 4-state solutions and its chi-square 95 % interval chi2(4n) / n, and the share of single
-    NEES inside chi2(4)'s 95 % interval."""
-    from scipy.stats import chi2
-
-    x = np.asarray(nees, float)
-    x = x[np.isfinite(x)]
-    n = len(x)
-    if not n:
-        return {"n": 0, "anees": float("nan"), "low": float("nan"), "high": float("nan"), "inside": float("nan")}
-    lo1, hi1 = chi2.ppf([0.025, 0.975], 4)
-    return {"n": n, "anees": float(np.mean(x)), "low": float(chi2.ppf(0.025, 4 * n) / n),
-            "high": float(chi2.ppf(0.975, 4 * n) / n), "inside": float(np.mean((x >= lo1) & (x <= hi1)))}
-
-
-def _solution_summary(tr: dict[str, np.ndarray]) -> dict:
-    """The TMA solutions' shares, counts and NEES (:func:`summarize`)."""
-    det = tr["determined"] == 1.0
-    within = np.where(det, (tr["pos_err_m"] <= CRB_FACTOR * tr["crb_sd_m"]).astype(float), np.nan)
-    corr = tr.get("crb_corr_sd_m", np.full_like(tr["determined"], np.nan))  # trials before version 12: not measured
-    within_corr = np.where(det & np.isfinite(corr), (tr["pos_err_m"] <= CRB_FACTOR * corr).astype(float), np.nan)
-    side = tr.get("side_correct", np.full_like(tr["determined"], np.nan))
-    return {
-        "crb": _share(within), "crb_correlated": _share(within_corr),
-        "max_sds": float(np.nanmax(np.where(det, tr["pos_sds"], np.nan), initial=0.0)),
-        "over_max_sds": int(np.sum(det & (tr["pos_sds"] > MAX_SDS))),
-        "solutions": int(np.sum(np.isfinite(tr["determined"]))), "determined": int(np.sum(det)),
-        "ml_diverged": int(np.nansum(tr["ml_diverged"])), "ml_printed": int(np.sum(det)),
-        "imm_diverged": int(np.nansum(tr["imm_diverged"])), "imm_printed": int(np.nansum(tr["imm_printed"])),
-        "ml_nees": _nees_summary(tr["ml_nees"][det]),
-        "imm_nees": _nees_summary(tr["imm_nees"][tr["imm_printed"] == 1.0]),
-        "side_correct": _share(side), "side_unresolved": int(np.sum(np.isfinite(tr["determined"]) & np.isnan(side))),
-    }
-
-
-def summarize(trials: dict[str, np.ndarray], config: Config) -> dict:
-    names = ship_names(config)
-    tr = {k: np.asarray(v, float) for k, v in trials.items()}
-    n_false = int(np.sum(tr["false_targets_noise"]) + np.sum(tr["false_targets_ships"]))
-    hours = float(np.sum(tr["hours"])) * 2.0  # each trial: a ship scene and a noise-only scene
-    outcome = tr["crossing_outcome"] if "crossing_outcome" in tr else tr["identity_kept"]  # trial version 5: 1/0
-    kept = np.where(np.isfinite(outcome), (outcome == 1.0).astype(float), np.nan)
-    axis_ok = np.where(np.isfinite(tr["axis_error_deg"]),
-                       (tr["axis_error_deg"] <= AXIS_BEAMWIDTHS * tr["beamwidth_deg"]).astype(float), np.nan)
-    return {
-        "ships": names, "scenes": tr["scene"].tolist(),
-        "hold": {n: _mean_interval(tr["hold"][:, s]) for s, n in enumerate(names)},
-        "hold_all": _mean_interval(tr["hold"].ravel()),
-        "hold_pairs_at_least": _share(np.where(np.isfinite(tr["hold"]), tr["hold"] >= HOLD_REQUIRED, np.nan)),
-        "identity": _share(kept),
-        "identity_crossed": _share(np.where(tr["crossing_crossed"] == 1.0, kept, np.nan)),
-        "crossing_outcomes": {name: int(np.sum(outcome == code)) for code, name in OUTCOMES.items()},
-        "axis": _share(axis_ok), "axis_one_target": _share(tr["axis_one_target"]),
-        "axis_error_deg": _mean_interval(tr["axis_error_deg"]),
-        **_solution_summary(tr),
-        "ospa_cone_deg": _mean_interval(tr["ospa_cone_deg"]), "gospa_cone_deg": _mean_interval(tr["gospa_cone_deg"]),
-        "gospa_switches": _mean_interval(tr["gospa_switches"]),
-        "ospa_position_m": _mean_interval(tr["ospa_position_m"]),
-        "segments": {n: _mean_interval(tr["segments"][:, s]) for s, n in enumerate(names)},
-        "switches": {n: _mean_interval(tr["switches"][:, s]) for s, n in enumerate(names)},
-        "narrowband_targets": int(np.sum(tr.get("narrowband_targets", np.zeros(1)))),
-        "false_targets": n_false, "hours": hours,
-        "false_per_hour": n_false / hours, "false_per_hour_upper95": _poisson_upper(n_false) / hours,
-    }
-
-
-def _num(v) -> float:
-    """A summary number (JSON stores NaN as null) as a float."""
-    return float("nan") if v is None else float(v)
-
-
-def _fmt_interval(v) -> str:
-    a, b, c = (_num(x) for x in v)
-    return f"{a:.2f} [{b:.2f}, {c:.2f}]"
-
-
-def _fmt_share(d: dict) -> str:
-    if not d["n"]:
-        return "none to judge"
-    return f"{d['k']} of {d['n']} = {_num(d['share']):.2f} [{_num(d['low']):.2f}, {_num(d['high']):.2f}]"
-
-
-def _fmt_nees(name: str, d: dict) -> str:
-    if not d["n"]:
-        return f"{name} NEES: no solution"
-    return (f"{name} ANEES {_num(d['anees']):.1f} of {d['n']} (chi-square 95 % {_num(d['low']):.2f}-"
-            f"{_num(d['high']):.2f}; {_num(d['inside']):.0%} single NEES inside chi2(4) 95 %)")
-
-
-def _share_holds(d: dict, required: float) -> bool:
-    return d["n"] > 0 and _num(d["share"]) >= required
-
-
-SHARE_TOLERANCE = "point estimate against the requirement; 95 % Clopper-Pearson interval shown"
-
-
-def _hold_claim(summary: dict) -> Claim:
-    v = summary["hold_all"]
-    return Claim(id="ships-held", paper=f"ours: every ship held by a confirmed track >= {HOLD_REQUIRED:.0%} of the "
-                                        "time its SNR is above the detection threshold",
-                 text="mean over (run, ship) pairs of the share of the ship's detectable windows held by a confirmed "
-                      f"track within match_deg (or a beamwidth, if wider) of its cone angle >= {HOLD_REQUIRED}",
-                 ours=f"all {_fmt_interval(v)}; " + "; ".join(f"{n} {_fmt_interval(x)}" for n, x in
-                                                               summary["hold"].items())
-                      + f"; pairs held >= {HOLD_REQUIRED}: {_fmt_share(summary['hold_pairs_at_least'])}"
-                      + f"; (report) OSPA of the tracks' cone angles {_num(summary['ospa_cone_deg'][0]):.2f} deg, "
-                        f"GOSPA {_num(summary['gospa_cone_deg'][0]):.2f} deg with "
-                        f"{_num(summary['gospa_switches'][0]):.1f} switches per run; track segments / identity "
-                        "switches per ship " + ", ".join(f"{n} {_num(summary['segments'][n][0]):.1f} / "
-                                                         f"{_num(summary['switches'][n][0]):.1f}" for n in
-                                                         summary["ships"]),
-                 holds=np.isfinite(_num(v[0])) and _num(v[0]) >= HOLD_REQUIRED,
-                 tolerance="point estimate against the requirement; 95 % normal interval over (run, ship) pairs")
-
-
-def _share_claims(summary: dict) -> list[Claim]:
-    i, a, c = summary["identity"], summary["axis"], summary["crb"]
-    return [
-        Claim(id="crossing-identities", paper=f"ours: identities kept through crossings in cone angle in >= "
-                                              f"{IDENTITY_REQUIRED:.0%} of crossings",
-              text="crossings (two ships within one beam of the array) whose two ships are followed by the same "
-                   f"two targets before and after, share >= {IDENTITY_REQUIRED}",
-              ours=f"{_fmt_share(i)} (of those crossing in order: {_fmt_share(summary['identity_crossed'])}); "
-                   + ", ".join(f"{n} {k}" for n, k in summary["crossing_outcomes"].items()),
-              holds=_share_holds(i, IDENTITY_REQUIRED), tolerance=SHARE_TOLERANCE),
-        Claim(id="axis-bearing", paper=f"ours: true bearing after an array-axis crossing within {AXIS_BEAMWIDTHS:g} "
-                                       f"beamwidths of the truth in >= {AXIS_REQUIRED:.0%}",
-              text="axis crossings whose following target's true bearings (median, 20 s to crossing_window_s + 20 s "
-                   f"after) lie within {AXIS_BEAMWIDTHS:g} beamwidths, share >= {AXIS_REQUIRED}",
-              ours=f"{_fmt_share(a)}; mean median error {_fmt_interval(summary['axis_error_deg'])} deg; one target "
-                   f"through the crossing {_fmt_share(summary['axis_one_target'])}",
-              holds=_share_holds(a, AXIS_REQUIRED), tolerance=SHARE_TOLERANCE),
-        Claim(id="ml-near-crb", paper=f"ours: ML final position within {CRB_FACTOR:g}x the CRB in >= {CRB_SHARE:.0%} "
-                                      f"of determined solutions, none off by more than {MAX_SDS:g} of its own sds",
-              text=f"determined final ML solutions of targets following a ship with error <= {CRB_FACTOR:g} x CRB "
-                   f"position sd, share >= {CRB_SHARE}; and none with a position Mahalanobis distance > {MAX_SDS:g}",
-              ours=f"{_fmt_share(c)}; {summary['over_max_sds']} over {MAX_SDS:g} sds (largest "
-                   f"{_num(summary['max_sds']):.1f}); {summary['determined']} of {summary['solutions']} determined; "
-                   f"(report) within {CRB_FACTOR:g}x the CRB of AR(1) errors with the peaks' own lag-1 correlation "
-                   f"{_fmt_share(summary['crb_correlated'])}; "
-                   f"{_fmt_nees('ML', summary['ml_nees'])}, {_fmt_nees('IMM-MGEKF', summary['imm_nees'])}; "
-                   f"OSPA of the determined positions {_num(summary['ospa_position_m'][0]):.0f} m; side right "
-                   f"{_fmt_share(summary['side_correct'])}, {summary['side_unresolved']} unresolved",
-              holds=_share_holds(c, CRB_SHARE) and summary["over_max_sds"] == 0, tolerance=SHARE_TOLERANCE),
-    ]
-
-
-def _diverged_claim(summary: dict) -> Claim:
-    n_ml, n_imm = summary["ml_diverged"], summary["imm_diverged"]
-    return Claim(id="no-diverged", paper="ours: no printed solution has diverged",
-                 text="final ML and IMM-MGEKF rows printed with a range that are not finite, beyond "
-                      f"{DIVERGED_RANGE_FACTOR:g}x the true range or faster than 60 kn: 0",
-                 ours=f"ML {n_ml} of {summary['ml_printed']} printed, IMM-MGEKF {n_imm} of {summary['imm_printed']} "
-                      "printed",
-                 holds=n_ml == 0 and n_imm == 0, tolerance="a count: none allowed")
-
-
-def _false_claim(summary: dict) -> Claim:
-    return Claim(id="false-targets", paper="ours: noise-only recordings give at most 1 confirmed false target "
-                                           "per hour",
-                 text="confirmed targets following no ship, per hour of recording (noise-only scenes and the ship "
-                      "scenes together) <= 1",
-                 ours=f"{summary['false_targets']} in {summary['hours']:.1f} h = {summary['false_per_hour']:.2f} per "
-                      f"hour (95 % upper bound {summary['false_per_hour_upper95']:.2f})",
-                 holds=summary["false_per_hour"] <= FALSE_PER_HOUR, tolerance="point estimate; Poisson upper bound "
-                                                                              "shown")
-
-
-def claims(summary: dict, config: Config) -> list[Claim]:
-    return [_hold_claim(summary), *_share_claims(summary), _diverged_claim(summary), _false_claim(summary)]

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sonartrack.systems.passive import measurements
-from sonartrack.systems.passive.measurements import TrackMeasurements, _crossing_swapped, _join_statistic
+from sonartrack.systems.passive import fragments as measurements
+from sonartrack.systems.passive.fragments import _crossing_swapped, _join_statistic
+from sonartrack.systems.passive.measurements import TrackMeasurements
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_join import SHIP_A, SHIP_B, _fragment, _nav  # noqa: E402

@@ -6,7 +6,8 @@ import numpy as np
 from sonartrack.core.angles import bearing_rad, wrap_angle
 from sonartrack.io.navigation import Navigation
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.systems.passive.measurements import TrackMeasurements, drop_unresolved
+from sonartrack.systems.passive.measurements import TrackMeasurements
+from sonartrack.systems.passive.shared_scans import drop_unresolved
 
 TIMES = np.arange(0.0, 1201.0, 1.0)
 SHIP_A, SHIP_B = [4000.0, 3000.0, -3.0, 1.0], [1000.0, 5850.0, 2.0, -3.0]  # cone angles cross near 660 s

@@ -5,7 +5,8 @@ import numpy as np
 from sonartrack.core.angles import bearing_rad, wrap_angle
 from sonartrack.io.navigation import Navigation
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.systems.passive.measurements import TrackMeasurements, _fragments_joined, join_fragments
+from sonartrack.systems.passive.fragments import _fragments_joined, join_fragments
+from sonartrack.systems.passive.measurements import TrackMeasurements
 
 TIMES = np.arange(0.0, 1201.0, 1.0)
 
@@ -67,7 +68,7 @@ def test_the_tonal_line_vetoes_a_join_of_two_ships_and_allows_one_ship():
 
 
 def test_tonals_agree_by_hand():
-    from sonartrack.systems.passive.measurements import tonals_agree
+    from sonartrack.systems.passive.fragments import tonals_agree
 
     t = np.arange(0.0, 100.0, 2.0)
     a = (t, np.full(len(t), 100.0), 0.1)
@@ -78,7 +79,7 @@ def test_tonals_agree_by_hand():
 
 
 def test_a_joined_targets_tonal_is_its_fragments_lines():
-    from sonartrack.systems.passive.measurements import joined_tonal
+    from sonartrack.systems.passive.fragments import joined_tonal
 
     nav = _nav()
     ship_a = [4000.0, 3000.0, -3.0, 1.0]
@@ -121,7 +122,7 @@ def _span(m, lo, hi):
 
 
 def test_two_tracks_on_one_ship_after_a_crossing_keep_its_peaks_in_the_one_that_followed_it():
-    from sonartrack.systems.passive.measurements import drop_unresolved
+    from sonartrack.systems.passive.shared_scans import drop_unresolved
 
     nav, a, b, t0, t1 = _crossing_ships()
     mid = (a.time_s >= t0) & (a.time_s <= t1)
@@ -141,7 +142,7 @@ def test_two_tracks_on_one_ship_after_a_crossing_keep_its_peaks_in_the_one_that_
 
 
 def test_two_tracks_swapped_at_a_crossing_get_their_parts_after_it_exchanged():
-    from sonartrack.systems.passive.measurements import drop_unresolved
+    from sonartrack.systems.passive.shared_scans import drop_unresolved
 
     nav, a, b, t0, t1 = _crossing_ships()
     mid = (a.time_s >= t0) & (a.time_s <= t1)
@@ -173,7 +174,7 @@ def _starboard_turn_nav() -> Navigation:
 
 
 def test_a_ships_fragments_either_side_of_the_arrays_turn_are_joined_on_the_right_fold_branch():
-    from sonartrack.systems.passive.measurements import _join_statistic
+    from sonartrack.systems.passive.fragments import _join_statistic
 
     nav = _starboard_turn_nav()
     ship = [6000.0, 2000.0, -2.0, 1.0]
@@ -195,7 +196,7 @@ def test_a_ships_fragments_either_side_of_the_arrays_turn_are_joined_on_the_righ
 def test_fragments_that_are_each_others_best_match_at_a_crossing_are_joined_up_to_the_looser_ratio():
     from dataclasses import replace
 
-    from sonartrack.systems.passive.measurements import (
+    from sonartrack.systems.passive.fragments import (
         MAX_JOIN_VARIANCE_RATIO,
         MUTUAL_JOIN_VARIANCE_RATIO,
         _join_statistic,

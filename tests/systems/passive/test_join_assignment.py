@@ -3,8 +3,9 @@
 
 import numpy as np
 
-from sonartrack.systems.passive import measurements
-from sonartrack.systems.passive.measurements import MUTUAL_JOIN_VARIANCE_RATIO, TrackMeasurements, join_fragments
+from sonartrack.systems.passive import fragments as measurements
+from sonartrack.systems.passive.fragments import MUTUAL_JOIN_VARIANCE_RATIO, join_fragments
+from sonartrack.systems.passive.measurements import TrackMeasurements
 
 
 def _frag(track_id: int, t0: float, t1: float) -> TrackMeasurements:

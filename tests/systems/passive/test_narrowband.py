@@ -26,11 +26,11 @@ from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.narrowband import (
     NarrowbandLines,
     SourceRoles,
-    narrowband_records,
     refined_detections,
     source_roles,
     tonal_at,
 )
+from sonartrack.systems.passive.narrowband_targets import narrowband_records
 from sonartrack.tracking.line_tracks import LineSource, LineTrack
 
 #: the default scene (default ships, ``--propagation ram`` as in the README), short, the ownship's turn early so

@@ -9,12 +9,11 @@ from sonartrack.core.errors import InputError
 from sonartrack.systems.passive.measurements import (
     TrackMeasurements,
     confirmed_segments,
-    drop_unresolved,
-    merge_duplicates,
     nearest_peaks,
     track_measurements,
 )
 from sonartrack.systems.passive.settings import PASSIVE_TRACKER_DEFAULTS, PassiveSettings
+from sonartrack.systems.passive.shared_scans import drop_unresolved, merge_duplicates
 from sonartrack.tracking.run import BearingTracks
 from sonartrack.tracking.settings import BearingTrackerSettings
 

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sonartrack.systems.passive.measurements import TrackMeasurements, drop_unresolved, within_one_beam
+from sonartrack.systems.passive.measurements import TrackMeasurements, within_one_beam
+from sonartrack.systems.passive.shared_scans import drop_unresolved
 from sonartrack.systems.passive.targets import endfire_reach_rad, line_array_relative_sigma, u_weighted_fit
 from sonartrack.tma.sides import fit_cv_target
 
@@ -52,7 +53,7 @@ def test_two_tracks_near_endfire_lose_the_scans_they_share_a_beam():
 def test_two_tracks_near_endfire_cross_while_they_share_a_beam():
     # the crossing spans of swap_at_crossings: filtered tracks 3 deg apart near endfire are within one 2 deg beam
     # (0.0104 < 0.0349) until one turns away to 30 deg at t = 10 s; at broadside 3 deg apart they never cross
-    from sonartrack.systems.passive.measurements import _close_spans
+    from sonartrack.systems.passive.fragments import _close_spans
 
     t = np.arange(20.0)
     a, b = track(1, t, np.full(20, 10.0)), track(2, t, np.r_[np.full(10, 13.0), np.full(10, 30.0)])
