@@ -389,7 +389,6 @@ class _Chain:
         self.n_detections = 0
 
     def _start(self, cells: PingCells) -> None:
-        from sonartrack.detection.cw_cells import cw_ranks
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
 
         s = self.settings
@@ -397,7 +396,7 @@ class _Chain:
         if s.detector == "mftd":
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
             self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
-                                 cfar=cw_ranks(s.cw) if self.cw else self.front_end.cfar)
+                                 cfar=s.cw.estimate() if self.cw else self.front_end.cfar)
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
@@ -406,17 +405,16 @@ class _Chain:
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser
         across Doppler and delay, the reverberation ridge of each beam notched from the navigation)."""
-        from sonartrack.acoustics.active_beams import cone_grid_deg
         from sonartrack.detection.cells import ping_front_end
-        from sonartrack.detection.cw_cells import cw_ping_cells, ridge_range_rates
+        from sonartrack.detection.cw_cells import cw_ping_cells
 
         w, fs = self.table.waveform(i), float(self.table.fs_hz[i])
         if w.kind != "cw":
             return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number)
-        g, cone = self.geometry, cone_grid_deg(self.front_end.beams)
-        ridge = ridge_range_rates(cone, float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
+        g = self.geometry
+        motion = (float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
         return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
-                             ridge_mps=ridge)
+                             motion=motion)
 
     def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
         from sonartrack.detection.cells import detect_ping
