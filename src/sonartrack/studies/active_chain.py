@@ -158,13 +158,27 @@ def run_scene(config: Config, scene: ActiveSceneSettings):
     return run_active(pings(), table, nav, config.chain_settings()), nav, truth
 
 
+def rate_sd(config: Config) -> float:
+    """Standard deviation of a measured range rate (m/s): the CW Doppler bank's filter step / sqrt(12) (run.py
+    ``rate_sd_of``), 1 m/s (unused) for an LFM."""
+    from sonartrack.acoustics.matched_filter import doppler_to_range_rate, fft_length
+    from sonartrack.systems.active.run import rate_sd_of
+
+    w, s = config.scene.waveform, config.chain_settings()
+    if w.kind != "cw":
+        return rate_sd_of([np.nan])
+    n = max(int(round(w.duration_s * config.scene.sample_rate_hz)), 1)
+    step_hz = config.scene.sample_rate_hz / fft_length(s.front_end.doppler_pad * n)
+    return rate_sd_of(doppler_to_range_rate(np.array([0.0, step_hz]), w.carrier_hz, s.sound_speed_mps))
+
+
 def variant_tracks(config: Config, result) -> dict:
     """The four trackings of the module doc on the trial's detections: variant -> ActiveTracks."""
-    from sonartrack.systems.active.run import rate_sd_of, track_detections
+    from sonartrack.systems.active.run import track_detections
 
-    s, r = config.chain_settings(), result
+    s, r = result.settings, result
     q = s.tracker_settings().q
-    kw = {"rate_sd_mps": rate_sd_of([np.nan]), "beam_step_deg": 180.0 / (s.front_end.beams - 1),
+    kw = {"rate_sd_mps": rate_sd(config), "beam_step_deg": 180.0 / (s.front_end.beams - 1),
           "ping_numbers": np.arange(1, len(r.ping_time_s) + 1)}
     out = {"mftd_imm": r.tracks}
     out["single_imm"] = track_detections(r.single, r.ping_time_s, r.geometry, s, **kw)[2]
@@ -306,14 +320,17 @@ def truth_grid(config: Config, truth: dict, column: str) -> np.ndarray:
 
 
 def echo_hits(config: Config, detections, truth: dict) -> np.ndarray:
-    """(targets, pings) bool: a detection within hit_delay_s of the echo's delay and hit_cone_deg of its cone."""
-    delay = truth_grid(config, truth, "lfm_delay_s" if config.scene.waveform.kind == "lfm" else "travel_time_s")
+    """(targets, pings) bool: a detection within hit_delay_s of the echo's delay (for a CW, whose delay cells are a
+    quarter pulse, within half a pulse) and hit_cone_deg of its cone."""
+    w = config.scene.waveform
+    delay = truth_grid(config, truth, "lfm_delay_s" if w.kind == "lfm" else "travel_time_s")
+    tol_s = config.hit_delay_s if w.kind == "lfm" else max(config.hit_delay_s, 0.5 * w.duration_s)
     cone = truth_grid(config, truth, "cone_deg")
     out = np.zeros(delay.shape, bool)
     for p in range(delay.shape[1]):
         m = detections.ping == p + 1
         if m.any():
-            near = (np.abs(detections.travel_time_s[m][None, :] - delay[:, p:p + 1]) < config.hit_delay_s) & \
+            near = (np.abs(detections.travel_time_s[m][None, :] - delay[:, p:p + 1]) < tol_s) & \
                 (np.abs(detections.cone_deg[m][None, :] - cone[:, p:p + 1]) < config.hit_cone_deg)
             out[:, p] = near.any(axis=1)
     return out
@@ -343,14 +360,14 @@ def _sweep_hits(config: Config, result, truth: dict) -> dict[str, np.ndarray]:
 def _sweep_false(config: Config, quiet, base: dict) -> np.ndarray:
     """(2, levels) confirmed tracks of the reverberation-only scene, single-ping then MFTD, at each threshold of
     the sweep (the lowest: ``base``, the tracks already made)."""
-    from sonartrack.systems.active.run import rate_sd_of, track_detections
+    from sonartrack.systems.active.run import track_detections
 
-    s, lv = config.chain_settings(), threshold_levels(quiet)
+    s, lv = quiet.settings, threshold_levels(quiet)
     out = np.zeros((2, len(SINGLE_FACTORS)))
     for j, d in enumerate(("single", "mftd")):
         for k, t in enumerate(lv[d]):
             tr = base[d] if k == 0 else track_detections(
-                _above(getattr(quiet, d), t), quiet.ping_time_s, quiet.geometry, s, rate_sd_mps=rate_sd_of([np.nan]),
+                _above(getattr(quiet, d), t), quiet.ping_time_s, quiet.geometry, s, rate_sd_mps=rate_sd(config),
                 ping_numbers=np.arange(1, len(quiet.ping_time_s) + 1))[2]
             out[j, k] = len(np.unique(tr.tracks.track_id[tr.tracks.confirmed]))
     return out
@@ -370,10 +387,10 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
     quiet_s = config.quiet_duration_s or config.scene.duration_s
     quiet, _, _ = run_scene(config, config.scene.model_copy(update={"seed": int(seeds[1]), "targets": [],
                                                                     "duration_s": quiet_s}))
-    from sonartrack.systems.active.run import rate_sd_of, track_detections
+    from sonartrack.systems.active.run import track_detections
 
-    s = config.chain_settings()
-    single = track_detections(quiet.single, quiet.ping_time_s, quiet.geometry, s, rate_sd_mps=rate_sd_of([np.nan]),
+    s = quiet.settings
+    single = track_detections(quiet.single, quiet.ping_time_s, quiet.geometry, s, rate_sd_mps=rate_sd(config),
                               ping_numbers=np.arange(1, len(quiet.ping_time_s) + 1))[2]
     out["reverb_false"] = np.array([len(np.unique(t.tracks.track_id[t.tracks.confirmed])) for t in
                                     (quiet.tracks, single)], float)

@@ -142,17 +142,28 @@ class ContactTracker:
     merge_probability : float or None
         Gate probability of the track-to-track test (tracking/duplicates.py) by which a track that follows the
         same target as a confirmed one is deleted after each scan; None: no merging.
+    max_range_rate_mps : float or None
+        The range rates searched span +-this (m/s): a contact's measured range rate (a CW's) multiplies its
+        likelihood ratio by its Gaussian likelihood over this uniform clutter law (tracking/measurements.py
+        :class:`RangeRatePositionMeasurements`); None: position only.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
-                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None):
+                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
+                 max_range_rate_mps: float | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
+        from sonartrack.tracking.measurements import RangeRatePositionMeasurements
 
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.tracker = position_tracker(settings)
+        if max_range_rate_mps is not None:
+            m = self.tracker.measurements
+            self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
+                                                                      m.clutter_density_per_m2, rate_sd_mps,
+                                                                      float(max_range_rate_mps))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
@@ -212,6 +223,11 @@ class ContactTracker:
             (m,) bool verdict per contact.
         """
         keep = self._gates(t_s, contacts)
+        if hasattr(self.tracker.measurements, "at_scan"):
+            g = self.geometry
+            self.tracker.measurements = self.tracker.measurements.at_scan(
+                (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
+                contacts.range_rate_mps[keep])
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
@@ -326,7 +342,7 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
-                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability)
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -427,7 +443,7 @@ class _Chain:
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
-                                      s.side_turn_deg, s.merge_probability)
+                                      s.side_turn_deg, s.merge_probability, s.max_range_rate_mps)
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser
