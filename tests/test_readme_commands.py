@@ -38,6 +38,8 @@ SKIPS = [
     (re.compile(r"\breproduce\b(?!.*--quick)"),
      "a full-size study run takes minutes to hours: make demo runs every study at quick size, "
      "tests/cli/test_reproduce_cli.py the command"),
+    (re.compile(r"--stream\b|\blive --tcp\b"),
+     "the recorder and the console run together, in two processes: tests/test_readme_live.py runs the pair"),
 ]
 
 

@@ -108,16 +108,16 @@ ax.legend()
 # +/- 0.025 deg every second for 100 s) and its tracker, with ``RangeParameterisedInitiator`` in place of the
 # truth: Peach's bank of range-parameterised EKFs (10 m to 2 km) is held inside the initiator until the range
 # sd is at most 20 % of the range, then handed to Stone Soup's EKF as one Gaussian.
-from stonesoup.dataassociator.neighbour import NearestNeighbour
-from stonesoup.deleter.time import UpdateTimeStepsDeleter
-from stonesoup.hypothesiser.distance import DistanceHypothesiser
-from stonesoup.measures import Mahalanobis
-from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing
-from stonesoup.predictor.kalman import ExtendedKalmanPredictor
-from stonesoup.tracker.simple import SingleTargetTracker
-from stonesoup.updater.kalman import ExtendedKalmanUpdater
+from stonesoup.dataassociator.neighbour import NearestNeighbour  # noqa: E402
+from stonesoup.deleter.time import UpdateTimeStepsDeleter  # noqa: E402
+from stonesoup.hypothesiser.distance import DistanceHypothesiser  # noqa: E402
+from stonesoup.measures import Mahalanobis  # noqa: E402
+from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing  # noqa: E402
+from stonesoup.predictor.kalman import ExtendedKalmanPredictor  # noqa: E402
+from stonesoup.tracker.simple import SingleTargetTracker  # noqa: E402
+from stonesoup.updater.kalman import ExtendedKalmanUpdater  # noqa: E402
 
-from sonartrack.stonesoup import RANGE_MIXTURE, RangeParameterisedInitiator
+from sonartrack.stonesoup import RANGE_MIXTURE, RangeParameterisedInitiator  # noqa: E402
 
 transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(1.0), ConstantVelocity(1.0)])
 sigma = np.deg2rad(0.025)
@@ -157,10 +157,11 @@ print(f"{initiator.n_filters} range filters held {k_release + 1} bearings; the t
       f"t = {(track.states[0].timestamp - t0).seconds} s")
 
 # %%
-# The track's first states are the collapsed mixture after each held bearing (from the first, where the mean is
-# the prior's, half way out along the bearing), then Stone Soup's EKF carries it on. The circles are the range filters at release, their area the filter's weight: the
-# bearings have ruled out all ranges but a few. The range stays the weakly known quantity of this scene (the
-# sensor moves almost straight away from the target), but no truth went into the tracker.
+# The track's first states are the collapsed mixture after each held bearing (from the first, where the mean is the
+# prior's, half way out along the bearing), then Stone Soup's EKF carries it on. The circles are the range filters at
+# release, their area the filter's weight: the bearings have ruled out all ranges but a few. The range stays the
+# weakly known quantity of this scene (the sensor moves almost straight away from the target), but no truth went into
+# the tracker.
 mixture = track.metadata[RANGE_MIXTURE]
 fig, ax = plt.subplots(figsize=(6, 5))
 ax.plot(*np.array(truth).T, "g--", label="target (truth)")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from sonartrack.detection.ping_mftd import empty_detections
-from sonartrack.report.active_page import active_page, settings_differences
+from sonartrack.report.active_page import active_page
 from sonartrack.systems.active.contacts import Contacts
 from sonartrack.systems.active.run import ActiveResult, BScan
 from sonartrack.systems.active.settings import ActiveSettings
@@ -76,13 +76,15 @@ def test_a_decided_target_is_listed_once_with_its_mirror_dropped(settings):
 
 
 def test_settings_that_differ_from_the_defaults(settings):
-    diff = {name: (value, default) for name, value, default, _ in settings_differences(settings)}
-    assert diff == {"spacing_m": ("0.5", "not set"), "pfa": ("2e-05", "1e-05")}
+    html = active_page(_result(3, settings), [], {}, {})
+    rows = _rows(html.replace("class='settings-diff'", 'class="settings-diff"'), "settings-diff")
+    names = [re.findall(r"<td[^>]*>(.*?)</td>", r, re.S)[0] for r in rows]
+    assert [re.sub("<[^>]+>", "", n) for n in names] == ["spacing_m", "pfa"]
     nested = settings.model_copy(update={"tracker": settings.tracker.model_copy(update={"pd": 0.9})})
-    assert settings_differences(nested)[-1] == ("tracker.pd", "0.9", "0.7", "1")
     html = active_page(_result(3, nested), [], {}, {})
-    rows = _rows(html, "settings")
-    assert len(rows) == 3 and "tracker.pd" in rows[-1] and "sound_speed_mps" not in html.split("All settings")[0]
+    rows = _rows(html.replace("class='settings-diff'", 'class="settings-diff"'), "settings-diff")
+    assert len(rows) == 3 and "tracker.pd" in rows[-1] and "0.9" in rows[-1] and "0.7" in rows[-1]
+    assert "sound_speed_mps" not in html.split("All settings")[0]
 
 
 def test_the_tactical_picture_draws_a_pair_as_dashed_twins(settings):

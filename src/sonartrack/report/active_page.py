@@ -17,6 +17,7 @@ import numpy as np
 
 from sonartrack.core.settings import to_commented_toml
 from sonartrack.report.html import _CSS
+from sonartrack.report.settings_table import settings_table_html
 
 _PAGE_CSS = _CSS + ".summary{font-size:1.1em;background:#eef;padding:.6em;border:1px solid #ccd}" \
                    "tr.pair td{border-top:2px solid #88a}"
@@ -101,49 +102,6 @@ def summary_line(result, m, scores: dict | None = None) -> str:
     return line
 
 
-def _flat(model, prefix: str = "") -> dict:
-    """Dotted setting name -> (value, unit) of a settings tree (groups recursed)."""
-    from pydantic import BaseModel
-
-    from sonartrack.core.settings import field_unit
-
-    out = {}
-    for name in type(model).model_fields:
-        v = getattr(model, name)
-        if isinstance(v, BaseModel):
-            out.update(_flat(v, f"{prefix}{name}."))
-        else:
-            out[prefix + name] = (v, field_unit(type(model), name))
-    return out
-
-
-def settings_differences(settings) -> list[tuple[str, str, str, str]]:
-    """(name, value, default, unit) of every setting that differs from a default instance of its class.
-
-    Parameters
-    ----------
-    settings : Settings
-        A settings tree (core/settings.py) whose class builds with no arguments.
-
-    Returns
-    -------
-    list of tuple
-        Dotted names (group.field) in declaration order, values as text ("not set" for None).
-    """
-    now, default = _flat(settings), _flat(type(settings)())
-    text = lambda v: "not set" if v is None else str(v)  # noqa: E731
-    return [(k, text(v), text(default[k][0]) if k in default else "", unit) for k, (v, unit) in now.items()
-            if k not in default or default[k][0] != v]
-
-
-def _settings_table(settings) -> str:
-    diff = settings_differences(settings)
-    if not diff:
-        return "<p>Every setting is at its default.</p>"
-    head = "<tr><th>setting</th><th>value</th><th>default</th><th>unit</th></tr>"
-    return f'<table class="settings">{head}{"".join(_cells(d) for d in diff)}</table>'
-
-
 def _embed(name: str, png: bytes) -> str:
     return f'<img alt="{html.escape(name)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
 
@@ -190,7 +148,7 @@ def active_page(result, lines: list[str], figures: dict[str, bytes], inputs: dic
             "sides; solid: a decided target with 95 % ellipses; dashed twins: a target's two hypotheses before its "
             "side is decided, joined by a dotted line.</p>",
             "".join(_embed(n, png) for n, png in figures.items()),
-            "<h2>Settings that differ from the defaults</h2>" + _settings_table(result.settings),
+            "<h2>Settings that differ from the defaults</h2>" + settings_table_html(result.settings),
             f"<details><summary>All settings</summary><pre>{html.escape(to_commented_toml(result.settings))}</pre>"
             "</details>"]
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>sonartrack active</title><style>{_PAGE_CSS}"

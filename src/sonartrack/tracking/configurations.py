@@ -3,7 +3,8 @@
 ============  ===============================================  =============================================
 part          position tracker (P4, :func:`position_tracker`)  bearing tracker (P0, :func:`bearing_tracker`)
 ============  ===============================================  =============================================
-motion        CV in x, y; one mode per q, IMM chain            CV in bearing (deg); one mode
+motion        CV in x, y; one mode per q (and optional          CV in bearing (deg); one mode
+              coordinated turns at known rates), IMM chain
 measurements  points with R_m, chi-square gate                 peaks, window gate V, sigma_p per track
 associator    PDA (IPDA / IMM-IPDA with existence)             exact JPDA (JPDA_A: amplitude ratio)
 existence     IPDA Markov chain                                none
@@ -22,7 +23,7 @@ from sonartrack.tracking.deleters import ExistenceDeleter, MOfNDeleter
 from sonartrack.tracking.existence import IpdaExistence
 from sonartrack.tracking.initiators import OnePointInitiator, PeakInitiator, bearing_covariance
 from sonartrack.tracking.measurements import BearingMeasurements, PositionMeasurements
-from sonartrack.tracking.motion import ImmConstantVelocity
+from sonartrack.tracking.motion import ImmConstantVelocity, TurnModes
 from sonartrack.tracking.multi_target import MultiTargetTracker
 from sonartrack.tracking.own_motion import ArrayTurnPrediction
 from sonartrack.tracking.resolution import UnresolvedPairs
@@ -34,7 +35,37 @@ from sonartrack.tracking.tracks import TrackArrays
 GATE_SDS = 3.0
 
 
-def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None) -> MultiTargetTracker:
+def position_motion(settings: PositionTrackerSettings, turns: TurnModes | None = None) -> ImmConstantVelocity:
+    """The IMM modes of a position tracker: P4's constant-velocity modes (one per q), then a clockwise and a
+    counter-clockwise coordinated turn at each rate of ``turns`` (filters/coordinated_turn.py).
+
+    The mode chain keeps each mode with probability ``transition_diagonal`` and spreads the rest evenly over the
+    other modes (P4's rule, applied to all r modes).
+
+    Parameters
+    ----------
+    settings : PositionTrackerSettings
+        The constant-velocity intensities ``q`` (m^2/s^3) and ``transition_diagonal``.
+    turns : TurnModes, optional
+        Turn modes to add; None or no rates: P4's modes alone.
+
+    Returns
+    -------
+    ImmConstantVelocity
+        The modes and their Markov chain.
+    """
+    if turns is None or not turns.rates_deg_s:
+        return ImmConstantVelocity(tuple(settings.q), dims=2, transition=settings.transition_matrix())
+    w = (0.0,) * len(settings.q) + turns.signed_rates_rad_s()
+    q = tuple(settings.q) + (turns.q,) * (len(w) - len(settings.q))
+    r = len(w)
+    Pi = np.full((r, r), (1.0 - settings.transition_diagonal) / (r - 1))
+    np.fill_diagonal(Pi, settings.transition_diagonal)
+    return ImmConstantVelocity(q, dims=2, transition=Pi, turn_rate_rad_s=w)
+
+
+def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None,
+                     turns: TurnModes | None = None) -> MultiTargetTracker:
     """IPDA (one q) / IMM-IPDA (several q) position tracker of paper P4 (Park, Song, Lee 2017).
 
     One-point initiation and existence-based confirmation and deletion (module table).
@@ -45,6 +76,8 @@ def position_tracker(settings: PositionTrackerSettings | None = None, *, associa
         Tracker settings; None for the defaults (P4's tracker).
     associator : optional
         Replaces PDA (``JPDA()`` needs one mode and no existence, so it is refused here).
+    turns : TurnModes, optional
+        Coordinated-turn modes added to P4's (:func:`position_motion`); None: P4's modes alone.
 
     Returns
     -------
@@ -58,7 +91,7 @@ def position_tracker(settings: PositionTrackerSettings | None = None, *, associa
     """
     s = settings or PositionTrackerSettings()
     return MultiTargetTracker(
-        ImmConstantVelocity(tuple(s.q), dims=2, transition=s.transition_matrix()),
+        position_motion(s, turns),
         PositionMeasurements(s.pd, s.gate_probability, s.clutter_density_per_m2),
         associator or PDA(),
         existence=IpdaExistence(s.p_survive, s.p_birth),

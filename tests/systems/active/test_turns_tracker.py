@@ -1,14 +1,18 @@
-"""A target that turns should stay on one track: the active chain's IMM-IPDA (ContactTracker, P4's two CV modes) on
-contacts of a target turning 60, 120 and 180 deg at 0.6-1 deg/s (today's rate held; the requirement, every run,
-expected to fail until the tracker has a turn model), and on a straight one (no false track, error within the
-contacts' own).
+"""A target that turns stays on one track: the active chain's IMM-IPDA (ContactTracker with P4's two CV modes and the
+coordinated-turn modes of ActiveSettings.target_turn_rates_deg_s) on contacts of a target turning 60, 120 and 180 deg
+at 0.3-1 deg/s, and on a straight one (no false track, its error no worse than with P4's CV modes alone).
 
 Contacts from a generator written here from the geometry (not the scene simulator): a fixed monostatic receiver at
 the origin with its array along north; the target's exact arc (speed v, turn rate w: x += v/w (cos h0 - cos h), y +=
 v/w (sin h - sin h0)); a contact per ping with probability 0.8, range sd 50 m and bearing sd 0.9 deg, and its mirror
-about the array's axis; 40 clutter echoes a ping (each a mirror pair) over 11.5 x 18 km. Measured with harder
-settings (Pd 0.7, 100 clutter echoes, 12 kn) the same tracker loses 2 of 6 targets in a 130 deg turn at 0.6 deg/s
-for 14-33 pings (issue 34's symptom)."""
+about the array's axis; 40 clutter echoes a ping (each a mirror pair) over 11.5 x 18 km.
+
+Measured on seeds 0-9 and 9 turns (60, 120, 180 deg at 0.3, 0.6, 1 deg/s): P4's CV modes alone (diagonal 0.99) lag
+up to 715 m behind a 180 deg turn at 1 deg/s (median of the runs' largest errors 653 m) and lose the target in 1-3
+of the 9 runs confirmed before the turn; with the turn modes the largest error in any held turn is 406 m and only
+seed 8 is lost (3 pings missed as its turn begins, 7 of 16 in it: every mode set tried loses it). Seed 9's target
+is not confirmed before the turn with either (confirmation, not the turn)."""
+
 
 import numpy as np
 import pytest
@@ -43,17 +47,22 @@ def cov(xy) -> np.ndarray:
     return 50.0**2 * np.outer(u, u) + (r * np.deg2rad(0.9)) ** 2 * np.outer(n, n)
 
 
-def track(turn_deg: float, rate_deg_s: float, seed: int):
+def track(turn_deg: float, rate_deg_s: float, seed: int, turns: bool = True):
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, DURATION_S, PING_S)
     X = arc(turn_deg, rate_deg_s, t)
     g = ActiveGeometry(np.array([-100.0, DURATION_S + 100.0]), np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
-    trk = ContactTracker(ActiveSettings().tracker_settings(), g, None, 1.0, None, 0.99)
+    s = ActiveSettings()
+    if turns:
+        trk = ContactTracker(s.tracker_settings(), g, None, 1.0, None, 0.99, turns=s.turn_modes())
+    else:  # the chain before the turn modes: P4's CV modes with P4's diagonal
+        p4 = s.tracker_settings().model_copy(update={"transition_diagonal": 0.99})
+        trk = ContactTracker(p4, g, None, 1.0, None, 0.99)
     det = 0
     for k, tk in enumerate(t):
         echoes = [X[k] + rng.multivariate_normal(np.zeros(2), cov(X[k]))] if rng.random() < 0.8 else []
         echoes += [np.array([rng.uniform(500, 12000), rng.uniform(-6000, 12000)]) for _ in range(rng.poisson(40))]
-        xy = np.array([[s * e[0], e[1]] for e in echoes for s in (1, -1)]).reshape(-1, 2)
+        xy = np.array([[sg * e[0], e[1]] for e in echoes for sg in (1, -1)]).reshape(-1, 2)
         m = len(xy)
         R = np.array([cov(p) for p in xy]).reshape(-1, 2, 2)
         trk.step(tk, Contacts(np.full(m, k), np.full(m, tk), np.repeat(np.arange(det, det + m // 2), 2),
@@ -85,8 +94,10 @@ def held_through(turn_deg: float, rate_deg_s: float, seed: int) -> tuple[bool, f
     return one, float(np.nanmax(err[turning])) if one else np.inf
 
 
-SEEDS = range(6)
-TURNS = [(60.0, 1.0), (-120.0, 0.6), (180.0, 1.0)]
+SEEDS = range(10)
+TURNS = [(60.0, 0.3), (-120.0, 0.6), (180.0, 1.0)]
+#: seed 9: the target is not confirmed before its turn; seed 8: lost in its turn (module docstring)
+NOT_CONFIRMED, LOST = {9}, {8}
 
 
 @pytest.fixture(scope="module")
@@ -94,18 +105,15 @@ def held():
     return {case: [held_through(*case, seed) for seed in SEEDS] for case in TURNS}
 
 
-@pytest.mark.parametrize("case", TURNS)
-def test_turns_held_at_todays_rate(held, case):
-    # measured on seeds 0-9 (this generator, 2400 s): the track lost in the turn 1/10 at 60 and 120 deg at 1 deg/s,
-    # 3/10 at 180 deg at 1 deg/s; a regression below this rate fails
-    assert sum(one for one, _ in held[case]) >= len(SEEDS) - 2, held[case]
-
-
-@pytest.mark.xfail(strict=True, reason="issue 34 item 5: the CV IMM (q 1e-4 and 0.05, diagonal 0.99) loses a turning "
-                                       "target in some runs and lags 500-700 m behind a 180 deg turn at 1 deg/s; "
-                                       "higher q or faster switching did not help (no turn model yet)")
 def test_every_turn_held_within_500_m(held):
-    assert all(one and err < 500.0 for v in held.values() for one, err in v), held
+    ok = [s for s in SEEDS if s not in NOT_CONFIRMED | LOST]
+    assert all(held[case][s][0] and held[case][s][1] < 500.0 for case in TURNS for s in ok), held
+
+
+@pytest.mark.xfail(strict=True, reason="seed 8: 3 pings missed as the turn begins and 7 of 16 in it; the track coasts "
+                                       "straight and its contacts leave every mode's gate (any mode set tried)")
+def test_a_turn_begun_in_missed_pings_is_held(held):
+    assert all(held[case][8][0] for case in TURNS), [held[case][8] for case in TURNS]
 
 
 def test_a_straight_target_costs_nothing():
@@ -121,4 +129,9 @@ def test_a_straight_target_costs_nothing():
         d = np.minimum(np.hypot(*(tr.x[rows, :2] - X[k]).T), np.hypot(*(tr.x[rows, :2] - mirror[k]).T))
         assert np.median(d) < 300.0, tid
     # the error is below a single contact's cross-range sd (~125 m at 8 km): the track averages contacts
-    assert np.sqrt(np.nanmean(err[start + 5:] ** 2)) < 125.0
+    rms = np.sqrt(np.nanmean(err[start + 5:] ** 2))
+    assert rms < 125.0
+    # and no worse than with P4's CV modes alone on the same contacts (within 10 %)
+    t, X, tr = track(0.0, 1.0, seed=3, turns=False)
+    held, err = holding(t, X, tr)
+    assert rms < 1.1 * np.sqrt(np.nanmean(err[np.argmax(held >= 0) + 5:] ** 2))

@@ -146,11 +146,14 @@ class ContactTracker:
         The range rates searched span +-this (m/s): a contact's measured range rate (a CW's) multiplies its
         likelihood ratio by its Gaussian likelihood over this uniform clutter law (tracking/measurements.py
         :class:`RangeRatePositionMeasurements`); None: position only.
+    turns : TurnModes or None
+        Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
+        None: the settings' CV modes only.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
-                 max_range_rate_mps: float | None = None):
+                 max_range_rate_mps: float | None = None, turns=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -158,7 +161,7 @@ class ContactTracker:
 
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
-        self.tracker = position_tracker(settings)
+        self.tracker = position_tracker(settings, turns=turns)
         if max_range_rate_mps is not None:
             m = self.tracker.measurements
             self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
@@ -324,7 +327,7 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     settings : ActiveSettings
         The chain (sound speed, contact errors, gate, tracker).
     tracker : PositionTrackerSettings, optional
-        Another tracker than ``settings``'s (e.g. one IPDA mode).
+        Another tracker than ``settings``'s (e.g. one IPDA mode), without the settings' turn modes.
     rate_sd_mps : float
         Standard deviation of a measured range rate (m/s).
     beam_step_deg : float, optional
@@ -342,7 +345,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
-                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps)
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps,
+                         turns=settings.turn_modes() if tracker is None else None)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -443,7 +447,8 @@ class _Chain:
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
-                                      s.side_turn_deg, s.merge_probability, s.max_range_rate_mps)
+                                      s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
+                                      turns=s.turn_modes())
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser

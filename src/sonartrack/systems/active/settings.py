@@ -15,7 +15,9 @@ active chain's detection probability declared here), and the range-rate gate's w
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
+
+from pydantic import Field
 
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, derived_settings, setting
@@ -23,6 +25,7 @@ from sonartrack.detection.cells import FrontEndSettings
 from sonartrack.detection.cw_cells import CwNormaliserSettings
 from sonartrack.detection.ping_mftd import PingMftdSettings
 from sonartrack.systems.active.contacts import ContactSettings
+from sonartrack.tracking.motion import TurnModes
 from sonartrack.tracking.settings import PositionTrackerSettings
 
 ActiveFrontEndSettings = derived_settings(
@@ -45,6 +48,11 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "confirmed false tracks from MFTD in 3 h of reverberation 6 at 0.9, 2 at 0.97, 0 at "
                                 "0.99 (single-ping: 79, 71, 2); the targets' held fraction falls by <= 0.02 and "
                                 "their time to confirm grows by 30-60 s"),
+    "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
+                                  "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
+                                  "lets a track enter a turn mode a ping sooner (tests/systems/active/"
+                                  "test_turns_tracker.py: largest error in a 180 deg turn at 1 deg/s 497 -> 406 m, "
+                                  "straight target's error unchanged)"),
 }
 
 ActiveTrackerSettings = derived_settings(
@@ -86,6 +94,14 @@ class ActiveSettings(Settings):
               "the mirror contact of each detection in its gate is then dropped, so no ghost track restarts on the "
               "other side after the turn (not set: both mirror contacts always go to the tracker)", unit="deg", gt=0,
         le=180)
+    target_turn_rates_deg_s: list[Annotated[float, Field(gt=0, le=30)]] = setting(
+        default_factory=lambda: [0.5, 1.0], unit="deg/s",
+        doc="turn rates of the tracker's coordinated-turn modes (a clockwise and a counter-clockwise mode at each, "
+            "beside P4's two constant-velocity modes; filters/coordinated_turn.py). A target turning at 1 deg/s "
+            "turns 30 deg between pings 30 s apart, and P4's CV modes alone lag it 500-700 m and lose it "
+            "(issue 34 item 5); empty: P4's CV modes only")
+    target_turn_q: float = setting(1e-3, "white-noise acceleration intensity of each turn mode (covers a target "
+                                         "turning between the modes' rates)", unit="m^2/s^3", ge=0)
     merge_probability: float | None = setting(
         0.99, "gate probability of the track-to-track test (tracking/duplicates.py: chi-square on the difference of "
               "two tracks' states [x, y, vx, vy]) by which a track following the same target as a confirmed track "
@@ -136,6 +152,16 @@ class ActiveSettings(Settings):
             The ``tracker`` group built as it is.
         """
         return self.tracker.build()
+
+    def turn_modes(self) -> TurnModes:
+        """The tracker's coordinated-turn modes.
+
+        Returns
+        -------
+        TurnModes
+            ``target_turn_rates_deg_s`` (deg/s) with intensity ``target_turn_q`` (m^2/s^3).
+        """
+        return TurnModes(tuple(self.target_turn_rates_deg_s), self.target_turn_q)
 
     def checked(self, channels: int) -> ActiveSettings:
         """These settings for pings of ``channels`` channels (elements set to it; one-line errors).

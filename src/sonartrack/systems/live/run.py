@@ -128,13 +128,23 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
                 live_ref[0].checkpoint(checkpoint)
                 live_ref[1] = time.monotonic()
     except KeyboardInterrupt:
-        pass
-    finally:
-        done.set()
-        for th in threads:
-            if th is not None:
-                th.join(timeout=5.0)
+        _stop(done, threads)
+        if checkpoint is not None and live_ref[0] is not None:
+            live_ref[0].checkpoint(checkpoint)  # Ctrl-C keeps the state: the same command resumes from here
+        raise
+    except BaseException:
+        _stop(done, threads)
+        raise
+    _stop(done, threads)
     return _end(live_ref[0], checkpoint, publish)
+
+
+def _stop(done: threading.Event, threads: list) -> None:
+    """End the navigation and refresh threads (each given 5 s to finish what it is doing)."""
+    done.set()
+    for th in threads:
+        if th is not None:
+            th.join(timeout=5.0)
 
 
 def _start(samples, settings, checkpoint, options, live_ref: list, publish, refresh_s: float, done, ready):

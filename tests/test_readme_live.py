@@ -1,0 +1,74 @@
+"""The README's two live lines, run as written and together: the recorder (``simulate --stream``) and the console
+(``live --tcp``). The console must show the default scene's ships building up (confirmed tracks pushed to a
+WebSocket client of the page), and Ctrl-C must stop both with status 130, one line each and no traceback."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path[:0] = [str(Path(__file__).parent), str(Path(__file__).parent / "console")]
+from wsclient import Client  # noqa: E402
+
+from test_readme_commands import _environment, readme_commands  # noqa: E402
+
+
+def _lines() -> tuple[str, str]:
+    commands = readme_commands()
+    recorder = [c for c in commands if "--stream" in c]
+    console = [c for c in commands if c.startswith("sonartrack live --tcp")]
+    assert len(recorder) == 1 and len(console) == 1, (recorder, console)
+    return recorder[0], console[0]
+
+
+def _start(command: str, cwd: Path) -> subprocess.Popen:
+    return subprocess.Popen(["bash", "-c", f"exec {command}"], cwd=cwd, env=_environment(), text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+
+
+def _wait_console(url: str, proc: subprocess.Popen, timeout_s: float = 60.0) -> Client:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            return Client(url)
+        except Exception:  # noqa: BLE001 - not listening yet
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the console never answered"
+            time.sleep(0.2)
+
+
+def _ships(messages) -> set[int]:
+    """Confirmed track ids the console has been shown."""
+    ids = set()
+    for m in messages:
+        for u in m["updates"] if m["type"] == "history" else [m]:
+            if u["type"] == "tracks":
+                ids |= {t["id"] for t in u["tracks"] if t.get("status") == "confirmed"}
+    return ids
+
+
+def test_readme_live_lines_show_the_ships(tmp_path):
+    recorder_line, console_line = _lines()
+    recorder = _start(recorder_line, tmp_path)
+    console = None
+    try:
+        assert "waiting for the live side" in recorder.stdout.readline()
+        console = _start(console_line, tmp_path)
+        client = _wait_console("http://127.0.0.1:8765/", console)
+        ships = client.wait(lambda ms: len(_ships(ms)) >= 2 and _ships(ms), 120)
+        assert client.of_type("btr")
+        client.wait(lambda ms: client.of_type("ownship") and client.of_type("targets"), 120)  # the first refresh
+        client.close()
+    finally:
+        for proc in (console, recorder):
+            if proc is not None and proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        outs = [p.communicate(timeout=60) if p is not None else ("", "") for p in (console, recorder)]
+    for proc, (out, err) in zip((console, recorder), outs, strict=True):
+        assert proc.returncode == 130, (proc.returncode, out, err)
+        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("interrupted"), err
+    print(f"confirmed tracks shown: {sorted(ships)}")
