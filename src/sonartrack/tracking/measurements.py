@@ -160,8 +160,9 @@ class RangeRatePositionMeasurements(PositionMeasurements):
     rx: tuple | None = None
     range_rate_mps: np.ndarray | None = None
 
-    def at_scan(self, tx, rx, range_rate_mps) -> RangeRatePositionMeasurements:
-        """This measurement part for one scan.
+    def at_scan(self, tx, rx, range_rate_mps, clutter_density_per_m2: float | None = None
+                ) -> RangeRatePositionMeasurements:
+        """This measurement part for one scan (and its clutter density, when given).
 
         Parameters
         ----------
@@ -169,13 +170,17 @@ class RangeRatePositionMeasurements(PositionMeasurements):
             Source and receiver (position m, velocity m/s) at the scan.
         range_rate_mps : array (m,)
             The scan's contacts' measured range rates (m/s; NaN: none).
+        clutter_density_per_m2 : float, optional
+            lambda for this scan (1/m^2); None: unchanged.
 
         Returns
         -------
         RangeRatePositionMeasurements
             A copy holding them.
         """
-        return replace(self, tx=tx, rx=rx, range_rate_mps=np.asarray(range_rate_mps, float))
+        lam = self.clutter_density_per_m2 if clutter_density_per_m2 is None else float(clutter_density_per_m2)
+        return replace(self, tx=tx, rx=rx, range_rate_mps=np.asarray(range_rate_mps, float),
+                       clutter_density_per_m2=lam)
 
     def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
         """P4's position likelihoods (:class:`PositionMeasurements`) with each gated pair's ratio times its range
