@@ -10,7 +10,10 @@ One ping on a towed line array (complex baseband, channels x samples) becomes a 
 * Dopplers: one cell (0 Hz) for an LFM (Doppler tolerant: an echo at Doppler f_d compresses at the delay
   travel time - f_d tau / B, acoustics/matched_filter.py), the Doppler filter bank for a CW, spanning
   |bistatic range rate| <= ``max_range_rate_mps`` (f_d = -f_c rdot_B / c);
-* delays below ``blank_s`` are dropped (the direct blast of the source and the pulse's own length);
+* delays below ``blank_s`` are dropped (the direct blast of the source and the pulse's own length), and so are
+  those before the end of the direct blast where the navigation gives its arrival (|Tx - Rx| / c, one pulse long,
+  plus ``blast_guard_s``): the samples before that gate are zeroed before the beams (:func:`gated_samples` says
+  why) and the CFAR runs on the cells after it only (a reference in the blanked start would be no reference);
 * the CFAR runs along delay with its reference cells one resolution cell apart (:func:`cfar_stride`: 2 cells
   for the default LFM sampled at 2 B, 4 for a CW's quarter-pulse delays), so that they are about independent,
   as the closed-form thresholds assume (with every cell as a reference the noise-only false-alarm rate was
@@ -62,8 +65,16 @@ class FrontEndSettings(Settings):
                                unit="1", ge=1, le=8)
     blank_s: float = setting(1.5, "delays below this are not searched: the direct blast (baseline / c) and the "
                                   "pulse length", unit="s", ge=0)
+    blast_guard_s: float | None = setting(
+        0.2, "the samples before the end of the direct blast plus this guard are zeroed before the beams, and no delay "
+             "before it is searched or used as a CFAR reference: the blast's arrival is the source-array distance / c "
+             "from the navigation, its end one pulse later (module doc; not set: only blank_s)", unit="s", ge=0, le=10)
     pfa: float = setting(1e-5, "false-alarm probability per cell of the single-ping threshold", unit="1",
                          gt=0, lt=1)
+    heavy_tail: bool = setting(True, "each ping's OS-normalised statistic is mapped onto its law in exponential noise "
+                                     "through the K distribution whose shape fits its tail, per Doppler cell "
+                                     "(detection/normalise.py): thresholds set for exponential noise then keep their "
+                                     "false-alarm rate in spiky reverberation (OS CFAR only)", unit="")
     cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
 
 
@@ -205,7 +216,8 @@ def cfar_stride(waveform: Waveform, fs_hz: float, delay_s: np.ndarray) -> int:
 
 
 def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: LineArray,
-                   settings: FrontEndSettings, *, time_s: float = 0.0, ping: int = 0) -> PingCells:
+                   settings: FrontEndSettings, *, time_s: float = 0.0, ping: int = 0,
+                   direct_arrival_s: float | None = None) -> PingCells:
     """One ping's normalised cells (module doc).
 
     Parameters
@@ -225,25 +237,119 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
         Transmit time (s), copied to the cells.
     ping : int
         The ping's number, copied to the cells.
+    direct_arrival_s : float, optional
+        Arrival of the direct blast at the array (s after transmit, |Tx - Rx| / c from the navigation): the samples
+        before its end plus ``blast_guard_s`` are zeroed and no delay before it is searched (:func:`blast_gate_s`).
 
     Returns
     -------
     PingCells
-        Normalised statistic (B, D, J) with its axes.
+        Normalised statistic (B, D, J) with its axes (cells before the blast's gate hold 0).
     """
-    power, delay, doppler = matched_cells(samples, fs_hz, waveform, array, settings)
-    stride = cfar_stride(waveform, fs_hz, delay)
-    y = np.asarray(np.moveaxis(power, 1, -1), dtype=np.float32)
-    mu = noise_estimate(y, settings.cfar, stride)
-    stat = np.ascontiguousarray(np.moveaxis(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), -1, 1))
-    level = np.ascontiguousarray(np.moveaxis(mu, -1, 1))
+    gate = blast_gate_s(settings, waveform, direct_arrival_s)
+    power, delay, doppler = matched_cells(gated_samples(samples, fs_hz, gate), fs_hz, waveform, array, settings)
     keep = delay >= settings.blank_s
     require(bool(keep.any()), f"blank_s {settings.blank_s:g} s leaves no delay of the {delay[-1]:.3g} s window: "
                               "lower it")
+    live = delay[keep] >= gate
+    require(bool(live.any()), f"the direct blast (arrival {direct_arrival_s:.3g} s from the navigation, plus the "
+                              f"pulse and blast_guard_s) ends at {gate:.3g} s, after the {delay[-1]:.3g} s window: "
+                              "check the navigation's source and array positions")
+    y = np.asarray(np.moveaxis(power[:, keep][:, live], 1, -1), dtype=np.float32)
+    mu = noise_estimate(y, settings.cfar, cfar_stride(waveform, fs_hz, delay))
+    stat = np.zeros((power.shape[0], int(keep.sum()), power.shape[2]), np.float32)
+    level = np.zeros_like(stat)
+    s_live, _ = heavy_tail_statistic(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), settings)
+    stat[:, live] = np.moveaxis(s_live, -1, 1)
+    level[:, live] = np.moveaxis(np.divide(y, s_live, out=mu.copy(), where=s_live > 0), -1, 1)  # s level = power
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
             if waveform.measures_doppler else np.full(doppler.shape, np.nan))
-    return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate,
-                     stat[:, keep], waveform.measures_doppler, level[:, keep])
+    return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate, stat,
+                     waveform.measures_doppler, level)
+
+
+def heavy_tail_statistic(stat: np.ndarray, settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray]:
+    """The OS-normalised statistic (B, J, D) mapped per Doppler cell through the K law of its fitted shape
+    (detection/normalise.py :func:`k_shape_from_exceedance`, :func:`k_to_exponential`), and the shapes (J,) (inf:
+    exponential, left as it is; all inf when ``heavy_tail`` is off or the CFAR is CA).
+
+    Parameters
+    ----------
+    stat : ndarray (B, J, D)
+        s = y / mu of the searched cells.
+    settings : FrontEndSettings
+        ``heavy_tail`` and the CFAR (N, k).
+
+    Returns
+    -------
+    tuple
+        (mapped statistic (B, J, D) float32, K shape per Doppler cell (J,)).
+    """
+    from sonartrack.detection.normalise import k_shape_from_exceedance, k_to_exponential
+
+    shapes = np.full(stat.shape[1], np.inf)
+    if not settings.heavy_tail or settings.cfar.method != "os":
+        return stat, shapes
+    n, k = settings.cfar.n_reference, settings.cfar.rank
+    out = np.array(stat, dtype=np.float32, copy=True)
+    for j in range(stat.shape[1]):
+        shapes[j] = k_shape_from_exceedance(stat[:, j], n, k)
+        out[:, j] = k_to_exponential(stat[:, j], shapes[j], n, k)
+    return out, shapes
+
+
+def blast_gate_s(settings: FrontEndSettings, waveform: Waveform, direct_arrival_s: float | None) -> float:
+    """End of the blanked start of a ping (s): ``blank_s``, or the direct blast's end plus ``blast_guard_s`` where
+    that is later (the blast arrives at ``direct_arrival_s`` = |Tx - Rx| / c and lasts one pulse).
+
+    Parameters
+    ----------
+    settings : FrontEndSettings
+        ``blank_s`` and ``blast_guard_s``.
+    waveform : Waveform
+        The pulse (its length).
+    direct_arrival_s : float or None
+        Arrival of the direct blast at the array (s after transmit; None: not known).
+
+    Returns
+    -------
+    float
+        Samples and delays before this time are not used (s).
+    """
+    if direct_arrival_s is None or settings.blast_guard_s is None:
+        return float(settings.blank_s)
+    return float(max(settings.blank_s, direct_arrival_s + waveform.duration_s + settings.blast_guard_s))
+
+
+def gated_samples(samples: np.ndarray, fs_hz: float, gate_s: float) -> np.ndarray:
+    """The ping with its samples before ``gate_s`` zeroed (a copy; the input is not changed).
+
+    Why: the beamformer's block-wise steering (acoustics/active_beams.py) leaks a fraction ~1e-7 of each sample's
+    power across the whole window, so a direct blast of ~170 dB re 1 uPa^2 (a towed source 150 m ahead of the array)
+    leaves ~100 dB at every delay, as loud as the late reverberation: measured on the independent generator
+    (tests/worlds/active_pings.py) 46 false single-ping detections a ping spread over 2-12 s, 32 false confirmed
+    tracks an hour. No searched delay uses a sample before the gate (an echo at delay d fills d .. d + tau).
+
+    Parameters
+    ----------
+    samples : ndarray (N, M)
+        Complex baseband, sample 0 at the transmit time.
+    fs_hz : float
+        Sample rate (Hz).
+    gate_s : float
+        Samples before this time are zeroed (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        (N, M) the gated samples.
+    """
+    n = min(int(np.floor(gate_s * fs_hz)), samples.shape[-1])
+    if n <= 0:
+        return samples
+    x = np.array(samples, copy=True)
+    x[..., :n] = 0
+    return x
 
 
 def _refine(log_s: np.ndarray, idx: tuple[np.ndarray, ...], axis: int) -> np.ndarray:

@@ -315,3 +315,137 @@ def cfar_normalise(power: np.ndarray, settings: CfarSettings, stride: int = 1) -
     y = np.asarray(power, dtype=np.float32)
     mu = noise_estimate(y, settings, stride)
     return np.divide(y, mu, out=np.zeros_like(y), where=mu > 0)
+
+
+#: ln x grid of the K laws' tabulation and the Gauss-Laguerre order of their texture integral
+_LOG_X = np.linspace(np.log(1e-9), np.log(1e7), 3000)
+_TEXTURE_NODES = 160
+
+
+@cache
+def _k_law(nu: float) -> tuple[np.ndarray, np.ndarray]:
+    """(pdf, survival) of a unit-mean K intensity of shape nu on the grid exp(_LOG_X), as the texture integral
+
+        S(x) = E_g[exp(-x / g)],   f(x) = E_g[exp(-x / g) / g],   g ~ Gamma(nu, 1 / nu)
+
+    by generalised Gauss-Laguerre quadrature (exact for the gamma weight u^(nu-1) e^(-u), u = nu g): stable for every
+    nu, where the Bessel form overflows for large nu."""
+    from scipy.special import gammaln, roots_genlaguerre
+
+    u, wq = roots_genlaguerre(_TEXTURE_NODES, nu - 1.0)
+    wq = wq / np.exp(gammaln(nu))  # the gamma density's normalisation
+    g = u / nu
+    x = np.exp(_LOG_X)[:, None]
+    e = np.exp(-x / g[None, :]) * wq[None, :]
+    return (e / g[None, :]).sum(axis=1), np.clip(e.sum(axis=1), 0.0, 1.0)
+
+
+def k_os_pfa(alpha, nu: float, n: int, k: int):
+    """Pfa of OS-CFAR (s = y / (x_(k) / c_k) >= alpha) when the cell y and its N references are independent
+    K-distributed intensities of shape nu (a gamma(nu) texture times an exponential speckle, independent cell to cell).
+
+    The K intensity of unit mean has (Jakeman & Pusey 1976; Ward, Tough & Watts, Sea Clutter, eq. 4.11; Watts 1987)
+
+        f(x) = 2 nu^((nu+1)/2) x^((nu-1)/2) K_(nu-1)(2 sqrt(nu x)) / Gamma(nu),
+        S(x) = P(y > x) = 2 (nu x)^(nu/2) K_nu(2 sqrt(nu x)) / Gamma(nu)
+
+    (computed as their texture integrals, :func:`_k_law`), and the k-th of N ordered references has the density
+    N! / ((k-1)! (N-k)!) F^(k-1) S^(N-k) f (David, Order Statistics, eq. 2.1.6), so
+
+        Pfa(alpha) = integral_0^inf S(alpha x / c_k) f_(k)(x) dx
+
+    (Gandhi & Kassam 1988 give the same integral for OS-CFAR in non-Gaussian clutter), by the trapezoid rule in ln x.
+    nu -> infinity gives Rohling's closed form :func:`os_pfa`; the scale of the clutter cancels.
+
+    Parameters
+    ----------
+    alpha : float or array_like
+        Threshold(s) on the normalised statistic s.
+    nu : float
+        K shape (> 0; small: spiky).
+    n, k : int
+        Reference cells N and the OS rank k.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Pfa per cell at each alpha.
+    """
+    from scipy.special import gammaln
+
+    pdf, sf = _k_law(float(nu))
+    x = np.exp(_LOG_X)
+    with np.errstate(divide="ignore"):
+        log_fk = (gammaln(n + 1) - gammaln(k) - gammaln(n - k + 1) + (k - 1) * np.log1p(-sf) + (n - k) * np.log(sf)
+                  + np.log(pdf))
+    w = np.exp(log_fk) * x  # density of x_(k) in ln x
+    a = np.atleast_1d(np.asarray(alpha, float))
+    log_t = np.log(np.maximum(a[:, None] * x[None, :] / os_mean_factor(n, k), 1e-300))
+    s = np.exp(np.interp(log_t, _LOG_X, np.log(np.maximum(sf, 1e-300))))
+    out = np.trapezoid(s * w[None, :], _LOG_X, axis=1) / np.trapezoid(w, _LOG_X)
+    return out if np.ndim(alpha) else float(out[0])
+
+
+#: K shapes of the tabulated thresholds; above the last the exponential closed form
+K_SHAPES = tuple(float(v) for v in np.exp(np.linspace(np.log(0.1), np.log(100.0), 31)))
+
+
+@cache
+def _k_table(n: int, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """log Pfa of OS-CFAR in K clutter on a grid: (shapes nu (S,), thresholds alpha (A,), log Pfa (S, A))."""
+    nus = np.asarray(K_SHAPES)
+    alphas = np.exp(np.linspace(np.log(0.5), np.log(1e5), 300))
+    return nus, alphas, np.log(np.maximum(np.stack([k_os_pfa(alphas, v, n, k) for v in nus]), 1e-300))
+
+
+def k_os_log_pfa(alpha, nu: float, n: int, k: int) -> np.ndarray:
+    """ln Pfa of OS-CFAR in K clutter of shape nu at thresholds alpha, interpolated on the tabulation of
+    :func:`k_os_pfa` (linear in ln nu and ln alpha; above nu = 100 the exponential closed form).
+
+    Parameters
+    ----------
+    alpha : array_like
+        Thresholds on s (> 0).
+    nu : float
+        K shape.
+    n, k : int
+        Reference cells N and the OS rank k.
+
+    Returns
+    -------
+    numpy.ndarray
+        ln Pfa at each alpha.
+    """
+    a = np.asarray(alpha, float)
+    if nu >= K_SHAPES[-1]:
+        return np.log(np.maximum(os_pfa(a, n, k), 1e-300))
+    nus, alphas, log_p = _k_table(n, k)
+    j = np.interp(np.log(max(nu, nus[0])), np.log(nus), np.arange(len(nus)))
+    lo = int(min(np.floor(j), len(nus) - 2))
+    row = (1 - (j - lo)) * log_p[lo] + (j - lo) * log_p[lo + 1]
+    return np.interp(np.log(np.maximum(a, 1e-300)), np.log(alphas), row)
+
+
+def k_os_threshold(pfa: float, nu: float, n: int, k: int) -> float:
+    """alpha with :func:`k_os_pfa` = ``pfa`` (on the tabulation, :func:`k_os_log_pfa`).
+
+    Parameters
+    ----------
+    pfa : float
+        False-alarm probability per cell, in (0, 1).
+    nu : float
+        K shape.
+    n, k : int
+        Reference cells N and the OS rank k.
+
+    Returns
+    -------
+    float
+        Threshold on the normalised statistic s.
+    """
+    require(0 < pfa < 1, f"the false-alarm probability must be in (0, 1), got {pfa:g}")
+    if nu >= K_SHAPES[-1]:
+        return os_threshold(pfa, n, k)
+    _, alphas, _ = _k_table(n, k)
+    row = k_os_log_pfa(alphas, nu, n, k)
+    return float(np.exp(np.interp(-np.log(pfa), -row, np.log(alphas))))

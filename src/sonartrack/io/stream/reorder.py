@@ -13,6 +13,7 @@ as they come and gives them out in order and contiguous:
 * a block that ends at or before ``n`` was either given out already (``duplicate``, dropped) or lies in a
   declared gap (``late``, dropped: the samples after it have gone out); one that straddles ``n`` has its known
   head cut (``overlap``) and its new tail given out.
+
 Memory: at most ``window_blocks`` blocks and the starts of the last :data:`RECENT` blocks given out.
 """
 

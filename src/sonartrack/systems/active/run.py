@@ -160,7 +160,8 @@ class ContactTracker:
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
-                 max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None):
+                 max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
+                 clutter_map=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -180,6 +181,7 @@ class ContactTracker:
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
         if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
             self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
+        self.clutter_map = clutter_map
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
@@ -217,6 +219,19 @@ class ContactTracker:
                 keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
         return keep
 
+    def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
+        ping goes only to the confirmed tracks whose gate holds it (True: not withheld)."""
+        keep = np.ones(len(contacts), bool)
+        if self.clutter_map is None:
+            return keep
+        clutter = self.clutter_map.update(contacts.xy, contacts.R)
+        if clutter.any():
+            x, P, _ = self._predicted_confirmed(t_s)
+            held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
+            keep &= ~clutter | held
+        return keep
+
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
@@ -231,9 +246,9 @@ class ContactTracker:
         Returns
         -------
         numpy.ndarray
-            (m,) bool verdict per contact.
+            (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts)
+        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
         if hasattr(self.tracker.measurements, "at_scan"):
             g, lam = self.geometry, None
             if self.clutter_area is not None:
@@ -382,11 +397,32 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
                          rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps,
                          turns=settings.turn_modes() if tracker is None else None,
-                         clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps))
+                         clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
+                         clutter_map=clutter_map_of(settings))
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
     return contacts, keep, trk.result()
+
+
+def clutter_map_of(settings: ActiveSettings):
+    """The chain's clutter map (detection/clutter_map.py), or None when ``clutter_map_pings`` is not set.
+
+    Parameters
+    ----------
+    settings : ActiveSettings
+        ``clutter_map_pings`` and ``clutter_map_hits``.
+
+    Returns
+    -------
+    ClutterMap or None
+        A fresh map.
+    """
+    from sonartrack.detection.clutter_map import ClutterMap
+
+    if settings.clutter_map_pings is None:
+        return None
+    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings))
 
 
 def geometry_of(nav) -> ActiveGeometry:
@@ -484,18 +520,21 @@ class _Chain:
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
-                                      turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps))
+                                      turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
+                                      clutter_map=clutter_map_of(s))
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
-        """The ping's cells: detection/cells.py's for an LFM, detection/cw_cells.py's for a CW (its normaliser
-        across Doppler and delay, the reverberation ridge of each beam notched from the navigation)."""
+        """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
+        arrival from the navigation), detection/cw_cells.py's for a CW (its normaliser across Doppler and delay,
+        the reverberation ridge of each beam notched from the navigation)."""
         from sonartrack.detection.cells import ping_front_end
         from sonartrack.detection.cw_cells import cw_ping_cells
 
-        w, fs = self.table.waveform(i), float(self.table.fs_hz[i])
+        w, fs, g = self.table.waveform(i), float(self.table.fs_hz[i]), self.geometry
         if w.kind != "cw":
-            return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number)
-        g = self.geometry
+            direct_s = float(np.hypot(*(g.tx_at(time_s) - g.rx_at(time_s)))) / self.settings.sound_speed_mps
+            return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number,
+                                  direct_arrival_s=direct_s)
         motion = (float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
         return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
                              motion=motion)

@@ -110,23 +110,13 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         nav, options = None, {**options, "nav": nav}
     stop = stop or threading.Event()
     done, live_ref = threading.Event(), [None]
-    threads, early = [_nav_thread(nav, live_ref, publish, done)], []
+    threads = [_nav_thread(nav, live_ref, publish, done)]
+
+    def start():
+        threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready))
+
     try:
-        for item in samples:
-            if stop.is_set():
-                break
-            if live_ref[0] is None and getattr(samples, "header", None) is None:
-                early.append(item)  # a TCP source's events before its header frame: the chain needs the header
-                continue
-            if live_ref[0] is None:
-                threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done,
-                                      ready))
-            for it in [*early, item]:
-                _take(live_ref[0], it, publish)
-            early = []
-            if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
-                live_ref[0].checkpoint(checkpoint)
-                live_ref[1] = time.monotonic()
+        _read(samples, stop, live_ref, start, publish, checkpoint, checkpoint_s)
     except KeyboardInterrupt:
         _stop(done, threads)
         if checkpoint is not None and live_ref[0] is not None:
@@ -137,6 +127,27 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         raise
     _stop(done, threads)
     return _end(live_ref[0], checkpoint, publish)
+
+
+def _read(samples, stop: threading.Event, live_ref: list, start: Callable[[], None], publish, checkpoint,
+          checkpoint_s: float) -> None:
+    """Each item of the sample source through the chain (built by ``start`` once the source's header is known),
+    the checkpoint written every ``checkpoint_s``, until the source ends or ``stop`` is set."""
+    early = []
+    for item in samples:
+        if stop.is_set():
+            break
+        if live_ref[0] is None and getattr(samples, "header", None) is None:
+            early.append(item)  # a TCP source's events before its header frame: the chain needs the header
+            continue
+        if live_ref[0] is None:
+            start()
+        for it in [*early, item]:
+            _take(live_ref[0], it, publish)
+        early = []
+        if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
+            live_ref[0].checkpoint(checkpoint)
+            live_ref[1] = time.monotonic()
 
 
 def _stop(done: threading.Event, threads: list) -> None:
