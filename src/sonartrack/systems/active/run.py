@@ -45,6 +45,7 @@ from sonartrack.systems.active.contacts import (
     range_rate_gate,
     resolve_mirrors,
 )
+from sonartrack.systems.active.cw_tracking import cw_clutter_area, cw_contact_errors
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.run import PositionTracks
@@ -309,55 +310,6 @@ def rate_sd_of(cells_range_rate_mps) -> float:
     if len(v) < 2 or not np.all(np.isfinite(v)):
         return 1.0
     return float(abs(v[1] - v[0]) / np.sqrt(12.0))
-
-
-def cw_clutter_area(cells, sound_speed_mps: float) -> float | None:
-    """The area a CW's contacts can fall in, pi (c t_max / 2)^2 (the bistatic ellipse of the longest delay, the
-    baseline neglected), for :class:`ContactTracker`'s clutter density; None when the detections or cells measure
-    no range rate (an LFM keeps the tuned setting).
-
-    Parameters
-    ----------
-    cells : PingCells or Detections
-        With ``range_rate_mps`` and ``delay_s`` (cells) or ``travel_time_s`` (detections).
-    sound_speed_mps : float
-        Sound speed c (m/s).
-
-    Returns
-    -------
-    float or None
-        Area (m^2).
-    """
-    rate = np.asarray(cells.range_rate_mps, float)
-    t = np.asarray(getattr(cells, "delay_s", getattr(cells, "travel_time_s", np.zeros(0))), float)
-    if not rate.size or not np.isfinite(rate).all() or not t.size:
-        return None
-    return float(np.pi * (sound_speed_mps * t.max() / 2.0) ** 2)
-
-
-def cw_contact_errors(settings: ActiveSettings, delay_s):
-    """The contacts' input errors with the travel-time error of a CW's delay cells: the larger of the setting and
-    (cells pooled per detection) x (cell step) / sqrt(12) (uniform within the cell; pooled: the MFTD's pool_cells).
-    Measured on the default scene as CW (seed 9101, 900 s): median |delay offset| 0.064 s single-ping (cell step
-    0.25 s: sd 0.072 s), 0.22 s MFTD (pooled pair: 0.14 s) against P4's 0.01 s, with which no CW track was formed.
-
-    Parameters
-    ----------
-    settings : ActiveSettings
-        The chain (its contacts' errors, detector and MFTD pooling).
-    delay_s : array
-        The CW cells' delays (s), evenly spaced.
-
-    Returns
-    -------
-    ContactSettings
-        ``settings.contacts`` with ``sigma_time_s`` raised where the cells are coarser.
-    """
-    d = np.asarray(delay_s, float)
-    step = float(d[1] - d[0]) if d.size > 1 else 0.0
-    pool = settings.mftd_settings().pool_cells if settings.detector == "mftd" else 1
-    sd = max(float(settings.contacts.sigma_time_s), pool * step / np.sqrt(12.0))
-    return settings.contacts.model_copy(update={"sigma_time_s": sd})
 
 
 def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeometry, settings: ActiveSettings, *,
