@@ -22,15 +22,13 @@ from sonartrack.core.errors import InputError
 from sonartrack.detection.cells import FrontEndSettings, detect_ping
 from sonartrack.detection.cfar import os_mean_factor
 from sonartrack.detection.cw_cells import (
+    CwEstimate,
     CwNormaliserSettings,
     cw_noise_estimate,
     cw_ping_cells,
-    cw_ranks,
     cw_threshold,
-    go_pfa,
-    ridge_notch,
-    ridge_range_rates,
 )
+from sonartrack.detection.cw_ridge import beam_ridge_notch, ridge_notch, ridge_range_rates
 from sonartrack.detection.ping_mftd import CellAxes, PingMftd, PingMftdSettings
 
 FS, FC, TAU, C, N, D = 200.0, 1500.0, 1.0, 1500.0, 16, 0.5
@@ -48,19 +46,24 @@ def cw_ping(rng, echoes, window_s=30.0, noise=1.0):
     return x.astype(np.complex64)
 
 
-def test_go_threshold_matches_monte_carlo_of_sorted_exponentials():
-    """P(y / max_i x_(k_i)/c_k_i > alpha) by sorting exponentials (not by the Beta law or the integral)."""
-    ranks = ((12, 9), (4, 3), (4, 3))
+def test_threshold_law_matches_monte_carlo_of_sorted_exponentials():
+    """P(y / max(x_f, sqrt(x_e x_l)) > alpha), each x an OS estimate, by sorting exponentials (not by the Beta law,
+    the convolution or the integral)."""
+    law = CwEstimate((12, 9), (4, 3))
     rng = np.random.default_rng(3)
     n = 400_000
-    m = np.zeros(n)
-    for nn, k in ranks:
-        m = np.maximum(m, np.sort(rng.exponential(1.0, (n, nn)), axis=1)[:, k - 1] / os_mean_factor(nn, k))
+
+    def os(nn, k):
+        return np.sort(rng.exponential(1.0, (n, nn)), axis=1)[:, k - 1] / os_mean_factor(nn, k)
+
+    m = np.maximum(os(12, 9), np.sqrt(os(4, 3) * os(4, 3)))
     y = rng.exponential(1.0, n)
-    for alpha in (3.0, 8.0):
-        p = go_pfa(alpha, ranks)
+    for alpha in (3.0, 8.0, 14.0):
+        p = law.pfa(alpha)
         measured = float(np.mean(y / m > alpha))
-        assert abs(measured - p) < 5 * np.sqrt(p / n) + 1e-4, (alpha, p, measured)
+        assert abs(measured - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p, measured)
+    draws = law.draw(np.random.default_rng(4), (n,))
+    assert abs(float(np.mean(y / draws > 8.0)) - law.pfa(8.0)) < 5 * np.sqrt(law.pfa(8.0) / n)
 
 
 def test_normaliser_keeps_its_false_alarm_rate_in_homogeneous_noise():
@@ -71,25 +74,35 @@ def test_normaliser_keeps_its_false_alarm_rate_in_homogeneous_noise():
     pfa = 1e-3
     rate = float(np.mean(stat > cw_threshold(pfa, s)))
     assert 0.6 * pfa < rate < 1.5 * pfa, rate
-    assert cw_ranks(s)[0] == (12, 9)
+    assert s.estimate() == CwEstimate((12, 9), (4, 3))
 
 
-def test_normaliser_does_not_alarm_on_a_steeply_falling_background():
-    """Reverberation falling 10 dB a second (the first seconds after the blanking): the two-sided delay estimate
-    alarmed at the first cells; the greatest-of with the earlier cells does not."""
+def test_normaliser_keeps_its_rate_on_a_steeply_falling_background():
+    """Reverberation falling 10 dB a second from 1.5 s down to the noise (the first seconds after the blanking): the
+    greatest-of with the earlier cells masked the cells there, the later cells alone alarm; the geometric mean of
+    both is the level where the log level is linear (and above it at the knee), from the first searched delay."""
+    from sonartrack.detection.cw_cells import first_searched_delay_s
+
     rng = np.random.default_rng(8)
     delay = np.arange(120) * 0.25
-    level = 10.0 ** (-(delay - delay[0]))[None, :, None] * 1e4 + 1.0
+    level = 10.0 ** (4.0 - np.clip(delay - 1.5, 0.0, None))[None, :, None] + 1.0
     y = (rng.exponential(1.0, (30, 120, 61)) * level).astype(np.float32)
-    stat = y / cw_noise_estimate(y, CwNormaliserSettings(), 4, 2)
-    assert float(np.mean(stat[:, 4:12] > cw_threshold(1e-3, CwNormaliserSettings()))) < 5e-3
+    s = CwNormaliserSettings()
+    stat = y / cw_noise_estimate(y, s, 4, 2)
+    first = int(round(first_searched_delay_s(FrontEndSettings(), s, TAU) / 0.25))
+    assert first == 14  # blank 1.5 s + 2 pulse lengths
+    pfa = 1e-3
+    assert float(np.mean(stat[:, first:first + 24] > cw_threshold(pfa, s))) < 2 * pfa
+    d = np.arange(first, first + 8)
+    late = np.sort(np.stack([y[:, d + 4 * k] for k in range(2, 6)], -1), -1)[..., 2] / os_mean_factor(4, 3)
+    assert float(np.mean(y[:, d] / late > cw_threshold(pfa, s))) > 5 * pfa  # the later cells alone under-estimate
 
 
 def test_ridge_rates_and_notch_by_hand():
     """Array heading north, source and receiver both at 2 m/s north: a stationary scatterer ahead closes at 4 m/s
     (rdot = -4), abeam 0, at cone 60 deg -4 cos 60 = -2 on both sides; heading east, cone 90: starboard is south,
     port north, both 0 for an eastward motion."""
-    r = ridge_range_rates([0.0, 60.0, 90.0, 180.0], 0.0, [0.0, 2.0], [0.0, 2.0])
+    r = ridge_range_rates(np.array([0.0, 60.0, 90.0, 180.0]), 0.0, [0.0, 2.0], [0.0, 2.0])
     np.testing.assert_allclose(r, [[-4, -4], [-2, -2], [0, 0], [4, 4]], atol=1e-12)
     r = ridge_range_rates([90.0], np.pi / 2, [0.0, 1.0], [0.0, 1.0])  # moving north with the axis east
     np.testing.assert_allclose(r, [[2.0, -2.0]], atol=1e-12)  # starboard (south) opens, port (north) closes
@@ -108,20 +121,47 @@ def test_detection_offsets_against_an_independent_ping(t0, cone, fd):
     near = np.abs(det.travel_time_s - t0) < 1.0
     assert near.sum() >= 1
     k = np.argmax(np.where(near, det.statistic, -np.inf))
-    assert abs(det.travel_time_s[k] - t0) < 0.1  # quarter-pulse cells refined by the parabola
+    # quarter-pulse cells refined by the parabola through log s; the delay estimate of neighbouring cells (each from
+    # its own residue class of references) differs from cell to cell, which moves the parabola: 0.13 s of the 1 s
+    assert abs(det.travel_time_s[k] - t0) < 0.15
     assert abs(det.cone_deg[k] - cone) < 1.5
     assert abs(det.doppler_hz[k] - fd) < 0.2  # filters 0.5 Hz apart, refined
     np.testing.assert_allclose(det.range_rate_mps[k], -C * det.doppler_hz[k] / FC)
     assert len(det) <= 12  # the echo and noise peaks: Pfa 1e-5 x ~4e5 cells = 4 expected, P(> 11 more) < 1e-3
 
 
+def beam_power_by_elements(cone_deg, beam_deg, n=N, d=D, f=FC, c=C):
+    """|(1/N) sum_n exp(2 pi i f s_n (cos theta - cos theta_b) / c)|^2, element by element (not the closed form)."""
+    s_n = ((n - 1) / 2.0 - np.arange(n)) * d
+    ph = 2j * np.pi * f * s_n[None, :] * (np.cos(np.deg2rad(cone_deg)) - np.cos(np.deg2rad(beam_deg)))[:, None] / c
+    return np.abs(np.exp(ph).mean(axis=1)) ** 2
+
+
+def test_beam_ridge_by_hand():
+    """Axis north, source and receiver at 2 m/s north (rdot = -4 cos theta on both mirrors): the broadside beam's
+    ridge spans -4 cos theta over its -10 dB main lobe (edges found on the element sum), plus the margin; the
+    forward endfire beam of a half-wavelength array also hears astern (its grating lobe): both ends of the band."""
+    from scipy.optimize import brentq
+
+    edge = brentq(lambda t: beam_power_by_elements([t], 90.0)[0] - 0.1, 90.0, 99.0)  # the lobe's -10 dB edge
+    half = 4.0 * abs(np.cos(np.deg2rad(edge)))
+    rates = np.linspace(-6.0, 6.0, 1201)
+    notch = beam_ridge_notch(rates, [90.0, 0.0], 0.0, [0.0, 2.0], [0.0, 2.0], LineArray(N, D), FC, C, -10.0, 0.5)
+    inside = rates[notch[0]]
+    assert abs(inside.max() - (half + 0.5)) < 0.03 and abs(inside.min() + half + 0.5) < 0.03
+    assert notch[1][np.argmin(abs(rates + 4.0))] and notch[1][np.argmin(abs(rates - 4.0))]
+    assert not notch[1][np.argmin(abs(rates))]  # broadside's rate is not in the endfire beam's lobes
+
+
 def test_notch_removes_the_ridge_cells_only():
+    """Platforms still (the sea's Doppler 0 in every beam, a ridge only the margin wide): an echo at 0.2 m/s goes, one
+    at 5 m/s stays."""
     rng = np.random.default_rng(2)
     x = cw_ping(rng, [(10.0, 90.0, 0.2, 0.3), (15.0, 90.0, -5.0, 0.3)])
     fe = FrontEndSettings()
-    ridge = np.zeros((fe.beams, 2))  # the sea's Doppler 0 in every beam
     s = CwNormaliserSettings()
-    cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s, ridge_mps=ridge)
+    cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s,
+                          motion=(0.0, np.zeros(2), np.zeros(2)))
     det = detect_ping(cells, cw_threshold(fe.pfa, s))
     assert not (np.abs(det.travel_time_s - 10.0) < 1.0).any()  # 0.2 m/s from the ridge: notched
     assert (np.abs(det.travel_time_s - 15.0) < 0.1).any()  # 5 m/s from it: kept
@@ -147,7 +187,7 @@ def test_mftd_on_cw_pings_finds_the_target_delay_and_doppler():
         x = cw_ping(rng, [(t0, cone, fd, 0.08)], window_s=20.0)
         cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s, time_s=k * T, ping=k)
         if mftd is None:
-            mftd = PingMftd(CellAxes.of(cells), T, 1e-6, C, PingMftdSettings(calibration_trials=200), cfar=cw_ranks(s))
+            mftd = PingMftd(CellAxes.of(cells), T, 1e-6, C, PingMftdSettings(calibration_trials=200), cfar=s.estimate())
         out.append(mftd.push(cells))
     last, t_last = out[-1], t_first + 3 * T * rate / C
     assert len(last) >= 1
@@ -165,6 +205,6 @@ def test_doppler_estimate_alone_has_rohlings_os_threshold():
     from sonartrack.detection.cfar import os_threshold
 
     s = CwNormaliserSettings(delay_reference=None)
-    assert cw_ranks(s) == ((12, 9),)
+    assert s.estimate() == CwEstimate((12, 9), None)
     for pfa in (1e-3, 1e-5):
         np.testing.assert_allclose(cw_threshold(pfa, s), os_threshold(pfa, 12, 9), rtol=2e-3)

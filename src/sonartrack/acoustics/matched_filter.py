@@ -23,7 +23,11 @@ time, Rihaczek, Principles of High-Resolution Radar, ch. 6); :func:`lfm_coupling
 CW Doppler filter bank: replicas shifted to Doppler f_j (the DFT frequencies of a zero-padded window of the
 pulse's length), z(d, f_j) = sum_t x(d + t) conj(s(t)) exp(-2 pi i f_j t / f_s): for the CW (s = 1) this is
 the DFT of each window x(d .. d + tau), evaluated on delays d every ``hop`` samples. An echo at Doppler f_d
-peaks in the filter nearest f_d (resolution ~ 0.88 / tau, paper P1's Doppler cell), at its delay.
+peaks in the filter nearest f_d (resolution ~ 0.88 / tau, paper P1's Doppler cell), at its delay. A tapered
+replica s(t) = w(t) (Hann, w = 1 - cos(2 pi (t + 1/2) / L), mean 1) lowers the filters' sidelobes from -13.3 dB
+(falling 6 dB an octave) to -31.5 dB (falling 18 dB an octave) at a wider main lobe (first null 2 / tau, not
+1 / tau) and a loss in white noise of 10 log10(E[w^2]) = 10 log10(1.5) = 1.76 dB (Harris, Proc. IEEE 66(1), 1978,
+table 1): the strong reverberation ridge of a moving platform then leaks into far fewer Doppler cells.
 Doppler f_d <-> bistatic range rate (rate of the total path Tx -> target -> Rx): f_d = -f_c rdot_B / c.
 """
 
@@ -200,8 +204,29 @@ def pulse_compress(spectra: np.ndarray, replica: np.ndarray, n_delays: int) -> n
     return np.fft.ifft(spectra * s_conj, axis=-1)[..., :n_delays].astype(np.complex64)
 
 
+def cw_taper(n: int, taper: str) -> np.ndarray | None:
+    """The CW replica's amplitude taper w (module doc), mean 1, float32; None for the rectangular pulse.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the pulse.
+    taper : str
+        rect or hann.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (n,) w(t) = 1 - cos(2 pi (t + 1/2) / n) for hann (symmetric, nonzero at both ends), None for rect.
+    """
+    require(taper in ("rect", "hann"), f"unknown CW taper '{taper}': choose rect or hann")
+    if taper == "rect":
+        return None
+    return (1.0 - np.cos(2.0 * np.pi * (np.arange(n) + 0.5) / n)).astype(np.float32)
+
+
 def cw_doppler_bank(series: np.ndarray, fs_hz: float, waveform: Waveform, max_doppler_hz: float,
-                    hop: int, pad: int = 2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                    hop: int, pad: int = 2, taper: str = "rect") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The CW matched filter at every Doppler of the bank, on delays every ``hop`` samples (module doc).
 
     Parameters
@@ -218,6 +243,8 @@ def cw_doppler_bank(series: np.ndarray, fs_hz: float, waveform: Waveform, max_do
         Delay step of the output (samples).
     pad : int
         Zero-padding factor of each window's DFT: filters 1 / (pad tau) apart.
+    taper : str
+        The replica's amplitude taper (:func:`cw_taper`): rect or hann.
 
     Returns
     -------
@@ -233,6 +260,9 @@ def cw_doppler_bank(series: np.ndarray, fs_hz: float, waveform: Waveform, max_do
     m = series.shape[-1]
     require(m >= n, f"the series ({m} samples) is shorter than the pulse ({n} samples)")
     windows = np.lib.stride_tricks.sliding_window_view(series, n, axis=-1)[..., ::hop, :]
+    w = cw_taper(n, taper)
+    if w is not None:
+        windows = windows * w
     n_fft = fft_length(pad * n)
     f = np.fft.fftfreq(n_fft, 1.0 / fs_hz)
     keep = np.nonzero(np.abs(f) <= max_doppler_hz)[0]

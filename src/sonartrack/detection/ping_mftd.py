@@ -273,13 +273,12 @@ def tile_statistics(detector: MftdDetector, stack, tiles, tol: float = 1e-9) -> 
 
 
 def noise_tiles(rng: np.random.Generator, shape: tuple[int, int, int], pool: tuple[int, int],
-                cfar: CfarSettings | tuple | None) -> np.ndarray:
+                cfar) -> np.ndarray:
     """One noise-only tile (K, L, D) on P1's scale (mean 2): each cell the max over ``pool`` = (beams, delays) input
     cells; the input cells exponential (mean 1), normalised by ``cfar`` along the delay axis when given (with the
-    CFAR's own reference cells around the tile, as in a ping), or, when ``cfar`` is a tuple of (n, k) ranks (a CW's
-    greatest-of OS normaliser, detection/cw_cells.py), each divided by its own draw of that estimate
-    (:func:`go_scales`: the marginal law of the normalised cell; the estimates' correlation between neighbouring
-    cells is left out), then doubled.
+    CFAR's own reference cells around the tile, as in a ping), or, when ``cfar`` is a CW's noise estimate
+    (detection/cw_cells.py :class:`CwEstimate`), each divided by its own draw of that estimate (the marginal law of
+    the normalised cell; the estimates' correlation between neighbouring cells is left out), then doubled.
 
     Parameters
     ----------
@@ -289,7 +288,7 @@ def noise_tiles(rng: np.random.Generator, shape: tuple[int, int, int], pool: tup
         (K frames, L travel-time cells, D Doppler cells) of the tile, after pooling.
     pool : tuple of int
         (beams, delays) pooled into each cell.
-    cfar : CfarSettings, tuple of (n, k), or None
+    cfar : CfarSettings, CwEstimate, or None
         The normaliser of the cells, or None for none.
 
     Returns
@@ -305,16 +304,14 @@ def noise_tiles(rng: np.random.Generator, shape: tuple[int, int, int], pool: tup
     if isinstance(cfar, CfarSettings):
         y = cfar_normalise(y, cfar)[..., half: half + n]
     elif cfar is not None:
-        from sonartrack.detection.cw_cells import go_scales
-
-        y = y / go_scales(rng, tuple(cfar), y.shape)
+        y = y / cfar.draw(rng, y.shape)
     y = y.reshape(K, n_doppler, pb, n_range, pc).max(axis=(2, 4))
     return NOISE_MEAN * np.moveaxis(y, 1, -1).astype(float)
 
 
 @functools.lru_cache(maxsize=32)
 def _calibrated(detector: MftdDetector, shape: tuple[int, int, int], pfa: float, trials: int, seed: int,
-                pool: tuple[int, int], tol: float, cfar: CfarSettings | tuple | None) -> float:
+                pool: tuple[int, int], tol: float, cfar) -> float:
     """Noise-only tiles (:func:`noise_tiles`) as the beams of one stack (trial i: beam i, from trial_rng(seed, i)),
     one tile each."""
     y = np.stack([noise_tiles(trial_rng(seed, i), shape, pool, cfar) for i in range(trials)], axis=1)
@@ -339,15 +336,15 @@ class PingMftd:
         K, N, design SNR, sigma_a, tiles, pooling, calibration.
     noise_mean : float
         Mean of a noise-only input cell (1 for a CFAR-normalised statistic); scaled to P1's 2.
-    cfar : CfarSettings or tuple of (n, k), optional
+    cfar : CfarSettings or CwEstimate, optional
         The CFAR that normalised the cells: the calibration's noise is normalised the same way (its estimation
-        noise makes the statistic heavier-tailed than an exponential); a tuple: the (n, k) ranks of a CW's
-        greatest-of OS normaliser (:func:`noise_tiles`).
+        noise makes the statistic heavier-tailed than an exponential); a CwEstimate: a CW's normaliser
+        (:func:`noise_tiles`).
     """
 
     def __init__(self, axes: CellAxes, period_s: float, pfa: float, sound_speed_mps: float,
                  settings: PingMftdSettings | None = None, noise_mean: float = 1.0,
-                 cfar: CfarSettings | tuple | None = None):
+                 cfar = None):
         s = settings or PingMftdSettings()
         require(period_s > 0 and sound_speed_mps > 0 and noise_mean > 0,
                 "ping interval, sound speed and noise mean must be positive")

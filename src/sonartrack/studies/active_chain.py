@@ -204,17 +204,11 @@ def run_scene(config: Config, scene: ActiveSceneSettings):
 
 
 def rate_sd(config: Config) -> float:
-    """Standard deviation of a measured range rate (m/s): the CW Doppler bank's filter step / sqrt(12) (run.py
-    ``rate_sd_of``), 1 m/s (unused) for an LFM. (Also made by helper CW2 on its branch; the lead merges.)"""
-    from sonartrack.acoustics.matched_filter import doppler_to_range_rate, fft_length
-    from sonartrack.systems.active.run import rate_sd_of
+    """Standard deviation of a measured range rate (m/s; systems/active/cw_tracking.py ``cw_rate_sd_mps``)."""
+    from sonartrack.systems.active.cw_tracking import cw_rate_sd_mps
 
-    w, s = config.scene.waveform, config.chain_settings()
-    if w.kind != "cw":
-        return rate_sd_of([np.nan])
-    n = max(int(round(w.duration_s * config.scene.sample_rate_hz)), 1)
-    step_hz = config.scene.sample_rate_hz / fft_length(s.front_end.doppler_pad * n)
-    return rate_sd_of(doppler_to_range_rate(np.array([0.0, step_hz]), w.carrier_hz, s.sound_speed_mps))
+    s, sc = config.chain_settings(), config.scene
+    return cw_rate_sd_mps(sc.waveform, sc.sample_rate_hz, s.front_end.doppler_pad, s.sound_speed_mps)
 
 
 def variant_tracks(config: Config, result) -> dict:
@@ -380,8 +374,8 @@ def truth_grid(config: Config, truth: dict, column: str) -> np.ndarray:
 
 
 def echo_hits(config: Config, detections, truth: dict) -> np.ndarray:
-    """(targets, pings) bool: a detection within hit_delay_s of the echo's delay (for a CW, whose delay cells are a
-    quarter pulse, within half a pulse: helper CW2's change too) and hit_cone_deg of its cone."""
+    """(targets, pings) bool: a detection within hit_delay_s of the echo's delay (a CW's: half a pulse, its cells
+    a quarter pulse) and hit_cone_deg of its cone."""
     w = config.scene.waveform
     delay = truth_grid(config, truth, "lfm_delay_s" if w.kind == "lfm" else "travel_time_s")
     tol_s = config.hit_delay_s if w.kind == "lfm" else max(config.hit_delay_s, 0.5 * w.duration_s)
@@ -475,8 +469,9 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
                                                                     "duration_s": quiet_s}))
     from sonartrack.systems.active.run import track_detections
 
-    single = track_detections(quiet.single, quiet.ping_time_s, quiet.geometry, quiet.settings,
-                              rate_sd_mps=rate_sd(config), ping_numbers=np.arange(1, len(quiet.ping_time_s) + 1))[2]
+    s = quiet.settings
+    single = track_detections(quiet.single, quiet.ping_time_s, quiet.geometry, s, rate_sd_mps=rate_sd(config),
+                              ping_numbers=np.arange(1, len(quiet.ping_time_s) + 1))[2]
     out["reverb_false"] = np.array([len(np.unique(t.tracks.track_id[t.tracks.confirmed])) for t in
                                     (quiet.tracks, single)], float)
     out["reverb_false_lv"] = _sweep_false(config, quiet, {"single": single, "mftd": quiet.tracks})

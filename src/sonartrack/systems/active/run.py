@@ -45,6 +45,7 @@ from sonartrack.systems.active.contacts import (
     range_rate_gate,
     resolve_mirrors,
 )
+from sonartrack.systems.active.cw_tracking import cw_clutter_area, cw_contact_errors
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.run import PositionTracks
@@ -142,6 +143,17 @@ class ContactTracker:
     merge_probability : float or None
         Gate probability of the track-to-track test (tracking/duplicates.py) by which a track that follows the
         same target as a confirmed one is deleted after each scan; None: no merging.
+    max_range_rate_mps : float or None
+        The range rates searched span +-this (m/s): a contact's measured range rate (a CW's) multiplies its
+        likelihood ratio by its Gaussian likelihood over this uniform clutter law (tracking/measurements.py
+        :class:`RangeRatePositionMeasurements`); None: position only.
+    clutter_area_m2 : float or None
+        The area the contacts can fall in (m^2): the clutter density of each scan is then the contacts' own,
+        lambda = (contacts so far + 1) / ((scans so far + 1) area) (the nonparametric density of the PDA,
+        Bar-Shalom, Willett, Tian 2011, sec. 3.4.2, pooled over the scans), not ``settings``'s: a CW gives ~100 times
+        fewer contacts than the LFM P4's 1e-6 was tuned on (measured on the default scene as CW, 900 s, single-ping
+        detections: 6.4 contacts a ping over ~1.6e9 m^2, 4e-9; with 1e-6 no track was confirmed, with 1e-8 the
+        strongest target was held 87 % of the pings, no false track). None: the setting's.
     turns : TurnModes or None
         Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
         None: the settings' CV modes only.
@@ -149,14 +161,22 @@ class ContactTracker:
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
-                 turns=None, clutter_map=None):
+                 max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
+                 clutter_map=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
+        from sonartrack.tracking.measurements import RangeRatePositionMeasurements
 
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
+        self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
         self.tracker = position_tracker(settings, turns=turns)
+        if max_range_rate_mps is not None:
+            m = self.tracker.measurements
+            self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
+                                                                      m.clutter_density_per_m2, rate_sd_mps,
+                                                                      float(max_range_rate_mps))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
@@ -230,6 +250,14 @@ class ContactTracker:
             (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
         keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
+        if hasattr(self.tracker.measurements, "at_scan"):
+            g, lam = self.geometry, None
+            if self.clutter_area is not None:
+                self._counts = [self._counts[0] + int(keep.sum()), self._counts[1] + 1]
+                lam = (self._counts[0] + 1) / ((self._counts[1] + 1) * self.clutter_area)
+            self.tracker.measurements = self.tracker.measurements.at_scan(
+                (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
+                contacts.range_rate_mps[keep], lam)
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
@@ -319,8 +347,10 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
-                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability,
-                         turns=settings.turn_modes() if tracker is None else None, clutter_map=clutter_map_of(settings))
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps,
+                         turns=settings.turn_modes() if tracker is None else None,
+                         clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
+                         clutter_map=clutter_map_of(settings))
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -428,38 +458,38 @@ class _Chain:
         self.n_detections = 0
 
     def _start(self, cells: PingCells) -> None:
-        from sonartrack.detection.cw_cells import cw_ranks
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
 
         s = self.settings
+        if self.cw:  # a CW's delay is known to its cells (a quarter pulse, the MFTD's pooled pair), not to P4's 10 ms
+            s = self.settings = s.model_copy(update={"contacts": cw_contact_errors(s, cells.delay_s)})
         self.axes = CellAxes.of(cells)
         if s.detector == "mftd":
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
             self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
-                                 cfar=cw_ranks(s.cw) if self.cw else self.front_end.cfar)
+                                 cfar=s.cw.estimate() if self.cw else self.front_end.cfar)
         self.rate_sd = rate_sd_of(cells.range_rate_mps)
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
-                                      s.side_turn_deg, s.merge_probability, turns=s.turn_modes(),
+                                      s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
+                                      turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
                                       clutter_map=clutter_map_of(s))
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
         arrival from the navigation), detection/cw_cells.py's for a CW (its normaliser across Doppler and delay,
         the reverberation ridge of each beam notched from the navigation)."""
-        from sonartrack.acoustics.active_beams import cone_grid_deg
         from sonartrack.detection.cells import ping_front_end
-        from sonartrack.detection.cw_cells import cw_ping_cells, ridge_range_rates
+        from sonartrack.detection.cw_cells import cw_ping_cells
 
         w, fs, g = self.table.waveform(i), float(self.table.fs_hz[i]), self.geometry
         if w.kind != "cw":
             direct_s = float(np.hypot(*(g.tx_at(time_s) - g.rx_at(time_s)))) / self.settings.sound_speed_mps
             return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number,
                                   direct_arrival_s=direct_s)
-        cone = cone_grid_deg(self.front_end.beams)
-        ridge = ridge_range_rates(cone, float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
+        motion = (float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
         return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
-                             ridge_mps=ridge)
+                             motion=motion)
 
     def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
         from sonartrack.detection.cells import detect_ping
