@@ -54,8 +54,9 @@ def test_history_is_bounded_and_a_gap_is_blank(scene):
     assert [u["t_s"] for u in blank] == [50.5, 51.5, 52.5, 53.5]
     assert all(max(u["level_db"]) < 1e-9 for u in blank[:3])  # windows 50-52, touched by the gap: zeros
     assert max(blank[3]["level_db"]) > 4  # window 53 starts clean after it
-    health = [u for u in ups if u["type"] == "health"][-1]
-    assert health["gaps"] == 1 and "gap: lost 3 s" in health["events"]
+    health = [u for u in ups if u["type"] == "health"]
+    assert health[-1]["gaps"] == 1  # each event is in one health update only (the console logs it once)
+    assert [e for h in health for e in h["events"]].count("gap: lost 3 s") == 1
     live.close()
 
 
@@ -123,3 +124,28 @@ def test_a_foreign_or_old_checkpoint_is_refused(tmp_path):
         LivePassive.restore(tmp_path / "y.ckpt")
     with pytest.raises(InputError, match="not found"):
         LivePassive.restore(tmp_path / "none.ckpt")
+
+
+def test_live_navigation_is_the_file_chains_on_the_same_fixes():
+    """The fixes' Navigation equals io/nmea.py navigation_from_track's on the same log (a turn through north and a
+    tow), and its heading stays continuous when the oldest fixes are dropped."""
+    from sonartrack.io.nmea import GeoTrack, navigation_from_track
+
+    nav = LiveNavigation(START, tow_length_m=300.0, keep_s=1e9)
+    heading = (300.0 + 2.0 * np.arange(60)) % 360.0  # 300 -> 58 deg through north
+    a = np.deg2rad(heading)
+    lat = 54.0 + np.cumsum(3.0 * np.cos(a)) / 111_320.0
+    lon = 11.0 + np.cumsum(3.0 * np.sin(a)) / (111_320.0 * np.cos(np.deg2rad(54.0)))
+    for t in range(60):
+        nav.push(_fix(t, lat=lat[t], lon=lon[t], heading=heading[t]))
+    unix = np.array([START.timestamp() + t for t in range(60)], float)
+    ref, _ = navigation_from_track(GeoTrack(unix, lat, lon, unix, heading, "HDT"), START, tow_length_m=300.0,
+                                   projection=nav.projection)
+    got = nav.navigation()
+    for name in ("time_s", "x_m", "y_m", "heading_rad", "array_x_m", "array_y_m", "array_heading_rad"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(ref, name), err_msg=name)
+    short = LiveNavigation(START, keep_s=20.0)
+    for t in range(60):
+        short.push(_fix(t, lat=lat[t], lon=lon[t], heading=heading[t]))
+    assert len(short.fixes) == 21
+    np.testing.assert_allclose(short.navigation().heading_rad, ref.heading_rad[-21:], rtol=0, atol=1e-12)
