@@ -10,8 +10,10 @@ tonal lines, joins, narrowband lines, sides, TMA and legs -- are the file chain'
 
 Equality with the file chain: the same core and the same finishing on the same windows, so on a stream no longer
 than ``history_s`` the final targets equal ``run_passive_recording``'s to the rounding of the front end's batched
-products (the file chain transforms 32 windows at once, the live chain one: ~1e-13 deg in a peak). The tonal pass
-reads the spectra the file chain's spill holds, kept in a ring of the last ``history_s`` (systems/live/windows.py).
+products (the file chain transforms 32 windows at once, the live chain one: ~1e-13 deg in a peak). The final tonal
+pass reads the spectra the file chain's spill holds, kept in a ring of the last ``history_s``
+(systems/live/windows.py). A refresh reads the tonal lines from per-track accumulators fed scan by scan instead
+(systems/live/tonals.py), so that its cost does not grow with the history.
 
 Bounded state over a day: the bearing-time rows, peaks and tracker rows of the last ``history_s`` (default 1 h:
 3.6 MB of rows, ~2 MB of tracker rows), the LOFAR periods of that span (61 beams x the band's bins x 8 bytes a
@@ -32,6 +34,7 @@ import numpy as np
 from sonartrack.core.errors import require
 from sonartrack.io.stream.types import NavFix, SampleBlock, StreamEvent, StreamHeader
 from sonartrack.systems.live.navigation import LiveNavigation
+from sonartrack.systems.live.tonals import LiveTonals
 from sonartrack.systems.live.updates import btr_update, lofar_update, ownship_update, targets_update, tracks_update
 from sonartrack.systems.live.windows import RingSpill, WindowAssembler
 from sonartrack.systems.passive.chain import PassiveCore, PassiveResult
@@ -87,6 +90,7 @@ class LivePassive:
         self.spill = RingSpill(self.n_samples, self.header.rate_hz, self.stages.tonal,
                                self.keep_windows + SPILL_MARGIN_WINDOWS)
         self.core = PassiveCore(self.stages, self.spill)
+        self.tonals = LiveTonals(self.stages, self.spill)
         self.rows: deque = deque()      # (k, z row float32, peak angles, peak heights): the btr history
         self.scans: deque = deque()     # (k, the tracker's rows of that scan)
         self.pending: deque = deque()   # (k, t, angles, heights): scans waiting for the navigation
@@ -182,6 +186,7 @@ class LivePassive:
             self._no_heading = self.fixed_nav is None and self.nav.navigation() is None
             rows = self.core.scan(t, angle, height, heading)[0]
             self.scans.append((k, rows))
+            self.tonals.add_scan(k, rows)
             out.append(tracks_update(t, rows))
         return out
 
@@ -232,6 +237,7 @@ class LivePassive:
             self.rows.popleft()
         while self.scans and self.scans[0][0] < first:
             self.scans.popleft()
+        self.tonals.trim(first)
         length = self.settings.narrowband.integration
         while self.periods and self._period_time(self.periods[0][0]) - 0.5 * length * self.window_s < \
                 first * self.window_s:
@@ -283,7 +289,7 @@ class LivePassive:
     def refresh(self) -> list[dict]:
         """Sides, TMA and legs on the current tracks (slow: on a schedule, from a worker thread): the targets and
         the ownship."""
-        snap = self._snapshot()
+        snap = self._snapshot(exact_tonals=False)
         result = None if snap is None else _result(self, snap)
         with self.lock:
             t = self.k_next * self.window_s
@@ -300,18 +306,24 @@ class LivePassive:
                 k, t, angle, height = self.pending.popleft()
                 heading = self._heading(t, True)
                 self.scans.append((k, self.core.scan(t, angle, height, heading)[0]))
-        snap = self._snapshot()
+                self.tonals.add_scan(k, self.scans[-1][1])
+        snap = self._snapshot(exact_tonals=True)
         require(snap is not None, "the stream ended before one whole window or without navigation: no result")
         return _result(self, snap)
 
-    def _snapshot(self) -> dict | None:
-        """What the finishing stages read, taken under the lock (the arrays are not written again)."""
+    def _snapshot(self, exact_tonals: bool) -> dict | None:
+        """What the finishing stages read, taken under the lock (the arrays are not written again); the tonal lines
+        from the accumulators (systems/live/tonals.py), or with ``exact_tonals`` from the file chain's pass over the
+        spectra ring where it holds every window of the history (not after a restore)."""
         with self.lock:
             nav = self.fixed_nav if self.fixed_nav is not None else self.nav.navigation()
             if nav is None or not self.rows:
                 return None
+            first = max(self.rows[0][0], self.spill.first_window)
+            ring = exact_tonals and first == self.rows[0][0]
             return {"rows": list(self.rows), "scans": [r for _, r in self.scans], "periods": list(self.periods),
-                    "nav": nav, "n_windows": self.k_next, "first_window": max(self.rows[0][0], self.spill.first_window),
+                    "nav": nav, "n_windows": self.k_next, "first_window": first,
+                    "tonals": None if ring else self.tonals.snapshot(),
                     "nav_times": np.array([f[0] for f in self.nav.fixes]) - self.header.start_utc.timestamp()
                     if self.fixed_nav is None else self.fixed_nav.time_s}
 
@@ -362,8 +374,10 @@ def _result(live: LivePassive, snap: dict) -> PassiveResult:
     btr = BearingTimeRecord(ks * w + 0.5 * w, cone, np.stack([r[1] for r in rows]), peaks, gram)
     tracks = live.core.tracker.tracks(snap["scans"])
     first, stop = snap["first_window"], snap["n_windows"]
+    tonals = snap["tonals"]
     result = finish_passive(btr, tracks, snap["nav"], live.stages, stop,
-                            lambda: live.spill.windows(first, stop), first_window=first)
+                            (lambda: tonals) if tonals is not None else (lambda: live.spill.windows(first, stop)),
+                            first_window=first)
     result = bound_batch_speed(result)
     lag = live.options["tow_length_m"] / 3.0 if live.fixed_nav is None else 0.0  # tow length over a slow 3 m/s
     navr = RecordingNavigation(snap["nav"], [], (snap["nav_times"],), lag)
