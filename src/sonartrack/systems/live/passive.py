@@ -347,6 +347,22 @@ class LivePassive:
         self.spill.close()
 
 
+def _with_measurements(tracks, peaks, max_offset_deg: float):
+    """The tracks without those that hold no peak in the history kept (a track that coasted through its whole
+    stretch after the cut: its measurements would be empty, which the finishing stages do not take --
+    systems/passive/measurements.py ``merge_duplicates`` fails on one)."""
+    from dataclasses import fields, replace
+
+    from sonartrack.systems.passive.measurements import track_measurements
+
+    empty = [m.track_id for m in track_measurements(tracks, peaks, max_offset_deg) if not len(m.time_s)]
+    if not empty:
+        return tracks
+    keep = ~np.isin(tracks.track_id, empty)
+    return replace(tracks, **{f.name: getattr(tracks, f.name)[keep] for f in fields(tracks)
+                              if getattr(tracks, f.name) is not None})
+
+
 def _result(live: LivePassive, snap: dict) -> PassiveResult:
     """The file chain's stages 3-5 on a snapshot (systems/passive/chain.py ``finish_passive``), with the file run's
     verdicts on fast batch solutions and on navigation gaps (systems/passive/nav_flags.py)."""
@@ -372,7 +388,7 @@ def _result(live: LivePassive, snap: dict) -> PassiveResult:
                          np.stack([p for _, p, _ in snap["periods"]]), np.stack([z for _, _, z in snap["periods"]]))
     cone = live.stages.front_end.cone_deg
     btr = BearingTimeRecord(ks * w + 0.5 * w, cone, np.stack([r[1] for r in rows]), peaks, gram)
-    tracks = live.core.tracker.tracks(snap["scans"])
+    tracks = _with_measurements(live.core.tracker.tracks(snap["scans"]), peaks, live.settings.max_peak_offset_deg)
     first, stop = snap["first_window"], snap["n_windows"]
     tonals = snap["tonals"]
     result = finish_passive(btr, tracks, snap["nav"], live.stages, stop,

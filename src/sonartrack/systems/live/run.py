@@ -54,13 +54,51 @@ def _refresh_thread(live: LivePassive, publish, refresh_s: float, stop: threadin
         wait = refresh_s
         while not stop.wait(wait):
             t0 = time.perf_counter()
-            for u in live.refresh():
+            try:
+                updates = live.refresh()
+            except Exception as exc:  # noqa: BLE001 - a failed refresh must not end the live run: said, and retried
+                updates = live.note(StreamEvent("refresh_failed", f"targets not refreshed ({type(exc).__name__}: "
+                                                                  f"{exc}); the stream goes on"))
+            for u in updates:
                 publish(u)
             wait = max(refresh_s, (time.perf_counter() - t0) / REFRESH_SHARE)
 
     th = threading.Thread(target=run, name="live-refresh", daemon=True)
     th.start()
     return th
+
+
+def warm_up(settings: PassiveSettings, windows: int = 12) -> float:
+    """Run a throwaway chain on a few windows of a synthetic plane wave (8 channels, 2 kHz, fixes of a straight
+    course), so that the imports, the compiled kernels' loading, the map projection's database and the first calls'
+    set-up are done before the stream starts: without it the first windows of a live run reached the screen 2-5 s
+    late (benchmarks/bench_live_latency.py). Returns the seconds it took."""
+    from datetime import UTC, datetime, timedelta
+
+    import numpy as np
+
+    from sonartrack.io.stream.types import StreamHeader
+
+    t0 = time.perf_counter()
+    channels, fs, start = 8, 2000.0, datetime(2000, 1, 1, tzinfo=UTC)
+    live = LivePassive(settings, StreamHeader(channels, fs, "float32", start),
+                       history_s=max(60.0, settings.window_s))
+    for k in range(int(windows * settings.window_s) + 3):
+        live.push_nav(NavFix(start + timedelta(seconds=k), 54.0, 11.0 + 5e-5 * k, 90.0, 3.0))
+    rng = np.random.default_rng(0)
+    n = int(round(windows * settings.window_s * fs))
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    delay = np.arange(channels) * settings.spacing_m * np.cos(np.deg2rad(60.0)) / 1500.0  # a broadband plane wave
+    phase = np.exp(-2j * np.pi * f[None, :] * delay[:, None])
+    wave = np.fft.irfft(np.fft.rfft(rng.standard_normal(n))[None, :] * phase, n, axis=1)
+    x = rng.standard_normal((n, channels)) + 3.0 * wave.T
+    try:
+        live.push_block(SampleBlock(0, x.astype(np.float32)))
+        live.select(1)
+        live.refresh()
+    finally:
+        live.close()
+    return time.perf_counter() - t0
 
 
 def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
@@ -72,7 +110,8 @@ def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
 
 def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], None], *, refresh_s: float = 10.0,
              checkpoint=None, stop: threading.Event | None = None, checkpoint_s: float = 60.0,
-             ready: Callable[[LivePassive], None] | None = None, **options) -> PassiveResult | None:
+             ready: Callable[[LivePassive], None] | None = None, warm: bool = True,
+             **options) -> PassiveResult | None:
     """Run the live chain until the sample source ends or ``stop`` is set (module doc).
 
     Parameters
@@ -96,6 +135,8 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         Seconds between checkpoints.
     ready : callable, optional
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
+    warm : bool
+        Run :func:`warm_up` before the sample source is read (a TCP source connects when read).
     **options
         LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
@@ -109,6 +150,8 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     if isinstance(nav, Navigation):
         nav, options = None, {**options, "nav": nav}
     stop = stop or threading.Event()
+    if warm:
+        warm_up(settings)
     done, live_ref = threading.Event(), [None]
     threads, early = [_nav_thread(nav, live_ref, publish, done)], []
     try:
