@@ -142,7 +142,8 @@ def soak(hours: float, history_s: float, refresh_every_s: float, channels: int, 
             hour = refresh[-int(3600 // refresh_every_s):]
             print(f"  hour {(k + 1) // 3600:2d}: resident {rss[-1]:6.0f} MB, refresh max {max(hour):.2f} s CPU, "
                   f"{len(live.last_targets['rows']) if live.last_targets else 0} targets, "
-                  f"{time.perf_counter() - wall0:.0f} s wall, {time.process_time() - cpu0:.0f} s CPU so far", flush=True)
+                  f"{time.perf_counter() - wall0:.0f} s wall, {time.process_time() - cpu0:.0f} s CPU so far",
+                  flush=True)
     live.close()
     full = int(np.ceil((history_s + 600) / 3600))  # the first hour with the history (and the tonal ring) full
     if len(rss) > full:
