@@ -109,8 +109,37 @@ def test_checkpoint_restores_the_chain_and_its_display(scene, tmp_path):
     np.testing.assert_array_equal(rb.tracks.bearing_deg, ra.tracks.bearing_deg)  # the same windows, one at a time
     np.testing.assert_array_equal(rb.record.level, ra.record.level)
     assert np.array_equal(rb.lofar.statistic, ra.lofar.statistic)
+    # the tonal lines survive the restore: the accumulators came back with it (the spectra ring did not), and they
+    # find the ships' lines (the scene's 120 and 175 Hz) as the file chain's pass over the whole ring does
+    tonal_a = sorted(tg.tonal.line_hz for tg in ra.targets if tg.tonal is not None)
+    tonal_b = sorted(tg.tonal.line_hz for tg in rb.targets if tg.tonal is not None)
+    assert b.spill.first_window > 0 and len(tonal_b) == len(tonal_a) >= 2
+    np.testing.assert_allclose(tonal_b, tonal_a, atol=0.3)
+    assert min(abs(np.array(tonal_b) - 120.0)) < 0.5 and min(abs(np.array(tonal_b) - 175.0)) < 0.5
     whole.close()
     b.close()
+
+
+def test_a_refresh_reads_the_tonals_kept_as_the_windows_came(scene):
+    """A refresh's tonal lines come from the per-track accumulators (no pass over the history): the ships' lines,
+    as the final pass over the spectra ring finds them."""
+    out, x, fs = scene
+    live = LivePassive(SETTINGS, _noise_header(x.shape[1], fs), nav=read_navigation(out / "nav.csv"))
+    live.push_block(SampleBlock(0, x))
+    reads = []
+    windows = live.spill.windows
+    live.spill.windows = lambda a, b: reads.append((a, b)) or windows(a, b)
+    rows = live.refresh()[0]["rows"]
+    assert all(b - a <= 1 for a, b in reads)  # one window at a time (the scans' own), never the history
+    final = live.finish()
+    assert any(b - a > 1 for a, b in reads)  # the final pass reads the ring
+    live.close()
+    by_track = {tg.track.track_id: tg.tonal.line_hz for tg in final.targets if tg.tonal is not None}
+    got = {r["track"]: r["tonal_hz"] for r in rows if r["tonal_hz"] is not None}
+    assert len(got) >= 2 and set(got) <= set(by_track)
+    for track, hz in got.items():
+        assert abs(hz - by_track[track]) < 0.3
+        assert min(abs(hz - 120.0), abs(hz - 175.0)) < 0.5
 
 
 def test_a_foreign_or_old_checkpoint_is_refused(tmp_path):

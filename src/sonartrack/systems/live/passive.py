@@ -194,14 +194,13 @@ class LivePassive:
         """LOFAR periods completed: into the history (the accumulator's list emptied), and the selected track's
         row."""
         acc = self.core.front.lofar
-        if acc is None or not acc._lines:  # noqa: SLF001 - the periods are taken out as they complete
+        if acc is None:
             return []
         out = []
-        for power, stat in acc._lines:  # noqa: SLF001
+        for power, stat in acc.take_periods():
             self.periods.append((self.n_periods, power.astype(np.float32), stat))
             self.n_periods += 1
             out += self._lofar_row(self.periods[-1])
-        acc._lines.clear()  # noqa: SLF001
         return out
 
     def _period_time(self, p: int) -> float:
