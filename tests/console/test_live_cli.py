@@ -28,9 +28,13 @@ from sonartrack.console.fake import FakeLive  # noqa: E402
     (["--tcp", "h:5555", "--nav", "n.csv", "--speed", "20"], "--speed replays a finished --wav"),
     (["--wav", "missing.wav", "--nav", "n.csv"], "is not a file"),
     (["--folder", "missing-folder", "--nav", "n.csv"], "is not a folder"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--config", "mftd.toml"], "cannot run [btr_mftd]"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--calibration", "bad.toml"], "sensitivity"),
 ])
 def test_bad_options_are_one_line_and_status_2(argv, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "mftd.toml").write_text("spacing_m = 2.5\n[btr_mftd]\nenabled = true\n")
+    (tmp_path / "bad.toml").write_text("sensitivity_db = -20.0\n")  # dB re 1 V/Pa given for re 1 V/uPa
     assert main(["live", "--port", "0", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
@@ -54,8 +58,11 @@ def _fake_modules(monkeypatch, run_live) -> None:
         setattr(sources, name, type(name, (_Source,), {}))
     stream = types.ModuleType("sonartrack.io.stream")
     stream.sources = sources
+    import sonartrack.systems.live as real_live
+
     live = types.ModuleType("sonartrack.systems.live")
     live.run_live = run_live
+    live.__path__ = real_live.__path__  # its submodules (the settings' check) are the real ones
     monkeypatch.setitem(sys.modules, "sonartrack.io.stream", stream)
     monkeypatch.setitem(sys.modules, "sonartrack.io.stream.sources", sources)
     monkeypatch.setitem(sys.modules, "sonartrack.systems.live", live)

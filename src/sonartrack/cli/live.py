@@ -46,6 +46,10 @@ def live_cmd(
     port: Annotated[int, typer.Option(help="Port of the console (0 picks a free one).", min=0, max=65535)] = 8765,
     checkpoint: Annotated[Path | None, typer.Option(help="Keep the chain's state in this file, so that a restart "
                                                          "resumes (and the display with it).")] = None,
+    calibration: Annotated[Path | None, typer.Option(help="Hydrophone calibration TOML/CSV, as for passive: "
+                                                          "sensitivity_db (dB re 1 V/uPa), gain_db[, full_scale_v]; "
+                                                          "a stream's header may state the full scale itself. Not "
+                                                          "given: the samples are pascals.")] = None,
     spacing: Annotated[float | None, typer.Option("--spacing", help=_help("spacing_m"))] = None,
     elements: Annotated[int | None, typer.Option(help=_help("elements"))] = None,
     method: Annotated[str | None, typer.Option(help=_help("method", FrontEndSettings))] = None,
@@ -61,6 +65,12 @@ def live_cmd(
         print_config_and_exit(settings)
     plan = _plan(tcp, folder, wav, speed, nav_udp, nav)
     from sonartrack.console.server import ConsoleServer
+    from sonartrack.io.calibration import read_calibration
+    from sonartrack.systems.live.passive import check_live_settings
+
+    check_live_settings(settings)
+
+    plan["calibration"] = read_calibration(calibration) if calibration is not None else None  # checked before start
 
     server = ConsoleServer(host=host, port=port)
     server.start()
@@ -145,7 +155,8 @@ def _run(plan: dict, settings, server, *, checkpoint):
     stop = threading.Event()
     try:
         return run_live(samples, navigation, settings, server.publish, checkpoint=checkpoint, stop=stop,
-                        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]))
+                        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]),
+                        calibration=plan.get("calibration"))
     finally:
         stop.set()
         for source in (samples, navigation):

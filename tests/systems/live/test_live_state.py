@@ -178,3 +178,33 @@ def test_live_navigation_is_the_file_chains_on_the_same_fixes():
         short.push(_fix(t, lat=lat[t], lon=lon[t], heading=heading[t]))
     assert len(short.fixes) == 21
     np.testing.assert_allclose(short.navigation().heading_rad, ref.heading_rad[-21:], rtol=0, atol=1e-12)
+
+
+def test_the_streams_full_scale_and_the_calibration_make_pascals(scene):
+    """p = x V_fs 1e-6 / 10^((S + G) / 20) (io/calibration.py), V_fs from the stream's header: a hand-worked case,
+    the conflicts refused, and the chain's LOFAR power scaled by the square of it."""
+    from dataclasses import replace
+
+    from sonartrack.io.calibration import Calibration
+    from sonartrack.systems.live.passive import stream_scale
+
+    out, x, fs = scene
+    header = replace(_noise_header(x.shape[1], fs), full_scale_v=2.5)
+    cal = Calibration(np.array([-170.0]), np.array([20.0]), np.array([1.0]))
+    scale, note = stream_scale(header, cal)
+    np.testing.assert_allclose(scale, 2.5e-6 / 10 ** (-150.0 / 20.0), rtol=1e-12)  # 79.06 Pa per unit
+    assert note is None
+    volts, note = stream_scale(header, None)
+    assert np.all(volts == 2.5) and "volts, not pascals" in note
+    assert stream_scale(_noise_header(x.shape[1], fs), None) == (None, None)
+    with pytest.raises(InputError, match="differs from the stream's"):
+        stream_scale(header, Calibration(np.array([-170.0]), np.array([20.0]), np.array([5.0])))
+    plain = LivePassive(SETTINGS, _noise_header(x.shape[1], fs), nav=read_navigation(out / "nav.csv"))
+    cal_live = LivePassive(SETTINGS, header, nav=read_navigation(out / "nav.csv"), calibration=cal)
+    n = 40 * int(fs)
+    plain.push_block(SampleBlock(0, x[:n]))
+    cal_live.push_block(SampleBlock(0, x[:n]))
+    assert len(plain.periods) >= 1
+    np.testing.assert_allclose(cal_live.periods[0][1], plain.periods[0][1] * scale[0] ** 2, rtol=1e-4)
+    plain.close()
+    cal_live.close()

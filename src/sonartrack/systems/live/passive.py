@@ -64,16 +64,20 @@ class LivePassive:
         Array centre behind the ship (m) for the fixes of :meth:`push_nav`.
     nav_timeout_s : float
         No fix for this long (stream time): the ownship coasts (module doc of systems/live/navigation.py).
+    calibration : Calibration, optional
+        The hydrophones' calibration (io/calibration.py, ``--calibration``): with the stream's full scale
+        (:func:`stream_scale`) the samples become pascals as the file chain's are; None: pascals already.
     """
 
     def __init__(self, settings: PassiveSettings, header: StreamHeader, *, history_s: float = 3600.0, nav=None,
-                 tow_length_m: float = 0.0, nav_timeout_s: float = 5.0):
-        require(not settings.btr_mftd.enabled, "the live chain cannot run [btr_mftd] (it needs the whole bearing-time "
-                                               "record): set [btr_mftd] enabled = false")
+                 tow_length_m: float = 0.0, nav_timeout_s: float = 5.0, calibration=None):
+        check_live_settings(settings)
         require(history_s >= settings.window_s, f"history_s {history_s:g} s is shorter than one window: give at "
                                                 "least window_s")
         self.settings, self.header, self.history_s = settings, header, float(history_s)
-        self.options = {"tow_length_m": float(tow_length_m), "nav_timeout_s": float(nav_timeout_s)}
+        self.options = {"tow_length_m": float(tow_length_m), "nav_timeout_s": float(nav_timeout_s),
+                        "calibration": calibration}
+        self.scale, scale_note = stream_scale(header, calibration)
         self.stages = settings.stages(header.rate_hz, channels=header.channels)
         self.window_s = settings.window_s
         self.n_samples = int(round(self.window_s * header.rate_hz))
@@ -83,6 +87,9 @@ class LivePassive:
         self.nav = LiveNavigation(header.start_utc, tow_length_m=tow_length_m, timeout_s=nav_timeout_s,
                                   keep_s=self.history_s + 600.0)
         self._fresh()
+        if scale_note:
+            self.events.append(f"calibration: {scale_note}")
+            self.new_events.append(self.events[-1])
 
     def _fresh(self) -> None:
         """The stream's state from scratch (also the base a restore fills in)."""
@@ -149,6 +156,8 @@ class LivePassive:
             self.k_first = k
             self.spill.skip_to(k)
         block = np.zeros((self.header.channels, self.n_samples), np.float32) if x is None else x
+        if self.scale is not None and x is not None:
+            block = block * self.scale[:, None]  # float64, as the file chain's calibrated blocks: the same product
         row, angle, height = next(self.core.front.windows([block]))
         t = k * self.window_s + 0.5 * self.window_s
         self.rows.append((k, row.astype(np.float32), angle, height))
@@ -344,6 +353,41 @@ class LivePassive:
     def close(self) -> None:
         """Free the tonal ring's disk."""
         self.spill.close()
+
+
+def check_live_settings(settings: PassiveSettings) -> None:
+    """InputError for settings the live chain cannot run: ``[btr_mftd]`` (it needs the whole bearing-time record)."""
+    require(not settings.btr_mftd.enabled, "the live chain cannot run [btr_mftd] (the bearing-time MFTD needs the "
+                                           "whole record): set [btr_mftd] enabled = false, or run passive on the file")
+
+
+def stream_scale(header: StreamHeader, calibration) -> tuple[np.ndarray | None, str | None]:
+    """Pascals per sample unit of a stream (channels,), or None for samples in pascals; and a note for the operator.
+
+    The stream's samples are in full-scale units (io/stream/types.py). A header's ``full_scale_v`` is the
+    recorder's own statement of the volts at full scale, the V_fs of io/calibration.py's p = x V_fs 1e-6 /
+    10^((S + G) / 20); the calibration gives S and G (its own full_scale_v stands where the header states none). A
+    calibration whose full scale is not 1 V and differs from the header's is refused (which one holds?). A header's
+    full scale without a calibration: the samples become volts (V_fs x), said in the note (levels in dB re 1 V, not
+    re 1 uPa; bearings and tracks do not depend on the scale).
+    """
+    from sonartrack.io.calibration import Calibration
+
+    cal = calibration if calibration is not None else Calibration.identity()
+    vfs = header.full_scale_v
+    if vfs is None:
+        return (None, None) if cal.is_identity else (cal.pa_per_unit(header.channels), None)
+    require(vfs > 0 and math.isfinite(vfs), f"the stream states full scale {vfs} V: a recorder's full scale is a "
+                                            "positive voltage (fix the recorder's header)")
+    if cal.is_identity:
+        return np.full(header.channels, float(vfs)), (f"the stream states full scale {vfs:g} V but no --calibration "
+                                                      "gives the hydrophones' sensitivity: levels are in volts, not "
+                                                      "pascals")
+    stated = np.asarray(cal.full_scale_v, float)
+    require(np.all(stated == 1.0) or np.allclose(stated, vfs, rtol=1e-9),
+            f"the calibration's full_scale_v ({stated[0]:g} V) differs from the stream's ({vfs:g} V): remove "
+            "full_scale_v from the calibration (the recorder states it)")
+    return cal.pa_per_unit(header.channels) * (float(vfs) / stated if np.all(stated == 1.0) else 1.0), None
 
 
 def _with_measurements(tracks, peaks, max_offset_deg: float):
