@@ -112,3 +112,41 @@ def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
     assert type(seen["samples"]).__name__ == "TcpSampleSource" and seen["samples"].args == ("127.0.0.1", 5555)
     assert type(seen["nav"]).__name__ == "FileNavSource"
     assert all(s.closed for s in opened) and len(opened) == 2  # the sources are closed on the way out
+
+
+def test_keep_open_serves_the_last_picture_after_the_stream_ends(monkeypatch, capsys, tmp_path):
+    """--keep-open: the stream ended, the console still serves its history to a client that comes then, until
+    Ctrl-C, which closes it with status 0."""
+    import threading
+
+    seen = {}
+
+    def run_live(samples, nav, settings, publish, *, checkpoint=None, stop=None, ready=None, **kw):
+        seen["url"] = publish.__self__.url
+        fake = FakeLive()
+        for _ in range(5):
+            for update in fake.step():
+                publish(update)
+        return None  # the stream ended before a result: said, and the console kept
+
+    real_sleep = time.sleep
+
+    def sleep(seconds):
+        if threading.current_thread() is threading.main_thread() and "rows" not in seen:
+            client = Client(seen["url"])  # a client that comes after the end of the stream
+            client.wait(lambda m: len(client.of_type("btr")) == 5)
+            seen["rows"] = len(client.of_type("btr"))
+            client.close()
+            raise KeyboardInterrupt
+        real_sleep(seconds)
+
+    opened.clear()
+    _fake_modules(monkeypatch, run_live)
+    monkeypatch.setattr(time, "sleep", sleep)
+    nav = tmp_path / "nav.csv"
+    nav.write_text("time_s,x_m,y_m,heading_deg\n")
+    status = main(["live", "--tcp", "127.0.0.1:5555", "--nav", str(nav), "--port", "0", "--spacing", "0.5",
+                   "--keep-open"])
+    err = capsys.readouterr().err
+    assert status == 0 and seen["rows"] == 5
+    assert "no result" in err and "stays open" in err and "console closed" in err and "Traceback" not in err

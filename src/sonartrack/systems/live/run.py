@@ -208,4 +208,6 @@ def _end(live: LivePassive | None, checkpoint, publish) -> PassiveResult | None:
     result = live.finish() if live.rows else None
     for u in live.refresh() if result is not None else []:
         publish(u)
+    for u in live.note(StreamEvent("end", "the stream ended: the picture is final")):
+        publish(u)
     return result
