@@ -14,9 +14,10 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
-from sonartrack.io.stream.types import NavFix, SampleBlock, StreamEvent
+from sonartrack.io.stream.types import NavFix, PingBlock, SampleBlock, StreamEvent
 from sonartrack.systems.live.passive import LivePassive
 from sonartrack.systems.passive.chain import PassiveResult
 from sonartrack.systems.passive.settings import PassiveSettings
@@ -110,7 +111,7 @@ def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
 
 def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], None], *, refresh_s: float = 10.0,
              checkpoint=None, stop: threading.Event | None = None, checkpoint_s: float = 60.0,
-             ready: Callable[[LivePassive], None] | None = None, warm: bool = True,
+             ready: Callable[[LivePassive], None] | None = None, warm: bool = True, active_settings=None,
              **options) -> PassiveResult | None:
     """Run the live chain until the sample source ends or ``stop`` is set (module doc).
 
@@ -137,6 +138,8 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
     warm : bool
         Run :func:`warm_up` before the sample source is read (a TCP source connects when read).
+    active_settings : ActiveSettings, optional
+        For the stream's pings (systems/live/active.py); default: the defaults with the passive spacing.
     **options
         LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
@@ -153,23 +156,11 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     if warm:
         warm_up(settings)
     done, live_ref = threading.Event(), [None]
-    threads, early = [_nav_thread(nav, live_ref, publish, done)], []
+    threads = [_nav_thread(nav, live_ref, publish, done)]
+    start = partial(_start, samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready)
     try:
-        for item in samples:
-            if stop.is_set():
-                break
-            if live_ref[0] is None and getattr(samples, "header", None) is None:
-                early.append(item)  # a TCP source's events before its header frame: the chain needs the header
-                continue
-            if live_ref[0] is None:
-                threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done,
-                                      ready))
-            for it in [*early, item]:
-                _take(live_ref[0], it, publish)
-            early = []
-            if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
-                live_ref[0].checkpoint(checkpoint)
-                live_ref[1] = time.monotonic()
+        _read(samples, stop, live_ref, start, threads, publish, _ActivePings(settings, active_settings),
+              (checkpoint, checkpoint_s))
     except KeyboardInterrupt:
         pass
     finally:
@@ -178,6 +169,27 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
             if th is not None:
                 th.join(timeout=5.0)
     return _end(live_ref[0], checkpoint, publish)
+
+
+def _read(samples, stop, live_ref: list, start, threads: list, publish, active, checkpointing) -> None:
+    """The sample source's items through the chain until it ends or ``stop`` is set; the chain built (``start``)
+    once the source knows its header, and checkpointed on its schedule."""
+    checkpoint, checkpoint_s = checkpointing
+    early = []
+    for item in samples:
+        if stop.is_set():
+            break
+        if live_ref[0] is None and getattr(samples, "header", None) is None:
+            early.append(item)  # a TCP source's events before its header frame: the chain needs the header
+            continue
+        if live_ref[0] is None:
+            threads.append(start())
+        for it in [*early, item]:
+            _take(live_ref[0], it, publish, active)
+        early = []
+        if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
+            live_ref[0].checkpoint(checkpoint)
+            live_ref[1] = time.monotonic()
 
 
 def _start(samples, settings, checkpoint, options, live_ref: list, publish, refresh_s: float, done, ready):
@@ -191,10 +203,27 @@ def _start(samples, settings, checkpoint, options, live_ref: list, publish, refr
     return _refresh_thread(live, publish, refresh_s, done)
 
 
-def _take(live: LivePassive, item, publish) -> None:
-    """One item of the sample source through the chain, its updates published."""
+class _ActivePings:
+    """The stream's pings to the active chain (systems/live/active.py), built at the first ping."""
+
+    def __init__(self, settings: PassiveSettings, active_settings):
+        self.settings, self.active_settings, self.chain = settings, active_settings, None
+
+    def push(self, ping, header) -> list[dict]:
+        if self.chain is None:
+            from sonartrack.systems.active.settings import ActiveSettings
+            from sonartrack.systems.live.active import LiveActive
+
+            s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
+            self.chain = LiveActive(s, header)
+        return self.chain.push_ping(ping)
+
+
+def _take(live: LivePassive, item, publish, active: _ActivePings) -> None:
+    """One item of the sample source through the chain (a ping through the active one), its updates published."""
     updates = live.push_block(item) if isinstance(item, SampleBlock) else \
-        live.note(item) if isinstance(item, StreamEvent) else []
+        live.note(item) if isinstance(item, StreamEvent) else \
+        active.push(item, live.header) if isinstance(item, PingBlock) else []
     for u in updates:
         publish(u)
 
