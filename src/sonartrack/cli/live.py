@@ -92,7 +92,7 @@ def _summary(result) -> None:
     from sonartrack.systems.passive.files import passive_summary
 
     if result is None:
-        typer.echo("live: the stream ended before one whole window: no result", err=True)
+        typer.echo("live: the stream ended before one whole window of samples: no passive result", err=True)
         return
     for warning in getattr(result, "warnings", []):
         typer.echo(warning, err=True)

@@ -85,3 +85,28 @@ def test_each_pings_bscan_is_the_file_chains_and_shows_the_echo(active_scene, st
     near = np.array(u["level_db"])[max(beam - 1, 0):beam + 2, max(rng - 1, 0):rng + 2]
     assert near.max() > 13.0 and np.median(u["level_db"]) < 6.0, (near.max(), np.median(u["level_db"]))
     assert u["detections"] >= 1
+
+
+def test_run_live_sends_a_streams_pings_to_the_active_chain(streamed):
+    """A stream of pings alone: run_live publishes a B-scan per ping and builds no passive chain (the stream's rate
+    is a baseband's, no passive band fits it); the end is said."""
+    from datetime import UTC, datetime
+
+    from sonartrack.io.stream.types import StreamEvent, StreamHeader
+    from sonartrack.systems.live import run_live
+    from sonartrack.systems.passive import PassiveSettings
+
+    pings, updates = streamed
+
+    class Pings:
+        header = StreamHeader(16, pings[0].fs_hz, "float32", datetime(2026, 12, 7, tzinfo=UTC))
+
+        def __iter__(self):
+            yield StreamEvent("connected", "test")
+            yield from pings
+
+    out = []
+    result = run_live(Pings(), None, PassiveSettings(spacing_m=0.5), out.append, warm=False,
+                      active_settings=ActiveSettings(spacing_m=0.5))
+    assert result is None
+    assert [u for u in out if u["type"] == "bscan"] == updates

@@ -24,6 +24,8 @@ from sonartrack.systems.passive.settings import PassiveSettings
 
 #: a refresh may take this share of the time between refreshes at most (the schedule stretches)
 REFRESH_SHARE = 0.1
+#: events kept from before the passive chain is built (its first sample block)
+EARLY_EVENTS = 20
 
 
 def _nav_thread(nav, live_ref: list, publish, stop: threading.Event) -> threading.Thread | None:
@@ -172,20 +174,25 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
 
 
 def _read(samples, stop, live_ref: list, start, threads: list, publish, active, checkpointing) -> None:
-    """The sample source's items through the chain until it ends or ``stop`` is set; the chain built (``start``)
-    once the source knows its header, and checkpointed on its schedule."""
+    """The sample source's items through the chains until it ends or ``stop`` is set: pings to the active chain,
+    the rest to the passive chain, built (``start``) at the first sample block (a stream of pings alone never builds
+    it: its rate is a baseband's); events before then kept (the last few) for it. Checkpoints on their schedule."""
     checkpoint, checkpoint_s = checkpointing
     early = []
     for item in samples:
         if stop.is_set():
             break
-        if live_ref[0] is None and getattr(samples, "header", None) is None:
-            early.append(item)  # a TCP source's events before its header frame: the chain needs the header
+        if isinstance(item, PingBlock):
+            for u in active.push(item, samples.header):
+                publish(u)
+            continue
+        if live_ref[0] is None and not isinstance(item, SampleBlock):
+            early = [*early[-EARLY_EVENTS + 1:], item]  # a TCP source's events before its first block
             continue
         if live_ref[0] is None:
             threads.append(start())
         for it in [*early, item]:
-            _take(live_ref[0], it, publish, active)
+            _take(live_ref[0], it, publish)
         early = []
         if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
             live_ref[0].checkpoint(checkpoint)
@@ -219,11 +226,10 @@ class _ActivePings:
         return self.chain.push_ping(ping)
 
 
-def _take(live: LivePassive, item, publish, active: _ActivePings) -> None:
-    """One item of the sample source through the chain (a ping through the active one), its updates published."""
+def _take(live: LivePassive, item, publish) -> None:
+    """One item of the sample source through the passive chain, its updates published."""
     updates = live.push_block(item) if isinstance(item, SampleBlock) else \
-        live.note(item) if isinstance(item, StreamEvent) else \
-        active.push(item, live.header) if isinstance(item, PingBlock) else []
+        live.note(item) if isinstance(item, StreamEvent) else []
     for u in updates:
         publish(u)
 
