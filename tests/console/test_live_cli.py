@@ -149,4 +149,4 @@ def test_keep_open_serves_the_last_picture_after_the_stream_ends(monkeypatch, ca
                    "--keep-open"])
     err = capsys.readouterr().err
     assert status == 0 and seen["rows"] == 5
-    assert "no result" in err and "stays open" in err and "console closed" in err and "Traceback" not in err
+    assert "no passive result" in err and "stays open" in err and "console closed" in err and "Traceback" not in err
