@@ -20,7 +20,7 @@ The data: a cheap synthetic generator (not the simulator): per window, white noi
 broadband sources whose cone angles drift (fractional delays applied in frequency: exact plane waves of the window's
 circular transform) each with a tonal line, so the tracker, the LOFAR lines and the TMA have work.
 
-    python benchmarks/bench_live_chain.py                  # both parts (~1 + ~6 min on one core)
+    python benchmarks/bench_live_chain.py                  # both parts (~3 + ~7 min of CPU on this machine)
     python benchmarks/bench_live_chain.py --part soak --hours 3
 """
 
