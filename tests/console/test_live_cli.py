@@ -28,9 +28,13 @@ from sonartrack.console.fake import FakeLive  # noqa: E402
     (["--tcp", "h:5555", "--nav", "n.csv", "--speed", "20"], "--speed replays a finished --wav"),
     (["--wav", "missing.wav", "--nav", "n.csv"], "is not a file"),
     (["--folder", "missing-folder", "--nav", "n.csv"], "is not a folder"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--config", "mftd.toml"], "cannot run [btr_mftd]"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--calibration", "bad.toml"], "sensitivity"),
 ])
 def test_bad_options_are_one_line_and_status_2(argv, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "mftd.toml").write_text("spacing_m = 2.5\n[btr_mftd]\nenabled = true\n")
+    (tmp_path / "bad.toml").write_text("sensitivity_db = -20.0\n")  # dB re 1 V/Pa given for re 1 V/uPa
     assert main(["live", "--port", "0", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
@@ -54,8 +58,11 @@ def _fake_modules(monkeypatch, run_live) -> None:
         setattr(sources, name, type(name, (_Source,), {}))
     stream = types.ModuleType("sonartrack.io.stream")
     stream.sources = sources
+    import sonartrack.systems.live as real_live
+
     live = types.ModuleType("sonartrack.systems.live")
     live.run_live = run_live
+    live.__path__ = real_live.__path__  # its submodules (the settings' check) are the real ones
     monkeypatch.setitem(sys.modules, "sonartrack.io.stream", stream)
     monkeypatch.setitem(sys.modules, "sonartrack.io.stream.sources", sources)
     monkeypatch.setitem(sys.modules, "sonartrack.systems.live", live)
@@ -105,3 +112,41 @@ def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
     assert type(seen["samples"]).__name__ == "TcpSampleSource" and seen["samples"].args == ("127.0.0.1", 5555)
     assert type(seen["nav"]).__name__ == "FileNavSource"
     assert all(s.closed for s in opened) and len(opened) == 2  # the sources are closed on the way out
+
+
+def test_keep_open_serves_the_last_picture_after_the_stream_ends(monkeypatch, capsys, tmp_path):
+    """--keep-open: the stream ended, the console still serves its history to a client that comes then, until
+    Ctrl-C, which closes it with status 0."""
+    import threading
+
+    seen = {}
+
+    def run_live(samples, nav, settings, publish, *, checkpoint=None, stop=None, ready=None, **kw):
+        seen["url"] = publish.__self__.url
+        fake = FakeLive()
+        for _ in range(5):
+            for update in fake.step():
+                publish(update)
+        return None  # the stream ended before a result: said, and the console kept
+
+    real_sleep = time.sleep
+
+    def sleep(seconds):
+        if threading.current_thread() is threading.main_thread() and "rows" not in seen:
+            client = Client(seen["url"])  # a client that comes after the end of the stream
+            client.wait(lambda m: len(client.of_type("btr")) == 5)
+            seen["rows"] = len(client.of_type("btr"))
+            client.close()
+            raise KeyboardInterrupt
+        real_sleep(seconds)
+
+    opened.clear()
+    _fake_modules(monkeypatch, run_live)
+    monkeypatch.setattr(time, "sleep", sleep)
+    nav = tmp_path / "nav.csv"
+    nav.write_text("time_s,x_m,y_m,heading_deg\n")
+    status = main(["live", "--tcp", "127.0.0.1:5555", "--nav", str(nav), "--port", "0", "--spacing", "0.5",
+                   "--keep-open"])
+    err = capsys.readouterr().err
+    assert status == 0 and seen["rows"] == 5
+    assert "no passive result" in err and "stays open" in err and "console closed" in err and "Traceback" not in err

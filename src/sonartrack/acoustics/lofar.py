@@ -306,6 +306,21 @@ class LofarAccumulator:
                 self._lines.append(_normalised((self._scale / length) * self._sum.T, self.settings))
                 self._sum, self._count = 0.0, 0
 
+    def take_periods(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The periods completed since the last call, taken out (power (B, F), statistic (B, F) each): a live
+        chain keeps its own bounded history of them (systems/live/); :meth:`gram` then holds none of them."""
+        out, self._lines = self._lines, []
+        return out
+
+    def state(self) -> dict:
+        """The open period's partial sum and window count (what a checkpoint keeps; the completed periods are the
+        caller's, :meth:`take_periods`)."""
+        return {"sum": self._sum, "count": self._count}
+
+    def restore(self, state: dict) -> None:
+        """Back to a :meth:`state`: the open period continues where it was."""
+        self._sum, self._count = state["sum"], int(state["count"])
+
     def gram(self, window_s: float) -> LofarGram | None:
         """The gram of the complete integration periods added so far (a last incomplete one is dropped), or None
         when there is none.

@@ -46,12 +46,18 @@ def live_cmd(
     port: Annotated[int, typer.Option(help="Port of the console (0 picks a free one).", min=0, max=65535)] = 8765,
     checkpoint: Annotated[Path | None, typer.Option(help="Keep the chain's state in this file, so that a restart "
                                                          "resumes (and the display with it).")] = None,
+    calibration: Annotated[Path | None, typer.Option(help="Hydrophone calibration TOML/CSV, as for passive: "
+                                                          "sensitivity_db (dB re 1 V/uPa), gain_db[, full_scale_v]; "
+                                                          "a stream's header may state the full scale itself. Not "
+                                                          "given: the samples are pascals.")] = None,
     spacing: Annotated[float | None, typer.Option("--spacing", help=_help("spacing_m"))] = None,
     elements: Annotated[int | None, typer.Option(help=_help("elements"))] = None,
     method: Annotated[str | None, typer.Option(help=_help("method", FrontEndSettings))] = None,
     band_hz: Annotated[tuple[float, float] | None, typer.Option(help=_help("band_hz", FrontEndSettings)
                                                               + " Two numbers: LOW HIGH.")] = None,
     config: Annotated[Path | None, typer.Option(help="TOML file of passive settings (see --print-config).")] = None,
+    keep_open: Annotated[bool, typer.Option("--keep-open", help="When the stream ends, keep the console open (the "
+                                                                "last picture, for study) until Ctrl-C.")] = False,
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
 ) -> None:
     """Live passive chain on a stream (TCP, a recorder's folder, or a replayed recording) with a browser console."""
@@ -61,23 +67,50 @@ def live_cmd(
         print_config_and_exit(settings)
     plan = _plan(tcp, folder, wav, speed, nav_udp, nav)
     from sonartrack.console.server import ConsoleServer
+    from sonartrack.io.calibration import read_calibration
+    from sonartrack.systems.live.passive import check_live_settings
 
+    check_live_settings(settings)
+    plan["calibration"] = read_calibration(calibration) if calibration is not None else None  # checked before start
     server = ConsoleServer(host=host, port=port)
     server.start()
     typer.echo(f"live: console at {server.url} (Ctrl-C to stop)", err=True)
     try:
-        result = _run(plan, settings, server, checkpoint=checkpoint)
-    except KeyboardInterrupt as exc:
-        raise _interrupted(exc, checkpoint) from None
+        try:
+            result = _run(plan, settings, server, checkpoint=checkpoint)
+        except KeyboardInterrupt as exc:
+            raise _interrupted(exc, checkpoint) from None
+        _summary(result)
+        if keep_open:
+            _hold(server)
     finally:
         server.stop()
+
+
+def _summary(result) -> None:
+    """The targets printed as ``passive`` prints them (or why there are none)."""
     from sonartrack.systems.passive.files import passive_summary
 
+    if result is None:
+        typer.echo("live: the stream ended before one whole window of samples: no passive result", err=True)
+        return
     for warning in getattr(result, "warnings", []):
         typer.echo(warning, err=True)
     for line in passive_summary(result):
         typer.echo(line)
     typer.echo("live: the stream ended", err=True)
+
+
+def _hold(server) -> None:
+    """``--keep-open``: the console stays up, its last picture served to every client, until Ctrl-C (status 0)."""
+    import time
+
+    typer.echo(f"live: the console stays open at {server.url} (Ctrl-C to close it)", err=True)
+    try:
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        typer.echo("live: console closed", err=True)
 
 
 def parse_host_port(text: str) -> tuple[str, int]:
@@ -145,7 +178,8 @@ def _run(plan: dict, settings, server, *, checkpoint):
     stop = threading.Event()
     try:
         return run_live(samples, navigation, settings, server.publish, checkpoint=checkpoint, stop=stop,
-                        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]))
+                        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]),
+                        calibration=plan.get("calibration"))
     finally:
         stop.set()
         for source in (samples, navigation):

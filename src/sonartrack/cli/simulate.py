@@ -157,36 +157,51 @@ def _simulate_active(scene: Path | None, duration_s: float | None, seed: int | N
 
 def _simulate_stream(kind: str, scene: Path | None, overrides: dict, print_config: bool, given: dict,
                      wire: tuple) -> None:
-    """``--stream``: the passive scene's settings, then the scene played over TCP and UDP until its end or Ctrl-C
-    (systems/simulate/stream.py); nothing is written."""
+    """``--stream``: the scene's settings (passive, or active with ``--kind active``), then the scene played over TCP
+    and UDP until its end or Ctrl-C (systems/simulate/stream.py); nothing is written."""
     from sonartrack.core.errors import require
     from sonartrack.systems.simulate.files import shipped_scene_path
     from sonartrack.systems.simulate.recording_layout import make_layout
 
-    require(kind == "passive", "--stream plays the passive scene only (active pings are not streamed yet): leave out "
-                               "--kind active")
     extra = [k for k, v in given.items() if k != "start_utc" and v != PASSIVE_ONLY[k]]
     require(not extra, f"--{extra[0].replace('_', '-') if extra else ''} shapes the files simulate writes; --stream "
                        "writes none: leave it out")
-    settings = resolve(PassiveSceneSettings, shipped_scene_path(scene) if scene is not None else None, **overrides)
-    if print_config:
-        print_config_and_exit(settings)
-    from sonartrack.systems.simulate.run import scene_summary
-    from sonartrack.systems.simulate.stream import SceneStreamer
-
     port, nav_udp, speed = wire
-    streamer = SceneStreamer(settings, port=port or 0, nav_udp=nav_udp, speed=1.0 if speed is None else speed,
-                             start_utc=make_layout(start_utc=given["start_utc"]).start_utc)
+    streamer, summary = _streamer(kind, shipped_scene_path(scene) if scene is not None else None, overrides,
+                                  print_config, dict(port=port or 0, nav_udp=nav_udp,
+                                                     speed=1.0 if speed is None else speed,
+                                                     start_utc=make_layout(start_utc=given["start_utc"]).start_utc))
     nav = f", NMEA to udp://127.0.0.1:{nav_udp}" if nav_udp is not None else ""
     try:  # from the line that gives the port on: an interrupt gets the stream's own line
-        typer.echo(f"simulate: streaming {scene_summary(settings)} on tcp://127.0.0.1:{streamer.port}{nav} at "
+        typer.echo(f"simulate: streaming {summary} on tcp://127.0.0.1:{streamer.port}{nav} at "
                    f"{streamer.speed:g}x real time; waiting for the live side to connect (Ctrl-C stops)")
         done = streamer.serve()
     except BaseException as exc:
         streamer.close()
         raise _stream_interrupt(exc)  # noqa: B904 (an interrupt gets the stream's line; anything else goes on)
-    typer.echo(f"simulate: streamed {done.seconds:g} s of the scene ({done.blocks} blocks, {done.sentences} NMEA "
+    what = "pings" if kind == "active" else "blocks"
+    typer.echo(f"simulate: streamed {done.seconds:g} s of the scene ({done.blocks} {what}, {done.sentences} NMEA "
                f"sentences) to {done.connections} connection(s)")
+
+
+def _streamer(kind: str, path, overrides: dict, print_config: bool, wire: dict):
+    """(the streamer of the passive or active scene, its one-line summary): systems/simulate/stream.py."""
+    from sonartrack.systems.simulate.stream import ActiveSceneStreamer, SceneStreamer
+
+    if kind == "active":
+        from sonartrack.sim.active_scene import ActiveSceneSettings
+        from sonartrack.systems.simulate.active_files import active_scene_summary
+
+        settings = resolve(ActiveSceneSettings, path, **overrides)
+        if print_config:
+            print_config_and_exit(settings)
+        return ActiveSceneStreamer(settings, **wire), active_scene_summary(settings)
+    from sonartrack.systems.simulate.run import scene_summary
+
+    settings = resolve(PassiveSceneSettings, path, **overrides)
+    if print_config:
+        print_config_and_exit(settings)
+    return SceneStreamer(settings, **wire), scene_summary(settings)
 
 
 def _stream_interrupt(exc: BaseException) -> BaseException:

@@ -252,8 +252,8 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     require(bool(keep.any()), f"blank_s {settings.blank_s:g} s leaves no delay of the {delay[-1]:.3g} s window: "
                               "lower it")
     live = delay[keep] >= gate
-    require(bool(live.any()), f"the direct blast (arrival {direct_arrival_s:.3g} s from the navigation, plus the "
-                              f"pulse and blast_guard_s) ends at {gate:.3g} s, after the {delay[-1]:.3g} s window: "
+    require(bool(live.any()), f"the direct blast (arrival {direct_arrival_s or 0.0:.3g} s from the navigation, plus "
+                              f"the pulse and blast_guard_s) ends at {gate:.3g} s, after the {delay[-1]:.3g} s window: "
                               "check the navigation's source and array positions")
     y = np.asarray(np.moveaxis(power[:, keep][:, live], 1, -1), dtype=np.float32)
     mu = noise_estimate(y, settings.cfar, cfar_stride(waveform, fs_hz, delay))

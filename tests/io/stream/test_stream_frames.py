@@ -178,3 +178,43 @@ def test_reorder_overlap_keeps_the_new_tail():
     out = r.push(_blk(0, 10)) + r.push(SampleBlock(5, np.arange(10, dtype=np.float32)[:, None]))
     assert out[1].kind == "overlap" and out[2].first_index == 10
     assert out[2].samples[:, 0].tolist() == [5, 6, 7, 8, 9]
+
+
+def _ping_by_hand(number, t, fs, fc, bw, dur, x):
+    """A ping frame built from the module doc's layout, not by encode_ping."""
+    body = struct.pack("<IIddddd", number, x.shape[1], t, fs, fc, bw, dur) + x.astype("<c8").tobytes()
+    head = b"SNTK" + bytes([1, 4, 0, 0]) + struct.pack("<I", len(body))
+    return head + body + struct.pack("<I", zlib.crc32(head + body))
+
+
+def test_a_ping_frame_round_trips_and_matches_the_documented_layout():
+    from sonartrack.io.stream.frames import encode_ping
+    from sonartrack.io.stream.types import PingBlock
+
+    rng = np.random.default_rng(3)
+    x = (rng.standard_normal((3, 50)) + 1j * rng.standard_normal((3, 50))).astype(np.complex64)
+    ping = PingBlock(7, 210.0, 1500.0, 300.0, 0.5, 2000.0, x)
+    frame = encode_ping(ping)
+    assert frame == _ping_by_hand(7, 210.0, 2000.0, 1500.0, 300.0, 0.5, x)
+    dec = FrameDecoder()
+    out = dec.feed(encode_header(_header()) + frame[:40])
+    out += dec.feed(frame[40:])
+    got = out[-1]
+    assert isinstance(got, PingBlock) and got.ping == 7 and got.kind == "lfm" and got.transmit_time_s == 210.0
+    np.testing.assert_array_equal(got.samples, x)
+
+
+@pytest.mark.parametrize("why, frame", [
+    ("2 channels", lambda x: _ping_by_hand(1, 0.0, 2000.0, 1500.0, 0.0, 0.5, x[:2])),  # the header says 3
+    ("out of range", lambda x: _ping_by_hand(1, -5.0, 2000.0, 1500.0, 0.0, 0.5, x)),
+    ("NaN/inf", lambda x: _ping_by_hand(1, 0.0, float("nan"), 1500.0, 0.0, 0.5, x)),
+    ("NaN/inf samples", lambda x: _ping_by_hand(1, 0.0, 2000.0, 1500.0, 0.0, 0.5, np.full_like(x, np.inf))),
+])
+def test_a_bad_ping_is_an_event_and_the_next_frame_is_read(why, frame):
+    x = np.ones((3, 20), np.complex64)
+    dec = FrameDecoder()
+    out = dec.feed(encode_header(_header()) + frame(x) + encode_end(0))
+    bad = [e for e in out if isinstance(e, StreamEvent)]
+    assert len(bad) == 1 and bad[0].kind == "bad_frame" and ("bytes" in bad[0].detail or "range" in bad[0].detail
+                                                             or "NaN" in bad[0].detail), (why, bad)
+    assert isinstance(out[-1], StreamEnd)

@@ -54,9 +54,9 @@ def test_history_is_bounded_and_a_gap_is_blank(scene):
     assert [u["t_s"] for u in blank] == [50.5, 51.5, 52.5, 53.5]
     assert all(max(u["level_db"]) < 1e-9 for u in blank[:3])  # windows 50-52, touched by the gap: zeros
     assert max(blank[3]["level_db"]) > 4  # window 53 starts clean after it
-    healths = [u for u in ups if u["type"] == "health"]
-    assert healths[-1]["gaps"] == 1
-    assert sum(e == "gap: lost 3 s" for h in healths for e in h["events"]) == 1  # each event logged once
+    health = [u for u in ups if u["type"] == "health"]
+    assert health[-1]["gaps"] == 1  # each event is in one health update only (the console logs it once)
+    assert [e for h in health for e in h["events"]].count("gap: lost 3 s") == 1
     live.close()
 
 
@@ -109,8 +109,37 @@ def test_checkpoint_restores_the_chain_and_its_display(scene, tmp_path):
     np.testing.assert_array_equal(rb.tracks.bearing_deg, ra.tracks.bearing_deg)  # the same windows, one at a time
     np.testing.assert_array_equal(rb.record.level, ra.record.level)
     assert np.array_equal(rb.lofar.statistic, ra.lofar.statistic)
+    # the tonal lines survive the restore: the accumulators came back with it (the spectra ring did not), and they
+    # find the ships' lines (the scene's 120 and 175 Hz) as the file chain's pass over the whole ring does
+    tonal_a = sorted(tg.tonal.line_hz for tg in ra.targets if tg.tonal is not None)
+    tonal_b = sorted(tg.tonal.line_hz for tg in rb.targets if tg.tonal is not None)
+    assert b.spill.first_window > 0 and len(tonal_b) == len(tonal_a) >= 2
+    np.testing.assert_allclose(tonal_b, tonal_a, atol=0.3)
+    assert min(abs(np.array(tonal_b) - 120.0)) < 0.5 and min(abs(np.array(tonal_b) - 175.0)) < 0.5
     whole.close()
     b.close()
+
+
+def test_a_refresh_reads_the_tonals_kept_as_the_windows_came(scene):
+    """A refresh's tonal lines come from the per-track accumulators (no pass over the history): the ships' lines,
+    as the final pass over the spectra ring finds them."""
+    out, x, fs = scene
+    live = LivePassive(SETTINGS, _noise_header(x.shape[1], fs), nav=read_navigation(out / "nav.csv"))
+    live.push_block(SampleBlock(0, x))
+    reads = []
+    windows = live.spill.windows
+    live.spill.windows = lambda a, b: reads.append((a, b)) or windows(a, b)
+    rows = live.refresh()[0]["rows"]
+    assert all(b - a <= 1 for a, b in reads)  # one window at a time (the scans' own), never the history
+    final = live.finish()
+    assert any(b - a > 1 for a, b in reads)  # the final pass reads the ring
+    live.close()
+    by_track = {tg.track.track_id: tg.tonal.line_hz for tg in final.targets if tg.tonal is not None}
+    got = {r["track"]: r["tonal_hz"] for r in rows if r["tonal_hz"] is not None}
+    assert len(got) >= 2 and set(got) <= set(by_track)
+    for track, hz in got.items():
+        assert abs(hz - by_track[track]) < 0.3
+        assert min(abs(hz - 120.0), abs(hz - 175.0)) < 0.5
 
 
 def test_a_foreign_or_old_checkpoint_is_refused(tmp_path):
@@ -124,3 +153,58 @@ def test_a_foreign_or_old_checkpoint_is_refused(tmp_path):
         LivePassive.restore(tmp_path / "y.ckpt")
     with pytest.raises(InputError, match="not found"):
         LivePassive.restore(tmp_path / "none.ckpt")
+
+
+def test_live_navigation_is_the_file_chains_on_the_same_fixes():
+    """The fixes' Navigation equals io/nmea.py navigation_from_track's on the same log (a turn through north and a
+    tow), and its heading stays continuous when the oldest fixes are dropped."""
+    from sonartrack.io.nmea import GeoTrack, navigation_from_track
+
+    nav = LiveNavigation(START, tow_length_m=300.0, keep_s=1e9)
+    heading = (300.0 + 2.0 * np.arange(60)) % 360.0  # 300 -> 58 deg through north
+    a = np.deg2rad(heading)
+    lat = 54.0 + np.cumsum(3.0 * np.cos(a)) / 111_320.0
+    lon = 11.0 + np.cumsum(3.0 * np.sin(a)) / (111_320.0 * np.cos(np.deg2rad(54.0)))
+    for t in range(60):
+        nav.push(_fix(t, lat=lat[t], lon=lon[t], heading=heading[t]))
+    unix = np.array([START.timestamp() + t for t in range(60)], float)
+    ref, _ = navigation_from_track(GeoTrack(unix, lat, lon, unix, heading, "HDT"), START, tow_length_m=300.0,
+                                   projection=nav.projection)
+    got = nav.navigation()
+    for name in ("time_s", "x_m", "y_m", "heading_rad", "array_x_m", "array_y_m", "array_heading_rad"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(ref, name), err_msg=name)
+    short = LiveNavigation(START, keep_s=20.0)
+    for t in range(60):
+        short.push(_fix(t, lat=lat[t], lon=lon[t], heading=heading[t]))
+    assert len(short.fixes) == 21
+    np.testing.assert_allclose(short.navigation().heading_rad, ref.heading_rad[-21:], rtol=0, atol=1e-12)
+
+
+def test_the_streams_full_scale_and_the_calibration_make_pascals(scene):
+    """p = x V_fs 1e-6 / 10^((S + G) / 20) (io/calibration.py), V_fs from the stream's header: a hand-worked case,
+    the conflicts refused, and the chain's LOFAR power scaled by the square of it."""
+    from dataclasses import replace
+
+    from sonartrack.io.calibration import Calibration
+    from sonartrack.systems.live.passive import stream_scale
+
+    out, x, fs = scene
+    header = replace(_noise_header(x.shape[1], fs), full_scale_v=2.5)
+    cal = Calibration(np.array([-170.0]), np.array([20.0]), np.array([1.0]))
+    scale, note = stream_scale(header, cal)
+    np.testing.assert_allclose(scale, 2.5e-6 / 10 ** (-150.0 / 20.0), rtol=1e-12)  # 79.06 Pa per unit
+    assert note is None
+    volts, note = stream_scale(header, None)
+    assert np.all(volts == 2.5) and "volts, not pascals" in note
+    assert stream_scale(_noise_header(x.shape[1], fs), None) == (None, None)
+    with pytest.raises(InputError, match="differs from the stream's"):
+        stream_scale(header, Calibration(np.array([-170.0]), np.array([20.0]), np.array([5.0])))
+    plain = LivePassive(SETTINGS, _noise_header(x.shape[1], fs), nav=read_navigation(out / "nav.csv"))
+    cal_live = LivePassive(SETTINGS, header, nav=read_navigation(out / "nav.csv"), calibration=cal)
+    n = 40 * int(fs)
+    plain.push_block(SampleBlock(0, x[:n]))
+    cal_live.push_block(SampleBlock(0, x[:n]))
+    assert len(plain.periods) >= 1
+    np.testing.assert_allclose(cal_live.periods[0][1], plain.periods[0][1] * scale[0] ** 2, rtol=1e-4)
+    plain.close()
+    cal_live.close()

@@ -33,7 +33,8 @@ def test_run_live_publishes_and_resumes_from_its_checkpoint(scene, tmp_path):
     r1 = run_live(Source(x, fs, stop=300_000), nav, SETTINGS, first.append, checkpoint=ckpt)
     assert r1 is not None and r1.duration_s == 75.0 and ckpt.is_file()
     assert sum(u["type"] == "btr" for u in first) == 75
-    assert first[-2]["type"] == "targets"
+    assert first[-3]["type"] == "targets"  # the final refresh, then its ownship, then the end said in the health
+    assert first[-1]["type"] == "health" and any(e.startswith("end:") for e in first[-1]["events"])
     again: list[dict] = []
     chosen = []
     r2 = run_live(Source(x, fs, first=300_000), nav, SETTINGS, again.append, checkpoint=ckpt,

@@ -6,7 +6,7 @@ Byte layout (all integers little-endian). Every frame::
     offset  size  field
     0       4     magic b"SNTK"
     4       1     version (1)
-    5       1     kind: 1 header, 2 data, 3 end of stream
+    5       1     kind: 1 header, 2 data, 3 end of stream, 4 ping
     6       2     reserved (0)
     8       4     body length L (uint32; at most MAX_BODY_BYTES)
     12      L     body
@@ -31,6 +31,22 @@ Data body (L = 12 + n x channels x bytes per sample)::
 End body (L = 8): the index one past the last sample sent (uint64). A recorder that stops for good sends it;
 a connection that drops without it is a disconnect (the source reconnects).
 
+Ping body (L = 48 + 8 n x channels), an active sonar's ping: its listening window as complex baseband, sent when
+the window is complete (``sonartrack simulate --kind active --stream``; channels are the header's; the header's rate
+and sample format are the stream's and do not apply to pings)::
+
+    0   4  ping number (uint32, from 1)
+    4   4  n, samples per channel (uint32, 1 .. MAX_BLOCK_FRAMES)
+    8   8  transmit time (float64, s after the header's start)
+    16  8  baseband sample rate (float64, Hz, 100 .. 1e6)
+    24  8  carrier frequency (float64, Hz)
+    32  8  bandwidth (float64, Hz; 0: a CW pulse, else an LFM sweep)
+    40  8  pulse length (float64, s)
+    48  .  samples, complex64 (real then imaginary float32), channel after channel: (channels, n) as a ping file
+           of systems/active holds them
+
+A stream may carry pings alone (an active sonar) or between the data frames of a passive stream.
+
 Integers are read as passive's file reader reads them, k / 2^(bits - 1) (io/wav_blocks.py), and written as
 round(x 2^(bits - 1)) clipped to the integer range (io/recording_writer.py's rule); float32 is sent as is.
 
@@ -52,11 +68,11 @@ from datetime import UTC, datetime, timedelta
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.io.stream.types import SAMPLE_FORMATS, SampleBlock, StreamEvent, StreamHeader
+from sonartrack.io.stream.types import SAMPLE_FORMATS, PingBlock, SampleBlock, StreamEvent, StreamHeader
 
 MAGIC = b"SNTK"
 VERSION = 1
-KIND_HEADER, KIND_DATA, KIND_END = 1, 2, 3
+KIND_HEADER, KIND_DATA, KIND_END, KIND_PING = 1, 2, 3, 4
 #: bytes of a frame's fixed prefix (magic .. body length) and of its CRC
 PREFIX_BYTES, CRC_BYTES = 12, 4
 #: the largest body taken (bytes): 16 MiB, a 1 s block of 1024 channels of float32 at 4 kHz
@@ -72,6 +88,7 @@ FORMAT_CODES = {"int16": (1, 2), "int24": (2, 3), "float32": (3, 4)}
 _FORMAT_OF_CODE = {code: name for name, (code, _) in FORMAT_CODES.items()}
 _HEADER = struct.Struct("<HBBdqd")
 _DATA = struct.Struct("<QI")
+_PING = struct.Struct("<IIddddd")
 _PREFIX = struct.Struct("<4sBBHI")
 _EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 #: latest start time taken (a clock that far off is garbage)
@@ -184,6 +201,30 @@ def encode_block(block: SampleBlock, sample_format: str) -> bytes:
                                                          f"exceeds the {MAX_BODY_BYTES} bytes of a frame: send "
                                                          "shorter blocks")
     return _frame(KIND_DATA, _DATA.pack(int(block.first_index), x.shape[0]) + payload)
+
+
+def encode_ping(ping: PingBlock) -> bytes:
+    """The ping frame of ``ping`` (module doc).
+
+    Parameters
+    ----------
+    ping : PingBlock
+        The ping: number, times, pulse, rate and complex samples (channels, n).
+
+    Returns
+    -------
+    bytes
+        One frame; InputError for a ping a frame cannot carry.
+    """
+    x = np.asarray(ping.samples)
+    require(x.ndim == 2 and 1 <= x.shape[0] <= MAX_CHANNELS and 1 <= x.shape[1] <= MAX_BLOCK_FRAMES,
+            f"a ping must be (channels, n) samples with 1..{MAX_BLOCK_FRAMES} per channel, got {x.shape}")
+    payload = np.ascontiguousarray(x, dtype="<c8").tobytes()
+    require(len(payload) + _PING.size <= MAX_BODY_BYTES, f"ping {ping.ping}: {x.shape} samples exceed the "
+                                                         f"{MAX_BODY_BYTES} bytes of a frame")
+    head = _PING.pack(int(ping.ping), x.shape[1], float(ping.transmit_time_s), float(ping.fs_hz), float(ping.fc_hz),
+                      float(ping.bandwidth_hz), float(ping.duration_s))
+    return _frame(KIND_PING, head + payload)
 
 
 def encode_end(end_index: int) -> bytes:
@@ -305,7 +346,7 @@ class FrameDecoder:
         _, version, kind, _, length = _PREFIX.unpack_from(buf, at)
         if version != VERSION:
             return self._bad(at, f"version {version} (this reader takes {VERSION})", out), None, False
-        if kind not in (KIND_HEADER, KIND_DATA, KIND_END):
+        if kind not in (KIND_HEADER, KIND_DATA, KIND_END, KIND_PING):
             return self._bad(at, f"unknown frame kind {kind}", out), None, False
         if length > MAX_BODY_BYTES:
             return self._bad(at, f"a body of {length} bytes (at most {MAX_BODY_BYTES})", out), None, False
@@ -328,9 +369,11 @@ class FrameDecoder:
         if n > 0:
             self._skipping = True
 
-    def _body(self, kind: int, body) -> StreamHeader | SampleBlock | StreamEnd:
+    def _body(self, kind: int, body) -> StreamHeader | SampleBlock | StreamEnd | PingBlock:
         if kind == KIND_HEADER:
             return self._header(body)
+        if kind == KIND_PING:
+            return self._ping(body)
         if kind == KIND_END:
             require(len(body) == 8, f"an end frame of {len(body)} bytes (8 expected)")
             return StreamEnd(struct.unpack("<Q", body)[0])
@@ -364,3 +407,20 @@ class FrameDecoder:
             require(max(hi, -lo) <= MAX_FLOAT_SAMPLE, f"a sample of magnitude {max(hi, -lo):.3g} in the block at "
                                                       f"index {first} (no pressure is that large)")
         return SampleBlock(int(first), x)
+
+    def _ping(self, body) -> PingBlock:
+        require(self.header is not None, "a ping frame before any header")
+        require(len(body) >= _PING.size, f"a ping frame of {len(body)} bytes (at least {_PING.size})")
+        number, n, t, fs, fc, bw, dur = _PING.unpack_from(body)
+        channels = self.header.channels
+        require(1 <= n <= MAX_BLOCK_FRAMES, f"a ping of {n} samples per channel (1..{MAX_BLOCK_FRAMES})")
+        require(len(body) == _PING.size + 8 * n * channels,
+                f"ping {number}: {n} samples x {channels} channels x 8 bytes in a {len(body)}-byte body")
+        require(all(math.isfinite(v) for v in (t, fs, fc, bw, dur)), f"ping {number}: a time, rate or pulse field "
+                                                                      "is NaN/inf")
+        require(MIN_RATE_HZ <= fs <= MAX_RATE_HZ and t >= 0 and dur > 0 and fc >= 0 and bw >= 0,
+                f"ping {number}: rate {fs:g} Hz, transmit time {t:g} s, pulse {dur:g} s, carrier {fc:g} Hz, "
+                f"bandwidth {bw:g} Hz: out of range")
+        x = np.frombuffer(body[_PING.size:], "<c8", n * channels).reshape(channels, n).astype(np.complex64)
+        require(bool(np.all(np.isfinite(x.view(np.float32)))), f"NaN/inf samples in ping {number}")
+        return PingBlock(int(number), float(t), float(fc), float(bw), float(dur), float(fs), x)

@@ -42,6 +42,26 @@ class SampleBlock:
 
 
 @dataclass(frozen=True, slots=True)
+class PingBlock:
+    """One active ping's listening window (io/stream/frames.py, frame kind 4): its number (from 1), transmit time
+    (s after the header's start_utc), the transmitted pulse (carrier and bandwidth (Hz; 0 for a CW), length (s)),
+    the baseband sample rate (Hz) and the samples, complex64 (channels, n), as systems/active reads a ping file."""
+
+    ping: int
+    transmit_time_s: float
+    fc_hz: float
+    bandwidth_hz: float
+    duration_s: float
+    fs_hz: float
+    samples: np.ndarray
+
+    @property
+    def kind(self) -> str:
+        """The pulse: "lfm" (a sweep) or "cw" (a tone)."""
+        return "lfm" if self.bandwidth_hz > 0 else "cw"
+
+
+@dataclass(frozen=True, slots=True)
 class NavFix:
     """One navigation fix: UTC time, position (deg, WGS84), true heading (deg; NaN when no sentence gives one:
     a course over ground is not a heading) and speed over ground (m/s; NaN when not given)."""

@@ -4,9 +4,11 @@ The file is a pickle of a dict: ``format`` and ``version`` (:data:`CHECKPOINT_VE
 version is refused with what to do), the settings (as their dict), the stream header, the options, and the state:
 the window assembler (with the part-filled window's samples), the tracker (its live tracks), the LOFAR accumulator's
 open period, the history deques (bearing-time rows, tracker rows, LOFAR periods), the waiting scans, the navigation
-fixes, the selected track and the health counters. Not kept: the tonal band's spectra ring (0.4 GB an hour, on
-disk): after a restore the tonal pass reads the windows since the restore (a target's tonal may then rest on fewer
-windows than a file run's).
+fixes (with their projected positions and unwrapped headings), the per-track tonal accumulators
+(systems/live/tonals.py: ~0.26 MB per track and hour), the selected track and the health counters. Not kept: the
+tonal band's spectra ring (0.4 GB an hour, on disk); the tonal lines after a restore rest on the accumulators, which
+hold the windows before the checkpoint and those since (the final pass too reads them then, not the ring).
+Version 2 (the accumulators and the navigation's columns); a version 1 file is refused with what to do.
 
 A checkpoint is read only from a path the operator gave (pickle runs code from the file: never load one from an
 untrusted source).
@@ -22,7 +24,7 @@ from sonartrack.io.atomic import atomic_path
 
 #: the checkpoint's format name and version (bumped when the state's layout changes)
 CHECKPOINT_FORMAT = "sonartrack-live-passive"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
 #: the chain's attributes a checkpoint keeps as they are
 _STATE = ("rows", "scans", "pending", "periods", "k_first", "k_next", "n_periods", "selected", "events", "gaps",
           "last_targets", "_no_heading")
@@ -32,7 +34,8 @@ def write_checkpoint(live, path) -> Path:
     """Write ``live``'s state (module doc) to ``path`` atomically; returns the path."""
     state = {name: getattr(live, name) for name in _STATE}
     state |= {"assembler": live.assembler.state(), "nav": live.nav.state(), "tracker": live.core.tracker,
-              "heading_deg": live.core.heading_deg, "lofar": _lofar_state(live.core.front.lofar)}
+              "heading_deg": live.core.heading_deg, "lofar": _lofar_state(live.core.front.lofar),
+              "tonals": live.tonals.tracks}
     doc = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
            "settings": live.settings.model_dump(mode="json"), "header": live.header, "history_s": live.history_s,
            "options": live.options, "fixed_nav": live.fixed_nav, "state": state}
@@ -43,7 +46,7 @@ def write_checkpoint(live, path) -> Path:
 
 
 def _lofar_state(acc) -> dict | None:
-    return None if acc is None else {"sum": acc._sum, "count": acc._count}  # noqa: SLF001 - the open period
+    return None if acc is None else acc.state()
 
 
 def read_checkpoint(cls, path):
@@ -71,6 +74,7 @@ def read_checkpoint(cls, path):
     live.nav.restore(state["nav"])
     live.core.tracker, live.core.heading_deg = state["tracker"], state["heading_deg"]
     if state["lofar"] is not None:
-        live.core.front.lofar._sum, live.core.front.lofar._count = state["lofar"]["sum"], state["lofar"]["count"]  # noqa: SLF001
+        live.core.front.lofar.restore(state["lofar"])
+    live.tonals.tracks = state["tonals"]
     live.spill.skip_to(live.k_next)
     return live

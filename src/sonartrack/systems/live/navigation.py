@@ -10,6 +10,12 @@ motion, a central difference), so that its heading is the one the file chain rea
 predicted) and the health and ownship updates say "coasting" until fixes return; the scans stepped while coasting
 may then differ from a file run on the complete log (which interpolates across the hole).
 
+Cost: each fix is projected once, as it comes, and its logged heading unwrapped against the one before (np.unwrap's
+steps, the same floats); the Navigation a scan reads is rebuilt from these columns (numpy over the fixes kept, a
+fraction of a millisecond for an hour of fixes a second) -- not reprojected from every fix each window, which cost
+~5 ms a window with an hour of fixes and grew with the history. Across the fixes dropped the headings stay
+continuous (a re-unwrap from the oldest fix kept would jump by 2 pi after a turn through north).
+
 Memory: fixes older than ``keep_s`` before the newest are dropped (the tow model needs the last tow length of track,
 a few minutes; the TMA the tracks' history: the live chain keeps ``history_s`` plus a margin).
 """
@@ -17,6 +23,7 @@ a few minutes; the TMA the tracks' history: the live chain keeps ``history_s`` p
 from __future__ import annotations
 
 import math
+from collections import deque
 from datetime import datetime
 
 import numpy as np
@@ -44,14 +51,19 @@ class LiveNavigation:
                  keep_s: float = 4200.0):
         self.start_utc, self.tow_length_m = start_utc, float(tow_length_m)
         self.timeout_s, self.keep_s = float(timeout_s), float(keep_s)
-        self.fixes: list[tuple[float, float, float, float]] = []  # (unix s, lat, lon, heading deg or NaN)
+        self.fixes: deque[tuple[float, float, float, float]] = deque()  # (unix s, lat, lon, heading deg or NaN)
+        #: per fix: projected x, y (m) and the heading unwrapped against the previous logged one (rad, NaN: none)
+        self._cols: deque[tuple[float, float, float]] = deque()
+        self._last_heading_rad: float | None = None  # the raw previous logged heading (rad)
+        self._correction = 0.0  # np.unwrap's running sum of corrections (rad)
+        self._n_headings = 0  # logged headings among the fixes kept
         self.projection = None
         self._nav: Navigation | None = None
         self.coasting = False
         self.dropouts = 0
 
     def push(self, fix: NavFix) -> None:
-        """Take a fix (a fix not after the newest is ignored: NMEA repeats)."""
+        """Take a fix (a fix not after the newest is ignored: NMEA repeats); projected once, here."""
         t = fix.utc.timestamp()
         if self.fixes and t <= self.fixes[-1][0]:
             return
@@ -61,10 +73,30 @@ class LiveNavigation:
             from sonartrack.io.nmea import LocalProjection
 
             self.projection = LocalProjection(float(fix.lat_deg), float(fix.lon_deg))
+        x, y = self.projection.xy(float(fix.lat_deg), float(fix.lon_deg))
         self.fixes.append((t, float(fix.lat_deg), float(fix.lon_deg), float(fix.heading_deg)))
-        while self.fixes and self.fixes[-1][0] - self.fixes[0][0] > self.keep_s:
-            self.fixes.pop(0)
+        self._cols.append((float(x), float(y), self._unwrapped(float(fix.heading_deg))))
+        self._n_headings += math.isfinite(fix.heading_deg)
+        while self.fixes[-1][0] - self.fixes[0][0] > self.keep_s:
+            self.fixes.popleft()
+            self._n_headings -= math.isfinite(self._cols.popleft()[2])
         self._nav = None
+
+    def _unwrapped(self, heading_deg: float) -> float:
+        """The logged heading (rad) unwrapped against the previous logged one, step by step as np.unwrap does it
+        (the same float operations: io/nmea.py unwraps the whole log so), and continued across the fixes dropped
+        (no 2 pi jump when the oldest fix kept changes); NaN without one."""
+        if not math.isfinite(heading_deg):
+            return math.nan
+        p = float(np.deg2rad(heading_deg))
+        if self._last_heading_rad is not None:
+            dd = p - self._last_heading_rad
+            ddmod = (dd + math.pi) % (2.0 * math.pi) - math.pi
+            if ddmod == -math.pi and dd > 0:
+                ddmod = math.pi
+            self._correction += 0.0 if abs(dd) < math.pi else ddmod - dd
+        self._last_heading_rad = p
+        return p + self._correction
 
     def _seconds(self, unix_s: float) -> float:
         return unix_s - self.start_utc.timestamp()
@@ -75,12 +107,19 @@ class LiveNavigation:
 
     def covers(self, time_s: float) -> bool:
         """Whether the fixes fix the array's heading at ``time_s`` as the whole log would (module doc)."""
-        t = np.array([f[0] for f in self.fixes]) - self.start_utc.timestamp()
-        after = np.flatnonzero(t >= time_s)
-        if len(self.fixes) < 2 or not after.size:
+        t0 = self.start_utc.timestamp()
+        after = 0
+        for f in reversed(self.fixes):  # the newest first: a scan asks about the last second or two
+            if f[0] - t0 < time_s or after >= 2:
+                break
+            after += 1
+        if len(self.fixes) < 2 or not after:
             return False
-        headed = np.isfinite([f[3] for f in self.fixes]).sum() >= 2
-        return headed or after.size >= 2
+        return after >= 2 or self._headed()
+
+    def _headed(self) -> bool:
+        """Two logged headings or more among the fixes kept."""
+        return self._n_headings >= 2
 
     def update(self, stream_time_s: float) -> bool:
         """Note the stream's time (s): whether the ownship is coasting now (no fix for ``timeout_s``); a dropout
@@ -92,15 +131,24 @@ class LiveNavigation:
         return coasting
 
     def navigation(self) -> Navigation | None:
-        """The Navigation of the fixes kept (None with fewer than two)."""
+        """The Navigation of the fixes kept (None with fewer than two): io/nmea.py ``navigation_from_track`` on
+        them, from the positions projected as each fix came (module doc)."""
         if self._nav is None and len(self.fixes) >= 2:
-            from sonartrack.io.nmea import GeoTrack, navigation_from_track
+            from sonartrack.io.nmea import _towed as tow_model  # the file chain's tow model, the same floats
+            from sonartrack.io.nmea import check_tow_length
 
-            f = np.array(self.fixes)
-            has = np.isfinite(f[:, 3])
-            track = GeoTrack(f[:, 0], f[:, 1], f[:, 2], f[has, 0], f[has, 3], "HDT" if has.sum() else "none")
-            self._nav = navigation_from_track(track, self.start_utc, tow_length_m=self.tow_length_m,
-                                              projection=self.projection)[0]
+            t = np.array([f[0] for f in self.fixes])
+            x, y, uw = (np.array(c) for c in zip(*self._cols, strict=True))
+            has = np.isfinite(uw)
+            if has.sum() >= 2:
+                h = np.interp(t, t[has], uw[has])
+            elif has.sum() == 1:
+                h = np.full(t.shape, uw[has][0])
+            else:  # no heading logged: the direction of motion (io/nmea.py)
+                h = np.unwrap(np.arctan2(np.gradient(x, t), np.gradient(y, t)))
+            check_tow_length(self.tow_length_m)
+            ax, ay, ah = tow_model(t, x, y, h, self.tow_length_m)
+            self._nav = Navigation(t - self.start_utc.timestamp(), x, y, h, ax, ay, ah)
         return self._nav
 
     def heading_deg(self, time_s: float) -> float | None:
@@ -114,13 +162,18 @@ class LiveNavigation:
     def state(self) -> dict:
         """What a checkpoint keeps."""
         origin = None if self.projection is None else (self.projection.lat0_deg, self.projection.lon0_deg)
-        return {"fixes": list(self.fixes), "coasting": self.coasting, "dropouts": self.dropouts, "origin": origin}
+        return {"fixes": list(self.fixes), "cols": list(self._cols), "coasting": self.coasting,
+                "dropouts": self.dropouts, "origin": origin,
+                "unwrap": (self._last_heading_rad, self._correction)}
 
     def restore(self, state: dict) -> None:
         """Back to a checkpoint's :meth:`state`."""
         from sonartrack.io.nmea import LocalProjection
 
-        self.fixes = [tuple(f) for f in state["fixes"]]
+        self.fixes = deque(tuple(f) for f in state["fixes"])
+        self._cols = deque(tuple(c) for c in state["cols"])
+        self._n_headings = sum(math.isfinite(c[2]) for c in self._cols)
+        self._last_heading_rad, self._correction = state["unwrap"]
         self.coasting, self.dropouts = bool(state["coasting"]), int(state["dropouts"])
         origin = state["origin"]
         self.projection = None if origin is None else LocalProjection(*origin)

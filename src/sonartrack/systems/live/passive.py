@@ -10,8 +10,10 @@ tonal lines, joins, narrowband lines, sides, TMA and legs -- are the file chain'
 
 Equality with the file chain: the same core and the same finishing on the same windows, so on a stream no longer
 than ``history_s`` the final targets equal ``run_passive_recording``'s to the rounding of the front end's batched
-products (the file chain transforms 32 windows at once, the live chain one: ~1e-13 deg in a peak). The tonal pass
-reads the spectra the file chain's spill holds, kept in a ring of the last ``history_s`` (systems/live/windows.py).
+products (the file chain transforms 32 windows at once, the live chain one: ~1e-13 deg in a peak). The final tonal
+pass reads the spectra the file chain's spill holds, kept in a ring of the last ``history_s``
+(systems/live/windows.py). A refresh reads the tonal lines from per-track accumulators fed scan by scan instead
+(systems/live/tonals.py), so that its cost does not grow with the history.
 
 Bounded state over a day: the bearing-time rows, peaks and tracker rows of the last ``history_s`` (default 1 h:
 3.6 MB of rows, ~2 MB of tracker rows), the LOFAR periods of that span (61 beams x the band's bins x 8 bytes a
@@ -32,6 +34,7 @@ import numpy as np
 from sonartrack.core.errors import require
 from sonartrack.io.stream.types import NavFix, SampleBlock, StreamEvent, StreamHeader
 from sonartrack.systems.live.navigation import LiveNavigation
+from sonartrack.systems.live.tonals import LiveTonals
 from sonartrack.systems.live.updates import btr_update, lofar_update, ownship_update, targets_update, tracks_update
 from sonartrack.systems.live.windows import RingSpill, WindowAssembler
 from sonartrack.systems.passive.chain import PassiveCore, PassiveResult
@@ -61,16 +64,20 @@ class LivePassive:
         Array centre behind the ship (m) for the fixes of :meth:`push_nav`.
     nav_timeout_s : float
         No fix for this long (stream time): the ownship coasts (module doc of systems/live/navigation.py).
+    calibration : Calibration, optional
+        The hydrophones' calibration (io/calibration.py, ``--calibration``): with the stream's full scale
+        (:func:`stream_scale`) the samples become pascals as the file chain's are; None: pascals already.
     """
 
     def __init__(self, settings: PassiveSettings, header: StreamHeader, *, history_s: float = 3600.0, nav=None,
-                 tow_length_m: float = 0.0, nav_timeout_s: float = 5.0):
-        require(not settings.btr_mftd.enabled, "the live chain cannot run [btr_mftd] (it needs the whole bearing-time "
-                                               "record): set [btr_mftd] enabled = false")
+                 tow_length_m: float = 0.0, nav_timeout_s: float = 5.0, calibration=None):
+        check_live_settings(settings)
         require(history_s >= settings.window_s, f"history_s {history_s:g} s is shorter than one window: give at "
                                                 "least window_s")
         self.settings, self.header, self.history_s = settings, header, float(history_s)
-        self.options = {"tow_length_m": float(tow_length_m), "nav_timeout_s": float(nav_timeout_s)}
+        self.options = {"tow_length_m": float(tow_length_m), "nav_timeout_s": float(nav_timeout_s),
+                        "calibration": calibration}
+        self.scale, scale_note = stream_scale(header, calibration)
         self.stages = settings.stages(header.rate_hz, channels=header.channels)
         self.window_s = settings.window_s
         self.n_samples = int(round(self.window_s * header.rate_hz))
@@ -80,6 +87,9 @@ class LivePassive:
         self.nav = LiveNavigation(header.start_utc, tow_length_m=tow_length_m, timeout_s=nav_timeout_s,
                                   keep_s=self.history_s + 600.0)
         self._fresh()
+        if scale_note:
+            self.events.append(f"calibration: {scale_note}")
+            self.new_events.append(self.events[-1])
 
     def _fresh(self) -> None:
         """The stream's state from scratch (also the base a restore fills in)."""
@@ -87,6 +97,7 @@ class LivePassive:
         self.spill = RingSpill(self.n_samples, self.header.rate_hz, self.stages.tonal,
                                self.keep_windows + SPILL_MARGIN_WINDOWS)
         self.core = PassiveCore(self.stages, self.spill)
+        self.tonals = LiveTonals(self.stages, self.spill)
         self.rows: deque = deque()      # (k, z row float32, peak angles, peak heights): the btr history
         self.scans: deque = deque()     # (k, the tracker's rows of that scan)
         self.pending: deque = deque()   # (k, t, angles, heights): scans waiting for the navigation
@@ -145,6 +156,8 @@ class LivePassive:
             self.k_first = k
             self.spill.skip_to(k)
         block = np.zeros((self.header.channels, self.n_samples), np.float32) if x is None else x
+        if self.scale is not None and x is not None:
+            block = block * self.scale[:, None]  # float64, as the file chain's calibrated blocks: the same product
         row, angle, height = next(self.core.front.windows([block]))
         t = k * self.window_s + 0.5 * self.window_s
         self.rows.append((k, row.astype(np.float32), angle, height))
@@ -182,6 +195,7 @@ class LivePassive:
             self._no_heading = self.fixed_nav is None and self.nav.navigation() is None
             rows = self.core.scan(t, angle, height, heading)[0]
             self.scans.append((k, rows))
+            self.tonals.add_scan(k, rows)
             out.append(tracks_update(t, rows))
         return out
 
@@ -189,14 +203,13 @@ class LivePassive:
         """LOFAR periods completed: into the history (the accumulator's list emptied), and the selected track's
         row."""
         acc = self.core.front.lofar
-        if acc is None or not acc._lines:  # noqa: SLF001 - the periods are taken out as they complete
+        if acc is None:
             return []
         out = []
-        for power, stat in acc._lines:  # noqa: SLF001
+        for power, stat in acc.take_periods():
             self.periods.append((self.n_periods, power.astype(np.float32), stat))
             self.n_periods += 1
             out += self._lofar_row(self.periods[-1])
-        acc._lines.clear()  # noqa: SLF001
         return out
 
     def _period_time(self, p: int) -> float:
@@ -232,6 +245,7 @@ class LivePassive:
             self.rows.popleft()
         while self.scans and self.scans[0][0] < first:
             self.scans.popleft()
+        self.tonals.trim(first)
         length = self.settings.narrowband.integration
         while self.periods and self._period_time(self.periods[0][0]) - 0.5 * length * self.window_s < \
                 first * self.window_s:
@@ -283,7 +297,7 @@ class LivePassive:
     def refresh(self) -> list[dict]:
         """Sides, TMA and legs on the current tracks (slow: on a schedule, from a worker thread): the targets and
         the ownship."""
-        snap = self._snapshot()
+        snap = self._snapshot(exact_tonals=False)
         result = None if snap is None else _result(self, snap)
         with self.lock:
             t = self.k_next * self.window_s
@@ -300,18 +314,24 @@ class LivePassive:
                 k, t, angle, height = self.pending.popleft()
                 heading = self._heading(t, True)
                 self.scans.append((k, self.core.scan(t, angle, height, heading)[0]))
-        snap = self._snapshot()
+                self.tonals.add_scan(k, self.scans[-1][1])
+        snap = self._snapshot(exact_tonals=True)
         require(snap is not None, "the stream ended before one whole window or without navigation: no result")
         return _result(self, snap)
 
-    def _snapshot(self) -> dict | None:
-        """What the finishing stages read, taken under the lock (the arrays are not written again)."""
+    def _snapshot(self, exact_tonals: bool) -> dict | None:
+        """What the finishing stages read, taken under the lock (the arrays are not written again); the tonal lines
+        from the accumulators (systems/live/tonals.py), or with ``exact_tonals`` from the file chain's pass over the
+        spectra ring where it holds every window of the history (not after a restore)."""
         with self.lock:
             nav = self.fixed_nav if self.fixed_nav is not None else self.nav.navigation()
             if nav is None or not self.rows:
                 return None
+            first = max(self.rows[0][0], self.spill.first_window)
+            ring = exact_tonals and first == self.rows[0][0]
             return {"rows": list(self.rows), "scans": [r for _, r in self.scans], "periods": list(self.periods),
-                    "nav": nav, "n_windows": self.k_next, "first_window": max(self.rows[0][0], self.spill.first_window),
+                    "nav": nav, "n_windows": self.k_next, "first_window": first,
+                    "tonals": None if ring else self.tonals.snapshot(),
                     "nav_times": np.array([f[0] for f in self.nav.fixes]) - self.header.start_utc.timestamp()
                     if self.fixed_nav is None else self.fixed_nav.time_s}
 
@@ -333,6 +353,57 @@ class LivePassive:
     def close(self) -> None:
         """Free the tonal ring's disk."""
         self.spill.close()
+
+
+def check_live_settings(settings: PassiveSettings) -> None:
+    """InputError for settings the live chain cannot run: ``[btr_mftd]`` (it needs the whole bearing-time record)."""
+    require(not settings.btr_mftd.enabled, "the live chain cannot run [btr_mftd] (the bearing-time MFTD needs the "
+                                           "whole record): set [btr_mftd] enabled = false, or run passive on the file")
+
+
+def stream_scale(header: StreamHeader, calibration) -> tuple[np.ndarray | None, str | None]:
+    """Pascals per sample unit of a stream (channels,), or None for samples in pascals; and a note for the operator.
+
+    The stream's samples are in full-scale units (io/stream/types.py). A header's ``full_scale_v`` is the
+    recorder's own statement of the volts at full scale, the V_fs of io/calibration.py's p = x V_fs 1e-6 /
+    10^((S + G) / 20); the calibration gives S and G (its own full_scale_v stands where the header states none). A
+    calibration whose full scale is not 1 V and differs from the header's is refused (which one holds?). A header's
+    full scale without a calibration: the samples become volts (V_fs x), said in the note (levels in dB re 1 V, not
+    re 1 uPa; bearings and tracks do not depend on the scale).
+    """
+    from sonartrack.io.calibration import Calibration
+
+    cal = calibration if calibration is not None else Calibration.identity()
+    vfs = header.full_scale_v
+    if vfs is None:
+        return (None, None) if cal.is_identity else (cal.pa_per_unit(header.channels), None)
+    require(vfs > 0 and math.isfinite(vfs), f"the stream states full scale {vfs} V: a recorder's full scale is a "
+                                            "positive voltage (fix the recorder's header)")
+    if cal.is_identity:
+        return np.full(header.channels, float(vfs)), (f"the stream states full scale {vfs:g} V but no --calibration "
+                                                      "gives the hydrophones' sensitivity: levels are in volts, not "
+                                                      "pascals")
+    stated = np.asarray(cal.full_scale_v, float)
+    require(np.all(stated == 1.0) or np.allclose(stated, vfs, rtol=1e-9),
+            f"the calibration's full_scale_v ({stated[0]:g} V) differs from the stream's ({vfs:g} V): remove "
+            "full_scale_v from the calibration (the recorder states it)")
+    return cal.pa_per_unit(header.channels) * (float(vfs) / stated if np.all(stated == 1.0) else 1.0), None
+
+
+def _with_measurements(tracks, peaks, max_offset_deg: float):
+    """The tracks without those that hold no peak in the history kept (a track that coasted through its whole
+    stretch after the cut: its measurements would be empty, which the finishing stages do not take --
+    systems/passive/measurements.py ``merge_duplicates`` fails on one)."""
+    from dataclasses import fields, replace
+
+    from sonartrack.systems.passive.measurements import track_measurements
+
+    empty = [m.track_id for m in track_measurements(tracks, peaks, max_offset_deg) if not len(m.time_s)]
+    if not empty:
+        return tracks
+    keep = ~np.isin(tracks.track_id, empty)
+    return replace(tracks, **{f.name: getattr(tracks, f.name)[keep] for f in fields(tracks)
+                              if getattr(tracks, f.name) is not None})
 
 
 def _result(live: LivePassive, snap: dict) -> PassiveResult:
@@ -360,10 +431,12 @@ def _result(live: LivePassive, snap: dict) -> PassiveResult:
                          np.stack([p for _, p, _ in snap["periods"]]), np.stack([z for _, _, z in snap["periods"]]))
     cone = live.stages.front_end.cone_deg
     btr = BearingTimeRecord(ks * w + 0.5 * w, cone, np.stack([r[1] for r in rows]), peaks, gram)
-    tracks = live.core.tracker.tracks(snap["scans"])
+    tracks = _with_measurements(live.core.tracker.tracks(snap["scans"]), peaks, live.settings.max_peak_offset_deg)
     first, stop = snap["first_window"], snap["n_windows"]
+    tonals = snap["tonals"]
     result = finish_passive(btr, tracks, snap["nav"], live.stages, stop,
-                            lambda: live.spill.windows(first, stop), first_window=first)
+                            (lambda: tonals) if tonals is not None else (lambda: live.spill.windows(first, stop)),
+                            first_window=first)
     result = bound_batch_speed(result)
     lag = live.options["tow_length_m"] / 3.0 if live.fixed_nav is None else 0.0  # tow length over a slow 3 m/s
     navr = RecordingNavigation(snap["nav"], [], (snap["nav_times"],), lag)

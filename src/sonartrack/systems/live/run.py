@@ -14,15 +14,18 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
-from sonartrack.io.stream.types import NavFix, SampleBlock, StreamEvent
+from sonartrack.io.stream.types import NavFix, PingBlock, SampleBlock, StreamEvent
 from sonartrack.systems.live.passive import LivePassive
 from sonartrack.systems.passive.chain import PassiveResult
 from sonartrack.systems.passive.settings import PassiveSettings
 
 #: a refresh may take this share of the time between refreshes at most (the schedule stretches)
 REFRESH_SHARE = 0.1
+#: events kept from before the passive chain is built (its first sample block)
+EARLY_EVENTS = 20
 
 
 def _nav_thread(nav, live_ref: list, publish, stop: threading.Event) -> threading.Thread | None:
@@ -54,13 +57,51 @@ def _refresh_thread(live: LivePassive, publish, refresh_s: float, stop: threadin
         wait = refresh_s
         while not stop.wait(wait):
             t0 = time.perf_counter()
-            for u in live.refresh():
+            try:
+                updates = live.refresh()
+            except Exception as exc:  # noqa: BLE001 - a failed refresh must not end the live run: said, and retried
+                updates = live.note(StreamEvent("refresh_failed", f"targets not refreshed ({type(exc).__name__}: "
+                                                                  f"{exc}); the stream goes on"))
+            for u in updates:
                 publish(u)
             wait = max(refresh_s, (time.perf_counter() - t0) / REFRESH_SHARE)
 
     th = threading.Thread(target=run, name="live-refresh", daemon=True)
     th.start()
     return th
+
+
+def warm_up(settings: PassiveSettings, windows: int = 12) -> float:
+    """Run a throwaway chain on a few windows of a synthetic plane wave (8 channels, 2 kHz, fixes of a straight
+    course), so that the imports, the compiled kernels' loading, the map projection's database and the first calls'
+    set-up are done before the stream starts: without it the first windows of a live run reached the screen 2-5 s
+    late (benchmarks/bench_live_latency.py). Returns the seconds it took."""
+    from datetime import UTC, datetime, timedelta
+
+    import numpy as np
+
+    from sonartrack.io.stream.types import StreamHeader
+
+    t0 = time.perf_counter()
+    channels, fs, start = 8, 2000.0, datetime(2000, 1, 1, tzinfo=UTC)
+    live = LivePassive(settings, StreamHeader(channels, fs, "float32", start),
+                       history_s=max(60.0, settings.window_s))
+    for k in range(int(windows * settings.window_s) + 3):
+        live.push_nav(NavFix(start + timedelta(seconds=k), 54.0, 11.0 + 5e-5 * k, 90.0, 3.0))
+    rng = np.random.default_rng(0)
+    n = int(round(windows * settings.window_s * fs))
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    delay = np.arange(channels) * settings.spacing_m * np.cos(np.deg2rad(60.0)) / 1500.0  # a broadband plane wave
+    phase = np.exp(-2j * np.pi * f[None, :] * delay[:, None])
+    wave = np.fft.irfft(np.fft.rfft(rng.standard_normal(n))[None, :] * phase, n, axis=1)
+    x = rng.standard_normal((n, channels)) + 3.0 * wave.T
+    try:
+        live.push_block(SampleBlock(0, x.astype(np.float32)))
+        live.select(1)
+        live.refresh()
+    finally:
+        live.close()
+    return time.perf_counter() - t0
 
 
 def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
@@ -72,7 +113,8 @@ def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
 
 def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], None], *, refresh_s: float = 10.0,
              checkpoint=None, stop: threading.Event | None = None, checkpoint_s: float = 60.0,
-             ready: Callable[[LivePassive], None] | None = None, **options) -> PassiveResult | None:
+             ready: Callable[[LivePassive], None] | None = None, warm: bool = True, active_settings=None,
+             **options) -> PassiveResult | None:
     """Run the live chain until the sample source ends or ``stop`` is set (module doc).
 
     Parameters
@@ -96,6 +138,10 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         Seconds between checkpoints.
     ready : callable, optional
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
+    warm : bool
+        Run :func:`warm_up` before the sample source is read (a TCP source connects when read).
+    active_settings : ActiveSettings, optional
+        For the stream's pings (systems/live/active.py); default: the defaults with the passive spacing.
     **options
         LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
@@ -109,39 +155,41 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     if isinstance(nav, Navigation):
         nav, options = None, {**options, "nav": nav}
     stop = stop or threading.Event()
+    if warm:
+        warm_up(settings)
     done, live_ref = threading.Event(), [None]
     threads = [_nav_thread(nav, live_ref, publish, done)]
-
-    def start():
-        threads.append(_start(samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready))
-
+    start = partial(_start, samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready)
     try:
-        _read(samples, stop, live_ref, start, publish, checkpoint, checkpoint_s)
-    except KeyboardInterrupt:
+        _read(samples, stop, live_ref, start, threads, publish, _ActivePings(settings, active_settings),
+              (checkpoint, checkpoint_s))
+    except BaseException as exc:
         _stop(done, threads)
-        if checkpoint is not None and live_ref[0] is not None:
+        if isinstance(exc, KeyboardInterrupt) and checkpoint is not None and live_ref[0] is not None:
             live_ref[0].checkpoint(checkpoint)  # Ctrl-C keeps the state: the same command resumes from here
-        raise
-    except BaseException:
-        _stop(done, threads)
         raise
     _stop(done, threads)
     return _end(live_ref[0], checkpoint, publish)
 
 
-def _read(samples, stop: threading.Event, live_ref: list, start: Callable[[], None], publish, checkpoint,
-          checkpoint_s: float) -> None:
-    """Each item of the sample source through the chain (built by ``start`` once the source's header is known),
-    the checkpoint written every ``checkpoint_s``, until the source ends or ``stop`` is set."""
+def _read(samples, stop, live_ref: list, start, threads: list, publish, active, checkpointing) -> None:
+    """The sample source's items through the chains until it ends or ``stop`` is set: pings to the active chain,
+    the rest to the passive chain, built (``start``) at the first sample block (a stream of pings alone never builds
+    it: its rate is a baseband's); events before then kept (the last few) for it. Checkpoints on their schedule."""
+    checkpoint, checkpoint_s = checkpointing
     early = []
     for item in samples:
         if stop.is_set():
             break
-        if live_ref[0] is None and getattr(samples, "header", None) is None:
-            early.append(item)  # a TCP source's events before its header frame: the chain needs the header
+        if isinstance(item, PingBlock):
+            for u in active.push(item, samples.header):
+                publish(u)
+            continue
+        if live_ref[0] is None and not isinstance(item, SampleBlock):
+            early = [*early[-EARLY_EVENTS + 1:], item]  # a TCP source's events before its first block
             continue
         if live_ref[0] is None:
-            start()
+            threads.append(start())
         for it in [*early, item]:
             _take(live_ref[0], it, publish)
         early = []
@@ -169,8 +217,24 @@ def _start(samples, settings, checkpoint, options, live_ref: list, publish, refr
     return _refresh_thread(live, publish, refresh_s, done)
 
 
+class _ActivePings:
+    """The stream's pings to the active chain (systems/live/active.py), built at the first ping."""
+
+    def __init__(self, settings: PassiveSettings, active_settings):
+        self.settings, self.active_settings, self.chain = settings, active_settings, None
+
+    def push(self, ping, header) -> list[dict]:
+        if self.chain is None:
+            from sonartrack.systems.active.settings import ActiveSettings
+            from sonartrack.systems.live.active import LiveActive
+
+            s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
+            self.chain = LiveActive(s, header)
+        return self.chain.push_ping(ping)
+
+
 def _take(live: LivePassive, item, publish) -> None:
-    """One item of the sample source through the chain, its updates published."""
+    """One item of the sample source through the passive chain, its updates published."""
     updates = live.push_block(item) if isinstance(item, SampleBlock) else \
         live.note(item) if isinstance(item, StreamEvent) else []
     for u in updates:
@@ -185,5 +249,7 @@ def _end(live: LivePassive | None, checkpoint, publish) -> PassiveResult | None:
         live.checkpoint(checkpoint)
     result = live.finish() if live.rows else None
     for u in live.refresh() if result is not None else []:
+        publish(u)
+    for u in live.note(StreamEvent("end", "the stream ended: the picture is final")):
         publish(u)
     return result

@@ -166,9 +166,11 @@ def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
 
     Parameters
     ----------
-    blocks : iterable of ndarray (N, window_s fs) or of RectWindow
+    blocks : iterable of ndarray (N, window_s fs) or of RectWindow, or an object with ``tonals_of``
         The recording's windows, the same as the front end's, or their rectangular spectra
-        (:meth:`SpectraSpill.windows`).
+        (:meth:`SpectraSpill.windows`); or the live chain's accumulators kept as the windows came
+        (systems/live/tonals.py :class:`~sonartrack.systems.live.tonals.LiveTonals`), whose ``tonals_of(measurements)``
+        is then the answer.
     fs_hz : float
         Sample rate (Hz).
     array : LineArray
@@ -191,26 +193,44 @@ def measure_tonals(blocks: Iterable[np.ndarray], fs_hz: float, array: LineArray,
     list of (TonalTrack or None)
         Per track, its tonal line, or None where it carries none.
     """
+    if hasattr(blocks, "tonals_of"):  # the live chain's accumulators, kept as the windows came (systems/live/)
+        return blocks.tonals_of(measurements)
     live = live_cones(measurements, settings.window_s, first_window + n_windows)
     acc: list[TonalAccumulator | None] = [None] * len(measurements)
+
+    def acc_of(i: int, n_bins: int) -> TonalAccumulator:
+        if acc[i] is None:
+            acc[i] = TonalAccumulator(settings, n_bins)
+        return acc[i]
+
     for k, block in enumerate(blocks, start=first_window):
         if k >= first_window + n_windows:
             break
         idx, cones = live[k]
         if len(idx):
-            # the block as read: a float32 block is transformed in single precision (acoustics/tonal.py
-            # beam_spectra), five times faster than a double copy, on the file's layout as it comes
-            freqs, power = (beam_spectra_of_rect(block.spectra, block.n_samples, fs_hz, array, cones, settings)
-                            if isinstance(block, RectWindow) else beam_spectra(block, fs_hz, array, cones, settings))
-            # every live beam's peaks at once (one running-median call): those each beam's accumulator would find
-            peaks = window_peak_bins(power, freqs[1] - freqs[0], settings) if freqs.size >= 3 else [None] * len(idx)
-            for row, i in enumerate(idx):
-                if acc[i] is None:
-                    acc[i] = TonalAccumulator(settings, len(freqs))
-                acc[i].add((k + 0.5) * settings.window_s, power[row], freqs, peak_bins=peaks[row])
+            add_window(acc_of, k, block, fs_hz, array, idx, cones, settings)
         if progress is not None:
             progress(k)
+    return tonal_results(acc)
+
+
+def add_window(acc_of: Callable[[int, int], TonalAccumulator], k: int, block, fs_hz: float, array: LineArray,
+               ids, cones_deg: np.ndarray, settings: TonalSettings) -> None:
+    """Window k's beams at the tracks' cone angles into their accumulators (``acc_of(id, n_bins)`` gives track id's).
+
+    The block as read: a float32 block is transformed in single precision (acoustics/tonal.py beam_spectra), five
+    times faster than a double copy, on the file's layout as it comes; a RectWindow's spectra are steered as they
+    are. Every beam's peaks are found at once (one running-median call): those each accumulator would find.
+    """
+    freqs, power = (beam_spectra_of_rect(block.spectra, block.n_samples, fs_hz, array, cones_deg, settings)
+                    if isinstance(block, RectWindow) else beam_spectra(block, fs_hz, array, cones_deg, settings))
+    peaks = window_peak_bins(power, freqs[1] - freqs[0], settings) if freqs.size >= 3 else [None] * len(ids)
+    for row, i in enumerate(ids):
+        acc_of(i, len(freqs)).add((k + 0.5) * settings.window_s, power[row], freqs, peak_bins=peaks[row])
+
+
+def tonal_results(acc: list[TonalAccumulator | None]) -> list[TonalTrack | None]:
+    """Each accumulator's line (None where none): a loud line leaks into every beam, so a line counts for a track
+    only if it stands highest on that track's own beam (acoustics/tonal.py TonalAccumulator.result)."""
     others = [a for a in acc if a is not None]
-    # a loud line leaks into every beam: a line counts for a track only if it stands highest on that track's
-    # own beam (acoustics/tonal.py TonalAccumulator.result)
     return [a.result(others=[o for o in others if o is not a]) if a is not None else None for a in acc]

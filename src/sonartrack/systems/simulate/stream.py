@@ -13,7 +13,13 @@ The samples are those ``simulate`` writes to recording.wav for the same scene an
 same generator (run.py :meth:`PassiveSimulation.recording_blocks`), cast to float32 as the WAV writer casts them.
 Navigation: per second of nav.csv's ownship, GGA, RMC and HDT (one sentence a datagram) to ``udp://host:nav_udp``,
 positions through recording_layout.py's projection about :data:`~recording_layout.ORIGIN_DEG` (what
-``--nmea``'s nav.nmea holds), sent when their time is due. Active pings are not streamed (not done yet).
+``--nmea``'s nav.nmea holds), sent when their time is due.
+
+Active pings (``--kind active --stream``, :class:`ActiveSceneStreamer`): the header states the array's elements
+and the baseband rate; each ping goes as one ping frame (io/stream/frames.py, kind 4: its listening window as
+complex64, number, transmit time and pulse) when its window is complete, transmit time + T; the samples are those
+``simulate --kind active`` writes to ping_NNNN.npy (the same generator, child stream k for ping k); the ownship's
+NMEA as for the passive scene, from nav.csv's ownship columns.
 """
 
 from __future__ import annotations
@@ -27,8 +33,8 @@ from datetime import datetime
 import numpy as np
 
 from sonartrack.core.errors import InputError, require
-from sonartrack.io.stream.frames import encode_block, encode_end, encode_header
-from sonartrack.io.stream.types import SampleBlock, StreamHeader
+from sonartrack.io.stream.frames import encode_block, encode_end, encode_header, encode_ping
+from sonartrack.io.stream.types import PingBlock, SampleBlock, StreamHeader
 from sonartrack.sim.scene import PassiveSceneSettings
 from sonartrack.systems.simulate.recording_layout import ORIGIN_DEG, START_UTC
 
@@ -206,3 +212,74 @@ class SceneStreamer:
             except OSError:  # the client went away or stalled: a recorder goes on without it
                 c.close()
                 self._clients.remove(c)
+
+
+class ActiveSceneStreamer(SceneStreamer):
+    """An active scene's pings on a TCP server as ping frames and its navigation over UDP (module doc).
+
+    Parameters
+    ----------
+    scene : ActiveSceneSettings
+        The active scene.
+    port, nav_udp, speed, start_utc, host
+        As :class:`SceneStreamer`.
+    """
+
+    def __init__(self, scene, *, port: int = 0, nav_udp: int | None = None, speed: float = 1.0,
+                 start_utc: datetime = START_UTC, host: str = "127.0.0.1"):
+        require(np.isfinite(speed) and speed > 0, f"--speed {speed:g}: give a positive factor (1 = real time)")
+        require(0 <= int(port) < 65536, f"--port {port}: give 0 (any free port) or 1..65535")
+        require(nav_udp is None or 0 < int(nav_udp) < 65536, f"--nav-udp {nav_udp}: give a UDP port, 1..65535")
+        self.scene, self.speed, self.host, self.nav_udp = scene, float(speed), host, nav_udp
+        self.header = StreamHeader(scene.sonar.elements, float(scene.sample_rate_hz), "float32", start_utc, None)
+        self._listener = socket.create_server((host, int(port)))
+        self._listener.settimeout(_POLL_S)
+        self.port = self._listener.getsockname()[1]
+        self._clients, self._connections = [], 0
+
+    def serve(self, stop: threading.Event | None = None, store=None) -> StreamSummary:
+        """Wait for the first connection, then play the pings to the end (or until ``stop`` is set); the summary's
+        ``blocks`` are the pings sent."""
+        from sonartrack.sim.active_scene import nav_columns, ping_geometry, platforms, transmission_loss_model
+
+        stop = stop or threading.Event()
+        sc = self.scene
+        t_nav = np.arange(0.0, np.floor(sc.duration_s) + 1.0)
+        fixes = nav_sentences(nav_columns(platforms(sc, t_nav)), self.header.start_utc) if self.nav_udp else []
+        tl, plat = transmission_loss_model(sc, store), ping_geometry(sc)
+        try:
+            while not self._clients and not stop.is_set():
+                self._accept()
+            self._listener.setblocking(False)
+            pings, sentences = self._play_pings(tl, plat, fixes, stop)
+        finally:
+            self.close()
+        return StreamSummary(pings * sc.ping_interval_s, pings, self._connections, sentences)
+
+    def _play_pings(self, tl, plat, fixes, stop: threading.Event) -> tuple[int, int]:
+        """Send each ping when its listening window is complete, the sentences as they fall due; (pings,
+        sentences) sent."""
+        from sonartrack.core.random import trial_rng
+        from sonartrack.sim.active_signals import ping_samples
+
+        sc, w = self.scene, self.scene.waveform
+        udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM) if fixes else None
+        t0, k_fix, sent = time.monotonic(), 0, 0
+        try:
+            for k, t_tx in enumerate(sc.ping_times_s):
+                x = ping_samples(sc, plat, k, tl, trial_rng(sc.seed, k))  # before its time: it takes a while
+                due = float(t_tx) + sc.samples_per_ping / sc.sample_rate_hz
+                k_fix = self._send_nav(udp, fixes, k_fix, due)
+                if stop.wait(max(0.0, t0 + due / self.speed - time.monotonic())):
+                    return sent, 3 * k_fix
+                self._accept()
+                self._broadcast(encode_ping(PingBlock(k + 1, float(t_tx), float(w.carrier_hz),
+                                                      float(w.bandwidth_hz) if w.kind == "lfm" else 0.0,
+                                                      float(w.duration_s), float(sc.sample_rate_hz), x)))
+                sent += 1
+            k_fix = self._send_nav(udp, fixes, k_fix, np.inf)
+            self._broadcast(encode_end(0))
+        finally:
+            if udp is not None:
+                udp.close()
+        return sent, 3 * k_fix
