@@ -30,8 +30,10 @@ On each record (:func:`run_trial`):
   times unknown (:func:`~sonartrack.tma.legs.crb_legs`), and against its own covariance;
 * the constant-velocity verdict: an independent chi-square test of the constant-velocity ML fit's residuals
   (each bearing's own sd, multi-start: pseudo-linear, far, and the true first leg; alpha ``cv_alpha``) decides
-  whether the record rejects constant velocity; ``solve_tma(record, ownship, TmaSettings(method="ml",
-  sigma_bearing_deg=rms sd))`` is run on every record and its rows marked ``range_determined`` are counted;
+  whether the record rejects constant velocity; ``solve_tma(record, ownship, TmaSettings(method="ml"))`` with each
+  bearing's sd in the record (``BearingRecord.bearing_sd_rad``, trial version 7; one rms sd before, which the
+  residuals of the wide endfire bearings inflated) is run on every record and its rows marked ``range_determined``
+  are counted;
 * observer advice (tma/advice.py :func:`~sonartrack.tma.advice.advise`) from the current leg's state and covariance
   at the last bearing, with sigma_base; each candidate leg is realised: the leg-wise ML (true change times fixed,
   started at the truth) on ``advice_draws`` fresh noisy records of the past bearings plus the bearings along the
@@ -258,10 +260,9 @@ def _verdict_outputs(scene, z, sigma, config: Config) -> dict:
 
     rejected, p = cv_rejected(scene, z, sigma, config.cv_alpha)
     t, own = scene.time_s, scene.own_xy_m
-    sd_deg = float(np.degrees(np.sqrt(np.mean(np.square(sigma)))))
     try:
-        res = solve_tma(BearingRecord(time_s=t, bearing_rad=z), OwnshipTrack(time_s=t, x_m=own[:, 0], y_m=own[:, 1]),
-                        TmaSettings(method="ml", sigma_bearing_deg=min(sd_deg, 30.0)))
+        res = solve_tma(BearingRecord(time_s=t, bearing_rad=z, bearing_sd_rad=sigma),
+                        OwnshipTrack(time_s=t, x_m=own[:, 0], y_m=own[:, 1]), TmaSettings(method="ml"))
         flags = res.solution.range_flags()
         any_det, last_det = float(flags.any()), float(flags[-1])
     except InputError:  # refused (e.g. no ownship manoeuvre): nothing printed as determined
