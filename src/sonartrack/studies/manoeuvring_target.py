@@ -211,7 +211,7 @@ def _current_leg_outputs(scene, sigma, legs) -> dict:
 
     nan = np.array(np.nan)
     out = {"leg_determined": nan, "leg_error_m": nan, "leg_crb_sd_m": nan, "leg_crb_mahalanobis": nan,
-           "leg_own_sds": nan}
+           "leg_own_sds": nan, "leg_range_sd_fraction": nan}
     if legs is None:
         return out
     t = scene.time_s
@@ -221,7 +221,8 @@ def _current_leg_outputs(scene, sigma, legs) -> dict:
     e = last.state[:2] - scene.target_xy_m(t[-1:])[0]
     out.update(leg_determined=np.array(float(last.determined)), leg_error_m=np.array(float(np.hypot(*e))),
                leg_crb_sd_m=np.array(float(np.sqrt(np.trace(C)))), leg_crb_mahalanobis=np.array(mahalanobis(e, C)),
-               leg_own_sds=np.array(mahalanobis(e, last.state_cov[:2, :2])))
+               leg_own_sds=np.array(mahalanobis(e, last.state_cov[:2, :2])),
+               leg_range_sd_fraction=np.array(float(last.relative_range_sd)))
     return out
 
 

@@ -153,8 +153,8 @@ class TmaSettings(Settings):
     frequency: bool = setting(False, "use the measured frequency too (sequential methods)")
     sigma_bearing_deg: float | None = setting(
         None, "bearing noise standard deviation (default: estimated from the record, the residual scale of its "
-              "constant-velocity fit; at most 30: beyond that a bearing says nothing the small-error model can use; a bearings "
-              "file's bearing_sd_deg column gives each bearing's own instead)",
+              "constant-velocity fit; at most 30: beyond that a bearing says nothing the small-error model can use; "
+              "a bearings file's bearing_sd_deg column gives each bearing's own instead)",
         unit="deg", gt=0, le=30)
     sigma_freq_hz: float = setting(0.1, "frequency noise standard deviation (at most 100)", unit="Hz", gt=0,
                                    le=100)

@@ -405,7 +405,8 @@ def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) 
 
 def em_map_verdict(solution: TmaSolution, record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, *,
                    environment=None, tl_store=None) -> dict:
-    """em-map's solution judged by its SNR residuals (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
+    """em-map's solution judged by its SNR residuals (tma/em_snr_check.py
+    :func:`~sonartrack.tma.em_snr_check.snr_residual_check`).
 
     When the propagation model explains the SNRs along the solution's track the solution stands. When it does
     not, the SNR's range is not to be trusted: over the whole record with bearings that determine the range
@@ -435,7 +436,7 @@ def em_map_verdict(solution: TmaSolution, record: BearingRecord, ownship: Ownshi
         "solution" and "notes" of the :class:`TmaResult`.
     """
     from sonartrack.tma.batch import snr_model
-    from sonartrack.tma.em_map import snr_residual_check
+    from sonartrack.tma.em_snr_check import snr_residual_check
     from sonartrack.tma.verdict import SNR_NOT_EXPLAINED, with_reasons
 
     b, em = settings.batch, settings.em_map
