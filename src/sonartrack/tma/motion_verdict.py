@@ -203,8 +203,8 @@ def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
     Returns
     -------
     ndarray (n,)
-        Measured minus fitted bearings (rad, wrapped). Raises InputError, LinAlgError or FloatingPointError when no
-        fit is possible.
+        Measured minus fitted bearings (rad, wrapped; the fit weighs each bearing by its own sd when the record
+        gives them). Raises InputError, LinAlgError or FloatingPointError when no fit is possible.
     """
     from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only
     from sonartrack.tma.sides import fit_cv_target
@@ -212,11 +212,12 @@ def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
     t = np.asarray(record.time_s, float)
     z = wrap_angle(np.asarray(record.bearing_rad, float))
     own = ownship.position_at(t)
+    rel = record.relative_sd()  # each bearing weighed by its own sd when the record gives them
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        fits = [fit_cv_target(z, t, own)]
+        fits = [fit_cv_target(z, t, own, relative_sigma=rel)]
         with contextlib.suppress(InputError, np.linalg.LinAlgError, FloatingPointError):
-            fits.append(ml_bearings_only(z, t, own, 1.0, check=False))
+            fits.append(ml_bearings_only(z, t, own, rel, check=False))
         fits = [f for f in fits if f is not None and np.isfinite(f.objective) and np.all(np.isfinite(f.x0))]
         if not fits:
             raise FloatingPointError("no start converges")

@@ -518,9 +518,8 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     ----------
     record : BearingRecord
         Bearings (rad, clockwise from north) at increasing times (s), with frequencies (Hz) or SNRs (dB) when
-        the method uses them, and optionally each bearing's noise sd (``bearing_sd_rad``, rad): then the
-        whole-record ML and the record's checks weigh each bearing by its own sd, and the single-sd methods
-        (the sequential filters, em-map, a windowed batch) use their reference (:func:`with_record_sd`).
+        the method uses them, and optionally each bearing's noise sd (``bearing_sd_rad``, rad: the whole-record
+        ML and the record's checks weigh each bearing by it, the other methods use :func:`with_record_sd`'s).
     ownship : OwnshipTrack
         The sensor's track; it must cover the record (no extrapolation, gaps up to
         ``settings.inputs.max_nav_gap_s``).
@@ -531,16 +530,15 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     tl_store : FieldStore, optional
         em-map: a cache of transmission-loss fields.
     ml_fit : BatchEstimate, optional
-        ml over the whole record only: an ML estimate of this same record found by a wider search (e.g. the
-        multi-start fits of tma/sides.py :func:`~sonartrack.tma.sides.resolve_side`), taken as the solution
-        instead of the single-start fit (which can settle in a far local minimum).
+        ml over the whole record only: an ML estimate of this record found by a wider search (e.g. tma/sides.py
+        :func:`~sonartrack.tma.sides.resolve_side`'s), taken instead of the single-start fit (a far local minimum).
     unobservable : {"raise", "flag"}
         ml over the whole record only: with an ownship that did not maneuver, "raise" refuses the record
         (:class:`~sonartrack.core.errors.InputError`); "flag" returns the solution with every row's
         ``range_determined`` False and the reason in ``warnings``.
     record_checks : bool
-        Judge the answer by its record (tma/motion_verdict.py). Off in the passive chain, which runs the same
-        checks with its line-array weights, side and jackknife. A ``sigma_bearing_deg`` of None is estimated anyway.
+        Judge the answer by its record (tma/motion_verdict.py; off in the passive chain, which runs the same checks
+        with its line-array weights, side and jackknife). A ``sigma_bearing_deg`` of None is estimated anyway.
 
     Returns
     -------
