@@ -110,12 +110,14 @@ class Config(Settings):
       determined legs beyond 2x the CRB had range sds 0.33-0.97 of their range, which suggested that a leg so
       uncertain should not count as determined; measured at trial version 7 (24 scenes), the share within 2x the
       CRB does not fall with that fraction (9 of 10 determined legs within it, at fractions 0.35-0.91; the one
-      beyond, 2.7x, at 0.39), and on those legs the fraction is the missed-zig widening's, not the fit's: the fit's
-      own range sd is 0.07-0.19 of the range where the widened one is 0.54-1.05 (trials 1-3; the regime where the
-      ML is near-efficient and the CRB a fair yardstick). The widened sd is the answer's honest uncertainty (every
-      determined leg within 1.0 of its own sds), not a confident number; tightening the cut to 1/2 or 1/3 of the
-      range removed the legs that met the CRB and kept the one that did not. The per-trial fraction is in the
-      trials table (``leg_range_sd_fraction``).
+      beyond, 2.7x, at 0.39), and the fraction is the missed-zig widening's, not the fit's: on the determined legs
+      of trials 1, 5, 8, 10 and 11 the fit's own range sd is 0.01-0.15 of the range where the widened one is
+      0.39-0.88 (the fit's small-error regime, where the ML is near-efficient and the CRB a fair yardstick). The
+      leg beyond 2x (trial 10: fit's fraction 0.06) is 10.5 of the fit's own sds off and 1.0 of the widened ones:
+      a zig the test missed, which the CRB of the true legs does not hold and the widening does. The widened sd is
+      the answer's honest uncertainty (every determined leg within 1.0 of its own sds), not a confident number;
+      cutting at 1/2 or 1/3 of the range removed legs that met the CRB and kept the one that did not. The per-trial
+      fraction is in the trials table (``leg_range_sd_fraction``).
     * "the advised leg's realised range sd <= 0.7x the median of the alternatives": the alternatives are the legs
       the ownship could take instead, the candidates of the advice's grid every 30 deg x each turn time (a random
       ``advice_others`` of them per trial, whose median estimates the grid's); the verdict is on the median over
