@@ -94,12 +94,16 @@ class Config(Settings):
       noncentrality grows as the number of bearings after the zig; the projection off the short previous leg's
       constant-velocity fit removes most of it at 2-3 bearings). Measured on 40 scenes before running the
       detector: 1 of 103 zigs detectable at 10-60 s, 17 of 106 at 2-10 s, 27 at 1-5 s, 36 at 1-2 s; 2-10 s is
-      the densest that keeps a full run within tens of minutes on two cores.
+      the densest that keeps a full run within tens of minutes on two cores. At full size (trial version 7, 100
+      scenes, 47 min on two shared cores): 40 of 271 zigs detectable, 33 of them (0.82 [0.67, 0.93]) detected
+      within 120 s: five later (120-725 s), two not at all.
     * "<= 1 false zig per 10 h": detections matched to no true zig on the constant-velocity scenes, per hour of
       their records. The detector runs at the toolkit's default operating point, a stated 0.05 per hour, half the
       claimed rate (tma/zig.py :data:`~sonartrack.tma.zig.DEFAULT_FALSE_ALARM_PER_HOUR`): its threshold's tail
       form is accurate to a factor 1.5, and at a stated 0.1 this study measured 4 false zigs in 32 h (0.124 per
-      hour, trial version 1).
+      hour, trial version 1). Its constant was fitted on bearings every 20-60 s; with bearings every 2-10 s (trial
+      version 7) the study measured 4 false zigs in 31.0 h (0.129 per hour [0.035, 0.330], two of them on one
+      scene with bearings every 2.1 s): the tail form's sqrt(dt) extrapolation needs refitting there.
     * "position within 2x its CRB": the error norm |e| <= 2 sqrt(trace CRB_pos) (the passive-chain study's
       reading; an efficient estimator meets it in >= 95 % of cases whatever the ellipse's shape), on the
       solutions whose last leg is determined (range sd below its range); "none beyond 5 of its own sds": the
