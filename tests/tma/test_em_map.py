@@ -5,7 +5,8 @@ import pytest
 
 from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.tma.batch_ml import bearing_model
-from sonartrack.tma.em_map import _log_psi, em_map, em_step, grid_initialisation, make_problem, objective, solve_em_map
+from sonartrack.tma.em_map import _log_psi, em_map, em_step, make_problem, objective, solve_em_map
+from sonartrack.tma.em_map_start import grid_initialisation
 
 KN = 1852.0 / 3600.0
 

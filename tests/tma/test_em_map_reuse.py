@@ -7,7 +7,8 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.tma import em_map
 from sonartrack.tma.batch_ml import bearing_model
-from sonartrack.tma.em_map import direct_log_likelihood, em_step, make_problem, objective, solve_em_map
+from sonartrack.tma.em_map import em_step, make_problem, objective, solve_em_map
+from sonartrack.tma.em_map_start import direct_log_likelihood
 
 
 def snr_model(shift_db=0.0):

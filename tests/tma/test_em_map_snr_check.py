@@ -7,7 +7,8 @@ from scipy.stats import chi2
 
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.tma.em_map import make_problem, snr_residual_check, solve_em_map
+from sonartrack.tma.em_map import make_problem, solve_em_map
+from sonartrack.tma.em_snr_check import snr_residual_check
 
 
 def test_statistics_of_hand_worked_residuals():

@@ -6,7 +6,8 @@ import pytest
 
 from sonartrack.core.angles import bearing_rad, wrap_angle
 from sonartrack.sim.platforms import ManeuveringTrack
-from sonartrack.tma.sides import mirror_bearings_rad, resolve_side, side_jackknife, time_blocks
+from sonartrack.tma.side_jackknife import side_jackknife, time_blocks
+from sonartrack.tma.sides import mirror_bearings_rad, resolve_side
 
 LN100 = float(np.log(100.0))
 

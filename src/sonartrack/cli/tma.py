@@ -9,8 +9,9 @@ the record's residual sd with its 95 % interval) and ``tactical_picture.png`` (r
 one-line summary on stdout, which prints "range NOT DETERMINED (reason)" instead of a range the solution does not
 determine (tma/verdict.py) and says what the record says of the bearing noise. Every method's answer is judged by
 its record (tma/motion_verdict.py): a target the bearings show changing course or speed is "target manoeuvred"
-with the time span the residuals point at; without ``--sigma-bearing-deg`` the bearing sd is estimated from the
-record; a given one that the residuals contradict is reported.
+with the time span the residuals point at; without ``--sigma-bearing-deg`` (or a ``bearing_sd_deg`` column, each
+bearing's own sd) the bearing sd is estimated from the record; a given one that the residuals contradict is
+reported.
 
 Every record's zigs and legs are found too (tma/leg_solution.py: the sequential GLR zig detector and the leg-wise
 ML with its own residual verdict): printed after the summary, one line for the zigs and one per leg (span, course,
@@ -44,7 +45,7 @@ def _help(name: str, model=TmaSettings) -> str:
 
 def tma_cmd(
     bearings: Annotated[Path | None, typer.Option(help="Bearings file (CSV/Parquet): time_s, bearing_deg[, "
-                                                       "frequency_hz, snr_db].")] = None,
+                                                       "frequency_hz, snr_db, bearing_sd_deg].")] = None,
     ownship: Annotated[Path | None, typer.Option(help="Ownship navigation file (CSV/Parquet): time_s, x_m, "
                                                       "y_m.")] = None,
     method: Annotated[str | None, typer.Option(help=_help("method"))] = None,

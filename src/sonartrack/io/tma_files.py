@@ -7,7 +7,11 @@ Bearings file (CSV or Parquet; ``#`` comment lines allowed in CSV), one row per 
   target from the ownship; any of -180..180 or 0..360);
 * optional ``frequency_hz`` (received frequency of the tracked line, Hz, > 0; an empty cell means
   no frequency at that time);
-* optional ``snr_db`` (signal-to-noise ratio, dB; used by the batch methods).
+* optional ``snr_db`` (signal-to-noise ratio, dB; used by the batch methods);
+* optional ``bearing_sd_deg`` (each bearing's noise standard deviation, degrees, > 0 and at most
+  :data:`MAX_BEARING_SD_DEG`; e.g. a line array's, which grows towards endfire): the ML and the record's checks
+  weigh each bearing by it, the single-sd methods use the sd of the same information (tma/solve.py
+  ``with_record_sd``); it replaces ``--sigma-bearing-deg`` (giving both is refused).
 
 Ownship file (CSV or Parquet): ``time_s`` (s, strictly increasing), ``x_m``, ``y_m`` (m, x east, y
 north, in the same local frame as the solution). Positions are interpolated linearly to the
@@ -56,6 +60,9 @@ OWNSHIP_COLUMNS = ["time_s", "x_m", "y_m"]
 MAX_FREQUENCY_HZ = 1e6
 #: largest |SNR| taken (dB)
 SNR_LIMIT_DB = 200.0
+#: largest per-bearing sd taken (deg): the settings' limit for one sd (tma/settings.py ``sigma_bearing_deg``) is 30;
+#: a line array's sd at endfire may exceed it, so the column takes up to 90 (beyond that a bearing says nothing)
+MAX_BEARING_SD_DEG = 90.0
 
 
 def _optional_column(df, col: str, what: str, path) -> np.ndarray:
@@ -78,7 +85,7 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
     Parameters
     ----------
     path : str or path-like
-        CSV or Parquet file: ``time_s, bearing_deg[, frequency_hz][, snr_db]``.
+        CSV or Parquet file: ``time_s, bearing_deg[, frequency_hz][, snr_db][, bearing_sd_deg]``.
     check_radians : bool, default True
         Refuse a bearing column that looks like radians (switch off for a target within 6 deg of north).
 
@@ -86,7 +93,7 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
     -------
     BearingRecord
         Times (s), bearings (rad, clockwise from north, wrapped to (-pi, pi]), frequencies (Hz, NaN where
-        empty; None if no column or no value) and SNRs (dB, or None).
+        empty; None if no column or no value), SNRs (dB, or None) and each bearing's sd (rad, or None).
 
     Raises
     ------
@@ -103,7 +110,7 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
     if check_radians:
         check_not_radians(b_deg, "bearing_deg", what, path, switch="or set check_radians = false under [inputs] if "
                                                                    "the target really stays within 6 deg of north")
-    freq = snr = None
+    freq = snr = sd = None
     if "frequency_hz" in df.columns:
         freq = _optional_column(df, "frequency_hz", what, path)
         given = np.isfinite(freq)
@@ -113,7 +120,11 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
             freq = None
     if "snr_db" in df.columns:
         snr = numeric_column(df, "snr_db", what, path, lo=-SNR_LIMIT_DB, hi=SNR_LIMIT_DB, fix="decibels")
-    return BearingRecord(time_s=t, bearing_rad=np.asarray(wrap_angle(np.deg2rad(b_deg))), frequency_hz=freq, snr_db=snr)
+    if "bearing_sd_deg" in df.columns:
+        sd = np.deg2rad(numeric_column(df, "bearing_sd_deg", what, path, lo=0.0, hi=MAX_BEARING_SD_DEG, lo_open=True,
+                                       fix="each bearing's noise sd in degrees, positive"))
+    return BearingRecord(time_s=t, bearing_rad=np.asarray(wrap_angle(np.deg2rad(b_deg))), frequency_hz=freq, snr_db=snr,
+                         bearing_sd_rad=sd)
 
 
 def read_ownship(path) -> OwnshipTrack:

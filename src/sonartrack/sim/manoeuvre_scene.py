@@ -50,7 +50,7 @@ class ManoeuvreSceneSettings(Settings):
 
     duration_s: list[float] = setting(default_factory=lambda: [3600.0, 5400.0], doc="length of the record",
                                       unit="s", min_length=2, max_length=2)
-    bearing_interval_s: list[float] = setting(default_factory=lambda: [10.0, 60.0], doc="time between bearings",
+    bearing_interval_s: list[float] = setting(default_factory=lambda: [2.0, 10.0], doc="time between bearings",
                                               unit="s", min_length=2, max_length=2)
     leg_s: list[float] = setting(default_factory=lambda: [300.0, 1800.0], doc="length of each target leg",
                                  unit="s", min_length=2, max_length=2)

@@ -300,12 +300,12 @@ def bf_jackknife(time_s, bearing_rad, freq_hz, own_xy, own_v, sigma_b_rad: float
                  est: BfEstimate, *, c_mps: float = SOUND_SPEED_MPS, blocks: int | None = None):
     """The bearings + frequency ML's final state recomputed with each block of the record left out: the
     delete-a-block jackknife (Kunsch, Ann. Statist. 17(3), 1989, 1217-1241, eq. 2.2 with non-overlapping blocks;
-    Shao & Tu, The Jackknife and Bootstrap, 1995, sec. 5.2), as tma/sides.py
-    :func:`~sonartrack.tma.sides.side_jackknife` does for the bearings-only fit.
+    Shao & Tu, The Jackknife and Bootstrap, 1995, sec. 5.2), as tma/side_jackknife.py
+    :func:`~sonartrack.tma.side_jackknife.side_jackknife` does for the bearings-only fit.
 
-    The record's span is cut into g equal stretches of time (:func:`~sonartrack.tma.sides.time_blocks`); replicate
-    j leaves block j out and refits X0 by :func:`ml_bearings_frequency` from ``est`` moved to the first kept time,
-    giving the state x_j at the last time t_n. The jackknife covariance
+    The record's span is cut into g equal stretches of time (:func:`~sonartrack.tma.side_jackknife.time_blocks`);
+    replicate j leaves block j out and refits X0 by :func:`ml_bearings_frequency` from ``est`` moved to the first kept
+    time, giving the state x_j at the last time t_n. The jackknife covariance
 
         P_J = (g - 1) / g  sum_j (x_j - x_bar)(x_j - x_bar)^T,      x_bar = mean_j x_j
 
@@ -328,7 +328,7 @@ def bf_jackknife(time_s, bearing_rad, freq_hz, own_xy, own_v, sigma_b_rad: float
     c_mps : float
         Speed of sound (m/s).
     blocks : int or None
-        g, the stretches of time (None: :data:`~sonartrack.tma.sides.JACKKNIFE_BLOCKS`).
+        g, the stretches of time (None: :data:`~sonartrack.tma.side_jackknife.JACKKNIFE_BLOCKS`).
 
     Returns
     -------
@@ -336,7 +336,7 @@ def bf_jackknife(time_s, bearing_rad, freq_hz, own_xy, own_v, sigma_b_rad: float
         ``log_lr`` NaN (no side is decided here), each replicate's final state (NaN where its fit failed) and its
         prediction of its block's bearings, and P_J.
     """
-    from sonartrack.tma.sides import JACKKNIFE_BLOCKS, SideJackknife, time_blocks
+    from sonartrack.tma.side_jackknife import JACKKNIFE_BLOCKS, SideJackknife, time_blocks
 
     t, z, f = (np.asarray(a, float) for a in (time_s, bearing_rad, freq_hz))
     own, ov = np.asarray(own_xy, float), np.asarray(own_v, float)

@@ -26,7 +26,7 @@ The integrals run on a logarithmic range grid (r dr = r^2 dlog r), which makes E
 latent range with prior mass proportional to r_j^2: each iteration cannot decrease L (Dempster, Laird
 & Rubin 1977), which the tests check. No derivative of the bearing function is needed.
 
-Initialisation (robust to the multimodal SNR of convergence zones): a grid search over tracks
+Initialisation (tma/em_map_start.py; robust to the multimodal SNR of convergence zones): a grid search over tracks
 through a point on the first bearing line and one on the last (ranges on a log grid), scored by the
 direct bearing + SNR log-likelihood; EM starts from the best few in distinct range basins and from
 the bearings-only ML estimate when there is one, and the highest final L wins.
@@ -57,7 +57,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import require
 from sonartrack.tma.batch_ml import BatchEstimate
 
@@ -340,95 +339,6 @@ def em_step(prob: EmProblem, x0) -> tuple[np.ndarray, float]:
     return np.linalg.solve(A, bb), L
 
 
-def direct_log_likelihood(prob: EmProblem, x0s) -> np.ndarray:
-    """log p(bearings, SNRs | X0) for many X0 (m, 4): the initial grid search's score.
-
-    Parameters
-    ----------
-    prob : EmProblem
-        The data and model (:func:`make_problem`).
-    x0s : array_like, shape (m, 4) or (4,)
-        Candidate X0s (m, m/s).
-
-    Returns
-    -------
-    ndarray, shape (m,)
-        The scores; -inf for a candidate whose ranges leave the grid.
-    """
-    x0s = np.atleast_2d(x0s)
-    bearing_term, j, outside = _candidate_geometry(prob, x0s)
-    ll_snr = prob.log_snr_lik[prob.terms.rows[:, 0], j]  # log p(xi_n | r_j) at each candidate's range
-    out = bearing_term + ll_snr.sum(axis=1)
-    return np.where(outside, -np.inf, out)
-
-
-#: [(key, geometry)] of the last :func:`_candidate_geometry`. The geometry of the grid search depends on
-#: the bearings, times, ownship and range grid only, not on the SNR model, so solves of the same data
-#: under several SNR models (a source-level sweep) share it.
-_GEOMETRY_MEMO: list = [None]
-
-
-def _candidate_geometry(prob: EmProblem, x0s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For candidates X0 (m, 4): the bearing log-likelihood term (m,), each frame's grid index of the
-    candidate's range (m, n), and whether any frame's range falls off the grid (m,)."""
-    key = b"|".join(np.ascontiguousarray(a).tobytes() + str(np.asarray(a).dtype).encode() + str(np.shape(a)).encode()
-                    for a in (x0s, prob.tau_s, prob.own_xy, prob.theta_rad, prob.sigma_rad, prob.r_grid))
-    last = _GEOMETRY_MEMO[0]  # read once (see _e_step)
-    if last is not None and last[0] == key:
-        return last[1]
-    dx = x0s[:, None, 0] + x0s[:, None, 2] * prob.tau_s - prob.own_xy[:, 0]
-    dy = x0s[:, None, 1] + x0s[:, None, 3] * prob.tau_s - prob.own_xy[:, 1]
-    rng = np.hypot(dx, dy)
-    e_b = wrap_angle(prob.theta_rad - np.arctan2(dx, dy)) / prob.sigma_rad
-    lr = np.log(prob.r_grid)
-    j = np.clip(np.searchsorted(lr, np.log(np.maximum(rng, 1e-9))), 0, len(lr) - 1)
-    out = (-0.5 * np.sum(e_b**2, axis=1), j, ((rng < prob.r_grid[0]) | (rng > prob.r_grid[-1])).any(axis=1))
-    _GEOMETRY_MEMO[0] = (key, out)
-    return out
-
-
-def grid_initialisation(prob: EmProblem, n: int = 64, n_starts: int = 4) -> np.ndarray:
-    """Starting X0s: tracks through (first bearing, range r_a) and (last bearing, range r_b) over an
-    n x n log grid, scored by the direct bearing + SNR log-likelihood; the best ``n_starts`` whose
-    initial ranges differ by more than 20 % (distinct basins: direct path, convergence zones), best first.
-
-    Parameters
-    ----------
-    prob : EmProblem
-        The data and model (:func:`make_problem`).
-    n : int
-        Ranges per bearing line.
-    n_starts : int
-        Most starts returned.
-
-    Returns
-    -------
-    ndarray, shape (k, 4)
-        Starts [x0, y0, vx, vy] (m, m/s), 1 <= k <= n_starts.
-    """
-    r = np.geomspace(prob.r_grid[0] * 1.01, prob.r_grid[-1] * 0.99, n)
-    u0 = np.array([np.sin(prob.theta_rad[0]), np.cos(prob.theta_rad[0])])
-    u1 = np.array([np.sin(prob.theta_rad[-1]), np.cos(prob.theta_rad[-1])])
-    ra, rb = np.meshgrid(r, r, indexing="ij")
-    p0 = prob.own_xy[0] + ra.ravel()[:, None] * u0
-    p1 = prob.own_xy[-1] + rb.ravel()[:, None] * u1
-    v = (p1 - p0) / prob.tau_s[-1]
-    cands = np.column_stack([p0, v])
-    score = direct_log_likelihood(prob, cands)
-    order = np.argsort(-score, kind="stable")
-    chosen: list[int] = []
-    for i in order:
-        if not np.isfinite(score[i]):
-            break
-        if all(abs(np.log(ra.ravel()[i] / ra.ravel()[j])) > 0.2 for j in chosen):
-            chosen.append(int(i))
-            if len(chosen) == n_starts:
-                break
-    if not chosen:
-        chosen = [int(order[0])]
-    return cands[chosen]
-
-
 def _squarem_step(prob: EmProblem, x, L_x: float, scale) -> tuple[np.ndarray, float]:
     """One SQUAREM iteration from ``x`` (see :func:`em_map`): (X0_new, L(X0_new)), with L(X0_new) >= L(x)."""
     x1, _ = em_step(prob, x)
@@ -549,6 +459,8 @@ def _best_run(prob: EmProblem, starts, max_iter: int):
 
 def _starts(prob: EmProblem, extra_starts) -> list[np.ndarray]:
     """The grid search's starts and the extra ones (None skipped)."""
+    from sonartrack.tma.em_map_start import grid_initialisation  # it imports this module
+
     return [*grid_initialisation(prob), *[np.asarray(s, dtype=float) for s in extra_starts if s is not None]]
 
 
@@ -622,83 +534,3 @@ def solve_em_map(prob: EmProblem, t0_s: float = 0.0, extra_starts=(), max_iter: 
         cov = np.full((4, 4), np.nan)
     return BatchEstimate(x0=x, covariance=cov, t0_s=float(t0_s), iterations=it, converged=it < max_iter,
                          objective=hist[-1], method="em-map")
-
-
-@dataclass(frozen=True, slots=True)
-class SnrCheck:
-    """The test of a solution's SNR residuals against the propagation model (:func:`snr_residual_check`): the
-    chi-square statistic with its degrees of freedom and upper limit, the trend statistic against log range with
-    its limit, and the number of SNRs tested."""
-
-    chi2: float
-    dof: int
-    limit: float
-    trend_chi2: float
-    trend_limit: float
-    n: int
-
-    @property
-    def explained(self) -> bool:
-        """Whether the model explains the SNRs (both statistics within their limits; True with fewer than 5 SNRs)."""
-        return self.n < 5 or (self.chi2 <= self.limit and self.trend_chi2 <= self.trend_limit)
-
-    def note(self) -> str:
-        """One line on the test.
-
-        Returns
-        -------
-        str
-            "the propagation model does (not) explain the SNR (chi2 = ... for ... dof, ...)".
-        """
-        verb = "explains" if self.explained else "does not explain"
-        return (f"the propagation model {verb} the SNR (chi2 = {self.chi2:.0f} for {self.dof} dof, limit "
-                f"{self.limit:.0f}; trend with log range chi2 = {self.trend_chi2:.1f} for 1 dof, limit "
-                f"{self.trend_limit:.1f})")
-
-
-def snr_residual_check(snr_db, predicted_db, range_m, sigma_snr_db: float, *, alpha: float = 1e-3,
-                       n_params: int = 4) -> SnrCheck:
-    """Do the measured SNRs agree with the propagation model along the solution's track?
-
-    With w_n = (xi_n - xi_bar(r_n)) / sigma_SNR the standardised SNR residuals at the solution's ranges r_n
-    (eq. 30 is the model: w_n ~ N(0, 1) independent when it holds),
-
-        chi2   = sum_n w_n^2  ~  chi-square(n - p)        (p = 4 track parameters fitted)
-        chi2_T = (sum_n (l_n - l_bar) w_n)^2 / sum_n (l_n - l_bar)^2  ~  chi-square(1),   l_n = ln r_n
-
-    the second the squared z statistic of the least-squares slope of w against log range (a model whose
-    spreading or absorption differs from the sea's leaves residuals that trend with range, which a
-    range-shifted track can make small on average but not flat). Each is compared with its upper-tail
-    1 - alpha quantile (scipy.stats.chi2). A wrong model can still be fitted by a wrong track: then the SNRs fit
-    and the bearings pay, which is why the solution is also judged against the bearings alone (tma/solve.py).
-
-    Parameters
-    ----------
-    snr_db, predicted_db : array_like (n,)
-        Measured SNRs and the model's mean SNR at the solution's ranges (dB); NaN entries are skipped.
-    range_m : array_like (n,)
-        The solution's ranges (m).
-    sigma_snr_db : float
-        The SNR noise the model states (dB).
-    alpha : float
-        Significance of each test.
-    n_params : int
-        Parameters fitted.
-
-    Returns
-    -------
-    SnrCheck
-        The statistics and their limits.
-    """
-    from scipy.stats import chi2 as chi2_dist
-
-    xi, pred, r = (np.asarray(a, float) for a in (snr_db, predicted_db, range_m))
-    use = np.isfinite(xi) & np.isfinite(pred) & (r > 0)
-    w = (xi[use] - pred[use]) / float(sigma_snr_db)
-    n = int(use.sum())
-    dof = max(n - n_params, 1)
-    lr = np.log(r[use]) - np.log(r[use]).mean() if n else np.zeros(0)
-    sxx = float(lr @ lr)
-    trend = float((lr @ w) ** 2 / sxx) if sxx > 0 else 0.0
-    return SnrCheck(float(w @ w), dof, float(chi2_dist.ppf(1 - alpha, dof)), trend,
-                    float(chi2_dist.ppf(1 - alpha, 1)), n)

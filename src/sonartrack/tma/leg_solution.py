@@ -45,6 +45,8 @@ class LegSolution:
     sigma_rad: float
     sigma_estimate: BearingSd | None = None
     message: str = ""
+    #: the record gave each bearing's sd (``sigma_rad`` is then their information-equivalent reference)
+    per_bearing: bool = False
 
     @property
     def legs(self) -> tuple[Leg, ...]:
@@ -73,7 +75,7 @@ class LegSolution:
                           for z in zigs)
         head = f"{len(zigs)} zig{'s' if len(zigs) != 1 else ''}" + (f", {where}" if zigs else "")
         sd = (f"estimated from the legs' residuals: {self.sigma_estimate.text()}" if self.sigma_estimate is not None
-              else "given")
+              else "each bearing's own given, this their reference" if self.per_bearing else "given")
         out = [f"legs: {head}; {len(self.legs)} leg{'s' if len(self.legs) != 1 else ''} (bearing sd "
                f"{np.degrees(self.sigma_rad):.3g} deg, {sd}; false zigs stated "
                f"{self.report.false_alarm_per_hour:g} per hour)"]
@@ -119,7 +121,7 @@ class LegSolution:
                 "current": np.arange(len(legs)) == len(legs) - 1}
 
 
-def _detect(t, z, own, sigma_rad: float, false_alarm_per_hour: float) -> ZigReport:
+def _detect(t, z, own, sigma_rad, false_alarm_per_hour: float) -> ZigReport:
     with np.errstate(all="ignore"):
         return detect_zigs(t, z, own, sigma_rad, false_alarm_per_hour=false_alarm_per_hour)
 
@@ -136,7 +138,8 @@ def solve_legs(record, ownship, sigma_deg: float, *, given: bool,
         The sensor's track (m).
     sigma_deg : float
         The bearing sd (deg): the given one, or the constant-velocity fit's residual scale (an upper bound of the
-        estimate's start).
+        estimate's start). Unused when the record gives each bearing's sd (``record.bearing_sd_rad``): those are
+        the detector's and the legs' weights, given.
     given : bool
         The sd was given (else it is estimated from the legs' residuals, module doc).
     false_alarm_per_hour : float
@@ -150,6 +153,13 @@ def solve_legs(record, ownship, sigma_deg: float, *, given: bool,
     t = np.asarray(record.time_s, float)
     z = np.asarray(record.bearing_rad, float)
     own = ownship.position_at(t)
+    if record.bearing_sd_rad is not None:  # each bearing's own sd: given, as the detector and fits weigh them
+        ref = record.reference_sd_rad()
+        try:
+            report = _detect(t, z, own, np.asarray(record.bearing_sd_rad, float), false_alarm_per_hour)
+        except InputError as err:
+            return LegSolution(None, ref, message=str(err), per_bearing=True)
+        return LegSolution(report, ref, message=report.message if report.legs is None else "", per_bearing=True)
     floor = float(np.radians(SIGMA_FLOOR_DEG))
     sigma = float(np.radians(sigma_deg))
     if not given and len(t) >= 3:

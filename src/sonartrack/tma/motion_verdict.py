@@ -81,6 +81,9 @@ class RecordJudgement:
     why_untested: str | None = None
     #: the residuals' chi-square against the given sd and its 1 - alpha point (None without a given sd)
     misfit: tuple[float, float] | None = None
+    #: the record gave each bearing's sd: ``given_rad`` is their reference (tma/records.py
+    #: :meth:`~sonartrack.tma.records.BearingRecord.reference_sd_rad`) and ``noise`` the residual scale in its units
+    per_bearing: bool = False
 
     @property
     def runs(self) -> bool:
@@ -111,6 +114,9 @@ class RecordJudgement:
         where = f", largest {self.span[0]:.0f}-{self.span[1]:.0f} s" if self.span is not None else ""
         if self.runs:
             return f"{MANOEUVRED}: residuals reject constant velocity{where}"
+        if self.per_bearing:
+            return (f"{EXCEEDS_STATED_NOISE}: residuals {self.noise.sd_rad / self.given_rad:.3g} times the stated "
+                    f"bearing sds (target manoeuvred{where}, or the sds too small: leave them out to estimate one)")
         return (f"{EXCEEDS_STATED_NOISE}: rms {np.rad2deg(self.noise.sd_rad):.3g} deg against the stated "
                 f"{np.rad2deg(self.given_rad):.3g} deg (target manoeuvred{where}, or the sd too small: leave it out "
                 "to estimate it)")
@@ -148,6 +154,10 @@ class RecordJudgement:
             floored = np.rad2deg(self.noise.sd_rad) < SIGMA_FLOOR_DEG
             used = f"; used {SIGMA_FLOOR_DEG:g} deg, the bearings' resolution" if floored else ""
             return (f"bearing sd estimated from the record: {self.noise.text()}{used}",)
+        if self.per_bearing and self.noise.excludes(self.given_rad):
+            return (f"the given bearing sds are contradicted by the record: its residuals are "
+                    f"{self.noise.sd_rad / self.given_rad:.3g} [{self.noise.lo_rad / self.given_rad:.3g}, "
+                    f"{self.noise.hi_rad / self.given_rad:.3g}] times them",)
         if self.noise.excludes(self.given_rad):
             return (f"the given bearing sd {np.rad2deg(self.given_rad):.3g} deg is contradicted by the record: its "
                     f"residuals measure {self.noise.text()}",)
@@ -193,8 +203,8 @@ def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
     Returns
     -------
     ndarray (n,)
-        Measured minus fitted bearings (rad, wrapped). Raises InputError, LinAlgError or FloatingPointError when no
-        fit is possible.
+        Measured minus fitted bearings (rad, wrapped; the fit weighs each bearing by its own sd when the record
+        gives them). Raises InputError, LinAlgError or FloatingPointError when no fit is possible.
     """
     from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only
     from sonartrack.tma.sides import fit_cv_target
@@ -202,11 +212,12 @@ def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
     t = np.asarray(record.time_s, float)
     z = wrap_angle(np.asarray(record.bearing_rad, float))
     own = ownship.position_at(t)
+    rel = record.relative_sd()  # each bearing weighed by its own sd when the record gives them
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        fits = [fit_cv_target(z, t, own)]
+        fits = [fit_cv_target(z, t, own, relative_sigma=rel)]
         with contextlib.suppress(InputError, np.linalg.LinAlgError, FloatingPointError):
-            fits.append(ml_bearings_only(z, t, own, 1.0, check=False))
+            fits.append(ml_bearings_only(z, t, own, rel, check=False))
         fits = [f for f in fits if f is not None and np.isfinite(f.objective) and np.all(np.isfinite(f.x0))]
         if not fits:
             raise FloatingPointError("no start converges")
@@ -228,7 +239,9 @@ def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSett
     ownship : OwnshipTrack
         The sensor's track (m).
     settings : TmaSettings
-        ``sigma_bearing_deg`` (None: estimated), ``verdict.alpha``, ``batch.correlation_inflation``.
+        ``sigma_bearing_deg`` (None: estimated), ``verdict.alpha``, ``batch.correlation_inflation``. A record that
+        gives each bearing's sd (``record.bearing_sd_rad``) is judged with those: its residuals are whitened by
+        them (in units of their reference sd), and the noise estimate is their scale.
 
     Returns
     -------
@@ -237,21 +250,25 @@ def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSett
     """
     from sonartrack.tma.solve import correlation_inflation
 
-    given = None if settings.sigma_bearing_deg is None else float(np.deg2rad(settings.sigma_bearing_deg))
+    per_bearing = record.bearing_sd_rad is not None
+    given = (record.reference_sd_rad() if per_bearing else
+             None if settings.sigma_bearing_deg is None else float(np.deg2rad(settings.sigma_bearing_deg)))
     try:
         e = cv_residuals(record, ownship)
     except (InputError, np.linalg.LinAlgError, FloatingPointError) as failure:
-        return RecordJudgement(None, given, why_untested=f"no constant-velocity fit of the bearings ({failure})")
+        return RecordJudgement(None, given, why_untested=f"no constant-velocity fit of the bearings ({failure})",
+                               per_bearing=per_bearing)
     t = np.asarray(record.time_s, float)
+    e = e / record.relative_sd()  # in units of the reference sd: each bearing weighed by its own
     noise = bearing_sd_estimate(e)
     sigma = given if given is not None else max(noise.sd_rad, float(np.deg2rad(SIGMA_FLOOR_DEG)))
     if settings.batch.correlation_inflation:
         block_s = max(RESIDUAL_BLOCK_S, 3.0 * float(np.median(np.diff(t))))
         block = residual_check(t, e, sigma, inflation=correlation_inflation(e), block_s=block_s)
-        judgement = RecordJudgement(noise, given, block=block)
+        judgement = RecordJudgement(noise, given, block=block, per_bearing=per_bearing)
     else:
         judgement = RecordJudgement(noise, given, whiteness=whiteness_check(
-            e, settings.verdict.alpha, float(np.deg2rad(SIGMA_FLOOR_DEG))))
+            e, settings.verdict.alpha, float(np.deg2rad(SIGMA_FLOOR_DEG))), per_bearing=per_bearing)
     if given is not None and e.size > 4:
         misfit = float(np.sum((np.asarray(e, float) / given) ** 2))
         judgement = replace(judgement, misfit=(misfit, float(chi2_quantile(1.0 - settings.verdict.alpha, e.size - 4))))
@@ -290,7 +307,7 @@ def record_verdict(result, judgement: RecordJudgement):
     if judgement.why_untested is not None:
         return result
     if s.method == "ml" and s.batch.window_s is None:
-        return determination_checked(result)
+        return determination_checked(result, result.record.relative_sd())
     if s.is_sequential and not s.frequency:
         return _held_to_ml(result)
     return result
@@ -306,4 +323,4 @@ def _held_to_ml(result):
         ml = solve_tma(result.record, result.ownship, ml_settings, unobservable="flag", record_checks=False)
     except (InputError, np.linalg.LinAlgError):
         return result
-    return batch_held(result, determination_checked(ml))
+    return batch_held(result, determination_checked(ml, result.record.relative_sd()))

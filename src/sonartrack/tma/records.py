@@ -24,12 +24,42 @@ MAX_NAV_GAP_S = 120.0
 @dataclass(frozen=True, slots=True)
 class BearingRecord:
     """Passive measurements against time: bearing (rad, clockwise from north, (-pi, pi]),
-    optionally received frequency (Hz) and SNR (dB). Times strictly increasing."""
+    optionally received frequency (Hz), SNR (dB) and each bearing's own noise sd (rad; e.g. a line array's,
+    which grows towards endfire). Times strictly increasing."""
 
     time_s: np.ndarray
     bearing_rad: np.ndarray
     frequency_hz: np.ndarray | None = None
     snr_db: np.ndarray | None = None
+    #: each bearing's noise standard deviation (rad, > 0); None: one sd for all (the settings' or estimated)
+    bearing_sd_rad: np.ndarray | None = None
+
+    def reference_sd_rad(self) -> float | None:
+        """The one sd worth the same information as the bearings' own sds (None without them): the harmonic
+        mean of the variances, 1 / sqrt(mean(1 / sigma_i^2)), so that n bearings of this sd carry the Fisher
+        information sum 1 / sigma_i^2 of the record's (what a single-sd method such as a sequential filter uses).
+
+        Returns
+        -------
+        float or None
+            The reference sd (rad).
+        """
+        if self.bearing_sd_rad is None:
+            return None
+        return float(1.0 / np.sqrt(np.mean(1.0 / np.square(np.asarray(self.bearing_sd_rad, float)))))
+
+    def relative_sd(self) -> np.ndarray | float:
+        """Each bearing's sd relative to :meth:`reference_sd_rad` (1.0 without per-bearing sds): the weights that
+        the single-sd checks (tma/record_checks.py, tma/record_verdict.py) whiten the residuals by.
+
+        Returns
+        -------
+        ndarray (n,) or float
+            sigma_i / sigma_ref.
+        """
+        if self.bearing_sd_rad is None:
+            return 1.0
+        return np.asarray(self.bearing_sd_rad, float) / self.reference_sd_rad()
 
     def until(self, end_s: float) -> BearingRecord:
         """The measurements at times <= ``end_s``.
@@ -50,7 +80,8 @@ class BearingRecord:
             return None if a is None else np.asarray(a)[keep]
 
         return BearingRecord(time_s=cut(self.time_s), bearing_rad=cut(self.bearing_rad),
-                             frequency_hz=cut(self.frequency_hz), snr_db=cut(self.snr_db))
+                             frequency_hz=cut(self.frequency_hz), snr_db=cut(self.snr_db),
+                             bearing_sd_rad=cut(self.bearing_sd_rad))
 
 
 @dataclass(frozen=True, slots=True)
@@ -170,6 +201,28 @@ def _joined_modes(first: TmaSolution, later: TmaSolution) -> ModeProbabilities |
     if a is None or b is None or a.names != b.names:
         return None
     return a.joined(b)
+
+
+def check_bearing_sds(record: BearingRecord) -> None:
+    """A record's per-bearing sds, when given, must be one finite positive value per bearing. Raises
+    :class:`InputError`.
+
+    Parameters
+    ----------
+    record : BearingRecord
+        The measurements.
+    """
+    if record.bearing_sd_rad is None:
+        return
+    sd = np.asarray(record.bearing_sd_rad, float)
+    if sd.shape != np.shape(record.time_s):
+        raise InputError(f"the record gives {sd.size} bearing sds for {np.size(record.time_s)} bearings: give one per "
+                         "bearing (or none)")
+    bad = ~np.isfinite(sd) | (sd <= 0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"bearing sd {sd[i]:g} rad at t = {np.asarray(record.time_s)[i]:g} s is not a positive "
+                         "number: give each bearing's noise sd (> 0), or leave the column out")
 
 
 def check_coverage(record: BearingRecord, ownship: OwnshipTrack, max_gap_s: float = MAX_NAV_GAP_S) -> None:

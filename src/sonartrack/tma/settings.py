@@ -71,6 +71,13 @@ class SequentialSettings(Settings):
     sigma_f0_hz: float | None = setting(None, "standard deviation of the initial f0 (default: the Doppler spread an "
                                               "unknown radial velocity can cause)", unit="Hz", gt=0)
     sound_speed_mps: float = setting(1500.0, "speed of sound of the Doppler (frequency) model", unit="m/s", gt=0)
+    range_filters: int = setting(1, "filters of the range-parameterised bank (tma/range_bank.py): 1 runs one filter "
+                                    "from initial_range_m and sigma_range_m; N > 1 runs N, one per subinterval of "
+                                    "bank_range_m, weighted by their likelihoods (NEES within chi-square's interval "
+                                    "where one filter's range collapses)", unit="1", ge=1, le=64)
+    bank_range_m: list[float] = setting(default_factory=lambda: [1_000.0, 60_000.0], doc="the range interval the "
+                                        "bank's filters cover (range_filters > 1)", unit="m", min_length=2,
+                                        max_length=2)
 
 
 class BatchSettings(Settings):
@@ -153,7 +160,8 @@ class TmaSettings(Settings):
     frequency: bool = setting(False, "use the measured frequency too (sequential methods)")
     sigma_bearing_deg: float | None = setting(
         None, "bearing noise standard deviation (default: estimated from the record, the residual scale of its "
-              "constant-velocity fit; at most 30: beyond that a bearing says nothing the small-error model can use)",
+              "constant-velocity fit; at most 30: beyond that a bearing says nothing the small-error model can use; "
+              "a bearings file's bearing_sd_deg column gives each bearing's own instead)",
         unit="deg", gt=0, le=30)
     sigma_freq_hz: float = setting(0.1, "frequency noise standard deviation (at most 100)", unit="Hz", gt=0,
                                    le=100)

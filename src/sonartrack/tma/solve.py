@@ -38,7 +38,7 @@ import numpy as np
 
 from sonartrack.core.errors import InputError, require
 from sonartrack.tma.record_checks import BearingSd
-from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution, check_coverage
+from sonartrack.tma.records import BearingRecord, OwnshipTrack, TmaSolution, check_bearing_sds, check_coverage
 from sonartrack.tma.settings import BATCH_METHODS, SEQUENTIAL_METHODS, TmaSettings
 
 if TYPE_CHECKING:
@@ -241,8 +241,9 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
         Its bearings (times in s).
     ownship : OwnshipTrack
         Ownship positions (m).
-    sigma_bearing_rad : float
-        Bearing noise standard deviation (rad).
+    sigma_bearing_rad : float or ndarray (n,)
+        Bearing noise standard deviation (rad), one or each bearing's (then the limit uses the sd of equal
+        information, :meth:`~sonartrack.tma.records.BearingRecord.reference_sd_rad`).
 
     Returns
     -------
@@ -255,7 +256,9 @@ def flag_unresolved_range(solution: TmaSolution, record, ownship, sigma_bearing_
     from sonartrack.tma.verdict import DIVERGED, UNOBSERVABLE, with_reasons
 
     t = np.asarray(record.time_s, float)
-    limit_m = observable_range_limit_m(t - t[0], ownship.position_at(t), sigma_bearing_rad)
+    sd = np.broadcast_to(np.asarray(sigma_bearing_rad, float), t.shape)
+    sigma_ref = float(1.0 / np.sqrt(np.mean(1.0 / np.square(sd))))  # the same information in one sd
+    limit_m = observable_range_limit_m(t - t[0], ownship.position_at(t), sigma_ref)
     cols = solution_columns(solution, ownship)
     range_m, range_std_m = cols["range_m"], cols["range_std_m"]
     P = np.asarray(solution.covariance, float)
@@ -328,7 +331,7 @@ def _inflated(est, record: BearingRecord, own_xy):
 
     t = np.asarray(record.time_s, float)
     h, _, _ = bearing_model(est.x0, t - est.t0_s, own_xy)
-    factor = correlation_inflation(wrap_angle(np.asarray(record.bearing_rad) - h))
+    factor = correlation_inflation(wrap_angle(np.asarray(record.bearing_rad) - h) / record.relative_sd())
     return replace(est, covariance=np.asarray(est.covariance) * factor)
 
 
@@ -355,7 +358,8 @@ def _solve_ml(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
 
     t = np.asarray(record.time_s, float)
     own = ownship.position_at(t)
-    sigma = float(np.deg2rad(settings.sigma_bearing_deg))
+    sigma = (float(np.deg2rad(settings.sigma_bearing_deg)) if record.bearing_sd_rad is None
+             else np.asarray(record.bearing_sd_rad, float))
     why = check_observability(t - t[0], own) if unobservable == "flag" else None
     # a record taken as it is may leave the covariance singular (range unknown): no warnings for its infinities
     quiet = np.errstate(invalid="ignore", over="ignore") if unobservable == "flag" else nullcontext()
@@ -401,7 +405,8 @@ def _solve_batch(record, ownship, settings: TmaSettings, environment, tl_store) 
 
 def em_map_verdict(solution: TmaSolution, record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings, *,
                    environment=None, tl_store=None) -> dict:
-    """em-map's solution judged by its SNR residuals (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`).
+    """em-map's solution judged by its SNR residuals (tma/em_snr_check.py
+    :func:`~sonartrack.tma.em_snr_check.snr_residual_check`).
 
     When the propagation model explains the SNRs along the solution's track the solution stands. When it does
     not, the SNR's range is not to be trusted: over the whole record with bearings that determine the range
@@ -431,7 +436,7 @@ def em_map_verdict(solution: TmaSolution, record: BearingRecord, ownship: Ownshi
         "solution" and "notes" of the :class:`TmaResult`.
     """
     from sonartrack.tma.batch import snr_model
-    from sonartrack.tma.em_map import snr_residual_check
+    from sonartrack.tma.em_snr_check import snr_residual_check
     from sonartrack.tma.verdict import SNR_NOT_EXPLAINED, with_reasons
 
     b, em = settings.batch, settings.em_map
@@ -473,6 +478,37 @@ def _judged(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings,
     return judgement, settings.model_copy(update={"sigma_bearing_deg": judgement.sigma_deg(settings)})
 
 
+def with_record_sd(record: BearingRecord, settings: TmaSettings) -> TmaSettings:
+    """The settings with ``sigma_bearing_deg`` the reference of the record's per-bearing sds, when it gives them
+    (:meth:`~sonartrack.tma.records.BearingRecord.reference_sd_rad`: what the single-sd methods use; the ML and the
+    record's checks weigh each bearing by its own). A different ``sigma_bearing_deg`` given as well is refused: one
+    of the two would be silently ignored.
+
+    Parameters
+    ----------
+    record : BearingRecord
+        The measurements, ``bearing_sd_rad`` optional.
+    settings : TmaSettings
+        The settings.
+
+    Returns
+    -------
+    TmaSettings
+        ``settings``, with ``sigma_bearing_deg`` set from the record when it gives each bearing's sd.
+    """
+    check_bearing_sds(record)
+    if record.bearing_sd_rad is None:
+        return settings
+    from sonartrack.tma.motion_verdict import SIGMA_CEILING_DEG
+
+    ref_deg = float(np.clip(np.rad2deg(record.reference_sd_rad()), 1e-9, SIGMA_CEILING_DEG))
+    given = settings.sigma_bearing_deg
+    if given is not None and abs(given - ref_deg) > 1e-9 * ref_deg:
+        raise InputError(f"the record gives each bearing's sd (reference {ref_deg:.3g} deg) and sigma_bearing_deg "
+                         f"(--sigma-bearing-deg) gives {given:g} deg: leave out one of the two")
+    return settings.model_copy(update={"sigma_bearing_deg": ref_deg})
+
+
 def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSettings | None = None, *,
               environment=None, tl_store=None, ml_fit=None,
               unobservable: Literal["raise", "flag"] = "raise", record_checks: bool = True) -> TmaResult:
@@ -482,7 +518,8 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     ----------
     record : BearingRecord
         Bearings (rad, clockwise from north) at increasing times (s), with frequencies (Hz) or SNRs (dB) when
-        the method uses them.
+        the method uses them, and optionally each bearing's noise sd (``bearing_sd_rad``, rad: the whole-record
+        ML and the record's checks weigh each bearing by it, the other methods use :func:`with_record_sd`'s).
     ownship : OwnshipTrack
         The sensor's track; it must cover the record (no extrapolation, gaps up to
         ``settings.inputs.max_nav_gap_s``).
@@ -493,16 +530,15 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
     tl_store : FieldStore, optional
         em-map: a cache of transmission-loss fields.
     ml_fit : BatchEstimate, optional
-        ml over the whole record only: an ML estimate of this same record found by a wider search (e.g. the
-        multi-start fits of tma/sides.py :func:`~sonartrack.tma.sides.resolve_side`), taken as the solution
-        instead of the single-start fit (which can settle in a far local minimum).
+        ml over the whole record only: an ML estimate of this record found by a wider search (e.g. tma/sides.py
+        :func:`~sonartrack.tma.sides.resolve_side`'s), taken instead of the single-start fit (a far local minimum).
     unobservable : {"raise", "flag"}
         ml over the whole record only: with an ownship that did not maneuver, "raise" refuses the record
         (:class:`~sonartrack.core.errors.InputError`); "flag" returns the solution with every row's
         ``range_determined`` False and the reason in ``warnings``.
     record_checks : bool
-        Judge the answer by its record (tma/motion_verdict.py). Off in the passive chain, which runs the same
-        checks with its line-array weights, side and jackknife. A ``sigma_bearing_deg`` of None is estimated anyway.
+        Judge the answer by its record (tma/motion_verdict.py; off in the passive chain, which runs the same checks
+        with its line-array weights, side and jackknife). A ``sigma_bearing_deg`` of None is estimated anyway.
 
     Returns
     -------
@@ -510,7 +546,7 @@ def solve_tma(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSetting
         The solution at the record's times; solver warnings in ``result.warnings``. Mistakes raise
         :class:`~sonartrack.core.errors.InputError`.
     """
-    settings = TmaSettings() if settings is None else settings
+    settings = with_record_sd(record, TmaSettings() if settings is None else settings)
     check_settings(settings)
     check_coverage(record, ownship, settings.inputs.max_nav_gap_s)
     whole_ml = settings.method == "ml" and settings.batch.window_s is None

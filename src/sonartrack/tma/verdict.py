@@ -20,20 +20,20 @@ order they are checked (the first that applies is given; :func:`sequential_reaso
   (Nardone & Aidala, IEEE Trans. AES 17(2), 1981), and the filter's range is its initial guess.
 
 A line array's target whose side of the array is not decided (its bearings may be the mirror ones) adds
-:data:`SIDE_UNRESOLVED` to the rows that have no reason yet (systems/passive/targets.py). The batch methods give
-their own: the ML (tma/solve.py :func:`~sonartrack.tma.solve.flag_unresolved_range`)
-:data:`DIVERGED` (a covariance that is not finite) and :data:`UNOBSERVABLE` (no maneuver, a range beyond what the
-maneuver resolves, or a range sd above the range), the passive chain's check of it (systems/passive/targets.py)
-:data:`INCONSISTENT_RESIDUALS`, :data:`FLAT_LIKELIHOOD`, :data:`NOT_ONE_TARGET` (a stretch of the record that
-the rest of it places more than a beamwidth away: another ship's bearings, or the mirror's) and :data:`FIXED_CONE`
-(bearings that one cone angle fixed in the array's frame explains as well as the CV target does); em-map
-:data:`SNR_NOT_EXPLAINED` (tma/em_map.py :func:`~sonartrack.tma.em_map.snr_residual_check`). The passive chain holds
-its sequential filter to the batch ML of the same record (systems/passive/targets.py :func:`batch_held`): the ML's
-reason where the ML is not determined, else :data:`DISAGREES_WITH_BATCH` when the two final positions differ
-beyond what their covariances allow. ``sonartrack tma`` (tma/solve.py :func:`~sonartrack.tma.solve.solve_tma`) judges
-every method's answer by its record (tma/motion_verdict.py): :data:`MANOEUVRED` on every row when the bearings
-reject constant velocity, else the ML's residual and profile-likelihood checks and, for a sequential filter on
-bearings, the batch ML's hold, as in the passive chain.
+:data:`SIDE_UNRESOLVED` to the rows that have no reason yet (systems/passive/targets.py). The batch methods give their
+own: the ML (tma/solve.py :func:`~sonartrack.tma.solve.flag_unresolved_range`) :data:`DIVERGED` (a covariance that is
+not finite) and :data:`UNOBSERVABLE` (no maneuver, a range beyond what the maneuver resolves, or a range sd above the
+range), the passive chain's check of it (systems/passive/targets.py) :data:`INCONSISTENT_RESIDUALS`,
+:data:`FLAT_LIKELIHOOD`, :data:`NOT_ONE_TARGET` (a stretch of the record that the rest of it places more than a
+beamwidth away: another ship's bearings, or the mirror's) and :data:`FIXED_CONE` (bearings that one cone angle fixed
+in the array's frame explains as well as the CV target does); em-map :data:`SNR_NOT_EXPLAINED` (tma/em_snr_check.py
+:func:`~sonartrack.tma.em_snr_check.snr_residual_check`). The passive chain holds its sequential filter to the batch
+ML of the same record (systems/passive/targets.py :func:`batch_held`): the ML's reason where the ML is not determined,
+else :data:`DISAGREES_WITH_BATCH` when the two final positions differ beyond what their covariances allow.
+``sonartrack tma`` (tma/solve.py :func:`~sonartrack.tma.solve.solve_tma`) judges every method's answer by its record
+(tma/motion_verdict.py): :data:`MANOEUVRED` on every row when the bearings reject constant velocity, else the ML's
+residual and profile-likelihood checks and, for a sequential filter on bearings, the batch ML's hold, as in the
+passive chain.
 """
 
 from __future__ import annotations

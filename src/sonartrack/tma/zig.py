@@ -24,8 +24,8 @@ Sequential use. The test runs at each new bearing over the bearings since the st
 ``window_s`` back; tau ranges over the bearing times leaving >= ``min_before`` bearings before and
 >= ``min_after`` after it. The score form screens; where it crosses the threshold h the test is confirmed on
 the window by the GLR itself: the CV ML re-fitted from cold starts too (a warm start can stop in a worse local
-minimum, whose structured residuals look like a zig) and the full (nonlinear) two-leg profile of tma/legs.py
-(:func:`~sonartrack.tma.legs.change_time_profile`), GLR(tau) = C_0 - C_1(tau). A zig is declared when its
+minimum, whose structured residuals look like a zig) and the full (nonlinear) two-leg profile of tma/legs.py's
+model (:func:`change_time_profile`, here), GLR(tau) = C_0 - C_1(tau). A zig is declared when its
 maximum exceeds h; the detection time is that bearing's. tau_hat = argmax GLR(tau), and the zig's interval is
 {tau : GLR(tau) >= GLR(tau_hat) - 3.84} (the chi-square(1) 95 % profile-likelihood interval).
 The test restarts after the change (after the later of the interval's end and the bearing ``min_after``
@@ -73,7 +73,7 @@ import numpy as np
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only, pseudo_linear_estimate
-from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, change_time_profile, fit_legs
+from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, _lm, _residual_fn, fit_legs, pseudo_linear_legs
 from sonartrack.tma.missed_zig import MISSED_ZIG_DV_SD_MPS, with_missed_zig
 
 #: c in the threshold's tail form p = c sqrt(dt / 1 s) (h / 2)^2 exp(-h / 2) (module doc), fitted to simulated CV
@@ -230,6 +230,51 @@ def _window_fit(z, t, own, sig, x_init):
             break
     h, H, _ = bearing_model(best.x0, tau, own)
     return best.x0, wrap_angle(z - h) / sig, H / sig[:, None]
+
+
+def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, params_init=None) -> np.ndarray:
+    """The two-leg ML cost C(c) (chi-square, module doc) at each candidate change time c: the profile over one
+    change time that a zig's time interval is read from (tma/zig.py). theta is re-fitted at each candidate,
+    warm-started from the previous one (in increasing order of c); where that cost is implausible (far above
+    chi-square(n): a wrong basin), from ``params_init``, the pseudo-linear estimate and a far start as well.
+
+    Parameters
+    ----------
+    time_s, bearing_rad : ndarray, shape (n,)
+        Strictly increasing times (s) and bearings (rad).
+    own_xy_m : ndarray, shape (n, 2)
+        Ownship positions (m).
+    sigma_rad : float or array_like, shape (n,)
+        Bearing noise sd (rad).
+    candidates_s : array_like, shape (m,)
+        Increasing change times (s) strictly inside the record.
+    params_init : array_like (6,) or None
+        A reference start for theta (e.g. from a joint fit), tried where the warm start fails.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        C at each candidate (inf where the fit failed).
+    """
+    t, z, own = (np.asarray(a, dtype=float) for a in (time_s, bearing_rad, own_xy_m))
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
+    cand = np.asarray(candidates_s, dtype=float)
+    out = np.full(len(cand), np.inf)
+    ref = None if params_init is None else np.asarray(params_init, dtype=float)
+    theta = ref
+    plausible = len(t) + 5.0 * np.sqrt(2.0 * len(t)) + 10.0  # far above chi-square(n): a wrong basin
+    for i, ck in enumerate(cand):
+        starts = [] if theta is None else [theta]
+        starts += [] if ref is None else [ref]
+        starts += [pseudo_linear_legs(z, t, own, t[0], [ck]),
+                   np.r_[own[0] + 10_000.0 * np.array([np.sin(z[0]), np.cos(z[0])]), np.zeros(4)]]
+        for start in starts:  # the warm start first; the others only while the cost is implausible
+            th, _, _, cost, _, _ = _lm(_residual_fn(z, t, own, sig, t[0], [ck]), start.copy(), 15, 1e-7)
+            if np.isfinite(cost) and cost < out[i]:
+                out[i], theta = cost, th
+            if out[i] < plausible:
+                break
+    return out
 
 
 def _locate(z, t, own, sig, cost_cv: float, detected_s: float, near_s=None, params_init=None) -> Zig:

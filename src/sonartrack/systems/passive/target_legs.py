@@ -53,7 +53,8 @@ from sonartrack.tma.legs import LegFit, _state_map, fit_legs, leg_bearing_model
 from sonartrack.tma.record_checks import MAX_RESIDUAL_SCALE, RESIDUAL_ALPHA, RESIDUAL_BLOCK_S
 from sonartrack.tma.record_verdict import undetermined
 from sonartrack.tma.records import TmaSolution
-from sonartrack.tma.sides import VISIT_GAP_S, SideJackknife, fit_cv_target, time_blocks
+from sonartrack.tma.side_jackknife import SideJackknife, time_blocks
+from sonartrack.tma.sides import VISIT_GAP_S, fit_cv_target
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation
 from sonartrack.tma.verdict import INCONSISTENT_RESIDUALS, MANOEUVRED, UNOBSERVABLE, with_reasons
@@ -360,8 +361,9 @@ def _without_crossings(report, blocks, record, other, visits, sigma_u: float):
 
 def legs_jackknife(blocks, fit: LegFit, t_end_s: float, n_blocks: int = 10) -> SideJackknife | None:
     """The leg fit repeated with each of ``n_blocks`` stretches of the record's time left out (change times held):
-    the delete-a-block jackknife of the chain's CV ML (tma/sides.py :func:`~sonartrack.tma.sides.side_jackknife`)
-    for the legs. Returned as a :class:`~sonartrack.tma.sides.SideJackknife` (``log_lr`` NaN: no side decision):
+    the delete-a-block jackknife of the chain's CV ML (tma/side_jackknife.py
+    :func:`~sonartrack.tma.side_jackknife.side_jackknife`) for the legs. Returned as a
+    :class:`~sonartrack.tma.side_jackknife.SideJackknife` (``log_lr`` NaN: no side decision):
     each replicate's state at ``t_end_s`` (last leg's velocity), the jackknife covariance P_J of that state, and
     each replicate's prediction of the block means it left out (rms difference, the prediction's rms sd). A
     replicate that cannot be fitted (a leg left without bearings) has NaN. None: fewer than 3 stretches.

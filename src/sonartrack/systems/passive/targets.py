@@ -49,6 +49,11 @@ Per track (its raw peaks, systems/passive/measurements.py):
    range, is not determined when its last position disagrees with the batch's, and otherwise claims no less
    uncertainty at its last row than the batch, whose covariance the record's residuals and block jackknife have
    checked (:func:`batch_held`).
+
+The pieces live by idea: the noise law and the weighted ML in systems/passive/line_array_noise.py, the checks by
+stretches of the record (jackknife, axis, side) in systems/passive/target_checks.py, the fixed-cone test in
+systems/passive/fixed_cone.py, the scans, side time and tonal a target is solved from in
+systems/passive/target_inputs.py; their names used elsewhere are importable from here too.
 """
 
 from __future__ import annotations
@@ -60,17 +65,44 @@ import numpy as np
 from sonartrack.acoustics.tonal import TonalTrack
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
-from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.io.navigation import Navigation
+from sonartrack.systems.passive.fixed_cone import fixed_cone_cost as fixed_cone_cost
+from sonartrack.systems.passive.fixed_cone import fixed_cone_f as fixed_cone_f
+from sonartrack.systems.passive.fixed_cone import fixed_cone_note
+from sonartrack.systems.passive.line_array_noise import (
+    SIGMA_U_FLOOR_RAD,
+    line_array_relative_sigma,
+    u_weighted_fit,
+)
+from sonartrack.systems.passive.line_array_noise import (
+    endfire_reach_rad as endfire_reach_rad,
+)
 from sonartrack.systems.passive.measurements import TrackMeasurements
 from sonartrack.systems.passive.settings import PassiveStages
+from sonartrack.systems.passive.target_checks import (
+    _end_stretch_note as _end_stretch_note,
+)
+from sonartrack.systems.passive.target_checks import (
+    _foreign_block_note,
+    _jackknife_widened,
+    axis_checked,
+    jackknife_checked,
+    ordinal,
+    side_checked,
+)
+from sonartrack.systems.passive.target_inputs import (
+    frequency_record,
+    line_tonal,
+    side_resolved_time,
+    usable_tonal,
+    without_neighbour_scans,
+)
 from sonartrack.systems.passive.target_legs import TargetLegs, legs_jackknife, target_legs, with_legs_verdict
 from sonartrack.tma.record_checks import (
     MAX_RESIDUAL_SCALE,
     PROFILE_FAR_FACTOR,
     PROFILE_MIN_RISE,
     PROFILE_SIGMAS,
-    RESIDUAL_ALPHA,
     residual_check,
     residual_scale,
 )
@@ -78,23 +110,16 @@ from sonartrack.tma.record_verdict import (  # the checks shared with ``sonartra
     UNSUPPORTED_RANGE,  # noqa: F401
     batch_held,
     determination_checked,
-    position_gap,
 )
-from sonartrack.tma.record_verdict import fit_at_bearings as _fit_at_bearings
 from sonartrack.tma.record_verdict import undetermined as _undetermined
 from sonartrack.tma.records import BearingRecord, TmaSolution
 from sonartrack.tma.settings import BatchSettings, TmaSettings
 from sonartrack.tma.sides import (
     SideDecision,
-    axis_end_stretches,
-    crossing_alternative,
     crossing_events,
-    fit_cv_target,
     mirror_bearings_rad,
-    near_axis_times,
     resolve_side,
     resolve_side_through_crossings,
-    side_jackknife,
 )
 from sonartrack.tma.solution_table import solution_columns
 from sonartrack.tma.solve import TmaResult, correlation_inflation, solve_tma
@@ -108,9 +133,6 @@ from sonartrack.tma.verdict import (
     UNOBSERVABLE,
     with_reasons,
 )
-
-#: interval at which the side decision is re-taken on the growing record
-SIDE_CHECK_S = 60.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,39 +153,6 @@ class Target:
     legs: TargetLegs | None = None
 
 
-def side_resolved_time(t, cone_rad, heading_rad, xy, final: SideDecision, min_log_lr: float) -> float:
-    """First checkpoint from which every later decision on the growing record agrees with ``final``.
-
-    Parameters
-    ----------
-    t, cone_rad, heading_rad : ndarray (n,)
-        The track's times (s), cone angles (rad) and the array's heading (rad) at those times.
-    xy : ndarray (n, 2)
-        The array centre (m).
-    final : SideDecision
-        The decision on the whole record.
-    min_log_lr : float
-        The decision threshold on |ln LR|.
-
-    Returns
-    -------
-    float
-        The time (s), checked every ``SIDE_CHECK_S``; NaN when the side was never resolved.
-    """
-    if final.side == "unresolved":
-        return float("nan")
-    checkpoints = np.arange(t[0] + SIDE_CHECK_S, t[-1], SIDE_CHECK_S)
-    since = float(t[-1])
-    for c in checkpoints[::-1]:
-        n = int(np.searchsorted(t, c, side="right"))
-        d = resolve_side(t[:n], cone_rad[:n], heading_rad[:n], xy[:n], min_log_lr=min_log_lr,
-                         unfolded=final.unfolded_rad is not None)
-        if d.side != final.side:
-            break
-        since = float(c)
-    return since
-
-
 def _tma_settings(method: str, sigma_bearing_rad: float, stages: PassiveStages, tonal: TonalTrack | None
                   ) -> TmaSettings:
     s = stages.settings
@@ -173,421 +162,6 @@ def _tma_settings(method: str, sigma_bearing_rad: float, stages: PassiveStages, 
                        sigma_freq_hz=max(tonal.sigma_hz, s.sigma_freq_floor_hz) if use_f else 0.1,
                        imm=stages.imm, sequential=stages.sequential, verdict=s.verdict,
                        batch=BatchSettings(correlation_inflation=s.ml_correlation_inflation))
-
-
-def frequency_record(t, bearing_rad, tonal: TonalTrack) -> BearingRecord:
-    """Bearings with the tonal's frequency at the same times.
-
-    Parameters
-    ----------
-    t, bearing_rad : ndarray (n,)
-        The bearings' times (s) and true bearings (rad).
-    tonal : TonalTrack
-        The track's tonal line.
-
-    Returns
-    -------
-    BearingRecord
-        The times that have both a bearing and a tonal frequency (Hz).
-    """
-    f = np.interp(t, tonal.time_s, tonal.frequency_hz, left=np.nan, right=np.nan)
-    on = np.isin(t, tonal.time_s)
-    f = np.where(on, f, np.nan)
-    keep = np.isfinite(f)
-    return BearingRecord(time_s=t[keep], bearing_rad=bearing_rad[keep], frequency_hz=f[keep])
-
-
-def usable_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
-    """The tonal if it is clean enough for bearing + frequency TMA.
-
-    Parameters
-    ----------
-    tonal : TonalTrack or None
-        The track's tonal line.
-    stages : PassiveStages
-        Its settings' ``max_sigma_freq_hz`` and ``tma_min_tonal_snr_db``.
-
-    Returns
-    -------
-    TonalTrack or None
-        ``tonal``, or None when it is too noisy or too weak (the record is then bearings only).
-    """
-    s = stages.settings
-    if tonal is None or tonal.sigma_hz > s.max_sigma_freq_hz or tonal.line_snr_db < s.tma_min_tonal_snr_db:
-        return None
-    return tonal
-
-
-def line_tonal(tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
-    """The tonal of a target found through its line (a narrowband target) if its frequency is clean enough for the
-    bearings + frequency ML.
-
-    Only the frequency noise gate of :func:`usable_tonal` (``max_sigma_freq_hz``) applies: its line-strength gate
-    (``tma_min_tonal_snr_db``) keeps a broadband track from taking a weak line that may be another source's, but a
-    narrowband target's bearings are its line's own, and a quiet target's line is weak by nature (the default
-    scene's submarine: 3 dB over its beam's background).
-
-    Parameters
-    ----------
-    tonal : TonalTrack or None
-        The target's line.
-    stages : PassiveStages
-        Its settings' ``max_sigma_freq_hz``.
-
-    Returns
-    -------
-    TonalTrack or None
-        ``tonal``, or None when there is none or its frequency noise exceeds the gate.
-    """
-    if tonal is None or tonal.sigma_hz > stages.settings.max_sigma_freq_hz:
-        return None
-    return tonal
-
-
-def jackknife_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float,
-                      beamwidth_deg: float) -> TmaResult:
-    """A determined bearings-only ML solution checked by the delete-a-block jackknife of its side decision and final
-    state (tma/sides.py :func:`~sonartrack.tma.sides.side_jackknife`: ten equal stretches of the record's time).
-
-    The range is not determined when leaving out one block
-
-    * leaves the side undecided or decides the other one (reason "side unresolved"): the decision rests on it;
-    * or shows that the block is not this target's (reason :data:`~sonartrack.tma.verdict.NOT_ONE_TARGET`): the
-      rest of the record predicts its bearings more than a beamwidth away (rms) and more than 3 of the
-      prediction's own standard deviations. Two sources a beamwidth apart are resolved as two by the array (the
-      Rayleigh limit), so bearings that far from one constant-velocity target's track are another ship's, or
-      the mirror's after an axis crossing the record missed.
-
-    Otherwise, when the jackknife covariance P_J of the final position is larger than P allows (a chi-square test
-    at 1e-3, :func:`_jackknife_widened`), the covariance is widened to cover it: multiplied by lambda = the largest
-    eigenvalue of P^-1 P_J (2 x 2 position blocks at the last time), so that P lambda - P_J is positive
-    semi-definite; the range is then not determined (reason "inconsistent residuals")
-    when its standard deviation reaches the range. The white-noise covariance, even inflated by the residuals'
-    lag-1 correlation and scale (:func:`determination_checked`), misses errors correlated over tens of scans, a bias
-    over part of the record and another ship's bearings (passive-chain study: 16 of 61 determined solutions more
-    than 5 of their sds off); the jackknife sees them as far as they move the estimate.
-
-    Parameters
-    ----------
-    result : TmaResult
-        The bearings-only ML solution of the decided side's bearings.
-    side : SideDecision
-        The side decision on the same record (both fits).
-    record : tuple of ndarray
-        (times s, starboard bearings rad, port bearings rad, array centre (n, 2) m) of the record.
-    min_log_lr : float
-        The side decision's threshold on |ln LR|.
-    beamwidth_deg : float
-        The array's broadside beamwidth (deg).
-
-    Returns
-    -------
-    TmaResult
-        ``result`` unchanged when undetermined already, on an undecided side or too short for the jackknife;
-        else with the covariance widened (and a warning), or every row undetermined with the reason.
-    """
-    t = record[0]
-    if not result.solution.range_flags().any() or side.side == "unresolved" or len(t) < 2 * MIN_JACKKNIFE_BEARINGS:
-        return result
-    jk = side_jackknife(*record, side)
-    span = f"of the record's {len(jk.log_lr)} stretches of time"
-    if not jk.stable(side.side, min_log_lr):
-        j = int(np.argmin((1.0 if side.side == "starboard" else -1.0) * np.nan_to_num(jk.log_lr)))
-        return _undetermined(result, SIDE_UNRESOLVED, f"without the {ordinal(j + 1)} {span} the side is not decided "
-                             f"{side.side} (ln LR {jk.log_lr[j]:+.3g}): the decision rests on it")
-    foreign = _foreign_block_note(jk, beamwidth_deg, span, "another source's or the mirror's")
-    if foreign is not None:
-        return _undetermined(result, NOT_ONE_TARGET, foreign)
-    return _jackknife_widened(result, jk.covariance, len(jk.log_lr), span)
-
-
-def endfire_reach_rad(beamwidth_deg: float) -> float:
-    """How far from the array's axis (rad) its endfire beam reaches: arccos(1 - du / 2) for the broadside half-power
-    width du = ``beamwidth_deg`` in rad, the width in u = cos(theta) of every beam (Van Trees, Optimum Array
-    Processing, 2002, sec. 2.4)."""
-    return float(np.arccos(max(1.0 - 0.5 * np.deg2rad(beamwidth_deg), -1.0)))
-
-
-#: |sin theta| below which the noise law sigma_theta = sigma_u / |sin theta| is not followed further
-#: (:func:`line_array_relative_sigma`; 2.9 deg from the axis). Measured on the passive-chain study's peaks (32 trials,
-#: seed 2017, every matched target's cone-angle errors against the truth, 1.4826 MAD): sd_theta |sin theta| is
-#: 0.021-0.041 deg in every band of |sin theta| from 0-0.1 to 0.95-1 (sd_theta 0.64 deg below 0.1, 0.030 deg at
-#: broadside), so the law holds to within a few degrees of the axis; a floor at the endfire beam's reach
-#: (:func:`endfire_reach_rad`, |sin| 0.18-0.32 for the study's 1.8-6 deg beams) understated the noise there ~4 times
-MIN_SIN_CONE = 0.05
-#: smallest sigma_u (rad) the weighted ML may measure (:func:`u_weighted_fit`): 0.02 deg, below every band of the
-#: table above (0.021-0.041 deg in u), so it only keeps a noise-free record finite. The side decision's 0.1 deg floor
-#: (tma/sides.py ``SIGMA_FLOOR_RAD``, a floor on sigma_theta) is 2.5-5 times the measured sigma_u: used for sigma_u it
-#: overstated the ML covariance 6-25 times (passive-chain study: median ML NEES 0.37 against chi-square(4)'s 3.36;
-#: with this floor 0.91, ML ANEES 1.5 -> 2.4, 37 % -> 64 % of the single NEES inside chi2(4) 95 %)
-SIGMA_U_FLOOR_RAD = float(np.deg2rad(0.02))
-
-
-def line_array_relative_sigma(cone_rad, min_sin: float = MIN_SIN_CONE) -> np.ndarray:
-    """Each cone angle's noise relative to broadside: 1 / max(|sin theta|, ``min_sin``).
-
-    A line array measures the direction cosine u = cos(theta) with one noise sigma_u at every steering angle (its
-    beam has one width in u, Van Trees, Optimum Array Processing, 2002, sec. 2.4; the CRB of u, sec. 8.5), so
-    sigma_theta = sigma_u / |sin theta|, floored at :data:`MIN_SIN_CONE` so that a peak on the axis keeps a finite
-    weight. E.g. at 30 deg twice broadside's, at 90 deg 1, at 0 deg 20.
-
-    Parameters
-    ----------
-    cone_rad : ndarray (n,)
-        Cone angles (rad; unfolded angles alike: |sin| is the same for every image through the axis).
-    min_sin : float
-        The floor of |sin theta|.
-
-    Returns
-    -------
-    ndarray (n,)
-        sigma_theta / sigma_u (>= 1).
-    """
-    return 1.0 / np.maximum(np.abs(np.sin(np.asarray(cone_rad, float))), min_sin)
-
-
-def u_weighted_fit(chosen_rad, time_s, sensor_xy, relative_sigma, start) -> tuple[object, float] | None:
-    """The decided side's constant-velocity ML with each bearing weighted by the line array's noise law
-    (:func:`line_array_relative_sigma`): min sum_n (wrap(z_n - h_n(x)) / r_n)^2 (paper P3, eq. 4, with per-bearing
-    sigma_n = sigma_u r_n), started from the side decision's equal-weight fit. sigma_u^2 = J / (n - 4), the
-    unbiased estimate from the weighted residuals (as the side decision measures sigma, tma/sides.py), floored at
-    :data:`SIGMA_U_FLOOR_RAD` (a floor in u, not the side decision's floor in bearing); the covariance is
-    (H^T W H)^-1 sigma_u^2.
-
-    Parameters
-    ----------
-    chosen_rad, time_s : ndarray (n,)
-        The decided side's true bearings (rad) and their times (s).
-    sensor_xy : ndarray (n, 2)
-        The array centre (m).
-    relative_sigma : ndarray (n,)
-        r_n, each bearing's noise relative to sigma_u.
-    start : BatchEstimate
-        The side decision's fit of the same record.
-
-    Returns
-    -------
-    (BatchEstimate, float) or None
-        The fit (covariance scaled by sigma_u^2) and sigma_u (rad); None when the fit fails.
-    """
-    from sonartrack.tma.batch_ml import ml_bearings_only
-
-    t = np.asarray(time_s, float)
-    try:
-        with np.errstate(invalid="ignore", over="ignore"):
-            est = ml_bearings_only(chosen_rad, t, sensor_xy, relative_sigma, x_init=start.x0, check=False)
-    except (InputError, np.linalg.LinAlgError, FloatingPointError):
-        return None
-    if not (np.isfinite(est.objective) and np.all(np.isfinite(est.x0))):
-        return None
-    sigma_u = max(float(np.sqrt(est.objective / max(len(t) - 4, 1))), SIGMA_U_FLOOR_RAD)
-    return replace(est, covariance=np.asarray(est.covariance) * sigma_u**2), sigma_u
-
-
-def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float, beamwidth_deg: float
-                 ) -> TmaResult:
-    """A determined ML solution of a track that comes within the endfire beam of the array's axis, checked against a
-    crossing of the axis there that the record does not show.
-
-    Within a beam of endfire (:func:`endfire_reach_rad`) the peaks of a ship crossing the axis stop short of it
-    (clipped at the steering grid's end), so neither the tracker nor the side decision need see the crossing
-    (tma/sides.py :func:`~sonartrack.tma.sides.axis_end_stretches`). Two tests; the range is not determined
-    (reason "side unresolved") when either finds the solution resting on a side the record does not decide:
-
-    * a track that begins or ends that near the axis: the side of those scans is decided by nothing (the motion
-      after a crossing is not in the record). They are left out and the decided side refitted
-      (:func:`~sonartrack.tma.sides.fit_cv_target`, covariance scaled by the side decision's sigma^2), what both
-      hypotheses share; the solution must agree with it;
-    * a crossing at a scan near the axis (:func:`~sonartrack.tma.sides.crossing_alternative`, the bearings weighted
-      by the line array's noise law sigma_u / sin(theta)) that the record does not reject (ln LR of the decided
-      side over it below ``min_log_lr``, the side decision's own threshold) must place the target where the
-      solution does; one that the record decides over the side taken (ln LR at or below ``-min_log_lr``) leaves
-      the range not determined wherever it places the target.
-
-    Agreement: the difference of the final positions within the 99.9 % point of chi-square(2) in the summed
-    covariance (P + P_other, which bounds the covariance of the difference of two estimates from one record).
-
-    Parameters
-    ----------
-    result : TmaResult
-        The ML solution of the decided side's bearings.
-    side : SideDecision
-        The side decision (its sigma).
-    record : tuple of ndarray
-        (times s, decided side's bearings rad, mirror's bearings rad, array centre (n, 2) m, cone angles rad).
-    min_log_lr : float
-        The side decision's threshold on |ln LR|.
-    beamwidth_deg : float
-        The array's broadside beamwidth (deg).
-
-    Returns
-    -------
-    TmaResult
-        ``result``, or every row undetermined with the reason as a warning.
-    """
-    t, chosen, other, xy, cone = record
-    if not result.solution.range_flags().any() or side.side == "unresolved":
-        return result
-    reach = endfire_reach_rad(beamwidth_deg)
-    note = _end_stretch_note(result, side, (t, chosen, xy, cone), reach)
-    if note is None:
-        alt = crossing_alternative(t, chosen, other, xy, cone, near_axis_times(t, cone, reach), reach)
-        if alt is not None and alt.log_lr < min_log_lr:
-            d, m2 = _elsewhere(result, alt.fit, t[-1], alt.sigma_u)
-            # not (m2 <= q): a crossing the record does not reject and whose place cannot be computed decides nothing
-            if not m2 <= chi2_quantile(1.0 - RESIDUAL_ALPHA, 2) or alt.log_lr <= -min_log_lr:
-                note = (f"within a beam of the array's axis at {alt.time_s - t[0]:.0f} s into the track the target may "
-                        f"have crossed it (ln LR {alt.log_lr:+.3g} of the side taken over that crossing), which places "
-                        f"it {np.hypot(*d):.0f} m elsewhere ({np.sqrt(m2):.3g} sd): the side after it is not decided")
-    return result if note is None else _undetermined(result, SIDE_UNRESOLVED, note)
-
-
-def _elsewhere(result: TmaResult, fit, t_end: float, sigma_rad: float) -> tuple[np.ndarray, float]:
-    """(position difference m, its squared Mahalanobis distance in P + P_fit) of a unit-noise CV fit scaled by
-    sigma^2 against the solution's final row (:func:`axis_checked`)."""
-    x, p = fit.state_at(t_end)
-    return position_gap(x[0], p[0] * sigma_rad**2, result.solution.state[-1], result.solution.covariance[-1])
-
-
-def _end_stretch_note(result: TmaResult, side: SideDecision, record, reach_rad: float) -> str | None:
-    """Why the solution rests on a stretch near the axis at the record's start or end, or None
-    (:func:`axis_checked`, first test)."""
-    t, chosen, xy, cone = record
-    for near in axis_end_stretches(cone, reach_rad):
-        keep = ~near
-        if keep.sum() < 2 * MIN_JACKKNIFE_BEARINGS:
-            continue
-        fit = fit_cv_target(chosen[keep], t[keep], xy[keep])
-        if fit is None:
-            continue
-        d, m2 = _elsewhere(result, fit, t[-1], side.sigma_bearing_rad)
-        if m2 > chi2_quantile(1.0 - RESIDUAL_ALPHA, 2):
-            return (f"the track {'ends' if near[-1] else 'begins'} within a beam of the array's axis "
-                    f"({int(near.sum())} scans), where it may have crossed unseen: without those scans the target "
-                    f"is {np.hypot(*d):.0f} m elsewhere ({np.sqrt(m2):.3g} sd)")
-    return None
-
-
-def _foreign_block_note(jk, beamwidth_deg: float, span: str, whose: str) -> str | None:
-    """Why the block of a jackknife (tma/sides.py :class:`~sonartrack.tma.sides.SideJackknife`) that the rest of the
-    record predicts worst is not this target's, or None (:meth:`~sonartrack.tma.sides.SideJackknife.foreign_block`
-    with the beamwidth)."""
-    j = jk.foreign_block(float(np.deg2rad(beamwidth_deg)))
-    if j is None:
-        return None
-    return (f"the rest of the record predicts the bearings of the {ordinal(j + 1)} {span} "
-            f"{np.rad2deg(jk.block_rms_rad[j]):.3g} deg away (rms; the prediction's sd "
-            f"{np.rad2deg(jk.block_sd_rad[j]):.2g} deg), more than a beamwidth ({beamwidth_deg:.2g} deg): they are "
-            f"{whose}")
-
-
-def _jackknife_widened(result: TmaResult, p_jack, blocks: int, span: str) -> TmaResult:
-    """``result`` with its covariance multiplied by lambda, the largest eigenvalue of P^-1 P_J (final position), when
-    the jackknife's spread exceeds what P allows, and undetermined when the range's sd then reaches the range
-    (:func:`jackknife_checked`). The test: for g independent Gaussian blocks of covariance g P the delete-a-block
-    jackknife covariance P_J is their sample covariance over g, so (g - 1) P^-1 P_J is Wishart with g - 1 degrees of
-    freedom and (g - 1) tr(P^-1 P_J) ~ chi-square(2 (g - 1)) (Shao & Tu, The Jackknife and Bootstrap, 1995, sec.
-    2.1); P is widened only above its upper :data:`~sonartrack.systems.passive.checks.RESIDUAL_ALPHA` point, as the
-    residual test inflates only when it fails (a clean record keeps its white-noise covariance)."""
-    P = np.asarray(result.solution.covariance, float)
-    ratio = np.linalg.solve(P[-1, :2, :2], p_jack[:2, :2])
-    if not (blocks - 1) * float(np.trace(ratio)) > chi2_quantile(1.0 - RESIDUAL_ALPHA, 2 * (blocks - 1)):
-        return result
-    lam = float(np.max(np.linalg.eigvals(ratio).real))
-    result = replace(result, solution=replace(result.solution, covariance=P * lam), warnings=result.warnings + (
-        f"block jackknife: covariance widened by {lam:.3g} to cover the spread of the final position with each "
-        f"{span} left out",))
-    cols = solution_columns(result.solution, result.ownship)
-    if not cols["range_std_m"][-1] < cols["range_m"][-1]:
-        return _undetermined(result, INCONSISTENT_RESIDUALS, f"widened by {lam:.3g} by the block jackknife, the "
-                             "range's standard deviation exceeds the range")
-    return result
-
-
-#: a record needs this many bearings per half for the jackknife (:func:`jackknife_checked`)
-MIN_JACKKNIFE_BEARINGS = 10
-
-
-def ordinal(k: int) -> str:
-    """1 -> "1st", 2 -> "2nd", 3 -> "3rd", 4 -> "4th" ... (k up to 20)."""
-    return f"{k}{ {1: 'st', 2: 'nd', 3: 'rd'}.get(k, 'th')}"
-
-
-def side_checked(result: TmaResult, side: SideDecision, resolved_s: float, *, causal: bool) -> TmaResult:
-    """A solution's rows whose array side is not decided made undetermined (reason "side unresolved").
-
-    Parameters
-    ----------
-    result : TmaResult
-        A solution on the chosen side's bearings.
-    side : SideDecision
-        The side decision (``side_at``: "unresolved" everywhere when it was never decided).
-    resolved_s : float
-        First time from which the decision held (:func:`side_resolved_time`; NaN if never).
-    causal : bool
-        The solution at a time uses the bearings up to then only (a sequential filter): its rows before
-        ``resolved_s`` were computed on a side the data had not decided yet, and are undetermined too.
-
-    Returns
-    -------
-    TmaResult
-        ``result`` with those rows undetermined.
-    """
-    t = np.asarray(result.solution.time_s, float)
-    open_side = side.side_at(t) == "unresolved"
-    if causal:
-        open_side |= ~(t >= resolved_s)
-    if not open_side.any():
-        return result
-    reasons = np.where(open_side, SIDE_UNRESOLVED, "").astype(object)
-    return replace(result, solution=with_reasons(result.solution, reasons))
-
-
-def without_neighbour_scans(m: TrackMeasurements, neighbours, min_separation_deg: float
-                            ) -> tuple[TrackMeasurements, str | None]:
-    """The track's measurements without the scans at which another track lies within ``min_separation_deg``.
-
-    Where two ships share a beam each one's peak is pulled towards the other (by up to a degree near a crossing):
-    a bias, not noise, which the white-noise ML would take as information. The other tracks' filtered cone
-    angles (``track_cone_deg``, at every scan they lived, also where they had no peak) are compared with this
-    track's measured cone angles; those scans are left out when at least 10 scans remain.
-
-    Parameters
-    ----------
-    m : TrackMeasurements
-        The track's raw peaks.
-    neighbours : sequence of TrackMeasurements
-        The other confirmed tracks (this one, by its track id, is skipped).
-    min_separation_deg : float
-        About a beamwidth (deg).
-
-    Returns
-    -------
-    TrackMeasurements
-        ``m`` without those scans (its filtered track kept whole).
-    str or None
-        What was left out, or None when nothing was.
-    """
-    t = np.asarray(m.time_s, float)
-    close = np.zeros(len(t), bool)
-    ids = []
-    for other in neighbours:
-        if other.track_id == m.track_id or len(other.track_time_s) == 0:
-            continue
-        tt = np.asarray(other.track_time_s, float)
-        alive = (t >= tt[0]) & (t <= tt[-1])
-        near = alive & (np.abs(np.interp(t, tt, np.asarray(other.track_cone_deg, float)) - m.cone_deg)
-                        < min_separation_deg)
-        if near.any():
-            close |= near
-            ids.append(other.track_id)
-    if not close.any() or int((~close).sum()) < 10:
-        return m, None
-    keep = ~close
-    reduced = replace(m, time_s=m.time_s[keep], cone_deg=m.cone_deg[keep], amplitude=m.amplitude[keep],
-                      unfolded_deg=None if m.unfolded_deg is None else m.unfolded_deg[keep])
-    return reduced, (f"{int(close.sum())} scan(s) left out of the TMA: track(s) {', '.join(map(str, ids))} within "
-                     f"{min_separation_deg:.2g} deg (one beam)")
 
 
 def solve_target(target_id: int, m: TrackMeasurements, tonal: TonalTrack | None, nav: Navigation,
@@ -729,86 +303,6 @@ def _noise_law_fit(chosen, t, xy, cone, fit, sigma_bearing_rad: float):
         return fit, sigma_bearing_rad, np.ones(len(t))
     (fit, sigma_ml), rel = weighted, law
     return fit, sigma_ml, rel
-
-
-#: fewest bearings for the fixed-cone test (:func:`fixed_cone_note`): the CV fit's 4 parameters and 2 dof left
-MIN_FIXED_CONE_POINTS = 6
-
-
-def fixed_cone_cost(cone_rad, relative_sigma) -> float:
-    """J_0 = min_c sum_n ((theta_n - c) / r_n)^2: the weighted cost of one cone angle c fixed in the array's frame,
-    in the units of the line array's noise law (:func:`line_array_relative_sigma`, r_n; the residual of the bearing
-    h_n +- c is +-(theta_n - c), so this is the bearing cost of :func:`u_weighted_fit` for that model). Quadratic in
-    c: c is the weighted mean of theta_n with weights 1 / r_n^2 (unfolded cone angles alike; a track through
-    endfire has no one cone angle and costs much)."""
-    theta = np.asarray(cone_rad, float)
-    w = 1.0 / np.asarray(relative_sigma, float) ** 2 * np.ones_like(theta)
-    c = float(np.sum(w * theta) / np.sum(w))
-    return float(np.sum(w * (theta - c) ** 2))
-
-
-def fixed_cone_f(j0: float, j_cv: float, n: int, alpha: float = RESIDUAL_ALPHA) -> tuple[float, float]:
-    """(F, its critical value at ``1 - alpha``) of the extra sum of squares of the CV target's 3 more parameters
-    over one fixed cone angle (Bates & Watts, Nonlinear Regression Analysis and Its Applications, 1988, sec. 3.10;
-    the form of systems/passive/narrowband.py's join test):
-
-        F = ((J_0 - J_cv) / 3) / (s2 = max(J_cv / (n - 4), sigma_u floor^2))   ~   F(3, n - 4)
-
-    with J the weighted costs of :func:`fixed_cone_cost` and of the CV ML, s2 as :func:`u_weighted_fit` measures
-    sigma_u^2. F below the critical value (also negative: the fixed cone fits better; or NaN): the CV target is not
-    needed to explain the bearings."""
-    from scipy.special import fdtri  # the F quantile without scipy.stats' import cost
-
-    s2 = max(j_cv / (n - 4), SIGMA_U_FLOOR_RAD**2)
-    return (j0 - j_cv) / 3.0 / s2, float(fdtri(3, n - 4, 1.0 - alpha))
-
-
-def fixed_cone_note(bearings_ml: TmaResult, cone_rad, relative_sigma) -> str | None:
-    """Why a track's bearings give no range because one cone angle fixed in the array's frame explains them as well
-    as the CV target does, or None (:func:`solve_target` then reports every row of its ML undetermined, reason
-    :data:`~sonartrack.tma.verdict.FIXED_CONE`, and fits no bearings + frequency ML).
-
-    A source moving with the array (own-ship or array self-noise, a towed body, an artefact of the processing) keeps
-    its cone angle whatever the array does, and a source at any range along that cone gives the same cone angles:
-    the bearings hold no range however the array turns (the maneuver that makes a CV target observable, Nardone &
-    Aidala 1981, moves this source with it). The CV ML still fits it, as a target near the array moving with it, and
-    its covariance states a range. The test (:func:`fixed_cone_f`): the CV fit's 3 more parameters must lower the
-    weighted cost of the bearings significantly (F at 1 - :data:`RESIDUAL_ALPHA`) below that of one fixed cone
-    angle (:func:`fixed_cone_cost`), both with the line array's noise law (``relative_sigma``). On a straight leg the
-    fixed cone is a CV target moving with the array (the models are nested); through a turn it is not, and a fixed
-    cone fitting better than the CV target (F < 0) says the same. Made whatever the ML's own verdict, since a
-    bearings + frequency ML would be fitted next: a source moving with the array has no Doppler, its line's
-    frequency is its own, whatever it does, and holds no range either.
-
-    Parameters
-    ----------
-    bearings_ml : TmaResult
-        The bearings-only CV ML of the track's bearings (its weighted cost J_cv).
-    cone_rad : ndarray (n,)
-        The record's cone angles (rad; unfolded through endfire alike).
-    relative_sigma : float or ndarray (n,)
-        Each bearing's noise relative to sigma_u, as the ML weighted it.
-
-    Returns
-    -------
-    str or None
-        The test's line when the fixed cone explains the bearings, else None (also with too few bearings or a CV
-        fit that is not finite).
-    """
-    n = len(np.asarray(cone_rad))
-    if n < MIN_FIXED_CONE_POINTS:
-        return None
-    _, z, own, at_t = _fit_at_bearings(bearings_ml)
-    e = wrap_angle(z - np.arctan2(at_t[:, 0] - own[:, 0], at_t[:, 1] - own[:, 1])) / relative_sigma
-    j_cv = float(np.sum(e**2))
-    if not np.isfinite(j_cv):
-        return None
-    f, critical = fixed_cone_f(fixed_cone_cost(cone_rad, relative_sigma), j_cv, n)
-    if f >= critical:
-        return None
-    return (f"one cone angle fixed to the array explains the {n} bearings as well as the CV target (F = {f:.3g} < "
-            f"{critical:.3g}, the {1 - RESIDUAL_ALPHA:.3g} point of F(3, {n - 4})): a source moving with the array, "
-            "at any range along its cone")
 
 
 def _imm_tonal(t, chosen, tonal: TonalTrack | None, stages: PassiveStages) -> TonalTrack | None:
