@@ -56,7 +56,9 @@ def test_readme_live_lines_show_the_ships(tmp_path):
     recorder = _start(recorder_line, tmp_path)
     console = None
     try:
-        assert "waiting for the live side" in recorder.stdout.readline()
+        line = recorder.stdout.readline()
+        failed = recorder.stderr.read() if recorder.poll() is not None else ""
+        assert "waiting for the live side" in line, (line, failed)
         console = _start(console_line, tmp_path)
         client = _wait_console("http://127.0.0.1:8765/", console)
         ships = client.wait(lambda ms: len(_ships(ms)) >= 2 and _ships(ms), 120)
