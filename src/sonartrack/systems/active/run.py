@@ -149,7 +149,7 @@ class ContactTracker:
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
-                 turns=None, clutter_map=None):
+                 turns=None, clutter_map=None, scan_interval_s: float | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -157,6 +157,12 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.tracker = position_tracker(settings, turns=turns)
+        if settings.false_tracks_per_h is not None:  # confirmation at the stated rate (tracking/existence.py)
+            from sonartrack.tracking.deleters import RateConfirmation
+
+            require(scan_interval_s is not None, "false_tracks_per_h needs the ping interval: give more than one ping")
+            self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
+                                                    settings.initial_existence, settings.terminate_threshold)
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
@@ -320,7 +326,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
                              numbers)
     trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
                          rate_sd_mps, settings.side_turn_deg, settings.merge_probability,
-                         turns=settings.turn_modes() if tracker is None else None, clutter_map=clutter_map_of(settings))
+                         turns=settings.turn_modes() if tracker is None else None, clutter_map=clutter_map_of(settings),
+                         scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -441,7 +448,8 @@ class _Chain:
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, turns=s.turn_modes(),
-                                      clutter_map=clutter_map_of(s))
+                                      clutter_map=clutter_map_of(s),
+                                      scan_interval_s=ping_interval(self.table, s) if len(self.table) > 1 else None)
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its

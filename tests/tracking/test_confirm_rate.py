@@ -1,0 +1,49 @@
+"""Confirmation at a stated false-track rate (tracking/existence.py confirm_threshold_for_rate, deleters.py
+RateConfirmation): the rule's closed form by hand, and the rate it states kept on clutter-only scans drawn here
+from the tracker's own clutter model (uniform Poisson points), where Ville's bound is exact."""
+
+import numpy as np
+import pytest
+
+from sonartrack.tracking.configurations import position_tracker
+from sonartrack.tracking.deleters import RateConfirmation
+from sonartrack.tracking.existence import confirm_threshold_for_rate
+from sonartrack.tracking.settings import PositionTrackerSettings
+
+
+def test_threshold_by_hand():
+    # 10 tracks started a scan, P0 = 0.05 (odds 1/19), stated 0.01 a scan: O_c = 10 / 19 / 0.01 = 52.6
+    assert confirm_threshold_for_rate(0.01, 10.0, 0.05) == pytest.approx(52.63158 / 53.63158, rel=1e-6)
+    # fewer tracks started than the stated rate: even confirming all keeps it, the threshold is P0
+    assert confirm_threshold_for_rate(5.0, 1.0, 0.05) == pytest.approx(0.05)
+    # more started, or a lower rate: a higher threshold
+    assert confirm_threshold_for_rate(0.01, 20.0, 0.05) > confirm_threshold_for_rate(0.01, 10.0, 0.05)
+
+
+def clutter_run(stated_per_h: float, scans: int = 240, seed: int = 7) -> tuple[int, int, float]:
+    """(false tracks confirmed, tracks started, threshold at the end) on clutter-only scans 30 s apart."""
+    s = PositionTrackerSettings(q=[1e-4], clutter_density_per_m2=2e-7, pd=0.7, confirm_threshold=0.9,
+                                initial_existence=0.05)
+    trk = position_tracker(s)
+    rule = RateConfirmation(stated_per_h, 30.0, s.initial_existence, s.terminate_threshold)
+    trk.deleter = rule
+    rng = np.random.default_rng(seed)
+    side = 6000.0
+    R = np.diag([60.0**2, 60.0**2])
+    confirmed: set[int] = set()
+    for k in range(scans):
+        m = rng.poisson(s.clutter_density_per_m2 * side**2)
+        snap = trk.step(30.0 * k, rng.uniform(0, side, (m, 2)), np.repeat(R[None], m, axis=0))
+        confirmed |= set(snap.track_id[snap.confirmed].tolist())
+    return len(confirmed), rule.started, rule.confirm_threshold
+
+
+def test_stated_rate_is_kept_on_the_clutter_model():
+    from scipy.stats import poisson
+
+    hours = 240 * 30.0 / 3600.0
+    for stated in (10.0, 2.0):
+        n_false, started, thr = clutter_run(stated)
+        assert started > 500 and 0.5 < thr < 1.0
+        # the count must not exceed what the stated rate allows, beyond chance (Poisson 99.9 % point)
+        assert n_false <= poisson.ppf(0.999, stated * hours), (stated, n_false, thr)
