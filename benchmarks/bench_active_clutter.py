@@ -109,11 +109,15 @@ def acquisition_delay(result, truth: list[dict], gate_m: float = 500.0) -> int |
     return None
 
 
+#: settings changed from the defaults for a run (``--false-tracks-per-h``: tracker confirmation at a stated rate)
+OVERRIDES: dict = {}
+
+
 def chain_settings():
-    """The chain's default settings (the code measured is the one on the path: module doc)."""
+    """The chain's default settings (the code measured is the one on the path: module doc), with ``OVERRIDES``."""
     from sonartrack.systems.active.settings import ActiveSettings
 
-    return ActiveSettings(spacing_m=0.5)
+    return ActiveSettings(spacing_m=0.5, **OVERRIDES)
 
 
 def measure_false(models, hours: float, which: str, seed0: int = 3400) -> dict:
@@ -151,7 +155,11 @@ def main() -> None:
     ap.add_argument("--label", default="new")
     ap.add_argument("--models", default="all")
     ap.add_argument("--acq-runs", type=int, default=10)
+    ap.add_argument("--false-tracks-per-h", type=float, default=None,
+                    help="confirm at this stated false-track rate (tracker setting false_tracks_per_h)")
     a = ap.parse_args()
+    if a.false_tracks_per_h is not None:
+        OVERRIDES["tracker"] = {"false_tracks_per_h": a.false_tracks_per_h}
     models = list(MODELS) if a.models == "all" else a.models.split(",")
     for which in [a.label]:
         print(f"false confirmed tracks, reverberation only ({which} chain):")
