@@ -59,7 +59,8 @@ def test_stated_rate_is_kept_on_the_clutter_model():
 
 
 def test_a_target_seen_every_scan_is_confirmed_within_five_scans_at_one_false_track_an_hour():
-    # the rule's threshold here (~8 tracks started a scan, 1 an hour stated): odds 8 x (1/19) / (30 / 3600) = 51
-    _, _, thr, at = clutter_run(1.0, scans=20, target_from=12)
-    assert 0.97 < thr < 0.99
+    # the rule's threshold here (~4.5 tracks started a scan, 1 an hour stated): odds 4.5 x (1/19) / (30 / 3600) = 28
+    _, started, thr, at = clutter_run(1.0, scans=20, target_from=12)
+    assert thr == pytest.approx(confirm_threshold_for_rate(30.0 / 3600.0, started / 20, 0.05))
+    assert 0.95 < thr < 0.99
     assert at is not None and at <= 5
