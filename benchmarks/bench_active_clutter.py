@@ -167,7 +167,8 @@ def main() -> None:
     ap.add_argument("--clutter-map", default=None, help="PINGS,HITS: the clutter map on (clutter_map_pings, _hits)")
     a = ap.parse_args()
     if a.clutter_map:
-        OVERRIDES.update(zip(("clutter_map_pings", "clutter_map_hits"), map(int, a.clutter_map.split(",")), strict=True)))
+        pings, hits = map(int, a.clutter_map.split(","))
+        OVERRIDES.update(clutter_map_pings=pings, clutter_map_hits=hits)
     if a.false_tracks_per_h is not None:
         OVERRIDES["tracker"] = {"false_tracks_per_h": a.false_tracks_per_h}
     models = list(MODELS) if a.models == "all" else a.models.split(",")
