@@ -164,11 +164,15 @@ def main() -> None:
     ap.add_argument("--acq-runs", type=int, default=10)
     ap.add_argument("--false-tracks-per-h", type=float, default=None,
                     help="confirm at this stated false-track rate (tracker setting false_tracks_per_h)")
+    ap.add_argument("--strong-pfa", type=float, default=None, help="mftd_strong_pfa: strong single-ping detections "
+                    "join the MFTD's")
     ap.add_argument("--clutter-map", default=None, help="PINGS,HITS: the clutter map on (clutter_map_pings, _hits)")
     a = ap.parse_args()
     if a.clutter_map:
         pings, hits = map(int, a.clutter_map.split(","))
         OVERRIDES.update(clutter_map_pings=pings, clutter_map_hits=hits)
+    if a.strong_pfa is not None:
+        OVERRIDES["mftd_strong_pfa"] = a.strong_pfa
     if a.false_tracks_per_h is not None:
         OVERRIDES["tracker"] = {"false_tracks_per_h": a.false_tracks_per_h}
     models = list(MODELS) if a.models == "all" else a.models.split(",")

@@ -422,6 +422,9 @@ class _Chain:
         self.front_end = s.front_end_settings()
         self.cw = len(ping_table) > 0 and ping_table.waveform(0).kind == "cw"
         self.threshold = cw_threshold(s.pfa, s.cw) if self.cw else detection_threshold(self.front_end)
+        strong = s.mftd_strong_pfa
+        self.strong = None if strong is None else (cw_threshold(strong, s.cw) if self.cw else detection_threshold(
+            self.front_end.model_copy(update={"pfa": strong})))
         self.period = ping_interval(ping_table, s) if s.detector == "mftd" else None
         check_spacing(s, ping_table)
         check_memory(s, ping_table, self.period)
@@ -484,6 +487,8 @@ class _Chain:
         if self.mftd is not None:
             det = tm.run("mftd", self.mftd.push, cells)
             self.multi.append(det)
+            if self.strong is not None:
+                det = with_strong(det, single, self.strong, float(np.median(np.diff(self.axes.travel_time_s))))
         self.bscan.append(tm.run("b-scan", _bscan_row, cells.statistic, s.bscan_bins))
         c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
                    self.beam_step, [number])
@@ -513,6 +518,25 @@ class _Chain:
         if self.mftd is not None:
             out["mftd"] = float(self.mftd.threshold(self.mftd.settings.frames))
         return out
+
+
+def with_strong(mftd: Detections, single: Detections, threshold: float, delay_step_s: float) -> Detections:
+    """The MFTD's detections of a ping and the single-ping ones at least ``threshold`` strong that no MFTD detection
+    already holds (not within one beam and 3 delay cells of one): a target entering the window echoes strongly on
+    its first ping, while the MFTD's K-ping stack holds it on one frame of K (measured: its first MFTD contact on its
+    3rd ping at 15 dB)."""
+    from sonartrack.detection.ping_mftd import concat_detections
+
+    strong = np.asarray(single.statistic) >= threshold
+    if len(mftd) and strong.any():
+        near = (np.abs(single.beam[:, None] - mftd.beam[None, :]) <= 1) & (
+            np.abs(single.travel_time_s[:, None] - mftd.travel_time_s[None, :]) <= 3 * delay_step_s)
+        strong &= ~near.any(axis=1)
+    if not strong.any():
+        return mftd
+    idx = np.nonzero(strong)[0]
+    return concat_detections([mftd, type(single)(*(np.asarray(getattr(single, f))[idx] for f in
+                                                   single.__dataclass_fields__))])
 
 
 def run_active(pings: Iterable[tuple[int, float, np.ndarray]], ping_table, nav, settings: ActiveSettings, *,
