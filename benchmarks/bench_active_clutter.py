@@ -15,11 +15,16 @@ before issue 34 first on the path (``git archive 9db87d5 src | tar -x -C /tmp/ba
     PYTHONPATH=src python benchmarks/bench_active_clutter.py [--hours 1] [--label new] [--models all]
         [--false-tracks-per-h F]   # confirmation at a stated rate (tracking/existence.py) instead of 0.99
 
-Measured (2026-12-07, shared machine, 0.5 h per model, seeds as here): with --false-tracks-per-h 1, K 1 + blast +
-6 clutter points 17 confirmed = 34/h [20, 54] (0.99: 28 [15, 47]): the still points are real echoes, which the rule
-cannot call false (the clutter map's job). Acquisition of a 15 dB steady target on K 1 (seeds 3500, 3501): 8 and 8
-pings at 0.99, 6 and 6 with the rule; the MFTD's first contact comes on the target's 3rd ping (single-ping
-detections: its 1st, confirmed at its 5th), the existence then grows 0.05, 0.15, 0.4, 0.8, 0.97, 0.99 a ping.
+Measured (2026-12-07, shared machine, 0.5 h per model, seeds as here; false confirmed tracks/h [95 %]):
+    confirmation 0.99 (the default; h-clutter's runs): Rayleigh, K: 0 [0, 7.4]; K 1 + blast + points 28 [15, 47]
+    --false-tracks-per-h 1: rayleigh+blast 0 [0, 7.4], K 0.5 0 [0, 7.4], K 1 + blast + points 34 [20, 54]
+        (+ --clutter-map 8,3: 8 [2.2, 20]): the still points are real echoes, which the rule cannot call false
+    --false-tracks-per-h 1 --strong-pfa 1e-6: Rayleigh, K 1, K 0.5: 0 [0, 7.4] each
+Acquisition of a 15 dB steady target on K 1 (pings from its first echo to a confirmed track; seeds 3500..):
+    0.99: 8, 8 (runs 0, 1); the MFTD's first contact comes on the target's 3rd ping, then the existence grows
+    0.05, 0.15, 0.4, 0.8, 0.97, 0.99 a ping; --false-tracks-per-h 1: 6, 6 (threshold ~0.8 here, few tracks start);
+    single-ping detector + rule: 5, 5 (first contact on its 1st ping); rule + --strong-pfa 1e-9: 6, 5; 1e-7: 6, 4;
+    1e-6: 4, 4, 9, 4 (runs 0-3; run 2 lost its 3rd echo)
 """
 
 from __future__ import annotations
