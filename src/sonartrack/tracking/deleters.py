@@ -102,3 +102,72 @@ class MOfNDeleter:
         keep = (misses < self.delete_after) & (T.confirmed | (age < self.confirm_n) | (hits >= self.confirm_m))
         T = replace(T, confirmed=T.confirmed | (hits >= self.confirm_m)).with_attrs(hits=hits, age=age, misses=misses)
         return T.select(keep)
+
+
+class RateConfirmation:
+    """IPDA confirmation at a stated false-track rate: the threshold from the tracks started so far (existence.py
+    :func:`~sonartrack.tracking.existence.confirm_threshold_for_rate`), never below ``floor``; deletion below
+    ``terminate_threshold``. Counts the tracks the initiator starts and the scans (stateful, one per tracker).
+
+    Parameters
+    ----------
+    false_tracks_per_h : float
+        Stated false confirmed tracks per hour.
+    scan_interval_s : float
+        Time between scans (s): turns the rate per hour into one per scan.
+    initial_existence : float
+        Existence of a new track.
+    terminate_threshold : float
+        A track whose existence falls below this is deleted.
+    floor : float
+        Lowest threshold whatever the count (0: the rule alone).
+    """
+
+    def __init__(self, false_tracks_per_h: float, scan_interval_s: float, initial_existence: float,
+                 terminate_threshold: float, floor: float = 0.0):
+        self.false_per_scan = float(false_tracks_per_h) * float(scan_interval_s) / 3600.0
+        self.initial_existence, self.terminate_threshold, self.floor = initial_existence, terminate_threshold, floor
+        self.started, self.scans = 0, 0
+
+    @property
+    def confirm_threshold(self) -> float:
+        """The threshold now: tracks started per scan so far (at least one scan counted) into the rule."""
+        from sonartrack.tracking.existence import confirm_threshold_for_rate
+
+        rule = confirm_threshold_for_rate(self.false_per_scan, self.started / max(self.scans, 1),
+                                          self.initial_existence)
+        return max(float(rule), self.floor)
+
+    def new_track_attrs(self, k: int) -> dict:
+        """Count the ``k`` tracks started this scan (called once a scan); no per-track counters.
+
+        Parameters
+        ----------
+        k : int
+            Number of new tracks.
+
+        Returns
+        -------
+        dict
+            Empty.
+        """
+        self.started += int(k)
+        self.scans += 1
+        return {}
+
+    def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`).
+
+        Parameters
+        ----------
+        T : TrackArrays
+            Tracks after the update.
+        hit : ndarray of bool, shape (n,)
+            Unused.
+
+        Returns
+        -------
+        TrackArrays
+            The kept tracks, with their confirmation flags.
+        """
+        return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold).manage(T, hit)

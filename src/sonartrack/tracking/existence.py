@@ -54,3 +54,41 @@ class IpdaExistence:
             Posterior existence probabilities.
         """
         return existence_update(existence_pred, np.exp(log_lambda_total))
+
+
+def confirm_threshold_for_rate(false_tracks_per_scan, tracks_started_per_scan, initial_existence):
+    """Existence threshold whose false confirmed tracks stay below a stated rate (Ville's inequality on IPDA's odds).
+
+    IPDA's existence is a posterior (Musicki, Evans, Stankovic 1994, eq. 29): with p11 = 1 and p21 = 0 its odds
+    after k scans are O_k = O_0 prod_j Lambda_j, and prod_j Lambda_j = p(Z^k | E) / p(Z^k | not E) is the
+    likelihood ratio of the track's measurements, a non-negative martingale of mean 1 on a track with no target
+    when the clutter model is right. Ville's inequality bounds the chance that it ever reaches a level a:
+    P(sup_k prod Lambda >= a) <= 1 / a. So a track started on clutter ever reaches the odds O_c with probability
+    at most O_0 / O_c; p11 < 1 only lowers the odds (the prediction shrinks P(E) and the update is increasing in
+    it). With n tracks started per scan, false confirmed tracks per scan are at most n O_0 / O_c; a stated rate f
+    is kept by
+
+        O_c = n O_0 / f,     threshold = O_c / (1 + O_c)
+
+    (Musicki & Evans 2004 discriminate false tracks by this existence probability; they set the threshold by
+    simulation, this sets it from the rate). The bound assumes the tracker's clutter density and detection model:
+    where the clutter is denser or correlated across scans (streaks of MFTD false detections), the measured rate
+    can exceed it (tests/tracking/test_confirm_rate.py measures it on the model; the benchmarks on other worlds).
+
+    Parameters
+    ----------
+    false_tracks_per_scan : float
+        The stated rate f of false confirmed tracks per scan (> 0).
+    tracks_started_per_scan : float or ndarray
+        Tracks started per scan n (measured: the initiator's running mean).
+    initial_existence : float
+        Existence P_0 of a new track (its odds O_0 = P_0 / (1 - P_0)).
+
+    Returns
+    -------
+    float or ndarray
+        The confirmation threshold on the existence probability, at least ``initial_existence``.
+    """
+    odds_0 = initial_existence / (1.0 - initial_existence)
+    odds_c = np.maximum(np.asarray(tracks_started_per_scan, float) * odds_0 / false_tracks_per_scan, odds_0)
+    return odds_c / (1.0 + odds_c)

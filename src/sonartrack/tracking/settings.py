@@ -39,6 +39,11 @@ class PositionTrackerSettings(Settings):
     initial_existence: float = setting(0.05, "existence probability of a new one-point track", unit="1", gt=0, lt=1)
     confirm_threshold: float = setting(0.9, "a track is confirmed when its existence exceeds this", unit="1",
                                        gt=0, le=1)
+    false_tracks_per_h: float | None = setting(
+        None, "stated false confirmed tracks per hour: the confirmation threshold is then set from it and the tracks "
+              "started per scan so far by Ville's inequality on IPDA's existence odds (tracking/existence.py "
+              "confirm_threshold_for_rate), in place of confirm_threshold (not set: confirm_threshold)",
+        unit="1/h", gt=0)
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "

@@ -162,7 +162,7 @@ class ContactTracker:
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
-                 clutter_map=None):
+                 clutter_map=None, scan_interval_s: float | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -177,6 +177,12 @@ class ContactTracker:
             self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
                                                                       m.clutter_density_per_m2, rate_sd_mps,
                                                                       float(max_range_rate_mps))
+        if settings.false_tracks_per_h is not None:  # confirmation at the stated rate (tracking/existence.py)
+            from sonartrack.tracking.deleters import RateConfirmation
+
+            require(scan_interval_s is not None, "false_tracks_per_h needs the ping interval: give more than one ping")
+            self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
+                                                    settings.initial_existence, settings.terminate_threshold)
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
@@ -350,7 +356,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
                          rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps,
                          turns=settings.turn_modes() if tracker is None else None,
                          clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
-                         clutter_map=clutter_map_of(settings))
+                         clutter_map=clutter_map_of(settings),
+                         scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
@@ -445,6 +452,9 @@ class _Chain:
         self.front_end = s.front_end_settings()
         self.cw = len(ping_table) > 0 and ping_table.waveform(0).kind == "cw"
         self.threshold = cw_threshold(s.pfa, s.cw) if self.cw else detection_threshold(self.front_end)
+        strong = s.mftd_strong_pfa
+        self.strong = None if strong is None else (cw_threshold(strong, s.cw) if self.cw else detection_threshold(
+            self.front_end.model_copy(update={"pfa": strong})))
         self.period = ping_interval(ping_table, s) if s.detector == "mftd" else None
         check_spacing(s, ping_table)
         check_memory(s, ping_table, self.period)
@@ -473,7 +483,8 @@ class _Chain:
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
                                       turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
-                                      clutter_map=clutter_map_of(s))
+                                      clutter_map=clutter_map_of(s),
+                                      scan_interval_s=ping_interval(self.table, s) if len(self.table) > 1 else None)
 
     def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
@@ -506,6 +517,8 @@ class _Chain:
         if self.mftd is not None:
             det = tm.run("mftd", self.mftd.push, cells)
             self.multi.append(det)
+            if self.strong is not None:
+                det = with_strong(det, single, self.strong, float(np.median(np.diff(self.axes.travel_time_s))))
         self.bscan.append(tm.run("b-scan", _bscan_row, cells.statistic, s.bscan_bins))
         c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
                    self.beam_step, [number])
@@ -535,6 +548,25 @@ class _Chain:
         if self.mftd is not None:
             out["mftd"] = float(self.mftd.threshold(self.mftd.settings.frames))
         return out
+
+
+def with_strong(mftd: Detections, single: Detections, threshold: float, delay_step_s: float) -> Detections:
+    """The MFTD's detections of a ping and the single-ping ones at least ``threshold`` strong that no MFTD detection
+    already holds (not within one beam and 3 delay cells of one): a target entering the window echoes strongly on
+    its first ping, while the MFTD's K-ping stack holds it on one frame of K (measured: its first MFTD contact on its
+    3rd ping at 15 dB)."""
+    from sonartrack.detection.ping_mftd import concat_detections
+
+    strong = np.asarray(single.statistic) >= threshold
+    if len(mftd) and strong.any():
+        near = (np.abs(single.beam[:, None] - mftd.beam[None, :]) <= 1) & (
+            np.abs(single.travel_time_s[:, None] - mftd.travel_time_s[None, :]) <= 3 * delay_step_s)
+        strong &= ~near.any(axis=1)
+    if not strong.any():
+        return mftd
+    idx = np.nonzero(strong)[0]
+    return concat_detections([mftd, type(single)(*(np.asarray(getattr(single, f))[idx] for f in
+                                                   single.__dataclass_fields__))])
 
 
 def run_active(pings: Iterable[tuple[int, float, np.ndarray]], ping_table, nav, settings: ActiveSettings, *,

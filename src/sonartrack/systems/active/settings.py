@@ -83,6 +83,11 @@ class ActiveSettings(Settings):
               "(the default scene: 3 false tracks an hour at 1e-9 against single-ping's 27 at 1e-5, the targets "
               "held longer)",
         unit="1", gt=0, lt=0.1)
+    mftd_strong_pfa: float | None = setting(
+        None, "single-ping detections above the single-ping threshold of this per-cell false-alarm rate join the "
+              "MFTD's (not within a beam and 3 delay cells of one): a target entering the window is then detected on "
+              "its first ping, not when the MFTD's K-ping stack has filled with it (a 15 dB target: its 3rd ping). "
+              "Not set: the MFTD's detections alone", unit="1", gt=0, lt=0.1)
     detector: Literal["mftd", "single"] = setting(
         "mftd", "detections the tracker gets: mftd = paper P1 across pings, single = one ping's threshold", unit="")
     range_rate_gate_sigma: float | None = setting(
