@@ -94,4 +94,6 @@ def test_stream_options_without_stream_are_refused():
     from sonartrack.cli import main
 
     assert main(["simulate", "--port", "5000", "--out", "unused"]) == 2
-    assert main(["simulate", "--stream", "--kind", "active"]) == 2
+    # (--stream --kind active is a valid stream of pings now: the file-layout options stay refused with --stream)
+    assert main(["simulate", "--stream", "--kind", "active", "--split-s", "60"]) == 2
+    assert main(["simulate", "--stream", "--split-s", "60"]) == 2
