@@ -11,7 +11,9 @@ Equations (Bar-Shalom, Li, Kirubarajan 2001, sec. 10.3.2; the same steps as Filt
               S = H P- H^T + R,        K = P- H^T S^-1
               x+ = x- + K nu,          P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
 
-The mode likelihood used by an IMM is N(nu; 0, S).
+The mode likelihood used by an IMM is N(nu; 0, S). The arguments are named as in filters/kalman.py's module
+docstring (H is the Jacobian dh/dx at x-); ``hx`` is the predicted measurement h(x-) and ``angle_rows`` the
+measurement components that are angles (rad), wrapped to (-pi, pi] in the innovation.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.linalg import symmetrize
+from sonartrack.filters.kalman import joseph_covariance, kf_predict
 
 
 def ekf_predict(x, P, F, Q, b=None):
@@ -27,30 +30,19 @@ def ekf_predict(x, P, F, Q, b=None):
 
     Parameters
     ----------
-    x : ndarray, shape (..., n)
-        State estimate at k-1 (state units, e.g. [x, y, vx, vy] in m and m/s, x east, y north).
-    P : ndarray, shape (..., n, n)
-        Its covariance.
-    F : ndarray, shape (n, n) or (..., n, n)
-        State transition matrix (the Jacobian of a nonlinear motion model at x).
-    Q : ndarray, shape (n, n) or (..., n, n)
-        Process noise covariance over the step.
+    x, P, F, Q : ndarray
+        As :func:`~sonartrack.filters.kalman.kf_predict`; F may be the Jacobian of a nonlinear motion model at x.
     b : ndarray, shape (n,) or (..., n), optional
         Known input term added to the prediction (e.g. minus the observer's displacement in a relative
         state); None for none.
 
     Returns
     -------
-    x_pred : ndarray, shape (..., n)
-        Predicted state.
-    P_pred : ndarray, shape (..., n, n)
-        Predicted covariance, symmetrized.
+    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
+        Predicted state and covariance (symmetrized).
     """
-    x_pred = np.einsum("...ij,...j->...i", F, x)
-    if b is not None:
-        x_pred = x_pred + b
-    P_pred = F @ P @ np.swapaxes(F, -1, -2) + Q
-    return x_pred, symmetrize(P_pred)
+    x_pred, P_pred = kf_predict(x, P, F, Q)
+    return (x_pred if b is None else x_pred + b), P_pred
 
 
 def innovation(z, hx, angle_rows=(0,)):
@@ -82,12 +74,8 @@ def ekf_gain(P_pred, H, R):
 
     Parameters
     ----------
-    P_pred : ndarray, shape (..., n, n)
-        Predicted covariance.
-    H : ndarray, shape (..., m, n)
-        Measurement Jacobian dh/dx at x-.
-    R : ndarray, shape (..., m, m)
-        Measurement noise covariance (measurement units squared, e.g. rad^2 for a bearing).
+    P_pred, H, R : ndarray, shapes (..., n, n), (..., m, n), (..., m, m)
+        Predicted covariance, Jacobian at x- and measurement noise (e.g. rad^2 for a bearing; module docstring).
 
     Returns
     -------
@@ -104,57 +92,20 @@ def ekf_gain(P_pred, H, R):
     return S, S_inv, PHt @ S_inv
 
 
-def joseph_covariance(P_pred, K, G, R):
-    """Joseph-form covariance update ``(I - K G) P- (I - K G)^T + K R K^T``.
-
-    G = H gives the EKF (Bar-Shalom, Li, Kirubarajan 2001, sec. 5.2.3); the MGEKF passes its modified matrix
-    (Song & Speyer 1985; filters/mgekf.py).
-
-    Parameters
-    ----------
-    P_pred : ndarray, shape (..., n, n)
-        Predicted covariance.
-    K : ndarray, shape (..., n, m)
-        Gain.
-    G : ndarray, shape (..., m, n)
-        Measurement Jacobian H, or the MGEKF's modified matrix.
-    R : ndarray, shape (..., m, m)
-        Measurement noise covariance.
-
-    Returns
-    -------
-    ndarray, shape (..., n, n)
-        Updated covariance, symmetrized.
-    """
-    n = P_pred.shape[-1]
-    A = np.eye(n) - K @ G
-    return symmetrize(A @ P_pred @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2))
-
-
 def ekf_update(x_pred, P_pred, z, hx, H, R, angle_rows=(0,)):
     """EKF measurement update (Joseph form), equations in the module docstring.
 
     Parameters
     ----------
-    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
-        Predicted state and covariance.
-    z : ndarray, shape (..., m)
-        Measurement (angles in rad).
-    hx : ndarray, shape (..., m)
-        Predicted measurement h(x-).
-    H : ndarray, shape (..., m, n)
-        Jacobian dh/dx at x-.
-    R : ndarray, shape (..., m, m)
-        Measurement noise covariance.
+    x_pred, P_pred, z, hx, H, R : ndarray
+        Prediction, measurement (angles in rad), predicted measurement, Jacobian, noise (module docstring).
     angle_rows : sequence of int, default (0,)
         Measurement components wrapped to (-pi, pi] in the innovation.
 
     Returns
     -------
-    x_upd : ndarray, shape (..., n)
-        Updated state.
-    P_upd : ndarray, shape (..., n, n)
-        Updated covariance.
+    x_upd, P_upd : ndarray, shapes (..., n) and (..., n, n)
+        Updated state and covariance.
     nu : ndarray, shape (..., m)
         Wrapped innovation.
     S, S_inv : ndarray, shape (..., m, m)

@@ -11,6 +11,18 @@ Equations (Bar-Shalom, Li, Kirubarajan, *Estimation with Applications to Trackin
               x+ = x- + K nu,       P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
 
 The Joseph form keeps P+ symmetric positive definite under round-off (sec. 5.2.3).
+
+Arguments the functions here (and filters/ekf.py) share; their docstrings name only what differs:
+
+- ``x``, ``P``: the state estimate at k-1, in the state's own units (e.g. [x, y, vx, vy] in m and m/s, x east,
+  y north), and its covariance (state units squared);
+- ``F``, ``Q``: the state transition matrix over the step and the process noise covariance over it (state units
+  squared), shape (n, n) or batched;
+- ``x_pred``, ``P_pred``: the predicted state and covariance x-, P-;
+- ``z``: the measurement (measurement units, e.g. m for a position, rad for a bearing);
+- ``H``: the measurement matrix (for an EKF the Jacobian dh/dx at x-), shape (m, n) or batched;
+- ``R``: the measurement noise covariance (measurement units squared), shape (m, m) or batched;
+- ``nu``, ``S``, ``S_inv``, ``K``: innovation, its covariance and inverse, gain.
 """
 
 from __future__ import annotations
@@ -25,14 +37,9 @@ def kf_predict(x, P, F, Q):
 
     Parameters
     ----------
-    x : ndarray, shape (..., n)
-        State estimate at k-1, in the state's own units (e.g. [x, y, vx, vy] in m and m/s).
-    P : ndarray, shape (..., n, n)
-        Its covariance (state units squared).
-    F : ndarray, shape (n, n) or (..., n, n)
-        State transition matrix over the step (broadcast over the batch).
-    Q : ndarray, shape (n, n) or (..., n, n)
-        Process noise covariance over the step (state units squared).
+    x, P, F, Q : ndarray
+        State (..., n) and covariance (..., n, n) at k-1, transition and process noise over the step (module
+        docstring; F and Q broadcast over the batch).
 
     Returns
     -------
@@ -51,14 +58,8 @@ def kf_innovation(x_pred, P_pred, z, H, R):
 
     Parameters
     ----------
-    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
-        Predicted state and covariance.
-    z : ndarray, shape (..., m)
-        Measurement (measurement units, e.g. m for a position).
-    H : ndarray, shape (m, n) or (..., m, n)
-        Measurement matrix.
-    R : ndarray, shape (m, m) or (..., m, m)
-        Measurement noise covariance (measurement units squared).
+    x_pred, P_pred, z, H, R : ndarray
+        Prediction, measurement and its model (module docstring).
 
     Returns
     -------
@@ -73,44 +74,31 @@ def kf_innovation(x_pred, P_pred, z, H, R):
 
 
 def kf_gain(P_pred, H, S_inv):
-    """Kalman gain ``K = P- H^T S^-1``.
-
-    Parameters
-    ----------
-    P_pred : ndarray, shape (..., n, n)
-        Predicted covariance.
-    H : ndarray, shape (m, n) or (..., m, n)
-        Measurement matrix.
-    S_inv : ndarray, shape (..., m, m)
-        Inverse of the innovation covariance.
-
-    Returns
-    -------
-    ndarray, shape (..., n, m)
-        The gain K.
-    """
+    """Kalman gain ``K = P- H^T S^-1`` (shape (..., n, m)) from the predicted covariance, the measurement matrix and
+    the inverse innovation covariance (module docstring)."""
     return P_pred @ np.swapaxes(H, -1, -2) @ S_inv
 
 
-def joseph_update(x_pred, P_pred, nu, K, H, R):
-    """State and Joseph-form covariance update from a given gain.
+def joseph_covariance(P_pred, K, G, R):
+    """Joseph-form covariance update ``(I - K G) P- (I - K G)^T + K R K^T``, symmetrized (shape (..., n, n)).
 
-    ``x+ = x- + K nu``; ``P+ = (I - K H) P- (I - K H)^T + K R K^T``
-    (Bar-Shalom, Li, Kirubarajan 2001, sec. 5.2.3): it stays symmetric positive definite under round-off and
-    is exact for any gain K.
+    G = H gives the Kalman filter and the EKF (Bar-Shalom, Li, Kirubarajan 2001, sec. 5.2.3): it stays symmetric
+    positive definite under round-off and is exact for any gain K; the MGEKF passes its modified matrix (Song &
+    Speyer 1985; filters/mgekf.py). ``P_pred``, ``K``, ``R`` as in the module docstring; ``G`` (..., m, n).
+    """
+    n = P_pred.shape[-1]
+    A = np.eye(n) - K @ G
+    return symmetrize(A @ P_pred @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2))
+
+
+def joseph_update(x_pred, P_pred, nu, K, H, R):
+    """State and Joseph-form covariance update from a given gain: ``x+ = x- + K nu`` and
+    :func:`joseph_covariance` with G = H.
 
     Parameters
     ----------
-    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
-        Predicted state and covariance.
-    nu : ndarray, shape (..., m)
-        Innovation.
-    K : ndarray, shape (..., n, m)
-        Gain.
-    H : ndarray, shape (m, n) or (..., m, n)
-        Measurement matrix.
-    R : ndarray, shape (m, m) or (..., m, m)
-        Measurement noise covariance.
+    x_pred, P_pred, nu, K, H, R : ndarray
+        Prediction, innovation, gain, measurement model (module docstring).
 
     Returns
     -------
@@ -119,11 +107,8 @@ def joseph_update(x_pred, P_pred, nu, K, H, R):
     P_upd : ndarray, shape (..., n, n)
         Updated covariance, symmetrized.
     """
-    n = P_pred.shape[-1]
     x_upd = x_pred + np.einsum("...ij,...j->...i", K, nu)
-    A = np.eye(n) - K @ H
-    P_upd = A @ P_pred @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2)
-    return x_upd, symmetrize(P_upd)
+    return x_upd, joseph_covariance(P_pred, K, H, R)
 
 
 def kf_update(x_pred, P_pred, z, H, R):
@@ -131,25 +116,15 @@ def kf_update(x_pred, P_pred, z, H, R):
 
     Parameters
     ----------
-    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
-        Predicted state and covariance (state units, e.g. m and m/s).
-    z : ndarray, shape (..., m)
-        Measurement.
-    H : ndarray, shape (m, n) or (..., m, n)
-        Measurement matrix.
-    R : ndarray, shape (m, m) or (..., m, m)
-        Measurement noise covariance (measurement units squared).
+    x_pred, P_pred, z, H, R : ndarray
+        Prediction (state units, e.g. m and m/s), measurement and its model (module docstring).
 
     Returns
     -------
-    x_upd : ndarray, shape (..., n)
-        Updated state.
-    P_upd : ndarray, shape (..., n, n)
-        Updated covariance.
-    nu : ndarray, shape (..., m)
-        Innovation ``z - H x-``.
-    S : ndarray, shape (..., m, m)
-        Innovation covariance.
+    x_upd, P_upd : ndarray, shapes (..., n) and (..., n, n)
+        Updated state and covariance.
+    nu, S : ndarray, shapes (..., m) and (..., m, m)
+        Innovation ``z - H x-`` and its covariance.
 
     Raises
     ------

@@ -32,31 +32,16 @@ def mgekf_update(x_pred, P_pred, z, hx, H, G, R, angle_rows=(0,)):
 
     Parameters
     ----------
-    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
-        Predicted state and covariance.
-    z : ndarray, shape (..., m)
-        Measurement (bearing in rad, clockwise from north, in row 0).
-    hx : ndarray, shape (..., m)
-        Predicted measurement h(x-).
-    H : ndarray, shape (..., m, n)
-        Jacobian dh/dx at x- (used for S and K).
     G : ndarray, shape (..., m, n)
-        Modified matrix (used for P+ only).
-    R : ndarray, shape (..., m, m)
-        Measurement noise covariance (rad^2, Hz^2).
-    angle_rows : sequence of int, default (0,)
-        Rows wrapped to (-pi, pi] in the innovation.
+        Modified matrix (used for P+ only; H serves S and K).
+    x_pred, P_pred, z, hx, H, R, angle_rows
+        As :func:`~sonartrack.filters.ekf.ekf_update` (bearing in rad, clockwise from north, in row 0 of z; R in
+        rad^2, Hz^2).
 
     Returns
     -------
-    x_upd : ndarray, shape (..., n)
-        Updated state.
-    P_upd : ndarray, shape (..., n, n)
-        Updated covariance.
-    nu : ndarray, shape (..., m)
-        Wrapped innovation.
-    S, S_inv : ndarray, shape (..., m, m)
-        Innovation covariance and its inverse.
+    x_upd, P_upd, nu, S, S_inv : ndarray
+        As :func:`~sonartrack.filters.ekf.ekf_update`, P_upd from G.
     """
     nu = innovation(z, hx, angle_rows)
     S, S_inv, K = ekf_gain(P_pred, H, R)

@@ -8,6 +8,17 @@ The environment is an :class:`~sonartrack.acoustics.environment.Environment` (a 
 or one read from a profile file by ``sonartrack.io.environment``); TL fields come from ``tl_store`` (any
 :class:`~sonartrack.acoustics.transmission_loss.FieldStore`, e.g. the disk cache of io/environment.py)
 when one is given.
+
+Parameters the functions here share (their docstrings refer to this list):
+
+- ``record`` (BearingRecord): bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured;
+- ``ownship`` (OwnshipTrack): ownship positions (m; x east, y north) over time;
+- ``sigma_bearing_rad`` (float): bearing noise standard deviation (rad);
+- ``batch`` (BatchSettings, optional): propagation-model settings of em-map (environment, SL, frequency, depth,
+  NL, DI, sigma_SNR); default the library defaults;
+- ``em_map`` (EmMapSettings, optional): EM/MAP solver settings (range interval, kappa, TL averaging, iterations);
+- ``environment`` (Environment or str, optional): overrides ``batch.env``;
+- ``tl_store`` (FieldStore, optional): cache of TL fields.
 """
 
 from __future__ import annotations
@@ -118,20 +129,8 @@ def em_map_estimate(record: BearingRecord, ownship: OwnshipTrack, *, sigma_beari
 
     Parameters
     ----------
-    record : BearingRecord
-        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
-    ownship : OwnshipTrack
-        Ownship positions (m; x east, y north) over time.
-    sigma_bearing_rad : float
-        Bearing noise standard deviation (rad).
-    batch : BatchSettings
-        Propagation-model settings (environment, SL, frequency, depth, NL, DI, sigma_SNR).
-    em_map : EmMapSettings
-        EM/MAP solver settings.
-    environment : Environment or str, optional
-        Overrides ``batch.env``.
-    tl_store : FieldStore, optional
-        Cache of TL fields.
+    record, ownship, sigma_bearing_rad, batch, em_map, environment, tl_store
+        As in the module docstring; ``record`` must hold SNRs, ``batch`` and ``em_map`` are required here.
 
     Returns
     -------
@@ -168,23 +167,10 @@ def solve_batch(record: BearingRecord, ownship: OwnshipTrack, method: str, *, si
 
     Parameters
     ----------
-    record : BearingRecord
-        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
-    ownship : OwnshipTrack
-        Ownship positions (m; x east, y north) over time.
     method : str
         "ml" or "em-map".
-    sigma_bearing_rad : float
-        Bearing noise standard deviation (rad).
-    batch : BatchSettings, optional
-        Propagation-model settings of em-map (environment, SL, frequency, depth, NL, DI, sigma_SNR); default
-        the library defaults.
-    em_map : EmMapSettings, optional
-        EM/MAP solver settings (range interval, kappa, TL averaging, iterations).
-    environment : Environment or str, optional
-        Overrides ``batch.env``.
-    tl_store : FieldStore, optional
-        Cache of TL fields.
+    record, ownship, sigma_bearing_rad, batch, em_map, environment, tl_store
+        As in the module docstring (``batch``, ``em_map``, ``environment`` and ``tl_store`` serve em-map only).
 
     Returns
     -------
@@ -212,25 +198,12 @@ def solve_batch_then_ekf(record: BearingRecord, ownship: OwnshipTrack, method: s
 
     Parameters
     ----------
-    record : BearingRecord
-        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
-    ownship : OwnshipTrack
-        Ownship positions (m; x east, y north) over time.
     method : str
         Batch method, "ml" or "em-map".
     window_s : float
         Length (s) of the batch window from the first bearing; bearings must remain after it.
-    sigma_bearing_rad : float
-        Bearing noise standard deviation (rad).
-    batch : BatchSettings, optional
-        Propagation-model settings of em-map (environment, SL, frequency, depth, NL, DI, sigma_SNR); default
-        the library defaults.
-    em_map : EmMapSettings, optional
-        EM/MAP solver settings (range interval, kappa, TL averaging, iterations).
-    environment : Environment or str, optional
-        Overrides ``batch.env``.
-    tl_store : FieldStore, optional
-        Cache of TL fields.
+    record, ownship, sigma_bearing_rad, batch, em_map, environment, tl_store
+        As in the module docstring; ``batch.ekf_q_m2_s3`` also sets the EKF's acceleration noise (m^2/s^3).
 
     Returns
     -------
@@ -256,18 +229,12 @@ def ekf_from_batch(record: BearingRecord, ownship: OwnshipTrack, est: BatchEstim
 
     Parameters
     ----------
-    record : BearingRecord
-        Bearings (rad, clockwise from north) with times (s) and SNRs (dB) when measured.
-    ownship : OwnshipTrack
-        Ownship positions (m; x east, y north) over time.
     est : BatchEstimate
         The batch estimate.
     start_s : float
         Time (s) the EKF starts from; only later bearings are filtered.
-    sigma_bearing_rad : float
-        Bearing noise standard deviation (rad).
-    q_m2_s3 : float
-        White-acceleration noise intensity (m^2/s^3).
+    record, ownship, sigma_bearing_rad, q_m2_s3
+        As in :func:`ekf_from_state`.
 
     Returns
     -------

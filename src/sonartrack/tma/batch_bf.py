@@ -29,6 +29,14 @@ d_n = k d'_n; the range rate scales alike, rdot_n = k g_n with g_n = d/dt |d'_n|
 the line f_n = f0 - (f0 k / c) g_n. When g_n varies over the record (the bearing changes), that line gives f0 and
 f0 k / c, hence the scale k: range is observable without an ownship maneuver. It is not when g_n is constant (a
 target on a constant bearing).
+
+Arguments the functions here share (their docstrings refer to this list):
+
+- ``tau_s``, array_like (n,): times since t0 (s);
+- ``own_xy``, ``own_v``, ndarray (n, 2): the sensor's positions (m; x east, y north) and velocities (m/s) then;
+- ``sigma_b_rad``, ``sigma_f_hz``, float or array_like (n,): bearing (rad) and frequency (Hz) noise standard
+  deviations;
+- ``c_mps``, float: speed of sound (m/s), default :data:`SOUND_SPEED_MPS`.
 """
 
 from __future__ import annotations
@@ -39,22 +47,16 @@ import numpy as np
 
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
-from sonartrack.tma.batch_ml import BatchEstimate, _damped_step, bearing_model
+from sonartrack.tma.batch_ml import BatchEstimate, LmFit, _damped_step, bearing_model
 
 #: speed of sound of the Doppler model (m/s) when none is given (paper P2)
 SOUND_SPEED_MPS = 1500.0
 
 
 @dataclass(frozen=True, slots=True)
-class BfEstimate:
-    """A bearings + frequency ML solution: X0 = [x0, y0, vx, vy, f0] at ``t0_s`` and its 5 x 5 covariance."""
-
-    x0: np.ndarray
-    covariance: np.ndarray
-    t0_s: float
-    iterations: int
-    converged: bool
-    objective: float
+class BfEstimate(LmFit):
+    """A bearings + frequency ML solution: X0 = [x0, y0, vx, vy, f0] (m, m/s, Hz) at ``t0_s`` and its 5 x 5
+    covariance, with how the solver ended (the fields of :class:`~sonartrack.tma.batch_ml.LmFit`)."""
 
     def track(self) -> BatchEstimate:
         """The kinematic part (x0, y0, vx, vy and its 4 x 4 covariance) as a :class:`BatchEstimate` (method "ml").
@@ -76,12 +78,8 @@ def bf_model(x0, tau_s, own_xy, own_v, c_mps: float = SOUND_SPEED_MPS):
     ----------
     x0 : array_like, shape (5,)
         [x0, y0, vx, vy, f0] at t0 (m, m/s, Hz).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy, own_v : ndarray, shape (n, 2)
-        Sensor positions (m; x east, y north) and velocities (m/s) at those times.
-    c_mps : float
-        Speed of sound (m/s).
+    tau_s, own_xy, own_v, c_mps
+        The times, the sensor's motion then, the speed of sound (module docstring).
 
     Returns
     -------
@@ -113,15 +111,9 @@ def fisher_information_bf(x0, tau_s, own_xy, own_v, sigma_b_rad, sigma_f_hz, c_m
     Parameters
     ----------
     x0 : array_like, shape (5,)
-        [x0, y0, vx, vy, f0] at t0 (m, m/s, Hz).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy, own_v : ndarray, shape (n, 2)
-        Sensor positions (m) and velocities (m/s).
-    sigma_b_rad, sigma_f_hz : float or array_like, shape (n,)
-        Bearing (rad) and frequency (Hz) noise standard deviations.
-    c_mps : float
-        Speed of sound (m/s).
+        The state [x0, y0, vx, vy, f0] at t0 (m, m/s, Hz) where J is taken.
+    tau_s, own_xy, own_v, sigma_b_rad, sigma_f_hz, c_mps
+        As in the module docstring.
 
     Returns
     -------
@@ -142,14 +134,8 @@ def crb_bf(x0_true, tau_s, own_xy, own_v, sigma_b_rad, sigma_f_hz, c_mps: float 
     ----------
     x0_true : array_like, shape (5,)
         The true X0 (m, m/s, Hz).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy, own_v : ndarray, shape (n, 2)
-        Sensor positions (m) and velocities (m/s).
-    sigma_b_rad, sigma_f_hz : float or array_like, shape (n,)
-        Bearing (rad) and frequency (Hz) noise standard deviations.
-    c_mps : float
-        Speed of sound (m/s).
+    tau_s, own_xy, own_v, sigma_b_rad, sigma_f_hz, c_mps
+        Geometry, noise and sound speed (module docstring).
 
     Returns
     -------
@@ -196,10 +182,8 @@ def ml_bearings_frequency(z_rad, freq_hz, time_s, own_xy, own_v, sigma_b_rad, si
     z_rad, freq_hz, time_s : array_like, shape (n,)
         Bearings (rad, clockwise from north), received frequencies (Hz) and their strictly increasing times (s);
         n >= 6.
-    own_xy, own_v : array_like, shape (n, 2)
-        Sensor positions (m) and velocities (m/s) at those times.
-    sigma_b_rad, sigma_f_hz : float or array_like, shape (n,)
-        Bearing (rad) and frequency (Hz) noise standard deviations.
+    own_xy, own_v, sigma_b_rad, sigma_f_hz
+        The sensor's motion at those times and the noise (module docstring).
     x_init : array_like, shape (5,)
         The start (:func:`bf_start`).
     c_mps, max_iter, tol : float, int, float

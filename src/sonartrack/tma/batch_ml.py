@@ -20,6 +20,15 @@ at the true state (Nardone, Lindgren & Gong 1984). Starting point: the pseudo-li
 Observability: with the ownship at constant velocity every target track scaled about the ownship's
 line fits the bearings exactly, so range is unobservable (Nardone & Aidala 1981); we check the
 ownship's deviation from its best constant-velocity fit over the record.
+
+Arguments the functions here share (their docstrings refer to this list):
+
+- ``x0`` (or ``x0_true``), array_like (4,): the target state [x0, y0, vx, vy] at t0 (m, m/s);
+- ``tau_s``, array_like (n,): times since t0 (s);
+- ``own_xy``, ndarray (n, 2): ownship positions (m; x east, y north) at those times;
+- ``sigma_rad``, float or array_like (n,): bearing noise standard deviation (rad);
+- ``rho``, float: lag-1 correlation of the normalised bearing errors in bearing order, 0 <= rho < 1 (0: white;
+  :func:`fisher_information`).
 """
 
 from __future__ import annotations
@@ -37,8 +46,9 @@ MIN_MANEUVER_M = 50.0
 
 
 @dataclass(frozen=True, slots=True)
-class BatchEstimate:
-    """A batch TMA solution: X0 at ``t0_s`` and its covariance, with how the solver ended."""
+class LmFit:
+    """A Levenberg-Marquardt fit (:func:`levenberg_marquardt`): X0 at ``t0_s`` (s) and its covariance, with how the
+    solver ended (iterations, convergence, the cost C it reached); the fields the batch solutions share."""
 
     x0: np.ndarray
     covariance: np.ndarray
@@ -46,6 +56,13 @@ class BatchEstimate:
     iterations: int
     converged: bool
     objective: float
+
+
+@dataclass(frozen=True, slots=True)
+class BatchEstimate(LmFit):
+    """A batch TMA solution: X0 = [x0, y0, vx, vy] (m, m/s) at ``t0_s`` and its covariance, with how the solver
+    ended and the ``method`` that made it."""
+
     method: str
 
     def state_at(self, t_s) -> tuple[np.ndarray, np.ndarray]:
@@ -77,12 +94,8 @@ def bearing_model(x0, tau_s, own_xy) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
     Parameters
     ----------
-    x0 : array_like, shape (4,)
-        Target state [x0, y0, vx, vy] at t0 (m, m/s).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
+    x0, tau_s, own_xy
+        The track and the ownship's positions at the times (module docstring).
 
     Returns
     -------
@@ -113,16 +126,8 @@ def fisher_information(x0, tau_s, own_xy, sigma_rad, rho: float = 0.0) -> np.nda
 
     Parameters
     ----------
-    x0 : array_like, shape (4,)
-        Target state [x0, y0, vx, vy] at t0 (m, m/s).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
-    sigma_rad : float or array_like, shape (n,)
-        Bearing noise standard deviation (rad).
-    rho : float
-        Lag-1 correlation of the normalised errors, 0 <= rho < 1 (0: white).
+    x0, tau_s, own_xy, sigma_rad, rho
+        State, geometry and bearing noise (module docstring).
 
     Returns
     -------
@@ -141,16 +146,8 @@ def crb(x0_true, tau_s, own_xy, sigma_rad, rho: float = 0.0) -> np.ndarray:
 
     Parameters
     ----------
-    x0_true : array_like, shape (4,)
-        True [x0, y0, vx, vy] at t0 (m, m/s).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
-    sigma_rad : float or array_like, shape (n,)
-        Bearing noise standard deviation (rad).
-    rho : float
-        Lag-1 correlation of the errors in bearing order (:func:`fisher_information`; 0: white).
+    x0_true, tau_s, own_xy, sigma_rad, rho
+        The true state, the geometry and the noise (module docstring).
 
     Returns
     -------
@@ -168,18 +165,10 @@ def crb_position_sd_m(x0_true, tau_s, own_xy, sigma_rad, tau_end_s: float, rho: 
 
     Parameters
     ----------
-    x0_true : array_like, shape (4,)
-        True [x0, y0, vx, vy] at t0 (m, m/s).
-    tau_s : array_like, shape (n,)
-        Times of the bearings since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
-    sigma_rad : float or array_like, shape (n,)
-        Bearing noise standard deviation (rad).
     tau_end_s : float
         The time (s since t0) of the position bounded, e.g. the solution's last row.
-    rho : float
-        Lag-1 correlation of the errors in bearing order (:func:`fisher_information`; 0: white).
+    x0_true, tau_s, own_xy, sigma_rad, rho
+        As for :func:`crb` (module docstring); ``tau_s`` are the bearings' times.
 
     Returns
     -------
@@ -201,10 +190,8 @@ def ownship_deviation_m(tau_s, own_xy) -> float:
 
     Parameters
     ----------
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
+    tau_s, own_xy
+        Times and ownship positions (module docstring).
 
     Returns
     -------
@@ -222,10 +209,8 @@ def check_observability(tau_s, own_xy, min_maneuver_m: float = MIN_MANEUVER_M) -
 
     Parameters
     ----------
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
+    tau_s, own_xy
+        The record's times and the ownship's positions then (module docstring).
     min_maneuver_m : float
         Smallest deviation (m) from the best constant-velocity line that makes range observable.
 
@@ -253,12 +238,8 @@ def observable_range_limit_m(tau_s, own_xy, sigma_rad: float) -> float:
 
     Parameters
     ----------
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
-    sigma_rad : float
-        Bearing noise standard deviation (rad).
+    tau_s, own_xy, sigma_rad
+        Times, ownship positions and a scalar bearing noise (module docstring).
 
     Returns
     -------
@@ -276,10 +257,8 @@ def pseudo_linear_estimate(z_rad, tau_s, own_xy) -> np.ndarray:
     ----------
     z_rad : ndarray, shape (n,)
         Measured bearings (rad, clockwise from north).
-    tau_s : array_like, shape (n,)
-        Times since t0 (s).
-    own_xy : ndarray, shape (n, 2)
-        Ownship positions (m; x east, y north) at those times.
+    tau_s, own_xy
+        Their times and the ownship positions (module docstring).
 
     Returns
     -------

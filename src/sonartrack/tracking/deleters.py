@@ -6,6 +6,14 @@
   ``confirm_m`` of its first ``confirm_n`` scans (else dropped), and deleted after ``delete_after``
   consecutive scans with an empty gate. Keeps the counters ``hits``, ``age``, ``misses`` in the
   tracks' ``attrs`` (a new track counts its initiating scan).
+* :class:`RateConfirmation`: :class:`ExistenceDeleter` with the threshold from a stated false-track rate.
+
+A deleter part has two methods, which the tracker calls every scan (the docstrings below say only what differs):
+
+* ``new_track_attrs(k) -> dict``: the per-track counters of ``k`` (int) new tracks, each an array of shape (k,);
+* ``manage(T, hit) -> TrackArrays``: the kept tracks, confirmation flags and counters updated, from ``T``
+  (TrackArrays, the tracks after the update) and ``hit`` (ndarray of bool, shape (n,): whether each track's gate
+  held a measurement this scan).
 """
 
 from __future__ import annotations
@@ -25,35 +33,12 @@ class ExistenceDeleter:
     terminate_threshold: float
 
     def new_track_attrs(self, k: int) -> dict:
-        """Per-track counters this deleter keeps: none.
-
-        Parameters
-        ----------
-        k : int
-            Number of new tracks.
-
-        Returns
-        -------
-        dict
-            Empty.
-        """
+        """Per-track counters this deleter keeps: none (an empty dict; protocol in the module docstring)."""
         return {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """Confirm tracks whose existence exceeds ``confirm_threshold``; drop those below ``terminate_threshold``.
-
-        Parameters
-        ----------
-        T : TrackArrays
-            Tracks after the update.
-        hit : ndarray of bool, shape (n,)
-            Whether each track's gate held a measurement (unused here).
-
-        Returns
-        -------
-        TrackArrays
-            The kept tracks, with their confirmation flags.
-        """
+        """Confirm tracks whose existence exceeds ``confirm_threshold``; drop those below ``terminate_threshold``
+        (``hit`` is unused; protocol in the module docstring)."""
         T = replace(T, confirmed=T.confirmed | (T.existence > self.confirm_threshold))
         return T.select(T.existence >= self.terminate_threshold)
 
@@ -67,35 +52,13 @@ class MOfNDeleter:
     delete_after: int
 
     def new_track_attrs(self, k: int) -> dict:
-        """Initial M-of-N counters of ``k`` new tracks (the initiating scan counts as a hit).
-
-        Parameters
-        ----------
-        k : int
-            Number of new tracks.
-
-        Returns
-        -------
-        dict of str to ndarray, each shape (k,)
-            ``hits`` = 1, ``age`` = 1, ``misses`` = 0.
-        """
+        """Initial M-of-N counters of ``k`` new tracks, the initiating scan counting as a hit: ``hits`` = 1,
+        ``age`` = 1, ``misses`` = 0 (int arrays of shape (k,))."""
         return {"hits": np.ones(k, dtype=int), "age": np.ones(k, dtype=int), "misses": np.zeros(k, dtype=int)}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """M-of-N confirmation, and deletion after ``delete_after`` consecutive empty gates (module docstring).
-
-        Parameters
-        ----------
-        T : TrackArrays
-            Tracks after the update, with ``hits``, ``age`` and ``misses`` in ``attrs``.
-        hit : ndarray of bool, shape (n,)
-            Whether each track's gate held a measurement this scan.
-
-        Returns
-        -------
-        TrackArrays
-            The kept tracks, counters and confirmation flags updated.
-        """
+        """M-of-N confirmation, and deletion after ``delete_after`` consecutive empty gates (module docstring);
+        ``T.attrs`` holds ``hits``, ``age`` and ``misses``."""
         a = T.attrs
         hits, age = a["hits"] + hit, a["age"] + 1
         misses = np.where(hit, 0, a["misses"] + 1)
@@ -139,35 +102,11 @@ class RateConfirmation:
         return max(float(rule), self.floor)
 
     def new_track_attrs(self, k: int) -> dict:
-        """Count the ``k`` tracks started this scan (called once a scan); no per-track counters.
-
-        Parameters
-        ----------
-        k : int
-            Number of new tracks.
-
-        Returns
-        -------
-        dict
-            Empty.
-        """
+        """Count the ``k`` tracks started this scan (called once a scan); no per-track counters (an empty dict)."""
         self.started += int(k)
         self.scans += 1
         return {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`).
-
-        Parameters
-        ----------
-        T : TrackArrays
-            Tracks after the update.
-        hit : ndarray of bool, shape (n,)
-            Unused.
-
-        Returns
-        -------
-        TrackArrays
-            The kept tracks, with their confirmation flags.
-        """
+        """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
         return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold).manage(T, hit)

@@ -101,35 +101,13 @@ class DuplicateMerger:
     gamma: float
 
     def new_track_attrs(self, k: int) -> dict:
-        """The inner deleter's per-track counters.
-
-        Parameters
-        ----------
-        k : int
-            Number of new tracks.
-
-        Returns
-        -------
-        dict
-            What ``inner.new_track_attrs(k)`` returns.
-        """
+        """The inner deleter's per-track counters of ``k`` new tracks (the deleter-part protocol:
+        tracking/deleters.py)."""
         return self.inner.new_track_attrs(k)
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """The inner deleter's confirmation and deletion, then the duplicates' deletion.
-
-        Parameters
-        ----------
-        T : TrackArrays
-            Tracks after the update.
-        hit : ndarray of bool, shape (n,)
-            Whether each track's gate held a measurement (passed to ``inner``).
-
-        Returns
-        -------
-        TrackArrays
-            The kept tracks.
-        """
+        """The inner deleter's confirmation and deletion (``hit`` passed to it), then the duplicates' deletion;
+        returns the kept tracks."""
         T = self.inner.manage(T, hit)
         if len(T) < 2 or not T.confirmed.any():
             return T

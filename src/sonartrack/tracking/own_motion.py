@@ -60,18 +60,7 @@ class ArrayTurnPrediction:
     attr = "p_starboard"
 
     def new_track_attrs(self, k: int) -> dict:
-        """Side probabilities of k new tracks: 0.5 (either side).
-
-        Parameters
-        ----------
-        k : int
-            Number of new tracks.
-
-        Returns
-        -------
-        dict
-            ``{"p_starboard": (k,) array of 0.5}``.
-        """
+        """Side probabilities of ``k`` new tracks, ``{"p_starboard": (k,) array of 0.5}`` (either side)."""
         return {self.attr: np.full(k, 0.5)}
 
     def predict(self, x_pred, P_pred, attrs: dict, turn_deg: float):
