@@ -120,10 +120,8 @@ def jpda_brute_force(log_lik, log_miss) -> np.ndarray:
 
     Parameters
     ----------
-    log_lik : array_like, shape (n_tracks, n_meas)
-        log w_tj, -inf outside the gate.
-    log_miss : array_like, shape (n_tracks,)
-        log(1 - P_D P_G).
+    log_lik, log_miss : array_like, shapes (n_tracks, n_meas) and (n_tracks,)
+        As :func:`jpda_weights`.
 
     Returns
     -------

@@ -222,18 +222,8 @@ def _root(parent, a):
 
 @nb.njit(cache=True)
 def cluster_labels(gated):
-    """Cluster label of each track: tracks that share a gated measurement, transitively (union-find).
-
-    Parameters
-    ----------
-    gated : ndarray of bool, shape (n, m)
-        Gates.
-
-    Returns
-    -------
-    ndarray of int64, shape (n,)
-        The cluster's smallest track index, per track.
-    """
+    """Cluster label of each track: tracks that share a gated measurement, transitively (union-find); from the
+    gates ``gated`` (bool, (n, m)) the cluster's smallest track index per track (int64, (n,))."""
     n, m = gated.shape
     parent = np.arange(n)
     for j in range(m):

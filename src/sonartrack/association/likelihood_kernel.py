@@ -183,16 +183,9 @@ def gated_pairs(x_pos, P_pos, z, R, bound, gamma):  # pragma: no cover - compile
 
     Parameters
     ----------
-    x_pos : ndarray, shape (n, r, 2)
-        Predicted positions H x- (m).
-    P_pos : ndarray, shape (n, r, 2, 2)
-        Their covariances H P- H^T (m^2).
-    z : ndarray, shape (m, 2)
-        Measured positions (m).
-    R : ndarray, shape (m, 2, 2)
-        Measurement covariances (m^2).
-    bound : float
-        Pre-gate size (gamma with its round-off margin).
+    x_pos, P_pos, z, R, bound
+        As :func:`candidate_pairs`: predicted positions (m) and covariances (m^2), measurements (m) and their
+        covariances (m^2), the pre-gate size (gamma with its round-off margin).
     gamma : float
         Chi-square gate size.
 

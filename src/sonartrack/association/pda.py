@@ -215,16 +215,9 @@ def pda_update(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float, clut
         Predicted state, position [x, y] (m) first.
     P_pred : array_like, shape (d, d)
         Its covariance.
-    z : array_like, shape (m, 2)
-        Measured positions (m).
-    R : array_like, shape (2, 2) or (m, 2, 2)
-        Measurement covariances (m^2).
-    pd, pg : float
-        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
-    gamma : float
-        Chi-square gate size.
-    clutter_density : float or array_like, shape (m,)
-        Clutter density (per m^2).
+    z, R, pd, pg, gamma, clutter_density
+        Measured positions (m), their covariances (m^2; (2, 2) shared or (m, 2, 2)), P_D, P_G, the chi-square gate
+        and the clutter density (per m^2): as :func:`pda_update_batch`.
 
     Returns
     -------

@@ -87,20 +87,9 @@ def pda_update_fast(x_pred, P_pred, z, R, *, pd: float, pg: float, gamma: float,
 
     Parameters
     ----------
-    x_pred : array_like, shape (d,)
-        Predicted state, position [x, y] (m) first.
-    P_pred : array_like, shape (d, d)
-        Its covariance.
-    z : array_like, shape (m, 2)
-        Measured positions (m).
-    R : array_like, shape (2, 2) (shared) or (m, 2, 2)
-        Measurement covariances (m^2).
-    pd, pg : float
-        Detection probability P_D, and the gate probability P_G that goes with ``gamma``.
-    gamma : float
-        Chi-square gate size.
-    clutter_density : float or array_like, shape (m,)
-        Clutter density (per m^2).
+    x_pred, P_pred, z, R, pd, pg, gamma, clutter_density
+        As :func:`~sonartrack.association.pda.pda_update`: the predicted state (position [x, y] (m) first) and its
+        covariance, the measured positions (m) and their covariances (m^2), P_D, P_G, gate, clutter (per m^2).
 
     Returns
     -------

@@ -362,23 +362,15 @@ def pda_mixture_update_pairs(x_pred, P_pred, lik: Likelihoods, beta0, beta_pair)
 
     Parameters
     ----------
-    x_pred : ndarray, shape (n, r, d)
-        Predicted mode-conditioned states.
-    P_pred : ndarray, shape (n, r, d, d)
-        Their covariances.
-    lik : Likelihoods
-        The gated pairs' innovations and inverse innovation covariances.
-    beta0 : ndarray, shape (n, r)
-        Weight of "no measurement is the target's".
     beta_pair : ndarray, shape (G, r)
-        Weights of the gated pairs.
+        Weights of the gated pairs (``beta[lik.pair_track, :, lik.pair_meas]``).
+    x_pred, P_pred, lik, beta0
+        As :func:`pda_mixture_update_fast`.
 
     Returns
     -------
-    x : ndarray, shape (n, r, d)
-        Updated states.
-    P : ndarray, shape (n, r, d, d)
-        Updated covariances (symmetrised).
+    x, P : ndarray
+        As :func:`pda_mixture_update_fast`.
     """
     k = lik.nu.shape[-1]
     ti = lik.pair_track

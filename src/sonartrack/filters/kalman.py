@@ -43,10 +43,8 @@ def kf_predict(x, P, F, Q):
 
     Returns
     -------
-    x_pred : ndarray, shape (..., n)
-        Predicted state.
-    P_pred : ndarray, shape (..., n, n)
-        Predicted covariance, symmetrized.
+    x_pred, P_pred : ndarray, shapes (..., n) and (..., n, n)
+        Predicted state and covariance (symmetrized).
     """
     x_pred = np.einsum("...ij,...j->...i", F, x)
     P_pred = F @ P @ np.swapaxes(F, -1, -2) + Q
@@ -102,10 +100,8 @@ def joseph_update(x_pred, P_pred, nu, K, H, R):
 
     Returns
     -------
-    x_upd : ndarray, shape (..., n)
-        Updated state.
-    P_upd : ndarray, shape (..., n, n)
-        Updated covariance, symmetrized.
+    x_upd, P_upd : ndarray, shapes (..., n) and (..., n, n)
+        Updated state and covariance (symmetrized).
     """
     x_upd = x_pred + np.einsum("...ij,...j->...i", K, nu)
     return x_upd, joseph_covariance(P_pred, K, H, R)

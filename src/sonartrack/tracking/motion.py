@@ -85,21 +85,13 @@ class ImmConstantVelocity:
 
         Parameters
         ----------
-        mu : ndarray, shape (n, r)
-            Mode probabilities.
-        x : ndarray, shape (n, r, d)
-            Mode-conditioned states.
-        P : ndarray, shape (n, r, d, d)
-            Their covariances.
+        mu, x, P : ndarray, shapes (n, r), (n, r, d), (n, r, d, d)
+            Mode probabilities of n tracks and r modes, the mode-conditioned states and their covariances.
 
         Returns
         -------
-        c : ndarray, shape (n, r)
-            Predicted mode probabilities.
-        x0 : ndarray, shape (n, r, d)
-            Mixed states.
-        P0 : ndarray, shape (n, r, d, d)
-            Mixed covariances.
+        c, x0, P0 : ndarray, shapes as ``mu``, ``x``, ``P``
+            Predicted mode probabilities, mixed states and mixed covariances.
         """
         if self.n_modes == 1:  # mixing one mode with itself: x0 = x, P0 = P (symmetrized, as imm_mix does)
             return mu, x, symmetrize(P)
