@@ -227,10 +227,8 @@ def ospa_over_time(truth_time, truth_pos, est_time, est_pos, c: float, p: float 
         Time of each estimated position (s).
     est_pos : array_like, shape (N, d)
         Estimated positions, same unit as the truth.
-    c : float
-        Cut-off distance (> 0).
-    p : float, default 1
-        Order, 1 <= p < inf.
+    c, p : float
+        Cut-off distance (> 0) and order (1 <= p < inf, default 1), as in :func:`ospa`.
 
     Returns
     -------

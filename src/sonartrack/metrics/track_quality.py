@@ -18,6 +18,10 @@ metrics", EURASIP J. Image Video Process., sec. 2.1, mme_t)::
 A target held by one track from confirmation to its end has F = 1 and W = 0; a track lost and
 re-confirmed under a new id adds one to both, a track that drops out and comes back under its own id
 adds one segment and no switch.
+
+:func:`time_to_confirm`, :func:`track_segments` and :func:`identity_switches` take the association ``assoc`` (a
+:class:`TrackAssociation` from :func:`associate_tracks`) and return one value per target, shape (T,), in
+``assoc.truth_ids`` order.
 """
 
 from __future__ import annotations
@@ -86,18 +90,8 @@ def associate_tracks(truth_time, truth_id, truth_pos, track_time, track_id, trac
 
 
 def time_to_confirm(assoc: TrackAssociation) -> np.ndarray:
-    """T_i: time from a target's first appearance to the first time a confirmed track holds it (module doc).
-
-    Parameters
-    ----------
-    assoc : TrackAssociation
-        From :func:`associate_tracks`.
-
-    Returns
-    -------
-    ndarray, shape (T,)
-        Seconds per target (in ``assoc.truth_ids`` order); NaN for a target never held.
-    """
+    """T_i: time (s) from a target's first appearance to the first time a confirmed track holds it, per target
+    (module doc); NaN for a target never held."""
     held = assoc.track_of != NONE
     k_first = np.argmax(assoc.present, axis=0)
     k_held = np.argmax(held, axis=0)
@@ -114,18 +108,8 @@ def _present_sequences(assoc: TrackAssociation):
 
 
 def track_segments(assoc: TrackAssociation) -> np.ndarray:
-    """F_i: the number of track segments that hold each target (module doc; fragmentation).
-
-    Parameters
-    ----------
-    assoc : TrackAssociation
-        From :func:`associate_tracks`.
-
-    Returns
-    -------
-    ndarray of int, shape (T,)
-        Segments per target (0: never held; 1: held by one track without a break).
-    """
+    """F_i: the number of track segments that hold each target (module doc; fragmentation), int per target
+    (0: never held; 1: held by one track without a break)."""
     out = []
     for a in _present_sequences(assoc):
         prev = np.concatenate([[NONE], a[:-1]])
@@ -134,18 +118,8 @@ def track_segments(assoc: TrackAssociation) -> np.ndarray:
 
 
 def identity_switches(assoc: TrackAssociation) -> np.ndarray:
-    """W_i: the number of times the track holding each target changes id, gaps bridged (module doc).
-
-    Parameters
-    ----------
-    assoc : TrackAssociation
-        From :func:`associate_tracks`.
-
-    Returns
-    -------
-    ndarray of int, shape (T,)
-        Identity switches per target.
-    """
+    """W_i: the number of times the track holding each target changes id, gaps bridged (module doc), int per
+    target."""
     out = []
     for a in _present_sequences(assoc):
         held = a[a != NONE]  # the ids in order; a gap keeps the last one

@@ -97,12 +97,8 @@ def printed_quantisation_covariance(pulse_s: float, carrier_hz: float, sound_spe
 
     Parameters
     ----------
-    pulse_s : float
-        Pulse length tau (s).
-    carrier_hz : float
-        Carrier frequency f_c (Hz).
-    sound_speed_mps : float
-        Sound speed c (m/s).
+    pulse_s, carrier_hz, sound_speed_mps : float
+        As :func:`cw_cell_sizes`: pulse length tau (s), carrier f_c (Hz), sound speed c (m/s).
 
     Returns
     -------
@@ -115,18 +111,8 @@ def printed_quantisation_covariance(pulse_s: float, carrier_hz: float, sound_spe
 
 
 def ar_transition(period_s: float) -> np.ndarray:
-    """``Phi = [[1, T], [0, 1]]`` for the state [range, range-rate] (paper P1, eq. 23).
-
-    Parameters
-    ----------
-    period_s : float
-        Frame period T (s).
-
-    Returns
-    -------
-    ndarray, shape (2, 2)
-        Phi.
-    """
+    """``Phi = [[1, T], [0, 1]]`` (2 x 2) for the state [range, range-rate] and the frame period T = ``period_s``
+    (s) (paper P1, eq. 23)."""
     return np.array([[1.0, float(period_s)], [0.0, 1.0]])
 
 

@@ -89,19 +89,9 @@ class AmplitudeHypothesiser(PDAHypothesiser):
         return float(track.metadata.get(STRENGTH, self.initial_strength))
 
     def hypothesise(self, track, detections, timestamp, **kwargs):
-        """PDA hypotheses with w_t0 and w_tj of the module doc.
-
-        Parameters
-        ----------
-        track, detections, timestamp, **kwargs
-            As :meth:`sonartrack.stonesoup.ipda.IPDAHypothesiser.hypothesise`.
-
-        Returns
-        -------
-        MultipleHypothesis
-            Unnormalised: hits weighted by the amplitude likelihood ratio r_tj, the miss by
-            1 - P_D0 Phi((z_hat - tau) / sigma_a) P_G.
-        """
+        """PDA hypotheses with w_t0 and w_tj of the module doc (arguments as
+        :meth:`sonartrack.stonesoup.ipda.IPDAHypothesiser.hypothesise`): an unnormalised MultipleHypothesis, hits
+        weighted by the amplitude likelihood ratio r_tj, the miss by 1 - P_D0 Phi((z_hat - tau) / sigma_a) P_G."""
         multi = super().hypothesise(track, detections, timestamp, **kwargs)
         strength = self.strength_of(track)
         pd_eff = float(detection_probability_above(float(self.prob_detect), strength, self.amplitude_spread,
@@ -123,18 +113,8 @@ class JPDAWithAmplitude(JPDA):
     hypothesiser: AmplitudeHypothesiser = Property(doc="Amplitude-aided PDA hypothesiser")
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> MultipleHypothesis (exact marginals); stages each track's new strength z_hat.
-
-        Parameters
-        ----------
-        tracks, detections, timestamp, **kwargs
-            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
-
-        Returns
-        -------
-        dict of Track to MultipleHypothesis
-            The exact JPDA marginal weights of each track's hypotheses.
-        """
+        """Mapping track -> MultipleHypothesis holding the exact JPDA marginal weights of its hypotheses (arguments
+        as :meth:`sonartrack.stonesoup.jpda.JPDA.associate`); stages each track's new strength z_hat."""
         hypotheses, table, log_beta = associate_exact(self, tracks, detections, timestamp, **kwargs)
         out = {}
         for t, track in enumerate(table.tracks):

@@ -306,10 +306,8 @@ def snapshot_from_tracks(tracks: Iterable, timestamp: datetime.datetime, *, orde
         Stone Soup tracks.
     timestamp : datetime.datetime
         The scan time.
-    order : sequence of int or None
-        As in :func:`tracks_from_snapshots`.
-    epoch : datetime.datetime
-        As in :func:`to_timestamp`.
+    order, epoch : sequence of int or None, datetime.datetime
+        As in :func:`tracks_from_snapshots` and :func:`to_timestamp`.
 
     Returns
     -------
@@ -375,10 +373,8 @@ def groundtruth_to_arrays(path: GroundTruthPath, *, order=STONESOUP_ORDER,
     ----------
     path : GroundTruthPath
         The path.
-    order : sequence of int or None
-        As in :func:`tracks_from_snapshots`.
-    epoch : datetime.datetime
-        As in :func:`to_timestamp`.
+    order, epoch : sequence of int or None, datetime.datetime
+        As in :func:`tracks_from_snapshots` and :func:`to_timestamp`.
 
     Returns
     -------

@@ -113,18 +113,9 @@ class IPDA(_ExistenceAssociator):
     """Integrated PDA, each track on its own (module doc; Musicki, Evans & Stankovic 1994)."""
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on the track.
-
-        Parameters
-        ----------
-        tracks, detections, timestamp, **kwargs
-            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
-
-        Returns
-        -------
-        dict of Track to ExistenceMultipleHypothesis
-            Per track the weights beta_tj = w_tj / Lambda with the predicted and posterior existence.
-        """
+        """Mapping track -> ExistenceMultipleHypothesis: per track the weights beta_tj = w_tj / Lambda given
+        existence, with the predicted and posterior existence (arguments as
+        :meth:`sonartrack.stonesoup.jpda.JPDA.associate`); stages P(E | Z) on the track."""
         _check_hypothesiser(self.hypothesiser)
         hypotheses = self.generate_hypotheses(tracks, detections, timestamp, **kwargs)
         out = {}
@@ -179,18 +170,9 @@ class JIPDA(_ExistenceAssociator):
     """Joint IPDA with exact marginals (module doc; Musicki & Evans 2004)."""
 
     def associate(self, tracks, detections, timestamp, **kwargs):
-        """Mapping track -> ExistenceMultipleHypothesis (weights given existence); stages P(E | Z) on each track.
-
-        Parameters
-        ----------
-        tracks, detections, timestamp, **kwargs
-            As :meth:`sonartrack.stonesoup.jpda.JPDA.associate`.
-
-        Returns
-        -------
-        dict of Track to ExistenceMultipleHypothesis
-            Per track the JIPDA weights given existence with the predicted and posterior existence.
-        """
+        """Mapping track -> ExistenceMultipleHypothesis of the JIPDA weights given existence, with the predicted
+        and posterior existence (arguments as :meth:`sonartrack.stonesoup.jpda.JPDA.associate`); stages P(E | Z) on
+        each track."""
         _check_hypothesiser(self.hypothesiser)
         hypotheses = self.generate_hypotheses(tracks, detections, timestamp, **kwargs)
         table = tabulate(tracks, hypotheses)

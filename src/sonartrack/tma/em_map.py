@@ -418,10 +418,8 @@ def observed_information(prob: EmProblem, x0, scale=None) -> np.ndarray:
 
     Parameters
     ----------
-    prob : EmProblem
-        The data and model (:func:`make_problem`).
-    x0 : array_like, shape (4,)
-        X0 (m, m/s).
+    prob, x0 : EmProblem, array_like (4,)
+        The data and model (:func:`make_problem`), and X0 (m, m/s) where the Hessian is taken.
     scale : array_like, shape (4,), optional
         Difference steps; default 1e-3 of the range (m) for the position and 1e-3 m/s for the velocity.
 

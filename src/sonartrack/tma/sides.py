@@ -297,10 +297,8 @@ def crossing_events(time_s, phi_rad) -> list[tuple[float, float]]:
 
     Parameters
     ----------
-    time_s : array (n,)
-        Times (s).
-    phi_rad : array (n,)
-        Unfolded cone angles (rad).
+    time_s, phi_rad : array (n,)
+        As :func:`axis_crossings`: times (s) and unfolded cone angles (rad).
 
     Returns
     -------

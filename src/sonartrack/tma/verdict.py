@@ -122,10 +122,8 @@ def range_sd_m(solution: TmaSolution, ownship: OwnshipTrack) -> np.ndarray:
 
     Parameters
     ----------
-    solution : TmaSolution
-        States [x, y, vx, vy] (m, m/s) and 4 x 4 covariances.
-    ownship : OwnshipTrack
-        The sensor's track (m).
+    solution, ownship : TmaSolution, OwnshipTrack
+        The states [x, y, vx, vy] (m, m/s) with 4 x 4 covariances, and the sensor's track (m).
 
     Returns
     -------
