@@ -75,10 +75,8 @@ def mahalanobis2(nu, S_inv):
 
     Parameters
     ----------
-    nu : ndarray, shape (..., k)
-        Innovations.
-    S_inv : ndarray, shape (..., k, k)
-        Inverse innovation covariances.
+    nu, S_inv : ndarray, shapes (..., k) and (..., k, k)
+        Innovations and inverse innovation covariances.
 
     Returns
     -------

@@ -77,10 +77,9 @@ def relative_process_noise_stack(dt_s: float, qs, q_f0: float = 0.0) -> np.ndarr
 
     Parameters
     ----------
-    dt_s : float
-        Step T (s).
-    qs : float or array_like, shape (r,)
-        Acceleration noise power spectral densities (m^2/s^3).
+    dt_s, qs : float, float or array_like (r,)
+        Step T (s) and acceleration noise power spectral densities (m^2/s^3), as in
+        :func:`~sonartrack.models.motion.cv_process_noise_stack`.
     q_f0 : float, default 0.0
         f0 random-walk intensity (Hz^2/s), shared by the modes.
 

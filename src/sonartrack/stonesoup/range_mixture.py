@@ -67,38 +67,19 @@ def filters_for_cv(r_min_m: float, r_max_m: float, range_cv: float) -> int:
 
 
 def range_subintervals(r_min_m: float, r_max_m: float, n_filters: int, prior: str = "log-uniform"):
-    """Peach's range subintervals: each filter's range, range sd and initial weight (module doc).
-
-    Parameters
-    ----------
-    r_min_m, r_max_m : float
-        The range interval (m), 0 < r_min < r_max.
-    n_filters : int
-        N_F >= 1.
-    prior : {"log-uniform", "uniform"}
-        The range prior the weights come from: equal weights (log-uniform, as the RPEKF of Ristic et al.
-        starts) or weights proportional to the subintervals' widths (uniform in range).
-
-    Returns
-    -------
-    range_m : ndarray, shape (N_F,)
-        The subintervals' midpoints r_i (m).
-    range_sd_m : ndarray, shape (N_F,)
-        sd_i (m).
-    weight : ndarray, shape (N_F,)
-        w_i, summing to 1.
+    """Peach's range subintervals (module doc): tma/range_bank.py's
+    :func:`~sonartrack.tma.range_bank.range_subintervals` (the interval ``r_min_m`` < ``r_max_m`` in m, ``n_filters``
+    N_F >= 1; each filter's midpoint range r_i and range sd_i, m) with each filter's initial weight w_i (summing to
+    1) from the range ``prior``: equal weights for "log-uniform" (as the RPEKF of Ristic et al. starts), weights
+    proportional to the subintervals' widths for "uniform" (uniform in range). Returns (range_m, range_sd_m,
+    weight), each of shape (N_F,).
     """
-    require(0.0 < r_min_m < r_max_m and math.isfinite(r_max_m),
-            f"range interval [{r_min_m}, {r_max_m}] m: need 0 < r_min < r_max < inf")
-    require(int(n_filters) >= 1, f"n_filters {n_filters}: need at least one range filter")
+    from sonartrack.tma.range_bank import range_subintervals as peach_subintervals
+
+    range_m, range_sd_m = peach_subintervals(r_min_m, r_max_m, n_filters)  # checks the interval and N_F
     require(prior in RANGE_PRIORS, f"range prior {prior!r}: choose one of {', '.join(RANGE_PRIORS)}")
-    rho = (r_max_m / r_min_m) ** (1.0 / n_filters)
-    upper = rho ** np.arange(1, n_filters + 1)
-    lower = upper / rho
-    range_m = r_min_m * (upper + lower) / 2.0
-    range_sd_m = r_min_m * (upper - lower) / math.sqrt(12.0)
-    width = upper - lower
-    weight = np.full(n_filters, 1.0 / n_filters) if prior == "log-uniform" else width / width.sum()
+    # a subinterval's width is sqrt(12) times its range sd: uniform weights in range are proportional to the sds
+    weight = np.full(n_filters, 1.0 / n_filters) if prior == "log-uniform" else range_sd_m / range_sd_m.sum()
     return range_m, range_sd_m, weight
 
 

@@ -68,18 +68,7 @@ class OwnshipLegs:
     heading_sd_deg: float
 
     def leg_at(self, t_s: float) -> int | None:
-        """Index of the leg that holds time ``t_s`` (None: in a turn or outside the legs).
-
-        Parameters
-        ----------
-        t_s : float
-            Time (s).
-
-        Returns
-        -------
-        int or None
-            The leg's index.
-        """
+        """Index (int) of the leg that holds time ``t_s`` (s); None in a turn or outside the legs."""
         inside = np.flatnonzero((self.start_s <= t_s) & (t_s <= self.end_s))
         return int(inside[0]) if len(inside) else None
 

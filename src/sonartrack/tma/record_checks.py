@@ -215,18 +215,8 @@ class BearingSd:
         return f"{sd:.3g} deg ({100 * self.level:.0f} % interval {lo:.3g}-{hi:.3g})"
 
     def excludes(self, sigma_rad: float) -> bool:
-        """Whether ``sigma_rad`` lies outside the interval (a stated sd the residuals contradict).
-
-        Parameters
-        ----------
-        sigma_rad : float
-            A stated bearing sd (rad).
-
-        Returns
-        -------
-        bool
-            True when it is below the interval's lower end or above its upper end.
-        """
+        """Whether a stated bearing sd ``sigma_rad`` (rad) lies below the interval's lower end or above its upper end
+        (a stated sd the residuals contradict)."""
         return not (self.lo_rad <= sigma_rad <= self.hi_rad)
 
 

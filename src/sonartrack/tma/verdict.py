@@ -203,18 +203,7 @@ def sequential_reasons(solution: TmaSolution, ownship: OwnshipTrack, nis, dof, p
 
 
 def not_determined_text(reason: str) -> str:
-    """What is printed instead of a range: "range NOT DETERMINED (reason)".
-
-    Parameters
-    ----------
-    reason : str
-        The row's reason.
-
-    Returns
-    -------
-    str
-        The phrase.
-    """
+    """What is printed instead of a range: "range NOT DETERMINED (reason)", from the row's ``reason`` (str)."""
     return f"range NOT DETERMINED ({reason or 'not determined'})"
 
 
@@ -225,17 +214,8 @@ MAX_BEARING_SD_DEG = 90.0
 
 def bearing_text(bearing_deg: float, bearing_sd_deg: float) -> str:
     """What is printed for a bearing: "bearing B ± S deg", or "bearing NOT DETERMINED" when the estimate or its
-    sd is not finite or the sd reaches :data:`MAX_BEARING_SD_DEG` (a number there would be confident noise).
-
-    Parameters
-    ----------
-    bearing_deg, bearing_sd_deg : float
-        The bearing and its standard deviation (deg).
-
-    Returns
-    -------
-    str
-        The phrase.
+    sd is not finite or the sd reaches :data:`MAX_BEARING_SD_DEG` (a number there would be confident noise);
+    ``bearing_deg`` and ``bearing_sd_deg`` are the bearing and its standard deviation (deg).
     """
     if not (np.isfinite(bearing_deg) and np.isfinite(bearing_sd_deg)) or bearing_sd_deg >= MAX_BEARING_SD_DEG:
         return "bearing NOT DETERMINED"
