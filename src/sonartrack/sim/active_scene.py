@@ -45,9 +45,9 @@ from typing import Literal
 import numpy as np
 from pydantic import model_validator
 
-from sonartrack.acoustics.environment import list_environments
 from sonartrack.acoustics.matched_filter import Waveform, range_rate_to_doppler
 from sonartrack.core.angles import wrap_angle
+from sonartrack.core.memory import MEMORY_LIMIT_BYTES, over_limit
 from sonartrack.core.settings import Settings, setting
 from sonartrack.core.units import KNOT_MPS
 from sonartrack.sim.active_tl import (  # noqa: F401  (re-exported: the scene's public names stay here)
@@ -63,9 +63,9 @@ from sonartrack.sim.scene import (
     MAX_DURATION_S,
     MAX_NOISE_LEVEL_DB,
     MAX_POSITION_M,
-    MEMORY_LIMIT_BYTES,
     MIN_LEVEL_DB,
     OwnshipSettings,
+    check_environment_and_names,
     scenes_dir,
 )
 
@@ -232,14 +232,10 @@ class ActiveSceneSettings(Settings):
                              f"Dopplers ({self.occupied_band_hz:.0f} Hz): raise it")
         if w.duration_s * self.sample_rate_hz < 4:
             raise ValueError("the pulse holds fewer than 4 samples: raise sample_rate_hz or duration_s")
-        if self.environment not in list_environments():
-            raise ValueError(f"unknown environment '{self.environment}': choose one of {list_environments()}")
-        names = [t.name for t in self.targets]
-        if len(set(names)) != len(names):
-            raise ValueError(f"target names must be unique: {names}")
-        needs = self.memory_needs()  # refused before anything is allocated, the largest named
-        if sum(need for need, _, _ in needs) > MEMORY_LIMIT_BYTES:
-            need, what, fix = max(needs, key=lambda x: x[0])
+        check_environment_and_names(self.environment, [t.name for t in self.targets], "target")
+        over = over_limit(self.memory_needs())  # refused before anything is allocated, the largest named
+        if over is not None:
+            need, what, fix = over[1]
             raise ValueError(f"{what} would take {need / 1e9:.3g} GB of memory, more than the "
                              f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB the simulator plans for: {fix}")
         return self
