@@ -433,12 +433,7 @@ def target_motion(target: TargetSettings, t_s) -> tuple[np.ndarray, np.ndarray]:
 
 
 def ping_geometry(scene: ActiveSceneSettings) -> Platforms:
-    """The platforms at every ping's transmit time.
-
-    Parameters
-    ----------
-    scene : ActiveSceneSettings
-        The scene.
+    """The platforms at every ping's transmit time of the ``scene``.
 
     Returns
     -------
