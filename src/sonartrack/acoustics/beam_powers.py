@@ -363,12 +363,8 @@ def beam_powers(block: np.ndarray, fs_hz: float, array: LineArray, cone_deg: np.
 
     Parameters
     ----------
-    block : ndarray (N, M)
-        One window of the N elements.
-    fs_hz : float
-        Sample rate (Hz).
-    array : LineArray
-        The array.
+    block, fs_hz, array : ndarray (N, M), float, LineArray
+        As :func:`split_array_powers`'s: one window of the N elements, the sample rate (Hz), the array.
     cone_deg : ndarray (B,)
         The beams' cone angles (deg); must be ``settings.cone_deg``.
     settings : BeamformerSettings

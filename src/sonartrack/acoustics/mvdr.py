@@ -165,12 +165,9 @@ def mvdr_powers(blocks: np.ndarray, fs_hz: float, array: LineArray, settings, ba
 
     Parameters
     ----------
-    blocks : ndarray (K, N, M)
-        K windows of M samples of the N elements (element 0 = front).
-    fs_hz : float
-        Sample rate (Hz).
-    array : LineArray
-        Spacing and sound speed of the steering delays.
+    blocks, fs_hz, array : ndarray (K, N, M), float, LineArray
+        As :func:`~sonartrack.acoustics.beam_powers.cbf_powers`'s: K windows of the N elements, the sample rate
+        (Hz), the array (spacing and sound speed of the steering delays).
     settings : BeamformerSettings
         The front end's ``beams`` (cone grid), ``whiten`` and, when ``band`` is None, ``band_hz``.
     band : Band, optional

@@ -43,12 +43,7 @@ class SourceSpec:
     multipath: tuple = ()
 
     def bearing_at(self, t_s: float) -> float:
-        """The source's cone angle at time ``t_s``, clipped to [0, 180] deg.
-
-        Parameters
-        ----------
-        t_s : float
-            Time (s).
+        """The source's cone angle at time ``t_s`` (s), clipped to [0, 180] deg.
 
         Returns
         -------

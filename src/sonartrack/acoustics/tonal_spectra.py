@@ -97,10 +97,8 @@ def beam_spectra_of_rect(rect: np.ndarray, n_samples: int, fs_hz: float, array: 
 
     Returns
     -------
-    freqs_hz : ndarray (F,)
-        The band's rfft frequencies (Hz).
-    power : ndarray (k, F)
-        One-sided power spectral density of each beam (input units^2 / Hz).
+    freqs_hz, power : ndarray (F,), ndarray (k, F)
+        As :func:`beam_spectra`'s: the band's frequencies (Hz) and each beam's PSD (input units^2 / Hz).
     """
     _, f, scale = _band_of_window(int(n_samples), float(fs_hz), *map(float, settings.band_hz))
     require(rect.shape[1] == f.size + 2, f"tonal: {rect.shape[1]} rectangular bins, expected {f.size + 2}")

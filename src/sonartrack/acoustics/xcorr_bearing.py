@@ -246,10 +246,8 @@ def bearings_from_recording(signals, fs_hz: float, settings: BearingSettings) ->
 
     Parameters
     ----------
-    signals : array_like, shape (2, n)
-        The two channels.
-    fs_hz : float
-        Sample rate (Hz).
+    signals, fs_hz : array_like (2, n), float
+        The two channels and their sample rate (Hz), as :func:`estimate_peaks`'s.
     settings : BearingSettings
         Spacing (m), sound speed (m/s), window (s), threshold, most peaks per window.
 

@@ -1,7 +1,8 @@
 """The ``sonartrack`` command line (typer + rich).
 
-Each sub-command lives in its own module in this package and exposes ``register(app)``; the
-modules are discovered here, so adding a command means adding a file. A command line imports only
+Each sub-command lives in its own module in this package: ``cli/NAME.py`` defines ``NAME_cmd``, registered
+here as the command ``NAME`` (or exposes ``register(app)`` to register its commands itself); the modules are
+discovered here, so adding a command means adding a file. A command line imports only
 the module named like its command (``sonartrack studies`` imports ``cli/studies.py``, not the
 settings of every other command), and all of them for ``--help`` or a name no module has; a module
 may register more commands than its own, found that way. Heavy imports stay inside the command
@@ -76,6 +77,8 @@ def load_commands(names: list[str] | None = None) -> typer.Typer:
             _LOADED.add(name)
             if hasattr(mod, "register"):
                 mod.register(_APP)
+            elif hasattr(mod, f"{name}_cmd"):  # the convention: cli/NAME.py defines NAME_cmd, the command NAME
+                _APP.command(name.replace("_", "-"))(getattr(mod, f"{name}_cmd"))
     _APP.registered_commands.sort(key=lambda c: order.get(c.callback.__module__.rpartition(".")[2], len(order)))
     return _APP
 
@@ -95,9 +98,10 @@ def _command_docs() -> list[tuple[str, str]] | None:
     """(name, docstring) of every command, in module order, read from the command modules' source.
 
     Reading instead of importing keeps the settings trees that a command module imports for its options out
-    of ``sonartrack --help``. Only the form every module uses is read: ``register`` made of statements
-    ``app.command("name")(function)`` with ``function`` defined in the same module; anything else (or a
-    module without its source) returns None, and the caller imports the modules instead.
+    of ``sonartrack --help``. Only the forms the modules use are read: a module ``NAME`` without ``register``
+    defining ``NAME_cmd`` (the convention), or ``register`` made of statements ``app.command("name")(function)``
+    with ``function`` defined in the same module; anything else (or a module without its source) returns None,
+    and the caller imports the modules instead.
     """
     import ast
     from pathlib import Path
@@ -109,6 +113,9 @@ def _command_docs() -> list[tuple[str, str]] | None:
             return None
         tree = ast.parse(path.read_text(encoding="utf-8"))
         functions = {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
+        if "register" not in functions and f"{module}_cmd" in functions:
+            docs.append((module.replace("_", "-"), ast.get_docstring(functions[f"{module}_cmd"]) or ""))
+            continue
         for stmt in getattr(functions.get("register"), "body", []):
             call = stmt.value if isinstance(stmt, ast.Expr) else None
             maker = call.func if isinstance(call, ast.Call) else None

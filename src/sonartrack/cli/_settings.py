@@ -8,7 +8,7 @@ settings as commented TOML (which ``--config`` reads back) and exits.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -17,6 +17,16 @@ import typer
 from sonartrack.core.settings import field_help, to_commented_toml
 
 PRINT_CONFIG_HELP = "Print the resolved settings (defaults, then --config, then options) as TOML and exit."
+
+
+def settings_help(default_model) -> Callable[..., str]:
+    """A command's ``_help(name, model=default_model)``: the help text of the option that sets field ``name`` of
+    ``model`` (:func:`option_help`), the command's settings class unless another is named."""
+
+    def _help(name: str, model=default_model) -> str:
+        return option_help(model, name)
+
+    return _help
 
 
 def option_help(model_cls, name: str, extra: str = "") -> str:

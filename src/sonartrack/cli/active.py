@@ -21,16 +21,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.active.settings import ActiveSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("active")(active_cmd)
-
-
-def _help(name: str) -> str:
-    return option_help(ActiveSettings, name)
+_help = settings_help(ActiveSettings)
 
 
 def active_cmd(

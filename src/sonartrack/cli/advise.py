@@ -17,16 +17,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.advise.settings import AdviceSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("advise")(advise_cmd)
-
-
-def _help(name: str) -> str:
-    return option_help(AdviceSettings, name)
+_help = settings_help(AdviceSettings)
 
 
 def advise_cmd(

@@ -14,21 +14,9 @@ from typing import Annotated
 import typer
 
 from sonartrack.acoustics.xcorr_bearing import BearingSettings
-from sonartrack.cli._settings import (
-    PRINT_CONFIG_HELP,
-    option_help,
-    output_folder,
-    print_config_and_exit,
-    resolve,
-)
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 
-
-def register(app: typer.Typer) -> None:
-    app.command("bearings")(bearings_cmd)
-
-
-def _help(name: str) -> str:
-    return option_help(BearingSettings, name)
+_help = settings_help(BearingSettings)
 
 
 def _config_keys(config: Path | None) -> set[str]:

@@ -16,18 +16,8 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import (
-    PRINT_CONFIG_HELP,
-    option_help,
-    output_folder,
-    print_config_and_exit,
-    resolve,
-)
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
 from sonartrack.systems.detect.settings import MftdSettings, ThresholdSettings
-
-
-def register(app: typer.Typer) -> None:
-    app.command("detect")(detect_cmd)
 
 
 def detect_cmd(

@@ -20,16 +20,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.passive.settings import FrontEndSettings, PassiveSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("passive")(passive_cmd)
-
-
-def _help(name: str, model=PassiveSettings) -> str:
-    return option_help(model, name)
+_help = settings_help(PassiveSettings)
 
 
 def passive_cmd(

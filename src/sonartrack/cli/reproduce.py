@@ -11,10 +11,6 @@ import typer
 from sonartrack.core.errors import require
 
 
-def register(app: typer.Typer) -> None:
-    app.command("reproduce")(reproduce_cmd)
-
-
 def _interrupted(exc: KeyboardInterrupt, mods, configs, seed: int, out: Path) -> KeyboardInterrupt:
     """The interrupt, carrying its one line: trials of this run complete on disk (all studies), of how many."""
     import signal

@@ -17,22 +17,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import (
-    PRINT_CONFIG_HELP,
-    option_help,
-    output_folder,
-    print_config_and_exit,
-    resolve,
-)
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.simulate.settings import PassiveSceneSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("simulate")(simulate_cmd)
-
-
-def _help(name: str) -> str:
-    return option_help(PassiveSceneSettings, name)
+_help = settings_help(PassiveSceneSettings)
 
 
 #: the passive-only options and their defaults: given with --kind active, they are refused

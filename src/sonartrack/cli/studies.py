@@ -10,10 +10,6 @@ from __future__ import annotations
 import typer
 
 
-def register(app: typer.Typer) -> None:
-    app.command("studies")(studies_cmd)
-
-
 def studies_cmd() -> None:
     """List the studies (one per source paper) that `reproduce` can run."""
     from sonartrack import studies

@@ -18,10 +18,6 @@ from typing import Annotated
 import typer
 
 
-def register(app: typer.Typer) -> None:
-    app.command("survey")(survey_cmd)
-
-
 def _recording_page(result, folder: Path, name: str) -> None:
     from sonartrack.report.figures.passive import write_passive_figures
     from sonartrack.report.passive_page import write_passive_page

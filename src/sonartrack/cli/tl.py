@@ -16,21 +16,9 @@ from typing import Annotated
 import typer
 
 from sonartrack.acoustics.performance import TLSettings
-from sonartrack.cli._settings import (
-    PRINT_CONFIG_HELP,
-    option_help,
-    output_folder,
-    print_config_and_exit,
-    resolve,
-)
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 
-
-def register(app: typer.Typer) -> None:
-    app.command("tl")(tl_cmd)
-
-
-def _help(name: str) -> str:
-    return option_help(TLSettings, name)
+_help = settings_help(TLSettings)
 
 
 def _list_environments() -> None:

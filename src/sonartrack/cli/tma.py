@@ -31,16 +31,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, output_folder, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, output_folder, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.tma.settings import BatchSettings, TmaSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("tma")(tma_cmd)
-
-
-def _help(name: str, model=TmaSettings) -> str:
-    return option_help(model, name)
+_help = settings_help(TmaSettings)
 
 
 def tma_cmd(

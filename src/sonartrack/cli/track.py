@@ -28,10 +28,6 @@ CONTACTS_HELP = ("Contacts CSV/Parquet: time_s, x_m, y_m [+ var_x_m2, var_y_m2, 
 TRACKER_CHOICES = {"jpda": "jpda", "jpda-a": "jpda_a", "jpda_a": "jpda_a"}
 
 
-def register(app: typer.Typer) -> None:
-    app.command("track")(track_cmd)
-
-
 def track_cmd(
     contacts: Annotated[Path | None, typer.Option(help=CONTACTS_HELP)] = None,
     nav: Annotated[Path | None, typer.Option(help="Navigation CSV/Parquet for raw bistatic contacts: time_s, tx_x_m, "

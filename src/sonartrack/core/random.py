@@ -28,14 +28,8 @@ def trial_seed_sequence(seed: int, trial_index: int) -> np.random.SeedSequence:
 
 
 def trial_rng(seed: int, trial_index: int) -> np.random.Generator:
-    """The random Generator (PCG64) of trial ``trial_index`` under master ``seed``.
-
-    Parameters
-    ----------
-    seed : int
-        Master seed of the run.
-    trial_index : int
-        Index of the trial (0-based).
+    """The random Generator (PCG64) of trial ``trial_index`` under master ``seed`` (the parameters of
+    :func:`trial_seed_sequence`).
 
     Returns
     -------

@@ -140,10 +140,8 @@ def field_help(model_cls: type[BaseModel], name: str) -> str:
 
     Parameters
     ----------
-    model_cls : type of pydantic.BaseModel
-        The settings class.
-    name : str
-        Field name.
+    model_cls, name : type of pydantic.BaseModel, str
+        The settings class and the field's name (as :func:`field_unit`).
 
     Returns
     -------

@@ -33,6 +33,7 @@ from sonartrack.io.tables import (
     check_sorted,
     numeric_column,
     read_table,
+    time_column,
 )
 
 RAW_COLUMNS = ["time_s", "travel_time_s", "bearing_deg"]
@@ -51,12 +52,6 @@ class Contacts:
     time_s: np.ndarray
     z: np.ndarray
     R: np.ndarray
-
-
-def _times(df, what, path) -> np.ndarray:
-    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
-    check_sorted(t, what, path)
-    return t
 
 
 def _position(df, col, what, path) -> np.ndarray:
@@ -97,7 +92,7 @@ def read_contacts(path, *, nav_path=None, default_sigma_m: float | None = None, 
     df = read_table(path, "contacts")
     raw = "travel_time_s" in df.columns or "bearing_deg" in df.columns or "travel_time_ms" in df.columns
     check_columns(df, RAW_COLUMNS if raw else ["time_s", "x_m", "y_m"], "contacts", path)
-    t = _times(df, "contacts", path)
+    t = time_column(df, "contacts", path)
     if raw:
         return _raw_bistatic(df, t, path, nav_path, bistatic_errors, sound_speed_mps, max_range_m)
     z = np.stack([_position(df, "x_m", "contacts", path), _position(df, "y_m", "contacts", path)], axis=-1)

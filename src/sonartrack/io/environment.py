@@ -124,7 +124,8 @@ def environment_from_name_or_file(name_or_path: str | Path, water_depth_m: float
     Returns
     -------
     Environment
-        The environment.
+        The shipped environment (:func:`~sonartrack.acoustics.environment.load_environment`), or the file's
+        (:func:`read_profile`).
 
     Raises
     ------
@@ -198,19 +199,8 @@ class TLDiskCache:
             return None  # a damaged cache file is recomputed and replaced
 
     def save(self, key: str, ranges_m: np.ndarray, depths_m: np.ndarray, tl_db: np.ndarray) -> None:
-        """Store a field atomically.
-
-        Parameters
-        ----------
-        key : str
-            Field key.
-        ranges_m : ndarray
-            Range grid (m).
-        depths_m : ndarray
-            Depth grid (m).
-        tl_db : ndarray
-            Transmission loss on the grid (dB).
-        """
+        """Store a field atomically (the parameters of
+        :meth:`FieldStore.save <sonartrack.acoustics.transmission_loss.FieldStore.save>`: key, grids in m, TL in dB)."""
         self.folder.mkdir(parents=True, exist_ok=True)
         with atomic_path(self.path(key)) as tmp:
             np.savez(tmp, ranges_m=ranges_m, depths_m=depths_m, tl_db=tl_db)
@@ -221,22 +211,12 @@ def cached_tl_field(env: Environment, freq_hz: float, source_depth_m: float, rma
                     cache: str | Path | None = None) -> TLField:
     """:func:`~sonartrack.acoustics.transmission_loss.tl_field` through the disk cache (module docstring).
 
-    What every study, command and benchmark that reuses fields calls.
+    What every study, command and benchmark that reuses fields calls. ``env``, ``freq_hz`` (Hz),
+    ``source_depth_m`` (m), ``rmax_m`` (m), ``dr_m``, ``dz_m`` (m) and ``ndz`` are
+    :func:`~sonartrack.acoustics.transmission_loss.tl_field`'s.
 
     Parameters
     ----------
-    env : Environment
-        The environment.
-    freq_hz : float
-        Frequency (Hz).
-    source_depth_m : float
-        Source depth (m).
-    rmax_m : float, default 50000.0
-        Largest range of the field (m).
-    dr_m, dz_m : float, optional
-        RAM range and depth steps (m); None for the defaults of ``tl_field``.
-    ndz : int, optional
-        Depth decimation of the stored field.
     cache : str or pathlib.Path, optional
         Cache folder (see :func:`cache_dir`).
 

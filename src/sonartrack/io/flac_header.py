@@ -209,12 +209,7 @@ class FlacLayout:
 
 
 def read_flac_layout(p: Path) -> FlacLayout:
-    """STREAMINFO, the first frame header and the frames' own length (module doc).
-
-    Parameters
-    ----------
-    p : Path
-        A FLAC file.
+    """STREAMINFO, the first frame header and the frames' own length of the FLAC file ``p`` (module doc).
 
     Returns
     -------

@@ -14,15 +14,7 @@ from pathlib import Path
 
 from sonartrack.acoustics.xcorr_bearing import PeakRecord
 from sonartrack.io.atomic import write_csv
-from sonartrack.io.tables import (
-    MAX_TIME_S,
-    check_columns,
-    check_no_duplicate_rows,
-    check_not_radians,
-    check_sorted,
-    numeric_column,
-    read_table,
-)
+from sonartrack.io.tables import check_no_duplicate_rows, check_not_radians, numeric_column, read_timed_table
 
 PEAK_COLUMNS = ["time_s", "bearing_deg", "amplitude"]
 #: largest peak amplitude taken (33 x the 30000 of a perfect normalised correlation: another scale beyond it)
@@ -69,10 +61,7 @@ def read_peaks_csv(path) -> PeakRecord:
         For a missing, empty or bad file (one line naming the problem).
     """
     what = "peaks"
-    df = read_table(path, what)
-    check_columns(df, PEAK_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
-    check_sorted(t, what, path)
+    df, t = read_timed_table(path, what, PEAK_COLUMNS)
     b = numeric_column(df, "bearing_deg", what, path, lo=0.0, hi=180.0,
                        fix="cone angles 0..180 deg from the array axis; compass bearings?")
     check_not_radians(b, "bearing_deg", what, path)

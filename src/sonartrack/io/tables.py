@@ -11,6 +11,9 @@ first offending value and its data row, and the fix:
   (:func:`check_not_radians`);
 * times sorted (refused, never silently re-sorted: a file out of order is usually a file put together
   wrongly) and no repeated rows (:func:`check_sorted`, :func:`check_no_duplicate_rows`).
+
+Glossary of the parameters: ``path``, the file (str or path-like); ``what``, what the file is, the subject of the
+messages ("contacts", "bearings"); ``col``, a column's name.
 """
 
 from __future__ import annotations
@@ -50,11 +53,6 @@ MAGIC = {b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image", b"%PDF": "a
 
 def sniff_file_type(path: str | Path) -> str | None:
     """What a file is by its first bytes (:data:`MAGIC`), or None when it is none of those.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file.
 
     Returns
     -------
@@ -101,8 +99,6 @@ def read_table(path: str | Path, what: str):
     ----------
     path : str or pathlib.Path
         The file; ``.parquet``/``.pq`` is read as Parquet, anything else as CSV.
-    what : str
-        What the file is, for the messages.
 
     Returns
     -------
@@ -192,13 +188,6 @@ def read_numeric_table(path: str | Path, what: str):
     :func:`_plain_numeric_csv`) is read without importing pandas, to the same values; any other file through
     :func:`read_table`, with its checks and messages.
 
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file.
-    what : str
-        What the file is, for the messages.
-
     Returns
     -------
     NumericTable or pandas.DataFrame
@@ -223,10 +212,6 @@ def check_columns(df, required: list[str], what: str, path) -> None:
         The table.
     required : list of str
         Required column names.
-    what : str
-        What the file is.
-    path : str or path-like
-        The file, for the message.
 
     Raises
     ------
@@ -268,12 +253,6 @@ def numeric_column(df, col: str, what: str, path, *, lo: float = -ABSURD, hi: fl
     ----------
     df : pandas.DataFrame or NumericTable
         The table.
-    col : str
-        Column name.
-    what : str
-        What the file is.
-    path : str or path-like
-        The file, for the message.
     lo, hi : float, default -1e15, 1e15
         Allowed range, in the column's unit.
     lo_open : bool, default False
@@ -317,12 +296,6 @@ def check_range(values: np.ndarray, col: str, what: str, path, *, lo: float = -A
     ----------
     values : ndarray
         The values.
-    col : str
-        Column name.
-    what : str
-        What the file is.
-    path : str or path-like
-        The file.
     lo, hi : float, default -1e15, 1e15
         Allowed range.
     lo_open : bool, default False
@@ -354,12 +327,6 @@ def check_not_radians(values: np.ndarray, col: str, what: str, path, *, min_rows
     ----------
     values : ndarray
         The column (deg).
-    col : str
-        Column name.
-    what : str
-        What the file is.
-    path : str or path-like
-        The file.
     min_rows : int, default 5
         Fewest values for the check to apply.
     switch : str, default ""
@@ -383,10 +350,6 @@ def check_sorted(times: np.ndarray, what: str, path, strict: bool = False, col: 
     ----------
     times : ndarray
         Times (s).
-    what : str
-        What the file is.
-    path : str or path-like
-        The file.
     strict : bool, default False
         Also refuse a repeated time.
     col : str, default "time_s"
@@ -406,6 +369,42 @@ def check_sorted(times: np.ndarray, what: str, path, strict: bool = False, col: 
                          f"{' and drop repeated times' if strict else ''}")
 
 
+def time_column(df, what: str, path, *, strict: bool = False) -> np.ndarray:
+    """The table's ``time_s`` column (s): numbers within +-:data:`MAX_TIME_S`, sorted (``strict``: increasing).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame or NumericTable
+        The table.
+    strict : bool, default False
+        Refuse repeated times too (:func:`check_sorted`).
+
+    Returns
+    -------
+    ndarray
+        The times (s).
+    """
+    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
+    check_sorted(t, what, path, strict=strict)
+    return t
+
+
+def read_timed_table(path, what: str, columns: list[str], *, strict: bool = False):
+    """A table with its required ``columns`` (:func:`read_table`, :func:`check_columns`) and its times
+    (:func:`time_column`).
+
+    Returns
+    -------
+    df : pandas.DataFrame
+        The table.
+    time_s : ndarray
+        Its ``time_s`` column (s), checked.
+    """
+    df = read_table(path, what)
+    check_columns(df, columns, what, path)
+    return df, time_column(df, what, path, strict=strict)
+
+
 def check_no_duplicate_rows(columns: dict[str, np.ndarray], what: str, path) -> None:
     """Refuse two rows with the same values in every column given (a contact listed twice is not two contacts).
 
@@ -413,10 +412,6 @@ def check_no_duplicate_rows(columns: dict[str, np.ndarray], what: str, path) -> 
     ----------
     columns : dict of str to ndarray
         The columns compared.
-    what : str
-        What the file is.
-    path : str or path-like
-        The file.
 
     Raises
     ------
@@ -449,10 +444,6 @@ def check_platform_speed(t, x, y, what: str, path, platform: str = "ownship") ->
         Times (s), strictly increasing.
     x, y : ndarray, shape (n,)
         Positions east and north (m).
-    what : str
-        What the file is.
-    path : str or path-like
-        The file.
     platform : str, default "ownship"
         Name of the platform in the message.
 

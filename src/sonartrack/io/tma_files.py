@@ -42,15 +42,12 @@ from sonartrack.io.atomic import write_csv
 from sonartrack.io.records import BearingRecord, OwnshipTrack, TmaSolution
 from sonartrack.io.tables import (
     MAX_POSITION_M,
-    MAX_TIME_S,
     cell_text,
-    check_columns,
     check_not_radians,
     check_platform_speed,
     check_range,
-    check_sorted,
     numeric_column,
-    read_table,
+    read_timed_table,
 )
 from sonartrack.tma.solution_table import solution_columns
 
@@ -101,10 +98,7 @@ def read_bearings(path, *, check_radians: bool = True) -> BearingRecord:
         On any failed check.
     """
     what = "bearings"
-    df = read_table(path, what)
-    check_columns(df, BEARING_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
-    check_sorted(t, what, path, strict=True)
+    df, t = read_timed_table(path, what, BEARING_COLUMNS, strict=True)
     b_deg = numeric_column(df, "bearing_deg", what, path, lo=-360.0, hi=360.0,
                            fix="beyond ±360: give bearings in degrees clockwise from north")
     if check_radians:
@@ -143,13 +137,10 @@ def read_ownship(path) -> OwnshipTrack:
     Raises
     ------
     InputError
-        On any failed check.
+        On any failed check (columns, times, positions, a single sample, a speed no ship makes).
     """
     what = "ownship"
-    df = read_table(path, what)
-    check_columns(df, OWNSHIP_COLUMNS, what, path)
-    t = numeric_column(df, "time_s", what, path, lo=-MAX_TIME_S, hi=MAX_TIME_S, fix="seconds")
-    check_sorted(t, what, path, strict=True)
+    df, t = read_timed_table(path, what, OWNSHIP_COLUMNS, strict=True)
     if len(t) < 2:
         raise InputError(f"{what} file {path} has one sample: give at least two (the ownship's velocity is needed)")
     x, y = (numeric_column(df, c, what, path, lo=-MAX_POSITION_M, hi=MAX_POSITION_M,

@@ -31,12 +31,7 @@ def dumps(data: dict) -> str:
 
 
 def load(path: str | Path) -> dict:
-    """Read a TOML file.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file.
+    """Read the TOML file ``path`` (str or pathlib.Path).
 
     Returns
     -------

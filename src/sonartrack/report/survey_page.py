@@ -156,18 +156,6 @@ def survey_page(out, rows: list[dict]) -> str:
 
 
 def write_survey_page(out, rows: list[dict]) -> Path:
-    """Write ``OUT/index.html`` and its chart (module doc); returns the page.
-
-    Parameters
-    ----------
-    out : path
-        The survey's output folder.
-    rows : list of dict
-        systems/survey/files.py ``survey_rows``.
-
-    Returns
-    -------
-    Path
-        The page.
-    """
+    """Write ``OUT/index.html`` and its chart (module doc; ``out`` and ``rows`` as :func:`survey_page`'s); returns
+    the page's path."""
     return write_text(Path(out) / "index.html", survey_page(out, rows))

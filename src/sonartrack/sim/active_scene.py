@@ -22,7 +22,7 @@ Levels (active sonar equation, Urick, Principles of Underwater Sound, ch. 2; dB 
                                                                    against the ambient noise alone: the input
                                                                    SNR rho of paper P1's detector)
 
-TL is ``spherical`` (20 log10 r + Thorp absorption at the carrier) or ``ram`` (RAM in the shipped
+TL (sim/active_tl.py) is ``spherical`` (20 log10 r + Thorp absorption at the carrier) or ``ram`` (RAM in the shipped
 environment, acoustics/transmission_loss.py, Tx leg from the source depth, Rx leg from the array depth by
 reciprocity, both to the target's depth, averaged over ``tl_average_m``). Measured: one RAM field at 1.5 kHz
 out to 25 km in the 193 m deep south-summer sea takes 6.6 s (then cached by the caller's store), so both
@@ -45,20 +45,27 @@ from typing import Literal
 import numpy as np
 from pydantic import model_validator
 
-from sonartrack.acoustics.environment import list_environments
 from sonartrack.acoustics.matched_filter import Waveform, range_rate_to_doppler
 from sonartrack.core.angles import wrap_angle
+from sonartrack.core.memory import MEMORY_LIMIT_BYTES, over_limit
 from sonartrack.core.settings import Settings, setting
 from sonartrack.core.units import KNOT_MPS
+from sonartrack.sim.active_tl import (  # noqa: F401  (re-exported: the scene's public names stay here)
+    RAM_RANGE_STEP_M,
+    TL_GRID_STEP_M,
+    TransmissionLoss,
+    max_path_range_m,
+    transmission_loss_model,
+)
 from sonartrack.sim.platforms import ManeuveringTrack
 from sonartrack.sim.scene import (
     MAX_DEPTH_M,
     MAX_DURATION_S,
     MAX_NOISE_LEVEL_DB,
     MAX_POSITION_M,
-    MEMORY_LIMIT_BYTES,
     MIN_LEVEL_DB,
     OwnshipSettings,
+    check_environment_and_names,
     scenes_dir,
 )
 
@@ -225,14 +232,10 @@ class ActiveSceneSettings(Settings):
                              f"Dopplers ({self.occupied_band_hz:.0f} Hz): raise it")
         if w.duration_s * self.sample_rate_hz < 4:
             raise ValueError("the pulse holds fewer than 4 samples: raise sample_rate_hz or duration_s")
-        if self.environment not in list_environments():
-            raise ValueError(f"unknown environment '{self.environment}': choose one of {list_environments()}")
-        names = [t.name for t in self.targets]
-        if len(set(names)) != len(names):
-            raise ValueError(f"target names must be unique: {names}")
-        needs = self.memory_needs()  # refused before anything is allocated, the largest named
-        if sum(need for need, _, _ in needs) > MEMORY_LIMIT_BYTES:
-            need, what, fix = max(needs, key=lambda x: x[0])
+        check_environment_and_names(self.environment, [t.name for t in self.targets], "target")
+        over = over_limit(self.memory_needs())  # refused before anything is allocated, the largest named
+        if over is not None:
+            need, what, fix = over[1]
             raise ValueError(f"{what} would take {need / 1e9:.3g} GB of memory, more than the "
                              f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB the simulator plans for: {fix}")
         return self
@@ -429,132 +432,8 @@ def target_motion(target: TargetSettings, t_s) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(st[0], float).reshape(-1, 2), np.asarray(st[1], float).reshape(-1, 2)
 
 
-#: RAM transmission loss is tabulated on this range step (m) and out to a whole number of RAM_RANGE_STEP_M
-TL_GRID_STEP_M = 10.0
-RAM_RANGE_STEP_M = 5_000.0
-
-
-@dataclass(frozen=True, slots=True)
-class TransmissionLoss:
-    """One-way TL (dB) of the Tx leg and the Rx leg to each depth used by the scene (module doc)."""
-
-    kind: str
-    absorption_db_per_m: float
-    ranges_m: np.ndarray
-    tx_db: dict
-    rx_db: dict
-
-    def tx(self, range_m, depth_m: float) -> np.ndarray:
-        """TL from the source to points at ``depth_m`` and ranges (m).
-
-        Parameters
-        ----------
-        range_m : float or array
-            Horizontal ranges from the source (m).
-        depth_m : float
-            Depth of the points (m); with RAM, one of the depths tabulated for the scene.
-
-        Returns
-        -------
-        numpy.ndarray
-            One-way transmission loss (dB), shaped as ``range_m``.
-        """
-        return self._leg(self.tx_db, range_m, depth_m)
-
-    def rx(self, range_m, depth_m: float) -> np.ndarray:
-        """TL from points at ``depth_m`` to the array (reciprocity: the array as the source).
-
-        Parameters
-        ----------
-        range_m : float or array
-            Horizontal ranges from the array centre (m).
-        depth_m : float
-            Depth of the points (m); with RAM, one of the depths tabulated for the scene.
-
-        Returns
-        -------
-        numpy.ndarray
-            One-way transmission loss (dB), shaped as ``range_m``.
-        """
-        return self._leg(self.rx_db, range_m, depth_m)
-
-    def _leg(self, table: dict, range_m, depth_m: float) -> np.ndarray:
-        r = np.asarray(range_m, dtype=float)
-        if self.kind == "spherical":
-            return 20.0 * np.log10(np.maximum(r, 1.0)) + self.absorption_db_per_m * r
-        return np.interp(r, self.ranges_m, table[float(depth_m)])
-
-
-def max_path_range_m(scene: ActiveSceneSettings) -> float:
-    """Longest one-way range that can echo within a ping's window (m): c T / 2 plus the baseline.
-
-    Parameters
-    ----------
-    scene : ActiveSceneSettings
-        The scene (sound speed c in m/s, ping interval T in s, tow lengths in m).
-
-    Returns
-    -------
-    float
-        The range (m).
-    """
-    baseline = abs(scene.sonar.array_tow_m - scene.sonar.source_tow_m)
-    return scene.sound_speed_mps * scene.ping_interval_s / 2.0 + baseline
-
-
-def transmission_loss_model(scene: ActiveSceneSettings, store=None) -> TransmissionLoss:
-    """The scene's one-way transmission loss (module doc).
-
-    Parameters
-    ----------
-    scene : ActiveSceneSettings
-        Propagation model, environment, depths, carrier.
-    store : optional
-        RAM field store (acoustics/transmission_loss.py ``FieldStore``), used with ``propagation = "ram"``.
-
-    Returns
-    -------
-    TransmissionLoss
-        TL (dB) of the Tx and Rx legs against range (m), per depth.
-    """
-    from sonartrack.acoustics.transmission_loss import thorp_absorption_db_per_km
-
-    fc = scene.waveform.carrier_hz
-    alpha = float(thorp_absorption_db_per_km(fc)) / 1e3
-    if scene.propagation == "spherical":
-        return TransmissionLoss("spherical", alpha, np.zeros(0), {}, {})
-    from sonartrack.acoustics.environment import load_environment
-    from sonartrack.acoustics.transmission_loss import smooth_tl, tl_field
-
-    env = load_environment(scene.environment)
-    rv = scene.reverberation
-    depths = sorted({float(t.depth_m) for t in scene.targets} | {rv.boundary.depth_m, rv.volume.depth_m})
-    rmax = RAM_RANGE_STEP_M * np.ceil(max_path_range_m(scene) * 1.05 / RAM_RANGE_STEP_M)
-    grid = np.arange(0.0, rmax, TL_GRID_STEP_M)
-    s = scene.sonar
-    fields = {z: tl_field(env, fc, z, rmax_m=rmax, store=store) for z in {s.source_depth_m, s.array_depth_m}}
-
-    def line(source_depth, depth):  # as transmission_loss(): one field per source depth, read at each depth
-        f = fields[source_depth]
-        tl = f.at_depth(min(depth, float(f.depths_m[-1])))
-        if scene.tl_average_m > 0:
-            tl = smooth_tl(f.ranges_m, tl, scene.tl_average_m)
-        out = np.interp(grid, f.ranges_m, tl)
-        near = grid < f.ranges_m[0]
-        out[near] = 20.0 * np.log10(np.maximum(grid[near], 1.0))
-        return out
-
-    return TransmissionLoss("ram", alpha, grid, {d: line(s.source_depth_m, d) for d in depths},
-                            {d: line(s.array_depth_m, d) for d in depths})
-
-
 def ping_geometry(scene: ActiveSceneSettings) -> Platforms:
-    """The platforms at every ping's transmit time.
-
-    Parameters
-    ----------
-    scene : ActiveSceneSettings
-        The scene.
+    """The platforms at every ping's transmit time of the ``scene``.
 
     Returns
     -------

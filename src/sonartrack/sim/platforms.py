@@ -92,14 +92,7 @@ class ManeuveringTrack:
 
     def _advance(self, dt, h0, w):
         """Displacement after ``dt`` from heading ``h0`` at turn rate ``w`` (closed form, w -> 0 safe)."""
-        dt, h0, w = np.broadcast_arrays(np.asarray(dt, float), np.asarray(h0, float), np.asarray(w, float))
-        v = self.speed_mps
-        small = np.abs(w * dt) < 1e-9
-        ws = np.where(small, 1.0, w)
-        h1 = h0 + w * dt
-        dx = np.where(small, v * dt * np.sin(h0 + 0.5 * w * dt), v / ws * (np.cos(h0) - np.cos(h1)))
-        dy = np.where(small, v * dt * np.cos(h0 + 0.5 * w * dt), v / ws * (np.sin(h1) - np.sin(h0)))
-        return np.stack([dx, dy], axis=-1)
+        return _displacement(self.speed_mps, dt, h0, w)
 
     def towed(self, t_s, cable_m: float):
         """Position and axis heading of a body towed ``cable_m`` behind along the ship's own track.

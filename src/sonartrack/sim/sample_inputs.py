@@ -157,10 +157,8 @@ def tma_record(scene: PassiveSceneSettings, rng: np.random.Generator, store=None
 
     Parameters
     ----------
-    scene : PassiveSceneSettings
-        The scene.
-    rng : numpy.random.Generator
-        Random stream.
+    scene, rng : PassiveSceneSettings, numpy.random.Generator
+        The scene and the random stream of the record's noise.
     store : optional
         Cache of RAM fields (sim/passive_scene.py).
 
@@ -193,12 +191,7 @@ def tma_record(scene: PassiveSceneSettings, rng: np.random.Generator, store=None
 
 
 def ctd_profile(scene: PassiveSceneSettings) -> dict[str, np.ndarray]:
-    """The scene environment's sound-speed profile as a CTD cast, down to the water depth.
-
-    Parameters
-    ----------
-    scene : PassiveSceneSettings
-        The scene (``environment``).
+    """The sound-speed profile of the ``scene``'s ``environment`` as a CTD cast, down to the water depth.
 
     Returns
     -------

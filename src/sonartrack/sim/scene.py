@@ -46,6 +46,7 @@ from typing import Literal
 from pydantic import model_validator
 
 from sonartrack.acoustics.environment import list_environments
+from sonartrack.core.memory import MEMORY_LIMIT_BYTES  # the limit the scene validators plan for
 from sonartrack.core.settings import Settings, setting
 
 #: bounds of the scene's declarations: a position beyond 1000 km, a level beyond these, more elements or a higher
@@ -69,8 +70,29 @@ MAX_NOISE_LEVEL_DB = 140.0
 MAX_WRAP_FRACTION = 0.1
 #: the RAM field is computed out to the farthest ship: beyond this range it would take hours
 MAX_RAM_RANGE_M = 200_000.0
-#: working memory the simulator may plan for (bytes): a scene asking for more is refused with the figure
-MEMORY_LIMIT_BYTES = 2 * 1024**3
+
+
+def check_environment_and_names(environment: str, names: list[str], what: str) -> None:
+    """A scene validator's checks of its environment (one shipped) and its ``what``s' names (unique).
+
+    Parameters
+    ----------
+    environment : str
+        The environment of the RAM transmission loss.
+    names : list of str
+        The names of the scene's ships or targets (``what``: "ship", "target").
+    what : str
+        What the names name, as the message says.
+
+    Raises
+    ------
+    ValueError
+        Naming the unknown environment and the shipped ones, or the names.
+    """
+    if environment not in list_environments():
+        raise ValueError(f"unknown environment '{environment}': choose one of {list_environments()}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"{what} names must be unique: {names}")
 
 
 class LegSettings(Settings):
@@ -357,11 +379,8 @@ class PassiveSceneSettings(Settings):
             raise ValueError(f"band_hz {self.band_hz} must satisfy 0 <= low < high <= sample_rate_hz / 2 = {nyquist:g}")
         if self.block_s * self.sample_rate_hz < 16 or self.duration_s * self.sample_rate_hz < 16:
             raise ValueError("block_s and duration_s must hold 16 samples or more: lengthen them")
-        if self.environment not in list_environments():
-            raise ValueError(f"unknown environment '{self.environment}': choose one of {list_environments()}")
         names = [s.name for s in self.ships]
-        if len(set(names)) != len(names):
-            raise ValueError(f"ship names must be unique: {names}")
+        check_environment_and_names(self.environment, names, "ship")
         for s in self.ships:
             if s.tonal_hz is not None and s.tonal_hz >= nyquist:
                 raise ValueError(f"ship {s.name}: tonal_hz {s.tonal_hz:g} is at or above sample_rate_hz / 2")

@@ -81,11 +81,10 @@ class Config(Settings):
     plane: CwPlaneSettings = setting(default_factory=CwPlaneSettings, doc="cell geometry (paper sec. V)")
     detector: MftdSettings = setting(default_factory=lambda: mftd.Config().detector,
                                      doc="the default detector (as in mftd; the readings set density and final)")
-    sigma_a_family_mps2: list[float] = setting(default_factory=lambda: [0.25, 1.0, 4.0],
-                                               doc="sigma_a of the Fig. 5 families", unit="m/s^2")
-    n_family: list[int] = setting(default_factory=lambda: [1, 3, 10, 30, 100], doc="N of the Fig. 6 family",
-                                  unit="1")
-    large_n: int = setting(100, "N of the second sigma_a family", unit="1", ge=1)
+    # the mftd study's families, declared once there
+    sigma_a_family_mps2: list[float] = mftd.Config.model_fields["sigma_a_family_mps2"]
+    n_family: list[int] = mftd.Config.model_fields["n_family"]
+    large_n: int = mftd.Config.model_fields["large_n"]
     prior_densities: list[str] = setting(default_factory=lambda: ["smoothed", "centre"],
                                          doc="prior density readings ('smoothed', 'centre')", unit="1")
     finals: list[str] = setting(default_factory=lambda: ["branches", "kept"],

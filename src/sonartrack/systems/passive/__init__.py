@@ -13,7 +13,7 @@ does, at start) stays light.
 
 from __future__ import annotations
 
-import importlib
+from sonartrack.core.lazy import lazy_exports
 
 _EXPORTS = {
     "PassiveResult": "sonartrack.systems.passive.chain", "run_passive": "sonartrack.systems.passive.chain",
@@ -21,10 +21,4 @@ _EXPORTS = {
     "write_passive_tables": "sonartrack.systems.passive.files",
     "PassiveSettings": "sonartrack.systems.passive.settings", "PassiveStages": "sonartrack.systems.passive.settings",
 }
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'sonartrack.systems.passive' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(__name__, _EXPORTS)

@@ -39,6 +39,7 @@ import numpy as np
 
 from sonartrack.acoustics.line_array import Band, LineArray
 from sonartrack.core.errors import InputError
+from sonartrack.core.memory import MEMORY_LIMIT_BYTES, refuse_over_limit  # noqa: F401  (the limit re-exported here)
 
 #: the first pass reads this many excerpts, spread from the file's start to its end ...
 EXCERPTS = 3
@@ -373,8 +374,6 @@ def check_aperture(array: LineArray, band: Band, window_s: float) -> None:
 QUANTUM = {"int16": 2.0**-15, "int24": 2.0**-23, "int32": 2.0**-31}
 
 
-#: working memory the chain may plan for (bytes): settings asking for more are refused with the figure
-MEMORY_LIMIT_BYTES = 2 * 1024**3
 
 
 def memory_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
@@ -444,9 +443,9 @@ def _lofar_needs(stages, n_windows: int) -> list[tuple[float, str, str]]:
 
 
 def check_memory(stages, n_windows: int) -> None:
-    """Refuse settings whose working arrays (:func:`memory_needs`) together exceed :data:`MEMORY_LIMIT_BYTES`
-    (they are held at once: the steering matrix while a batch of spectra is beamformed, the record and the gram
-    as they grow), naming the largest and how to shrink it.
+    """Refuse settings whose working arrays (:func:`memory_needs`) together exceed
+    :data:`~sonartrack.core.memory.MEMORY_LIMIT_BYTES` (they are held at once: the steering matrix while a batch of
+    spectra is beamformed, the record and the gram as they grow), naming the largest and how to shrink it.
 
     Parameters
     ----------
@@ -460,13 +459,7 @@ def check_memory(stages, n_windows: int) -> None:
     InputError
         Naming the array, its size in GB and the settings that make it.
     """
-    needs = memory_needs(stages, n_windows)
-    total = sum(need for need, _, _ in needs)
-    if total > MEMORY_LIMIT_BYTES:
-        need, what, fix = max(needs, key=lambda n: n[0])
-        raise InputError(f"the chain's working arrays would take {total / 1e9:.3g} GB of memory, more than the "
-                         f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB it plans for; the largest, {what}, {need / 1e9:.3g} GB: "
-                         f"{fix}")
+    refuse_over_limit(memory_needs(stages, n_windows), "the chain's")
 
 
 # the residual tests of a fit moved to the tma layer, where ``sonartrack tma`` uses them too (one mechanism);

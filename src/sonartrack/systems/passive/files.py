@@ -32,6 +32,8 @@ reported in a warning; where the ship turned or changed speed in it, the range o
 and the summary (systems/passive/nav_flags.py). A batch ML solution faster than ``verdict.max_speed_mps`` is not
 printed as determined either (nav_flags.py ``bound_batch_speed``: reason "diverged", as the sequential filters'
 verdict).
+
+Glossary of the parameters: ``result``, the chain's result (:class:`~sonartrack.systems.passive.chain.PassiveResult`).
 """
 
 from __future__ import annotations
@@ -421,11 +423,6 @@ def lines_columns(result: PassiveResult) -> dict[str, np.ndarray]:
     and their rates (Hz/s, deg/s), the detection's SNR (dB) and its refined frequency and cone angle (NaN where the
     period had no detection), and the line's harmonic relations within its source.
 
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
-
     Returns
     -------
     dict of str to ndarray
@@ -459,11 +456,6 @@ def lines_columns(result: PassiveResult) -> dict[str, np.ndarray]:
 def lines_table(result: PassiveResult):
     """lines.csv as a table (:func:`lines_columns`; target_id a nullable integer column).
 
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
-
     Returns
     -------
     pandas.DataFrame
@@ -479,11 +471,6 @@ def lines_table(result: PassiveResult):
 
 def passive_summary(result: PassiveResult) -> list[str]:
     """The summary lines (systems/passive/tables.py), a narrowband target's marked as such with its line.
-
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
 
     Returns
     -------

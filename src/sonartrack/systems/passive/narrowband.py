@@ -231,14 +231,7 @@ def source_history(source: LineSource, lines: dict[int, LineTrack], min_snr_db: 
 
 
 def strongest_line(source: LineSource, lines: dict[int, LineTrack]) -> LineTrack:
-    """The source's line of highest mean SNR (its tonal).
-
-    Parameters
-    ----------
-    source : LineSource
-        The source.
-    lines : dict of int to LineTrack
-        Line tracks by id.
+    """The line of highest mean SNR (its tonal) of ``source`` among ``lines`` (line tracks by id).
 
     Returns
     -------

@@ -237,10 +237,8 @@ def narrowband_records(nb: NarrowbandLines, roles: SourceRoles, nav, stages: Pas
 
     Parameters
     ----------
-    nb : NarrowbandLines
-        The lines and sources.
-    roles : SourceRoles
-        :func:`source_roles`.
+    nb, roles : NarrowbandLines, SourceRoles
+        The lines and sources, and their roles (:func:`source_roles`).
     nav : Navigation
         The array's position and heading (the joining test).
     stages : PassiveStages

@@ -1,6 +1,8 @@
 """What the navigation's own faults do to the chain's answers: a gap the ship turned in withholds the range of every
 target tracked across it, and a batch ML faster than any ship is not determined (systems/passive/files.py runs
 these on the chain's result; the gaps themselves are found by io/nav_checks.py).
+
+Glossary of the parameters: ``result``, the chain's result (:class:`~sonartrack.systems.passive.chain.PassiveResult`).
 """
 
 from __future__ import annotations
@@ -95,11 +97,6 @@ def _withheld(tma, why: str, from_s: float):
 def bound_batch_speed(result: PassiveResult) -> PassiveResult:
     """Withhold the batch ML range of a target faster than ``verdict.max_speed_mps`` (the bound the sequential
     filters' verdict applies, tma/verdict.py ``diverged_rows``): reason "diverged", and a warning line.
-
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
 
     Returns
     -------

@@ -335,12 +335,8 @@ class PassiveSettings(Settings):
         """The settings for a 2-channel recording: two sensors, as in paper P0, so their cross-correlation (the
         split-array method with one element per half) over a broad band, [fs / 80, fs / 4] (50-1000 Hz at 4 kHz)
         unless ``band_hz`` is given. A time delay of broadband noise is unambiguous over the physical lags, so the
-        sensor spacing may exceed half a wavelength (P0's 20 m does) and grating lobes are accepted.
-
-        Parameters
-        ----------
-        fs_hz : float
-            Sample rate (Hz).
+        sensor spacing may exceed half a wavelength (P0's 20 m does) and grating lobes are accepted. ``fs_hz``: the
+        recording's sample rate (Hz).
 
         Returns
         -------

@@ -11,6 +11,9 @@ tma/solution_table.py (position, velocity, true bearing, range, course, speed an
 deviations, range_determined and undetermined_reason -- tma/verdict.py, for the ML and the IMM-MGEKF rows alike;
 where the range is not determined, every column but the bearing is left empty, as no number is known there), and
 the track's measured tonal frequency (NaN where none).
+
+Glossary of the parameters: ``result``, the chain's result (:class:`~sonartrack.systems.passive.chain.PassiveResult`);
+``record``, the front end's bearing-time record (:class:`~sonartrack.acoustics.beamforming.BearingTimeRecord`).
 """
 
 from __future__ import annotations
@@ -35,11 +38,6 @@ TARGET_ID_COLUMNS = ["target_id", "track_id", "method", "leg", "side", "side_log
 def peaks_columns(record: BearingTimeRecord) -> dict[str, np.ndarray]:
     """peaks.csv's columns.
 
-    Parameters
-    ----------
-    record : BearingTimeRecord
-        The front end's record.
-
     Returns
     -------
     dict of str to ndarray
@@ -51,11 +49,6 @@ def peaks_columns(record: BearingTimeRecord) -> dict[str, np.ndarray]:
 
 def peaks_table(record: BearingTimeRecord):
     """peaks.csv as a table.
-
-    Parameters
-    ----------
-    record : BearingTimeRecord
-        The front end's record.
 
     Returns
     -------
@@ -133,11 +126,6 @@ EMPTY_TARGET_COLUMNS = TARGET_ID_COLUMNS + ["time_s", "bearing_deg", "range_m", 
 def targets_columns(result: PassiveResult) -> dict[str, np.ndarray]:
     """targets.csv's columns (module docstring).
 
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
-
     Returns
     -------
     dict of str to ndarray
@@ -154,11 +142,6 @@ def targets_columns(result: PassiveResult) -> dict[str, np.ndarray]:
 
 def targets_table(result: PassiveResult):
     """targets.csv as a table (module docstring).
-
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
 
     Returns
     -------
@@ -276,11 +259,6 @@ def target_line(target: Target) -> str:
 
 def summary_lines(result: PassiveResult) -> list[str]:
     """What the command line prints.
-
-    Parameters
-    ----------
-    result : PassiveResult
-        The chain's result.
 
     Returns
     -------

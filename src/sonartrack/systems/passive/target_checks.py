@@ -127,10 +127,8 @@ def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: floa
         The side decision (its sigma).
     record : tuple of ndarray
         (times s, decided side's bearings rad, mirror's bearings rad, array centre (n, 2) m, cone angles rad).
-    min_log_lr : float
-        The side decision's threshold on |ln LR|.
-    beamwidth_deg : float
-        The array's broadside beamwidth (deg).
+    min_log_lr, beamwidth_deg : float
+        The side decision's threshold on |ln LR|, and the array's broadside beamwidth (deg).
 
     Returns
     -------

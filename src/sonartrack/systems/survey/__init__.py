@@ -12,17 +12,11 @@ The names below load on first use, so that importing this package stays light.
 
 from __future__ import annotations
 
-import importlib
+from sonartrack.core.lazy import lazy_exports
 
 _EXPORTS = {
     "SurveyEntry": "sonartrack.systems.survey.manifest", "read_manifest": "sonartrack.systems.survey.manifest",
     "RecordingOutcome": "sonartrack.systems.survey.recording", "run_recording": "sonartrack.systems.survey.recording",
     "SurveySummary": "sonartrack.systems.survey.run", "run_survey": "sonartrack.systems.survey.run",
 }
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'sonartrack.systems.survey' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(__name__, _EXPORTS)

@@ -13,6 +13,8 @@ in the system's temporary folder) and is removed when the cluster closes, interr
 killed run is removed by the next (files.py ``remove_stale``). An interrupt closes the workers at once (a task
 under way is dropped: its recording is done again by the next run). With ``--scheduler`` the client connects and
 closes with the signals held too; the cluster's workers are not ours to stop.
+
+Glossary of the parameters: ``out``, the survey's output folder (str or Path).
 """
 
 from __future__ import annotations
@@ -51,11 +53,6 @@ def check_scheduler(address: str) -> None:
 
 def scratch_dir(out) -> Path:
     """Dask's scratch folder for this process: ``OUT/.dask-scratch-PID`` (module doc).
-
-    Parameters
-    ----------
-    out : str or Path
-        The survey's output folder.
 
     Returns
     -------

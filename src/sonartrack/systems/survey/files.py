@@ -16,6 +16,9 @@ Nothing outside ``--out`` is ever written or removed. A recording's name is one 
 (manifest.py ``name_problem``; :func:`recording_dir` refuses any other), and the survey refuses to run when
 ``OUT/recordings`` or a recording's folder in it is a symbolic link (which would take its writes, or the
 removal of an old folder, somewhere else); the renames and removals never follow a link either.
+
+Glossary of the parameters: ``out``, the survey's output folder (str or Path); ``name``, a recording's name (its
+manifest entry).
 """
 
 from __future__ import annotations
@@ -52,11 +55,6 @@ def _refuse_link(path: Path) -> None:
 def recordings_dir(out) -> Path:
     """The folder of the recordings' folders, ``OUT/recordings``, checked (module doc): not a symbolic link.
 
-    Parameters
-    ----------
-    out : str or Path
-        The survey's output folder.
-
     Returns
     -------
     Path
@@ -79,8 +77,6 @@ def recording_dir(out, name: str) -> Path:
 
     Parameters
     ----------
-    out : str or Path
-        The survey's output folder.
     name : str
         The recording's name (its manifest entry): one plain folder name.
 
@@ -107,13 +103,6 @@ def recording_dir(out, name: str) -> Path:
 def read_status(out, name: str) -> dict | None:
     """The stored status of recording ``name``, or None when it has not been stored.
 
-    Parameters
-    ----------
-    out : str or Path
-        The survey's output folder.
-    name : str
-        The recording's name.
-
     Returns
     -------
     dict or None
@@ -130,13 +119,6 @@ def read_status(out, name: str) -> dict | None:
 
 def is_done(out, name: str) -> bool:
     """Whether recording ``name`` was stored complete with status ok (a rerun skips it).
-
-    Parameters
-    ----------
-    out : str or Path
-        The survey's output folder.
-    name : str
-        The recording's name.
 
     Returns
     -------
@@ -246,11 +228,6 @@ def remove_stale(out) -> list[Path]:
     scratch folders ``OUT/.dask-scratch-PID``, keeping those of a process still running (another survey writing
     into the same folder).
 
-    Parameters
-    ----------
-    out : str or Path
-        The survey's output folder.
-
     Returns
     -------
     list of Path
@@ -270,8 +247,6 @@ def survey_rows(out, entries: list[SurveyEntry]) -> list[dict]:
 
     Parameters
     ----------
-    out : str or Path
-        The survey's output folder.
     entries : list of SurveyEntry
         The manifest's recordings.
 
@@ -299,8 +274,6 @@ def survey_targets(out, rows: list[dict]):
 
     Parameters
     ----------
-    out : str or Path
-        The survey's output folder.
     rows : list of dict
         :func:`survey_rows` (only recordings with status ok are read).
 
@@ -338,8 +311,6 @@ def write_survey_tables(out, rows: list[dict]) -> list[Path]:
 
     Parameters
     ----------
-    out : str or Path
-        The survey's output folder.
     rows : list of dict
         :func:`survey_rows`.
 

@@ -66,12 +66,8 @@ def _run(entry: SurveyEntry, t0: float) -> RecordingOutcome:
 
 
 def run_recording(entry: SurveyEntry) -> RecordingOutcome:
-    """Run the passive chain over one recording of the survey (module doc); never raises.
-
-    Parameters
-    ----------
-    entry : SurveyEntry
-        The manifest's line.
+    """Run the passive chain over one recording of the survey, the manifest's line ``entry`` (module doc); never
+    raises.
 
     Returns
     -------
@@ -91,12 +87,8 @@ def run_recording(entry: SurveyEntry) -> RecordingOutcome:
 
 
 def os_reason(e: OSError) -> str:
-    """One line for a user's file that the system refused to read (module doc): the path, why, and the fix.
-
-    Parameters
-    ----------
-    e : OSError
-        The refusal.
+    """One line for a user's file that the system refused to read (the refusal ``e``; module doc): the path, why,
+    and the fix.
 
     Returns
     -------
