@@ -111,18 +111,30 @@ def test_no_zig_on_a_constant_velocity_record_at_the_default_rate():
 
 
 def test_threshold_solves_the_tail_form():
-    """p = c sqrt(dt) (h / 2)^2 exp(-h / 2) at h = glr_threshold (module doc), for rates over three decades."""
-    from sonartrack.tma.zig import TAIL_FACTOR
+    """rate = K(dt) (h / 2)^2 exp(-h / 2) at h = glr_threshold (module doc), for rates over three decades."""
+    from sonartrack.tma.zig import tail_scale_per_hour
 
-    for rate, dt in [(0.01, 30.0), (0.1, 30.0), (1.0, 60.0), (0.1, 10.0)]:
+    for rate, dt in [(0.01, 30.0), (0.1, 30.0), (1.0, 30.0), (0.1, 10.0), (0.05, 2.0), (0.05, 3.7)]:
         h = glr_threshold(rate, dt)
-        assert TAIL_FACTOR * np.sqrt(dt) * (h / 2) ** 2 * np.exp(-h / 2) == pytest.approx(rate * dt / 3600, rel=1e-9)
+        assert tail_scale_per_hour(dt) * (h / 2) ** 2 * np.exp(-h / 2) == pytest.approx(rate, rel=1e-9)
     assert glr_threshold(0.01, 30.0) > glr_threshold(0.1, 30.0) > glr_threshold(1.0, 30.0)
+
+
+def test_tail_scale_is_the_table_interpolated_in_log_log():
+    """K at a table point is its entry; between two points the geometric mean at the geometric-mean interval; held
+    beyond the ends (tma/zig.py TAIL_SCALE_PER_H)."""
+    from sonartrack.tma.zig import TAIL_SCALE_PER_H, tail_scale_per_hour
+
+    (d0, k0), (d1, k1) = TAIL_SCALE_PER_H[0], TAIL_SCALE_PER_H[1]
+    assert tail_scale_per_hour(d0) == pytest.approx(k0, rel=1e-12)
+    assert tail_scale_per_hour(np.sqrt(d0 * d1)) == pytest.approx(np.sqrt(k0 * k1), rel=1e-12)
+    assert tail_scale_per_hour(d0 / 4) == pytest.approx(k0, rel=1e-12)
+    assert tail_scale_per_hour(TAIL_SCALE_PER_H[-1][0] * 3) == pytest.approx(TAIL_SCALE_PER_H[-1][1], rel=1e-12)
 
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"false_alarm_per_hour": 500.0}, "lower it"),
-    ({"false_alarm_per_hour": -1.0}, "lower it"),
+    ({"false_alarm_per_hour": -1.0}, "must be positive"),
 ])
 def test_bad_rates_are_refused_in_one_line(kwargs, match):
     rng = np.random.default_rng(4)
