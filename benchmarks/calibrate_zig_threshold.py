@@ -5,12 +5,13 @@ Records: the manoeuvring-target study's scene family (sim/manoeuvre_scene.py) wi
 velocity (5-20 km, 4-15 kn, ownship on leg-turn-leg, zig-zag or constant-turn patterns), 60-90 min, bearings every
 ``dt`` s exactly, each bearing's sd the line array's law sigma_base / max(|sin cone|, 0.05) with sigma_base drawn
 in 0.5-1 deg (the study's). The sequential test (:func:`~sonartrack.tma.zig.sequential_glr`, window 1800 s) is
-run at each threshold h; every detection is a false zig. Printed per (dt, h): false zigs, hours, the rate per hour,
-and the constant c that the tail form (module doc of tma/zig.py) would need to predict it,
+run at each threshold h; every detection is a false zig. Printed per (dt, h): false zigs, hours and the rate per
+hour; per dt, the Poisson ML of the tail form's scale over the thresholds (tma/zig.py module doc),
 
-    c = rate x sqrt(max(dt, TEST_EVERY_S)) / (3600 (h / 2)^2 exp(-h / 2)),
+    K = false zigs / (hours x sum_h (h / 2)^2 exp(-h / 2)),
 
-beside the module's TAIL_FACTOR. Usage: ``python benchmarks/calibrate_zig_threshold.py [hours_per_dt]`` (default
+beside the table's K (tma/zig.py :func:`~sonartrack.tma.zig.tail_scale_per_hour`), which was made from this output.
+Usage: ``python benchmarks/calibrate_zig_threshold.py [hours_per_dt]`` (default
 12 h per interval; about 1 min of CPU per 10 h at dt = 2 s, less at longer intervals).
 """
 
@@ -41,10 +42,10 @@ def cv_records(dt: float, hours: float, seed: int):
 
 
 def main() -> None:
-    from sonartrack.tma.zig import TEST_EVERY_S, TAIL_FACTOR, sequential_glr
+    from sonartrack.tma.zig import sequential_glr, tail_scale_per_hour
 
     hours = float(sys.argv[1]) if len(sys.argv) > 1 else 12.0
-    print(f"TAIL_FACTOR {TAIL_FACTOR}, TEST_EVERY_S {TEST_EVERY_S:g}")
+    form = np.array([(h / 2) ** 2 * np.exp(-h / 2) for h in THRESHOLDS])
     for dt in INTERVALS_S:
         counts, total_s = np.zeros(len(THRESHOLDS)), 0.0
         for t, z, own, sigma in cv_records(dt, hours, seed=int(dt * 10)):
@@ -52,10 +53,10 @@ def main() -> None:
             for j, h in enumerate(THRESHOLDS):
                 counts[j] += len(sequential_glr(t, z, own, sigma, h)[1])
         for j, h in enumerate(THRESHOLDS):
-            rate = counts[j] / (total_s / 3600.0)
-            c = rate * np.sqrt(max(dt, TEST_EVERY_S)) / (3600.0 * (h / 2) ** 2 * np.exp(-h / 2))
             print(f"dt {dt:4.0f} s  h {h:4.1f}: {counts[j]:3.0f} false zigs in {total_s / 3600:5.1f} h = "
-                  f"{rate:6.3f} per h; c = {c:.4f}", flush=True)
+                  f"{counts[j] / (total_s / 3600.0):6.3f} per h", flush=True)
+        print(f"dt {dt:4.0f} s: K = {counts.sum() / (total_s / 3600.0 * form.sum()):.2f} per h (table: "
+              f"{tail_scale_per_hour(dt):.2f})", flush=True)
 
 
 if __name__ == "__main__":

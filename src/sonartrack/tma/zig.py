@@ -20,16 +20,26 @@ suffix cumulative sums, so the whole profile costs O(m) (vectorised; no loop ove
 (t - tau)+ = (t - tau) + (tau - t)+ and (t - tau) g lies in G's span, P B(tau) = P [(tau - t_i)+ g_i]: the
 sums over i < tau give the same statistic, and each tau uses the shorter side (less cancellation).
 
-Sequential use. The test runs at each new bearing over the bearings since the start of the current leg, at most
-``window_s`` back; tau ranges over the bearing times leaving >= ``min_before`` bearings before and
->= ``min_after`` after it. The score form screens; where it crosses the threshold h the test is confirmed on
-the window by the GLR itself: the CV ML re-fitted from cold starts too (a warm start can stop in a worse local
-minimum, whose structured residuals look like a zig) and the full (nonlinear) two-leg profile of tma/legs.py's
-model (:func:`change_time_profile`, here), GLR(tau) = C_0 - C_1(tau). A zig is declared when its
-maximum exceeds h; the detection time is that bearing's. tau_hat = argmax GLR(tau), and the zig's interval is
+Sequential use. The test runs as the record grows, at a bearing at least ``test_every_s`` (:data:`TEST_EVERY_S`,
+10 s) after the last bearing it ran at, over the bearings since the start of the current leg, at most ``window_s``
+back; tau ranges over the bearing times leaving >= ``min_before`` bearings and >= ``min_before_s`` (30 s) of the
+window before it and >= ``min_after`` bearings and >= ``min_after_s`` (30 s) after it. Why in seconds: a candidate
+with only two bearings after it tests those two bearings alone, a fresh chi-square(2) at every bearing, so with
+bearings every 2 s the number of nearly independent tests per hour, and the false-alarm rate at a given threshold,
+grew as the bearings got denser; with the spans and the test's cadence in seconds the statistic is a functional of
+the record in time, the same however densely it is sampled (and 2-s bearings cost a fifth of the fits). The score
+form screens; where it crosses the threshold h the test is confirmed on the window by the GLR itself: the CV ML
+re-fitted from many cold starts (a warm start can stop a few units of chi-square above the minimum, e.g. slid out
+along a range the window does not see, and the two-leg model, with two more parameters, then finds the basin: a
+false zig; measured on the study's scenes) and the full (nonlinear) two-leg profile of tma/legs.py's model
+(:func:`change_time_profile`, here), GLR(tau) = C_0 - C_1(tau). A zig is declared when its maximum exceeds h;
+the detection time is that bearing's. tau_hat = argmax GLR(tau), and the zig's interval is
 {tau : GLR(tau) >= GLR(tau_hat) - 3.84} (the chi-square(1) 95 % profile-likelihood interval).
-The test restarts after the change (after the later of the interval's end and the bearing ``min_after``
-before the detection, so that the next leg's window holds no bearing of the last one): segmentation. The legs
+The test restarts after the change's interval (segmentation): the next leg's window starts after the interval's
+end, so that it holds the new leg's bearings between the change and its detection. (It restarted at the detection
+until session 9; the next leg then lost those bearings, its constant-velocity fit before the next zig was short
+and absorbed most of that zig: of the study's 7 detectable zigs found late or never at trial version 7, four are
+found within 120 s since.) The legs
 are then fitted jointly over the whole record with the change times refined
 (:func:`~sonartrack.tma.legs.fit_legs`), and each zig's time and interval are read again from the two-leg
 profile of all the bearings between its neighbours' change times: the reported zig is the one that uses all
@@ -38,30 +48,37 @@ the record, its ``detected_s`` the sequential test's.
 Threshold. GLR* is a maximum over correlated chi-square(2) variables, and successive tests share most of their
 bearings, so neither chi-square(2) nor a Bonferroni bound gives the false-alarm rate. We use the tail form of
 the maximum of a smooth chi-square(2) process (a power of the level times the chi-square(2) tail exp(-h / 2);
-Adler 1981, The Geometry of Random Fields, ch. 6; Siegmund 1985, Sequential Analysis, ch. IV), with the power
-and the constant fitted to simulations:
+Adler 1981, The Geometry of Random Fields, ch. 6; Siegmund 1985, Sequential Analysis, ch. IV), with its scale
+measured by Monte Carlo for each bearing interval:
 
-    p = P(a tested bearing declares a false zig) = c sqrt(dt / 1 s) (h / 2)^2 exp(-h / 2),   c = 0.0085
+    false zigs per hour of constant-velocity motion = K(dt) (h / 2)^2 exp(-h / 2)
 
-(dt the median bearing interval: denser bearings make successive tests more alike), so that h solves
-h / 2 = ln(c sqrt(dt) / alpha) + 2 ln(h / 2) with alpha = (false zigs per hour) x dt / 3600. The simulation
-(constant-velocity targets 5-20 km away at 5-15 kn, ownship at 6 kn on 15-min legs turning 40-100 deg either
-way, 2 h records, window 1800 s), false zigs per tested bearing p and the c it gives:
+(dt the median bearing interval), so that h solves h / 2 = ln(K(dt) / rate) + 2 ln(h / 2). K is a table
+(:data:`TAIL_SCALE_PER_H`, interpolated in log dt and log K, held at its ends; :func:`tail_scale_per_hour`)
+made by benchmarks/calibrate_zig_threshold.py: the manoeuvring-target study's scene family with every target at
+constant velocity (5-20 km, 4-15 kn, ownship on leg-turn-leg, zig-zag or constant-turn patterns, 60-90 min),
+bearings every dt exactly with the line array's noise law (sigma_base / max(|sin cone|, 0.05), sigma_base
+0.5-1 deg), about 12.5 h of records per dt, the sequential test at h = 9, 12 and 15; K is the Poisson ML of one
+scale over the three thresholds (false zigs / (hours x sum of (h / 2)^2 exp(-h / 2))):
 
-    bearings every 20 s, sigma 1.0 deg, 40 h:  h = 9: p = 9.86e-3 (c = 0.0098); h = 13: p = 2.55e-3 (c = 0.0090)
-    bearings every 60 s, sigma 0.5 deg, 60 h:  h = 7: p = 2.76e-2 (c = 0.0097); h = 11: p = 8.31e-3 (c = 0.0087)
+    dt    false zigs at h = 9 / 12 / 15 in hours    K (1/h)
+    2 s   55 / 20 / 7 in 12.3 h                     19.3
+    5 s   41 / 18 / 13 in 12.6 h                    16.6
+    10 s  41 / 14 / 2 in 12.8 h                     12.9
+    30 s  14 / 5 / 2 in 12.6 h                      4.83
+    60 s  3 / 3 / 1 in 12.9 h                       1.57
 
-    bearings every 40 s, sigma 0.75 deg, 80 h: h = 9.6: 54 false zigs where c = 0.0093 predicted 80 (c = 0.0063)
-
-c = 0.0085 is the geometric mean of the five: the stated rate holds within a factor 1.5 over these settings,
-which is what tests/tma/test_zig.py checks (on records of its own). The rate holds only with the right bearing
-sd: a sd stated too small inflates every GLR.
+(3.5 min of CPU.) K levels off below 10 s (the test's cadence) and falls beyond it (fewer tests per hour, and
+>= 2 bearings after tau is then more than 30 s). The old form, p = 0.0085 sqrt(dt) (h / 2)^2 exp(-h / 2) per
+bearing fitted at 20-60 s, is K = 30.6 / sqrt(dt): 21.6 at 2 s, 9.7 at 10 s, 3.95 at 60 s. Each K holds to its
+Poisson error (38 % at 60 s from 7 events, 11-13 % at 2-10 s); the form's fall with h is checked over h = 9-15
+only and the operating point is h ~ 20: at 5 s the count at h = 15 (13) is twice the form's, a heavier tail
+than the form where the bearings-only likelihood is far from quadratic (close, fast-crossing targets), which the
+margin below is for. The rate holds only with the right bearing sd: a sd stated too small inflates every GLR.
 
 Operating point. The default stated rate is :data:`DEFAULT_FALSE_ALARM_PER_HOUR` = 0.05 per hour, half the
-requirement of at most 1 false zig per 10 h (issue 30): the tail form is accurate to a factor 1.5, and the
-manoeuvring-target study measured 4 false zigs in 32 h of constant-velocity records (0.124 per hour) at a stated
-0.1. The threshold at 0.05 per hour with 30 s bearings is h = 18.3 (16.5 at 0.1): a zig must raise the GLR 1.8
-higher, a few bearings later.
+requirement of at most 1 false zig per 10 h (issue 30). The threshold at 0.05 per hour is h = 21.4 with bearings
+every 2 s, 20.4 at 10 s, 17.9 at 30 s.
 """
 
 from __future__ import annotations
@@ -400,7 +417,7 @@ def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *
     stat = np.full(len(t), np.nan)
     zigs: list[Zig] = []
     seg, x_prev, t_prev, t_test = 0, None, None, -np.inf
-    need = max(min_before + min_after, 6)
+    need, spans = max(min_before + min_after, 6), (min_before, min_after, min_before_s, min_after_s)
     for n in range(len(t)):
         w0 = max(seg, int(np.searchsorted(t, t[n] - window_s, side="left")))
         if n - w0 + 1 < need or (t[n] < t_test + test_every_s - 1e-6 and n < len(t) - 1):
@@ -413,7 +430,6 @@ def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *
         if not (np.all(np.isfinite(e)) and np.all(np.isfinite(G))):  # a fit onto the ownship's track: no test here
             x_prev = None
             continue
-        spans = (min_before, min_after, min_before_s, min_after_s)
         _, glr = _candidates(t[w], e, G, *spans)
         stat[n] = glr.max() if len(glr) else np.nan
         if stat[n] > threshold:
