@@ -99,11 +99,11 @@ class Config(Settings):
       within 120 s: five later (120-725 s), two not at all. Most were late because the test restarted the next leg
       at the previous (late or false) detection, not at the change: the leg before the zig was short and its
       constant-velocity fit absorbed the zig (tma/zig.py now restarts at the change's interval end; trial
-      version 8): four of the seven are now found within 120 s (at 46-95 s). Measured with the detector alone on the 100 scenes of trial version 7 (seed 2017, 73 s of CPU):
-      38 zigs detectable, 34 within 120 s (0.89 [0.75, 0.97]; median latency 72 s), the four later at 124, 142,
-      145 and 278 s (turns of 57-94 deg 5-18 km away; noncentralities 41, 66, 38 and 36 against h ~ 21: three
-      with a power of 0.93-0.98, near ``detectable_power``); over
-      all zigs 67 of 271 within 120 s (60 before), 189 found (182).
+      version 8): four of the seven are now found within 120 s (at 46-95 s). Measured with the detector alone on
+      the 100 scenes (seed 2017, trial version 8's detector, 73 s of CPU): 38 zigs detectable, 34 within 120 s
+      (0.89 [0.75, 0.97]; median latency 72 s), the four later at 124, 142, 145 and 278 s (turns of 57-94 deg
+      5-18 km away; noncentralities 41, 66, 38 and 36 against h ~ 21: three with a power of 0.93-0.98, near
+      ``detectable_power``); over all zigs 67 of 271 within 120 s (60 before), 189 found (182).
     * "<= 1 false zig per 10 h": detections matched to no true zig on the constant-velocity scenes, per hour of
       their records. The detector runs at the toolkit's default operating point, a stated 0.05 per hour, half the
       claimed rate (tma/zig.py :data:`~sonartrack.tma.zig.DEFAULT_FALSE_ALARM_PER_HOUR`): its threshold's tail
