@@ -71,6 +71,21 @@ def test_false_alarm_rate_on_constant_velocity_records_is_the_stated_one():
     assert lo - 2.58 * np.sqrt(lo) <= count <= hi + 2.58 * np.sqrt(hi), (count, hours)
 
 
+def test_false_alarm_rate_with_dense_bearings_is_the_stated_one():
+    """The rate per hour does not grow as the bearings get denser (tma/zig.py: the test runs every 10 s, its
+    candidate change times 30 s from the window's ends): 4 records of 2 h, bearings every 3 s, sigma 0.75 deg, at a
+    stated 3 false zigs per hour; the count as in the 30-s test above (measured: 0.8x the stated rate at 2 and 5 s
+    on 12-20 h of these records)."""
+    rng = np.random.default_rng(3)
+    count, hours = 0, 0.0
+    for _ in range(4):
+        t, z, own, sigma = record(rng, 3.0, 7200.0, 0.75)
+        count += len(detect_zigs(t, z, own, sigma, false_alarm_per_hour=3.0, fit=False).zigs)
+        hours += (t[-1] - t[0]) / 3600.0
+    lo, hi = 3.0 * hours / 1.5, 3.0 * hours * 1.5
+    assert lo - 2.58 * np.sqrt(lo) <= count <= hi + 2.58 * np.sqrt(hi), (count, hours)
+
+
 def test_a_60_degree_zig_is_detected_within_120_s():
     """Target 8 km off at 10 kn turns 60 deg at 1805 s; bearings every 20 s, sigma 0.5 deg; ownship on legs."""
     t = np.arange(0.0, 3600.0, 20.0)
@@ -111,18 +126,30 @@ def test_no_zig_on_a_constant_velocity_record_at_the_default_rate():
 
 
 def test_threshold_solves_the_tail_form():
-    """p = c sqrt(dt) (h / 2)^2 exp(-h / 2) at h = glr_threshold (module doc), for rates over three decades."""
-    from sonartrack.tma.zig import TAIL_FACTOR
+    """rate = K(dt) (h / 2)^2 exp(-h / 2) at h = glr_threshold (module doc), for rates over three decades."""
+    from sonartrack.tma.zig import tail_scale_per_hour
 
-    for rate, dt in [(0.01, 30.0), (0.1, 30.0), (1.0, 60.0), (0.1, 10.0)]:
+    for rate, dt in [(0.01, 30.0), (0.1, 30.0), (1.0, 30.0), (0.1, 10.0), (0.05, 2.0), (0.05, 3.7)]:
         h = glr_threshold(rate, dt)
-        assert TAIL_FACTOR * np.sqrt(dt) * (h / 2) ** 2 * np.exp(-h / 2) == pytest.approx(rate * dt / 3600, rel=1e-9)
+        assert tail_scale_per_hour(dt) * (h / 2) ** 2 * np.exp(-h / 2) == pytest.approx(rate, rel=1e-9)
     assert glr_threshold(0.01, 30.0) > glr_threshold(0.1, 30.0) > glr_threshold(1.0, 30.0)
+
+
+def test_tail_scale_is_the_table_interpolated_in_log_log():
+    """K at a table point is its entry; between two points the geometric mean at the geometric-mean interval; held
+    beyond the ends (tma/zig.py TAIL_SCALE_PER_H)."""
+    from sonartrack.tma.zig import TAIL_SCALE_PER_H, tail_scale_per_hour
+
+    (d0, k0), (d1, k1) = TAIL_SCALE_PER_H[0], TAIL_SCALE_PER_H[1]
+    assert tail_scale_per_hour(d0) == pytest.approx(k0, rel=1e-12)
+    assert tail_scale_per_hour(np.sqrt(d0 * d1)) == pytest.approx(np.sqrt(k0 * k1), rel=1e-12)
+    assert tail_scale_per_hour(d0 / 4) == pytest.approx(k0, rel=1e-12)
+    assert tail_scale_per_hour(TAIL_SCALE_PER_H[-1][0] * 3) == pytest.approx(TAIL_SCALE_PER_H[-1][1], rel=1e-12)
 
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"false_alarm_per_hour": 500.0}, "lower it"),
-    ({"false_alarm_per_hour": -1.0}, "lower it"),
+    ({"false_alarm_per_hour": -1.0}, "must be positive"),
 ])
 def test_bad_rates_are_refused_in_one_line(kwargs, match):
     rng = np.random.default_rng(4)
