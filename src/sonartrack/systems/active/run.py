@@ -157,6 +157,12 @@ class ContactTracker:
     turns : TurnModes or None
         Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
         None: the settings' CV modes only.
+    clutter_map : ClutterMap or None
+        detection/clutter_map.py: a contact at a recurring still world position goes only to the confirmed tracks
+        whose gate holds it (a confirmed track keeps its contacts when its target slows, stops or crosses a
+        clutter point); None: no map.
+    scan_interval_s : float or None
+        The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``).
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -232,7 +238,7 @@ class ContactTracker:
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
-        clutter = self.clutter_map.update(contacts.xy, contacts.R)
+        clutter = self.clutter_map.update(contacts.xy, contacts.R, float(t_s))
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
@@ -381,7 +387,8 @@ def clutter_map_of(settings: ActiveSettings):
 
     if settings.clutter_map_pings is None:
         return None
-    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings))
+    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings),
+                      still_probability=settings.clutter_map_still_probability)
 
 
 def geometry_of(nav) -> ActiveGeometry:

@@ -48,6 +48,9 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "confirmed false tracks from MFTD in 3 h of reverberation 6 at 0.9, 2 at 0.97, 0 at "
                                 "0.99 (single-ping: 79, 71, 2); the targets' held fraction falls by <= 0.02 and "
                                 "their time to confirm grows by 30-60 s"),
+    "false_tracks_per_h": (0.5, "stated false confirmed tracks per hour: the confirmation threshold from Ville's bound "
+                                "on IPDA's existence odds and the tracks started so far (tracking/existence.py), in "
+                                "place of confirm_threshold. MEASURED"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
                                   "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
                                   "lets a track enter a turn mode a ping sooner (tests/systems/active/"
@@ -84,7 +87,7 @@ class ActiveSettings(Settings):
               "held longer)",
         unit="1", gt=0, lt=0.1)
     mftd_strong_pfa: float | None = setting(
-        None, "single-ping detections above the single-ping threshold of this per-cell false-alarm rate join the "
+        1e-6, "single-ping detections above the single-ping threshold of this per-cell false-alarm rate join the "
               "MFTD's (not within a beam and 3 delay cells of one): a target entering the window is then detected on "
               "its first ping, not when the MFTD's K-ping stack has filled with it (a 15 dB target: its 3rd ping). "
               "Not set: the MFTD's detections alone", unit="1", gt=0, lt=0.1)
@@ -115,16 +118,18 @@ class ActiveSettings(Settings):
               "without it the default scene (seed 9101, not a study seed) holds 3-4 confirmed tracks on each strong "
               "target at once (not set: no merging)", unit="1", gt=0, lt=1)
     clutter_map_pings: int | None = setting(
-        None, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
-              "the last this many pings is stationary clutter and goes only to confirmed tracks whose gate holds "
-              "it (not set: no map). Off by default: at 3 hits of 8 it ate the default small scene's 5 kn target "
-              "at 15 s pings (its contacts drift 37 m a ping, inside the gate), while it kept tracks off 35 dB "
-              "still points of the independent generator (7 -> 1 confirmed in 20 pings); use it where targets "
-              "move > ~3 m/s or pings are far apart", unit="1", ge=1, le=100)
+        8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
+           "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "
+           "stationary clutter and goes only to confirmed tracks whose gate holds it (not set: no map)",
+        unit="1", ge=1, le=100)
     clutter_map_hits: int = setting(3, "pings of the clutter map's memory that must hold a contact in the gate of a "
                                        "new one for it to be clutter (3: learned before IPDA confirms a track on a "
                                        "strong still point, ~4 pings; at 5 the independent generator's 6 points of 35 "
                                        "dB gave 7 confirmed tracks in 20 pings, at 3 one)", unit="1", ge=1, le=100)
+    clutter_map_still_probability: float | None = setting(
+        0.99, "the clutter map's stillness test (detection/clutter_map.py): a recurring contact is clutter only when "
+              "the velocity fitted through its hits is zero at this chi-square(2) probability, so a slow target's "
+              "contacts, which drift, are spared (not set: recurrence alone)", unit="1", gt=0, lt=1)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
     front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,

@@ -1,0 +1,197 @@
+"""Benchmark: the active chain's clutter defaults measured together (issue 34 items 2, 5), before and after.
+
+One front-end pass per recording (benchmarks/_active_cache.py keeps each ping's single-ping and MFTD detections),
+then the tracker stage with each settings variant on the same detections:
+
+* reverberation only, from the independent generator tests/worlds/active_pings.py (bench_active_clutter.py's
+  worlds): Rayleigh, spiky K (shape 0.5, a texture per scatterer), K 1 + the direct blast of the towed source + 6
+  persistent clutter points of 35 dB; every confirmed track is false (a track on a still point counts);
+  per model and pooled: count, hours, rate and the exact Poisson 95 % upper bound (Garwood);
+* the default scene of ``sonartrack simulate --kind active`` (1 h, 30 s pings) with its LFM and as CW: held % per
+  target (pings at which a confirmed track lies within ``HELD_M`` of it, over its truth rows) and the confirmed
+  tracks never within ``HELD_M`` of a target or its mirror;
+* acquisition: a 15 dB target (steady and Swerling 1) entering the window at its 4th ping on K 1
+  (bench_active_clutter.py ``measure_acquisition``'s worlds): pings from its first echo to a confirmed track
+  within 500 m.
+
+Run (front ends cached in --cache; first run slow: ~1.3 CPU-s a generator ping, more for the scene's):
+
+    PYTHONPATH=src python benchmarks/bench_active_defaults.py --cache /tmp/clutter_cache [--hours 2] [--acq-runs 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_active_clutter as bac  # noqa: E402
+from _active_cache import cached, detect_pings, detect_world, track_cached  # noqa: E402
+from worlds.active_pings import Target, ping  # noqa: E402
+
+HELD_M = 1000.0
+REVERB = ("rayleigh", "K nu=0.5", "K nu=1+blast+points")
+
+#: settings variants: name -> ActiveSettings fields changed from main's defaults before this change
+BEFORE = {"clutter_map_pings": None, "mftd_strong_pfa": None, "tracker": {"false_tracks_per_h": None}}
+
+
+#: ``--set``: fields changed in the ``after`` variant (trying values before they become defaults)
+AFTER: dict = {}
+
+
+def variant(name: str, base) -> object:
+    """``base`` (the chain's settings on the path) with the variant's fields: ``before`` the old defaults,
+    ``after`` the settings as they are (with ``AFTER``)."""
+    if name == "after":
+        upd = dict(AFTER)
+        if "tracker" in upd:
+            upd["tracker"] = base.tracker.model_copy(update=upd["tracker"])
+        return base.model_copy(update=upd)
+    upd = dict(BEFORE)
+    upd["tracker"] = base.tracker.model_copy(update=upd["tracker"])
+    return base.model_copy(update=upd)
+
+
+def reverb_caches(folder: Path, hours: float) -> dict:
+    out = {}
+    for name in REVERB:
+        j = list(bac.MODELS).index(name)
+        w = bac.base_world(hours, 3400 + j, **bac.MODELS[name])
+        out[name] = cached(folder / f"{name.replace(' ', '_')}_{hours}h.pkl",
+                           lambda w=w: detect_world(w, bac.chain_settings(), bac.records, ping))
+    return out
+
+
+def acquisition_caches(folder: Path, runs: int) -> dict:
+    out = {}
+    for sw in (False, True):
+        for r in range(runs):
+            rng = np.random.default_rng(3500 + r)
+            ang, rad = rng.uniform(0, 2 * np.pi), rng.uniform(3000.0, 6000.0)
+            tgt = Target(rad * np.sin(ang), rad * np.cos(ang), *(2.0 * rng.standard_normal(2)), ebr_db=15.0,
+                         start_s=90.0, swerling=sw)
+            w = replace(bac.base_world(0.1, 3500 + r, texture_shape=1.0), pings=14, targets=(tgt,))
+            key = f"acq_{'sw1' if sw else 'steady'}_{r}"
+            out[key] = cached(folder / f"{key}.pkl",
+                              lambda w=w: detect_world(w, bac.chain_settings(), bac.records, ping))
+    return out
+
+
+def scene_config(kind: str, quick: bool = False):
+    """The study's config on the default scene of ``simulate --kind active`` (``quick``: the study's 5-minute quick
+    scene, 10 s pings, a strong and a weak target), with the pulse ``kind``."""
+    from sonartrack.sim.active_scene import ActiveSceneSettings
+    from sonartrack.studies import active_chain as ac
+
+    scene = ac.quick_scene() if quick else ActiveSceneSettings()
+    if kind == "cw":
+        scene = scene.model_copy(update={"waveform": scene.waveform.model_copy(update={"kind": "cw"})})
+    return ac.Config(scene=scene)
+
+
+def scene_cache(folder: Path, kind: str, quick: bool = False) -> dict:
+    from sonartrack.studies import active_chain as ac
+    from sonartrack.systems.active.run import geometry_of
+
+    cfg = scene_config(kind, quick)
+
+    def make():
+        pings, table, nav, truth = ac.simulate(cfg.scene)
+        out = detect_pings(pings(), table, geometry_of(nav), cfg.chain_settings())
+        out["truth"] = truth
+        return out
+
+    return cached(folder / f"scene_{'quick_' if quick else ''}{kind}.pkl", make)
+
+
+def held_percent(tracks, truth: dict, geometry) -> tuple[dict, int]:
+    """Per target, % of its truth rows with a confirmed track within HELD_M; and the confirmed tracks never within
+    HELD_M of a target or its mirror."""
+    from sonartrack.studies.active_chain import _false_track_count, _mirror
+
+    tr = tracks.tracks
+    t, xy = np.asarray(truth["time_s"], float), np.stack([truth["x_m"], truth["y_m"]], -1).astype(float)
+    names = np.asarray(truth["target"]).astype(str)
+    held = {}
+    for name in dict.fromkeys(names):
+        rows = np.nonzero(names == name)[0]
+        n = 0
+        for r in rows:
+            at = (tr.time_s == t[r]) & tr.confirmed
+            n += bool(at.any() and np.hypot(*(tr.x[at, :2] - xy[r]).T).min() < HELD_M)
+        held[name] = 100.0 * n / len(rows)
+    return held, _false_track_count(tracks, t, xy, _mirror(geometry, t, xy), HELD_M)
+
+
+def delay(tracks, truth: list[dict]) -> int | None:
+    return bac.acquisition_delay(tracks, truth)
+
+
+def main() -> None:
+    from sonartrack.systems.active.settings import ActiveSettings
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cache", type=Path, required=True)
+    ap.add_argument("--hours", type=float, default=2.0)
+    ap.add_argument("--acq-runs", type=int, default=5)
+    ap.add_argument("--parts", default="reverb,acq,scene")
+    ap.add_argument("--variants", default="before,after")
+    ap.add_argument("--quick-scene", action="store_true", help="the study's 5-minute quick scene, not the 1-hour one")
+    ap.add_argument("--set", default="", help="after variant: FIELD=VALUE,... (tracker.F=V for the tracker's)")
+    a = ap.parse_args()
+    for kv in filter(None, a.set.split(",")):
+        k, v = kv.split("=")
+        val = None if v == "None" else float(v)
+        if k.startswith("tracker."):
+            AFTER.setdefault("tracker", {})[k[8:]] = val
+        else:
+            AFTER[k] = int(val) if val is not None and val.is_integer() and "pfa" not in k else val
+    parts = a.parts.split(",")
+    base = ActiveSettings(spacing_m=0.5)
+    if "reverb" in parts:
+        caches = reverb_caches(a.cache, a.hours)
+        for v in a.variants.split(","):
+            tot_k, tot_h = 0, 0.0
+            for name, c in caches.items():
+                t0 = time.perf_counter()
+                k = bac.confirmed_tracks(_R(track_cached(c, variant(v, base))))
+                lo, hi = bac.poisson_interval(k)
+                tot_k, tot_h = tot_k + k, tot_h + c["hours"]
+                print(f"{v:>6} {name:<22} {k:3d} in {c['hours']:.2f} h = {k / c['hours']:5.2f}/h  95 % upper "
+                      f"{hi / c['hours']:.2f}/h  ({time.perf_counter() - t0:.0f} s)", flush=True)
+            hi = bac.poisson_interval(tot_k)[1]
+            print(f"{v:>6} {'pooled':<22} {tot_k:3d} in {tot_h:.2f} h = {tot_k / tot_h:5.2f}/h  95 % upper "
+                  f"{hi / tot_h:.2f}/h", flush=True)
+    if "acq" in parts:
+        caches = acquisition_caches(a.cache, a.acq_runs)
+        for v in a.variants.split(","):
+            d = {k: bac.acquisition_delay(_R(track_cached(c, variant(v, base))), c["truth"]) for k, c in caches.items()}
+            ok = sum(x is not None and x <= 5 for x in d.values())
+            print(f"{v:>6} acquisition (pings to confirm) {d}; within 5: {ok}/{len(d)}", flush=True)
+    if "scene" in parts:
+        for kind in ("lfm", "cw"):
+            c = scene_cache(a.cache, kind, a.quick_scene)
+            s = scene_config(kind, a.quick_scene).chain_settings()
+            for v in a.variants.split(","):
+                held, false = held_percent(track_cached(c, variant(v, s)), c["truth"], c["geometry"])
+                label = "quick" if a.quick_scene else "default"
+                print(f"{v:>6} {label} scene {kind}: held % {({k: round(x) for k, x in held.items()})}; false "
+                      f"confirmed {false} in {c['hours']:.2f} h", flush=True)
+
+
+class _R:
+    """The ``tracks`` attribute bench_active_clutter's counters read."""
+
+    def __init__(self, tracks):
+        self.tracks = tracks
+
+
+if __name__ == "__main__":
+    main()
