@@ -11,18 +11,19 @@ time between pings. Two tests, on each contact z_0 (covariance R_0, time t_0) of
    is the ping's hit. Fewer than ``min_hits`` hits: not clutter.
 2. stillness: the hits and z_0 are fitted by weighted least squares with a point moving at a constant velocity,
    z_j = a + v (t_j - t_0) + e_j, e_j ~ N(0, R_j) (information J = sum_j H_j^T R_j^-1 H_j, H_j = [I, (t_j - t_0) I]);
-   the contact is clutter only when the fitted velocity is consistent with zero,
-   v^T [J^-1]_vv^-1 v <= chi2_2 quantile at ``still_probability``. The points of the fit are taken in a wider gate
-   than the hits', one that lets a point move at up to ``slow_mps`` (R_0 + R_j + (slow_mps (t_j - t_0))^2 I), so
-   that a slow target's contacts further back than the hits' gate reaches still enter the fit and pin its velocity.
+   the contact is clutter only when the fit shows the point slower than ``slow_mps``: the confidence ellipse of v
+   at ``still_probability`` lies inside that speed, |v| + sqrt(gamma_s lambda_max(C_vv)) <= slow_mps (C_vv =
+   [J^-1]_vv, gamma_s the chi2_2 quantile). The fit's points are taken in a wider gate than the hits', one that lets
+   a point move at up to 2 ``slow_mps`` (R_0 + R_j + (2 slow_mps (t_j - t_0))^2 I).
 
 The first test alone (the map of before) also marks a slow target's contacts: it matches a ping j back while its
 drift v j T stays inside the gate (~3 sqrt(2) sigma; sigma 70 m, T 30 s, 3 hits: below ~3 m/s). The second test
-spares it: the velocity of a straight line through n hits is known to sigma_v ~ sigma sqrt(12 / (n (n^2 - 1))) / T
-(0.36 m/s across the beam for n = 8 at 70 m; ~0.04 m/s along it, where the delay sets sigma ~ 8 m), so a target of
-1 m/s across the beam or 0.1 m/s along it is spared after a few pings, while a still point is called moving on a
-fraction 1 - ``still_probability`` of its pings only (a lone contact given to tentative tracks, which the next
-ping's withheld contact starves). A target that is still from the moment it enters the window is a still echo and
+spares it: a contact is clutter only once the fit has shown it slower than ``slow_mps``, which takes time, not
+pings: the velocity of a straight line through n hits T apart is known to sigma_v ~ sigma sqrt(12 / (n (n^2 - 1))) /
+T (sigma 70 m across the beam, T 30 s: 0.57 m/s at n = 5, so a still point is clutter from its 5th-6th ping; at T
+10 s it takes ~10 pings, the same time), and a target faster than ``slow_mps`` is never shown slower (but for the
+test's error). A still point not yet shown still goes to the tracker (a track may start on it; the rate-based
+confirmation, tracking/existence.py, must keep it unconfirmed until the map has learned the point). A target that is still from the moment it enters the window is a still echo and
 cannot be told from clutter by position; one that stops after its track is confirmed keeps its contacts: the chain
 withholds clutter contacts only from tracks that are not confirmed (systems/active/run.py), so a confirmed track
 still gets the contacts in its gate, whether its target stops or passes over a clutter point.
@@ -49,14 +50,14 @@ class ClutterMap:
     gate_probability : float
         Probability of the chi-square(2) gate on the difference of two positions.
     still_probability : float or None
-        Probability of the chi-square(2) test that the fitted velocity of the hits is zero (None: no stillness test,
-        recurrence alone).
+        Probability of the velocity's confidence ellipse in the stillness test (None: no stillness test, recurrence
+        alone).
     slow_mps : float
-        Speed allowed in the gate of the fit's points (m/s).
+        A contact is clutter only when its fit shows it slower than this (m/s).
     """
 
     def __init__(self, span: int = 8, min_hits: int = 3, gate_probability: float = 0.99,
-                 still_probability: float | None = 0.99, slow_mps: float = 3.0):
+                 still_probability: float | None = 0.9, slow_mps: float = 1.5):
         self.span, self.min_hits, self.slow_mps = int(span), int(min_hits), float(slow_mps)
         self.gamma = float(gate_threshold(gate_probability, 2))
         self.still_gamma = None if still_probability is None else float(gate_threshold(still_probability, 2))
@@ -88,14 +89,14 @@ class ClutterMap:
             if not (len(xy) and len(xy_j)):
                 continue
             hits += (mahalanobis2(xy, R, xy_j, R_j) <= self.gamma).any(axis=1)
-            d2 = mahalanobis2(xy, R, xy_j, R_j, (self.slow_mps * (t_j - t_s)) ** 2)
+            d2 = mahalanobis2(xy, R, xy_j, R_j, (2.0 * self.slow_mps * (t_j - t_s)) ** 2)
             near = np.argmin(d2, axis=1)
             on = d2[np.arange(len(xy)), near] <= self.gamma
             _add_point(info, vec, on, xy_j[near] - xy, _inv2(R_j[near]), t_j - t_s)
         self._pings.append((float(t_s), xy, R))
         clutter = hits >= self.min_hits
         if self.still_gamma is not None and clutter.any():
-            clutter[clutter] = still_statistic(info[clutter], vec[clutter]) <= self.still_gamma
+            clutter[clutter] = speed_bound(info[clutter], vec[clutter], self.still_gamma) <= self.slow_mps
         return clutter
 
 
@@ -118,29 +119,51 @@ def _add_point(info: np.ndarray, vec: np.ndarray, on: np.ndarray, dz: np.ndarray
     vec[:, 2:] += tau * wz
 
 
-def still_statistic(info: np.ndarray, vec: np.ndarray) -> np.ndarray:
-    """v^T C_vv^-1 v of the weighted least-squares velocity (module doc, test 2); chi-square(2) for a still point.
+def velocity_fit(info: np.ndarray, vec: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The weighted least-squares velocity of the fit z_j = a + v tau_j (module doc, test 2).
 
     Parameters
     ----------
     info : ndarray (n, 4, 4)
-        J = sum_j H_j^T R_j^-1 H_j of the fit z_j = a + v tau_j (H_j = [I, tau_j I]).
+        J = sum_j H_j^T R_j^-1 H_j (H_j = [I, tau_j I]).
     vec : ndarray (n, 4)
         sum_j H_j^T R_j^-1 z_j.
 
     Returns
     -------
-    numpy.ndarray
-        (n,) statistic; 0 where the fit has no velocity information (all points at one time).
+    tuple
+        (ok (n,) bool: the fit has velocity information, v (n, 2) m/s, C_vv (n, 2, 2) (m/s)^2; NaN where not ok).
     """
     det = np.linalg.det(info)
     ok = np.isfinite(det) & (det > 0)
-    out = np.zeros(len(info))
+    v, C = np.full((len(info), 2), np.nan), np.full((len(info), 2, 2), np.nan)
     if ok.any():
-        C = np.linalg.inv(info[ok])
-        theta = np.einsum("nij,nj->ni", C, vec[ok])
-        v, Cvv = theta[:, 2:], C[:, 2:, 2:]
-        out[ok] = np.einsum("ni,nij,nj->n", v, _inv2(Cvv), v)
+        Ci = np.linalg.inv(info[ok])
+        v[ok], C[ok] = np.einsum("nij,nj->ni", Ci, vec[ok])[:, 2:], Ci[:, 2:, 2:]
+    return ok, v, C
+
+
+def speed_bound(info: np.ndarray, vec: np.ndarray, gamma: float) -> np.ndarray:
+    """|v| + sqrt(gamma lambda_max(C_vv)): the largest speed in the fitted velocity's confidence ellipse (m/s; inf
+    where the fit has no velocity information).
+
+    Parameters
+    ----------
+    info, vec : ndarray (n, 4, 4), (n, 4)
+        As :func:`velocity_fit`.
+    gamma : float
+        The ellipse's chi-square(2) level.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) speed (m/s).
+    """
+    ok, v, C = velocity_fit(info, vec)
+    out = np.full(len(info), np.inf)
+    if ok.any():
+        lam = np.linalg.eigvalsh(C[ok])[:, -1]
+        out[ok] = np.hypot(v[ok, 0], v[ok, 1]) + np.sqrt(gamma * np.maximum(lam, 0.0))
     return out
 
 

@@ -388,7 +388,8 @@ def clutter_map_of(settings: ActiveSettings):
     if settings.clutter_map_pings is None:
         return None
     return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings),
-                      still_probability=settings.clutter_map_still_probability)
+                      still_probability=settings.clutter_map_still_probability,
+                      slow_mps=settings.clutter_map_slow_mps)
 
 
 def geometry_of(nav) -> ActiveGeometry:

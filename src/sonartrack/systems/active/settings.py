@@ -127,9 +127,13 @@ class ActiveSettings(Settings):
                                        "strong still point, ~4 pings; at 5 the independent generator's 6 points of 35 "
                                        "dB gave 7 confirmed tracks in 20 pings, at 3 one)", unit="1", ge=1, le=100)
     clutter_map_still_probability: float | None = setting(
-        0.99, "the clutter map's stillness test (detection/clutter_map.py): a recurring contact is clutter only when "
-              "the velocity fitted through its hits is zero at this chi-square(2) probability, so a slow target's "
-              "contacts, which drift, are spared (not set: recurrence alone)", unit="1", gt=0, lt=1)
+        0.9, "the clutter map's stillness test (detection/clutter_map.py): a recurring contact is clutter only when "
+             "the confidence ellipse, at this probability, of the velocity fitted through its recurrences lies "
+             "within clutter_map_slow_mps, so a moving target's contacts are spared (not set: recurrence alone)",
+        unit="1", gt=0, lt=1)
+    clutter_map_slow_mps: float = setting(
+        1.5, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
+             "than this, not yet confirmed, is taken for clutter once its fit shows it slower)", unit="m/s", gt=0)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
     front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,
