@@ -17,16 +17,19 @@ time between pings. Two tests, on each contact z_0 (covariance R_0, time t_0) of
    a point move at up to 2 ``slow_mps`` (R_0 + R_j + (2 slow_mps (t_j - t_0))^2 I).
 
 The first test alone (the map of before) also marks a slow target's contacts: it matches a ping j back while its
-drift v j T stays inside the gate (~3 sqrt(2) sigma; sigma 70 m, T 30 s, 3 hits: below ~3 m/s). The second test
-spares it: a contact is clutter only once the fit has shown it slower than ``slow_mps``, which takes time, not
-pings: the velocity of a straight line through n hits T apart is known to sigma_v ~ sigma sqrt(12 / (n (n^2 - 1))) /
-T (sigma 70 m across the beam, T 30 s: 0.57 m/s at n = 5, so a still point is clutter from its 5th-6th ping; at T
-10 s it takes ~10 pings, the same time), and a target faster than ``slow_mps`` is never shown slower (but for the
-test's error). A still point not yet shown still goes to the tracker (a track may start on it; the rate-based
-confirmation, tracking/existence.py, must keep it unconfirmed until the map has learned the point). A target that is still from the moment it enters the window is a still echo and
-cannot be told from clutter by position; one that stops after its track is confirmed keeps its contacts: the chain
-withholds clutter contacts only from tracks that are not confirmed (systems/active/run.py), so a confirmed track
-still gets the contacts in its gate, whether its target stops or passes over a clutter point.
+drift v j T stays inside the gate (~3 sqrt(2) sigma; sigma 70 m, T 30 s, 3 hits: below ~3 m/s; at T 10 s it ate the
+study's quick-scene 5 kn target). The second test spares it: a contact is clutter only once the fit has shown it
+slower than ``slow_mps``, which takes time, not pings: the velocity of a straight line through n hits T apart is
+known to sigma_v ~ sigma sqrt(12 / (n (n^2 - 1))) / T (sigma 70 m across the beam, T 30 s: 0.57 m/s at n = 5, so a
+still point is clutter from its 5th-8th ping; at T 10 s it takes about the same time), and a target faster than
+``slow_mps`` is never shown slower (but for the test's error). A still point not yet shown still goes to the
+tracker, and a track may start on it; the chain holds back the confirmation of a track slower than ``slow_mps``
+sitting on a recurring contact (tracking/deleters.py :class:`StillHold`: ``recurring`` is the mask it reads) until
+its own speed shows it moving or the map withholds the point. A target slower than ``slow_mps`` from the moment it
+enters the window is taken for clutter (a still target is a still echo: nothing in the positions tells them apart);
+one that slows or stops after its track is confirmed keeps its contacts: the chain withholds clutter contacts only
+from tracks that are not confirmed (systems/active/run.py), so a confirmed track still gets the contacts in its
+gate, whether its target stops or passes over a clutter point.
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ class ClutterMap:
         self.gamma = float(gate_threshold(gate_probability, 2))
         self.still_gamma = None if still_probability is None else float(gate_threshold(still_probability, 2))
         self._pings: deque = deque(maxlen=self.span)
+        self.recurring = np.zeros(0, bool)  # the last update's contacts with >= min_hits hits (still or not)
 
     def update(self, xy: np.ndarray, R: np.ndarray, t_s: float = 0.0) -> np.ndarray:
         """Mark a ping's contacts, then remember them.
@@ -95,6 +99,7 @@ class ClutterMap:
             _add_point(info, vec, on, xy_j[near] - xy, _inv2(R_j[near]), t_j - t_s)
         self._pings.append((float(t_s), xy, R))
         clutter = hits >= self.min_hits
+        self.recurring = clutter.copy()
         if self.still_gamma is not None and clutter.any():
             clutter[clutter] = speed_bound(info[clutter], vec[clutter], self.still_gamma) <= self.slow_mps
         return clutter

@@ -189,12 +189,17 @@ class ContactTracker:
             require(scan_interval_s is not None, "false_tracks_per_h needs the ping interval: give more than one ping")
             self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
                                                     settings.initial_existence, settings.terminate_threshold)
+        self.clutter_map, self.hold = clutter_map, None
+        if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
+            from sonartrack.tracking.deleters import StillHold
+
+            self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
+                                                         gate_threshold(settings.gate_probability, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
         if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
             self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
-        self.clutter_map = clutter_map
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
@@ -239,6 +244,8 @@ class ContactTracker:
         if self.clutter_map is None:
             return keep
         clutter = self.clutter_map.update(contacts.xy, contacts.R, float(t_s))
+        r = self.clutter_map.recurring
+        self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False

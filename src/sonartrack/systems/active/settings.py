@@ -48,7 +48,7 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "confirmed false tracks from MFTD in 3 h of reverberation 6 at 0.9, 2 at 0.97, 0 at "
                                 "0.99 (single-ping: 79, 71, 2); the targets' held fraction falls by <= 0.02 and "
                                 "their time to confirm grows by 30-60 s"),
-    "false_tracks_per_h": (0.5, "stated false confirmed tracks per hour: the confirmation threshold from Ville's bound "
+    "false_tracks_per_h": (1.0, "stated false confirmed tracks per hour: the confirmation threshold from Ville's bound "
                                 "on IPDA's existence odds and the tracks started so far (tracking/existence.py), in "
                                 "place of confirm_threshold. MEASURED"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
@@ -132,7 +132,7 @@ class ActiveSettings(Settings):
              "within clutter_map_slow_mps, so a moving target's contacts are spared (not set: recurrence alone)",
         unit="1", gt=0, lt=1)
     clutter_map_slow_mps: float = setting(
-        1.5, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
+        1.0, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
              "than this, not yet confirmed, is taken for clutter once its fit shows it slower)", unit="m/s", gt=0)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
