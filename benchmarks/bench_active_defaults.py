@@ -58,15 +58,17 @@ def variant(name: str, base) -> object:
     return base.model_copy(update=upd)
 
 
-def reverb_caches(folder: Path, hours: float, chunks: int) -> dict:
+def reverb_caches(folder: Path, hours: float, chunks: int, cached_only: bool = False) -> dict:
     """Per model, ``chunks`` recordings of ``hours`` each (seeds 3400 + 100 chunk + model index; each its own
-    recording: the MFTD and tracker start afresh); the ones not cached yet are made."""
+    recording: the MFTD and tracker start afresh); the ones not cached yet are made (``cached_only``: skipped)."""
     out = {}
     for name in REVERB:
         j = list(bac.MODELS).index(name)
         for i in range(chunks):
             w = bac.base_world(hours, 3400 + 100 * i + j, **bac.MODELS[name])
             path = folder / f"chunk_{name.replace(' ', '_')}_{i}.pkl"
+            if cached_only and not path.exists():
+                continue
             out.setdefault(name, []).append(cached(path, lambda w=w: detect_world(w, bac.chain_settings(), bac.records,
                                                                                   ping)))
     return out
@@ -144,6 +146,7 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, required=True)
     ap.add_argument("--hours", type=float, default=0.5, help="length of each reverberation-only recording")
     ap.add_argument("--chunks", type=int, default=4, help="recordings per clutter model")
+    ap.add_argument("--cached-only", action="store_true", help="only the recordings already in --cache")
     ap.add_argument("--acq-runs", type=int, default=5)
     ap.add_argument("--parts", default="reverb,acq,scene")
     ap.add_argument("--variants", default="before,after")
@@ -160,7 +163,7 @@ def main() -> None:
     parts = a.parts.split(",")
     base = ActiveSettings(spacing_m=0.5)
     if "reverb" in parts:
-        caches = reverb_caches(a.cache, a.hours, a.chunks)
+        caches = reverb_caches(a.cache, a.hours, a.chunks, a.cached_only)
         for v in a.variants.split(","):
             tot_k, tot_h = 0, 0.0
             for name, cs in caches.items():

@@ -31,7 +31,7 @@ import bench_active_clutter as bac  # noqa: E402
 from _active_cache import cached, detect_world, track_cached  # noqa: E402
 from worlds.active_pings import Target, ping  # noqa: E402
 
-EBR_DB = (6.0, 10.0, 14.0)
+EBR_DB = (6.0, 10.0, 14.0, 18.0)
 HELD_M = 500.0
 
 
