@@ -162,7 +162,8 @@ class ContactTracker:
         whose gate holds it (a confirmed track keeps its contacts when its target slows, stops or crosses a
         clutter point); None: no map.
     scan_interval_s : float or None
-        The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``).
+        The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``); None
+        (a single ping): the settings' ``confirm_threshold``.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -183,10 +184,9 @@ class ContactTracker:
             self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
                                                                       m.clutter_density_per_m2, rate_sd_mps,
                                                                       float(max_range_rate_mps))
-        if settings.false_tracks_per_h is not None:  # confirmation at the stated rate (tracking/existence.py)
-            from sonartrack.tracking.deleters import RateConfirmation
+        if settings.false_tracks_per_h is not None and scan_interval_s is not None:  # at the stated rate
+            from sonartrack.tracking.deleters import RateConfirmation  # (tracking/existence.py; one ping: no rate)
 
-            require(scan_interval_s is not None, "false_tracks_per_h needs the ping interval: give more than one ping")
             self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
                                                     settings.initial_existence, settings.terminate_threshold)
         self.clutter_map, self.hold = clutter_map, None
