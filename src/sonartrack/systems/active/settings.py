@@ -128,8 +128,8 @@ class ActiveSettings(Settings):
            "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "
            "stationary clutter and goes only to confirmed tracks whose gate holds it; a slow new track on a recurring "
            "contact is not confirmed until its speed or the map decides (tracking/deleters.py StillHold). On the "
-           "independent generator's K 1 + blast + 6 still points of 35 dB (1.5 h) it cut the confirmed tracks on the "
-           "points and their mirrors from 36 to 11, while the study's quick scene (5 kn targets, 10 s pings) is held "
+           "independent generator's K 1 + blast + 6 still points of 35 dB (2 h) it cut the confirmed tracks on the "
+           "points and their mirrors from 48 to 14, while the study's quick scene (5 kn targets, 10 s pings) is held "
            "as without it (not set: no map)",
         unit="1", ge=1, le=100)
     clutter_map_hits: int = setting(3, "pings of the clutter map's memory that must hold a contact in the gate of a "
