@@ -20,6 +20,9 @@ Measured (2026-12-07, shared machine, 0.5 h per model, seeds as here; false conf
     --false-tracks-per-h 1: rayleigh+blast 0 [0, 7.4], K 0.5 0 [0, 7.4], K 1 + blast + points 34 [20, 54]
         (+ --clutter-map 8,3: 8 [2.2, 20]): the still points are real echoes, which the rule cannot call false
     --false-tracks-per-h 1 --strong-pfa 1e-6: Rayleigh, K 1, K 0.5: 0 [0, 7.4] each
+Since h9-clutter the defaults are the rule at 1/h, mftd_strong_pfa 1e-6 and the clutter map with its stillness test
+(clutter_map_pings 8); the measurement of those defaults together is bench_active_defaults.py (same worlds, front
+ends cached).
 Acquisition of a 15 dB steady target on K 1 (pings from its first echo to a confirmed track; seeds 3500..):
     0.99: 8, 8 (runs 0, 1); the MFTD's first contact comes on the target's 3rd ping, then the existence grows
     0.05, 0.15, 0.4, 0.8, 0.97, 0.99 a ping; --false-tracks-per-h 1: 6, 6 (threshold ~0.8 here, few tracks start);

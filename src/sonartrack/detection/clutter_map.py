@@ -1,25 +1,35 @@
-"""A clutter map over pings: contacts whose world position recurs ping after ping are stationary clutter.
+"""A clutter map over pings: contacts whose world position recurs, still, ping after ping are stationary clutter.
 
 A strong fixed scatterer (a wreck, a rock, a seamount's flank) echoes on every ping at the same place on the sea
 floor. The navigation puts each contact in the world frame (systems/active/contacts.py), so such a point gives a
 contact at the same world position whatever the ownship does, where a target's contacts drift by its speed times the
-time between pings. For each contact z_i (covariance R_i) of a new ping and each of the last ``span`` pings, the
-ping is a hit when one of its contacts z_j passes the gate
+time between pings. Two tests, on each contact z_0 (covariance R_0, time t_0) of a new ping:
 
-    (z_i - z_j)^T (R_i + R_j)^(-1) (z_i - z_j) <= gamma,     gamma = chi2_2 quantile at ``gate_probability``
+1. recurrence: each of the last ``span`` pings is a hit when one of its contacts z_j passes the gate
+   (z_0 - z_j)^T (R_0 + R_j)^(-1) (z_0 - z_j) <= gamma, gamma the chi2_2 quantile at ``gate_probability`` (the
+   difference of two independent measurements of one still point has covariance R_0 + R_j); the nearest in the gate
+   is the ping's hit. Fewer than ``min_hits`` hits: not clutter.
+2. stillness: the hits and z_0 are fitted by weighted least squares with a point moving at a constant velocity,
+   z_j = a + v (t_j - t_0) + e_j, e_j ~ N(0, R_j) (information J = sum_j H_j^T R_j^-1 H_j, H_j = [I, (t_j - t_0) I]);
+   the contact is clutter only when the fit shows the point slower than ``slow_mps``: the confidence ellipse of v
+   at ``still_probability`` lies inside that speed, |v| + sqrt(gamma_s lambda_max(C_vv)) <= slow_mps (C_vv =
+   [J^-1]_vv, gamma_s the chi2_2 quantile). The fit's points are taken in a wider gate than the hits', one that lets
+   a point move at up to 2 ``slow_mps`` (R_0 + R_j + (2 slow_mps (t_j - t_0))^2 I).
 
-(the difference of two independent position measurements of one still point has covariance R_i + R_j); a contact
-with hits on at least ``min_hits`` of the last ``span`` pings is marked clutter. Mirror contacts are kept like any
-other (a still point's mirror is still while the array holds its heading).
-
-A slow target is the price: its contacts match a ping j pings back while its drift v j T stays inside the gate
-(about 3 sqrt(2) sigma, sigma the contact's position error), so one moving slower than about
-3 sqrt(2) sigma / (min_hits T) looks still (sigma 70 m, T 30 s, min_hits 3: ~3 m/s; the map must learn a point
-before IPDA confirms a track on it, ~4 pings, so min_hits cannot be much larger). So the chain does not delete
-clutter contacts: it keeps them from tracks that are not confirmed (systems/active/run.py), so they start and confirm
-no track, while a confirmed track (a target already held that slows, or passes over a clutter point) still gets the
-contacts in its gate. A target that is slower than that from the moment it enters the window is not confirmed while
-it stays slow: that is the measured trade (benchmarks/bench_active_clutter.py).
+The first test alone (the map of before) also marks a slow target's contacts: it matches a ping j back while its
+drift v j T stays inside the gate (~3 sqrt(2) sigma; sigma 70 m, T 30 s, 3 hits: below ~3 m/s; at T 10 s it ate the
+study's quick-scene 5 kn target). The second test spares it: a contact is clutter only once the fit has shown it
+slower than ``slow_mps``, which takes time, not pings: the velocity of a straight line through n hits T apart is
+known to sigma_v ~ sigma sqrt(12 / (n (n^2 - 1))) / T (sigma 70 m across the beam, T 30 s: 0.57 m/s at n = 5, so a
+still point is clutter from its 5th-8th ping; at T 10 s it takes about the same time), and a target faster than
+``slow_mps`` is never shown slower (but for the test's error). A still point not yet shown still goes to the
+tracker, and a track may start on it; the chain holds back the confirmation of a track slower than ``slow_mps``
+sitting on a recurring contact (tracking/deleters.py :class:`StillHold`: ``recurring`` is the mask it reads) until
+its own speed shows it moving or the map withholds the point. A target slower than ``slow_mps`` from the moment it
+enters the window is taken for clutter (a still target is a still echo: nothing in the positions tells them apart);
+one that slows or stops after its track is confirmed keeps its contacts: the chain withholds clutter contacts only
+from tracks that are not confirmed (systems/active/run.py), so a confirmed track still gets the contacts in its
+gate, whether its target stops or passes over a clutter point.
 """
 
 from __future__ import annotations
@@ -32,24 +42,32 @@ from sonartrack.association.gating import gate_threshold
 
 
 class ClutterMap:
-    """Recurring world positions over the last ``span`` pings (module doc).
+    """Recurring still world positions over the last ``span`` pings (module doc).
 
     Parameters
     ----------
     span : int
         Pings remembered.
     min_hits : int
-        A contact is clutter when this many of the remembered pings hold a contact in its gate.
+        A contact is clutter only when this many of the remembered pings hold a contact in its gate.
     gate_probability : float
         Probability of the chi-square(2) gate on the difference of two positions.
+    still_probability : float or None
+        Probability of the velocity's confidence ellipse in the stillness test (None: no stillness test, recurrence
+        alone).
+    slow_mps : float
+        A contact is clutter only when its fit shows it slower than this (m/s).
     """
 
-    def __init__(self, span: int = 8, min_hits: int = 3, gate_probability: float = 0.99):
-        self.span, self.min_hits = int(span), int(min_hits)
+    def __init__(self, span: int = 8, min_hits: int = 3, gate_probability: float = 0.99,
+                 still_probability: float | None = 0.9, slow_mps: float = 1.5):
+        self.span, self.min_hits, self.slow_mps = int(span), int(min_hits), float(slow_mps)
         self.gamma = float(gate_threshold(gate_probability, 2))
+        self.still_gamma = None if still_probability is None else float(gate_threshold(still_probability, 2))
         self._pings: deque = deque(maxlen=self.span)
+        self.recurring = np.zeros(0, bool)  # the last update's contacts with >= min_hits hits (still or not)
 
-    def update(self, xy: np.ndarray, R: np.ndarray) -> np.ndarray:
+    def update(self, xy: np.ndarray, R: np.ndarray, t_s: float = 0.0) -> np.ndarray:
         """Mark a ping's contacts, then remember them.
 
         Parameters
@@ -58,23 +76,130 @@ class ClutterMap:
             Contact positions in the world frame (m).
         R : ndarray (m, 2, 2)
             Their covariances (m^2).
+        t_s : float
+            The ping's time (s): the stillness test's time base.
 
         Returns
         -------
         numpy.ndarray
-            (m,) bool, True: clutter (hits on >= ``min_hits`` of the remembered pings).
+            (m,) bool, True: clutter (hits on >= ``min_hits`` of the remembered pings, and still).
         """
         xy, R = np.asarray(xy, float).reshape(-1, 2), np.asarray(R, float).reshape(-1, 2, 2)
+        info = np.zeros((len(xy), 4, 4))  # the fit's information J and vector b = sum H^T W (z - z_0)
+        vec = np.zeros((len(xy), 4))
         hits = np.zeros(len(xy), np.int64)
-        for xy_j, R_j in self._pings:
-            if len(xy) and len(xy_j):
-                hits += in_gate(xy, R, xy_j, R_j, self.gamma).any(axis=1)
-        self._pings.append((xy, R))
-        return hits >= self.min_hits
+        _add_point(info, vec, np.ones(len(xy), bool), np.zeros_like(xy), _inv2(R), 0.0)
+        for t_j, xy_j, R_j in self._pings:
+            if not (len(xy) and len(xy_j)):
+                continue
+            hits += (mahalanobis2(xy, R, xy_j, R_j) <= self.gamma).any(axis=1)
+            d2 = mahalanobis2(xy, R, xy_j, R_j, (2.0 * self.slow_mps * (t_j - t_s)) ** 2)
+            near = np.argmin(d2, axis=1)
+            on = d2[np.arange(len(xy)), near] <= self.gamma
+            _add_point(info, vec, on, xy_j[near] - xy, _inv2(R_j[near]), t_j - t_s)
+        self._pings.append((float(t_s), xy, R))
+        clutter = hits >= self.min_hits
+        self.recurring = clutter.copy()
+        if self.still_gamma is not None and clutter.any():
+            clutter[clutter] = speed_bound(info[clutter], vec[clutter], self.still_gamma) <= self.slow_mps
+        return clutter
+
+
+def _inv2(R: np.ndarray) -> np.ndarray:
+    """Inverses of (n, 2, 2) covariances (closed form; a singular one gets zero weight)."""
+    det = R[:, 0, 0] * R[:, 1, 1] - R[:, 0, 1] * R[:, 1, 0]
+    inv = np.stack([np.stack([R[:, 1, 1], -R[:, 0, 1]], -1), np.stack([-R[:, 1, 0], R[:, 0, 0]], -1)], -2)
+    return inv / np.where(det > 0, det, np.inf)[:, None, None]
+
+
+def _add_point(info: np.ndarray, vec: np.ndarray, on: np.ndarray, dz: np.ndarray, W: np.ndarray, tau: float) -> None:
+    """Add measurements dz (n, 2) at time offset tau with weights W (n, 2, 2) where ``on``: H = [I, tau I]."""
+    w = W * on[:, None, None]
+    info[:, :2, :2] += w
+    info[:, :2, 2:] += tau * w
+    info[:, 2:, :2] += tau * w
+    info[:, 2:, 2:] += tau * tau * w
+    wz = np.einsum("nij,nj->ni", w, dz)
+    vec[:, :2] += wz
+    vec[:, 2:] += tau * wz
+
+
+def velocity_fit(info: np.ndarray, vec: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The weighted least-squares velocity of the fit z_j = a + v tau_j (module doc, test 2).
+
+    Parameters
+    ----------
+    info : ndarray (n, 4, 4)
+        J = sum_j H_j^T R_j^-1 H_j (H_j = [I, tau_j I]).
+    vec : ndarray (n, 4)
+        sum_j H_j^T R_j^-1 z_j.
+
+    Returns
+    -------
+    tuple
+        (ok (n,) bool: the fit has velocity information, v (n, 2) m/s, C_vv (n, 2, 2) (m/s)^2; NaN where not ok).
+    """
+    det = np.linalg.det(info)
+    ok = np.isfinite(det) & (det > 0)
+    v, C = np.full((len(info), 2), np.nan), np.full((len(info), 2, 2), np.nan)
+    if ok.any():
+        Ci = np.linalg.inv(info[ok])
+        v[ok], C[ok] = np.einsum("nij,nj->ni", Ci, vec[ok])[:, 2:], Ci[:, 2:, 2:]
+    return ok, v, C
+
+
+def speed_bound(info: np.ndarray, vec: np.ndarray, gamma: float) -> np.ndarray:
+    """|v| + sqrt(gamma lambda_max(C_vv)): the largest speed in the fitted velocity's confidence ellipse (m/s; inf
+    where the fit has no velocity information).
+
+    Parameters
+    ----------
+    info, vec : ndarray (n, 4, 4), (n, 4)
+        As :func:`velocity_fit`.
+    gamma : float
+        The ellipse's chi-square(2) level.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) speed (m/s).
+    """
+    ok, v, C = velocity_fit(info, vec)
+    out = np.full(len(info), np.inf)
+    if ok.any():
+        lam = np.linalg.eigvalsh(C[ok])[:, -1]
+        out[ok] = np.hypot(v[ok, 0], v[ok, 1]) + np.sqrt(gamma * np.maximum(lam, 0.0))
+    return out
+
+
+def mahalanobis2(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray,
+                 extra_m2: float = 0.0) -> np.ndarray:
+    """(a, b): d^2 = (z_a - z_b)^T (R_a + R_b + extra I)^(-1) (z_a - z_b) (closed-form 2 x 2 inverse; inf if
+    singular).
+
+    Parameters
+    ----------
+    xy_a, xy_b : ndarray (a, 2), (b, 2)
+        Positions (m).
+    R_a, R_b : ndarray (a, 2, 2), (b, 2, 2)
+        Covariances (m^2).
+    extra_m2 : float
+        Variance added on both axes (m^2).
+
+    Returns
+    -------
+    numpy.ndarray
+        (a, b) squared Mahalanobis distances.
+    """
+    d = xy_a[:, None, :] - xy_b[None, :, :]
+    S = R_a[:, None] + R_b[None, :] + extra_m2 * np.eye(2)
+    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
+    return (S[..., 1, 1] * d[..., 0] ** 2 - (S[..., 0, 1] + S[..., 1, 0]) * d[..., 0] * d[..., 1]
+            + S[..., 0, 0] * d[..., 1] ** 2) / np.where(det > 0, det, np.inf)
 
 
 def in_gate(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray, gamma: float) -> np.ndarray:
-    """(a, b) bool: d^2 = (z_a - z_b)^T (R_a + R_b)^(-1) (z_a - z_b) <= gamma (2 x 2 inverse in closed form).
+    """(a, b) bool: d^2 = (z_a - z_b)^T (R_a + R_b)^(-1) (z_a - z_b) <= gamma (:func:`mahalanobis2`).
 
     Parameters
     ----------
@@ -90,9 +215,4 @@ def in_gate(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray
     numpy.ndarray
         (a, b) bool.
     """
-    d = xy_a[:, None, :] - xy_b[None, :, :]
-    S = R_a[:, None] + R_b[None, :]
-    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
-    d2 = (S[..., 1, 1] * d[..., 0] ** 2 - (S[..., 0, 1] + S[..., 1, 0]) * d[..., 0] * d[..., 1]
-          + S[..., 0, 0] * d[..., 1] ** 2) / np.where(det > 0, det, np.inf)
-    return d2 <= gamma
+    return mahalanobis2(xy_a, R_a, xy_b, R_b) <= gamma

@@ -110,3 +110,65 @@ class RateConfirmation:
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
         """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
         return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold).manage(T, hit)
+
+
+class StillHold:
+    """A deleter part that runs ``inner``, then takes back the confirmation a track has just earned while it sits on
+    a recurring world position and moves slower than ``slow_mps``: such a track may be a still clutter point that the
+    clutter map (detection/clutter_map.py) has not yet shown to be still. Its confirmation waits until its speed
+    shows it moving (a target; the track's own velocity, as the brief of issue 34 item 2 allows) or the map
+    withholds the point's contacts (the track then starves). A target slower than ``slow_mps`` is held back the
+    same way: the price, stated in the clutter map's settings.
+
+    Parameters
+    ----------
+    inner : deleter part
+        The tracker's own deleter (e.g. :class:`RateConfirmation`).
+    slow_mps : float
+        A track slower than this (combined state's speed, m/s) is not confirmed on a recurring position.
+    gamma : float
+        Gate (chi-square(2)) on a recurring contact's position against a track's: d^2 with P_pos + R.
+    """
+
+    def __init__(self, inner, slow_mps: float, gamma: float):
+        self.inner, self.slow_mps, self.gamma = inner, float(slow_mps), float(gamma)
+        self.xy, self.R = np.zeros((0, 2)), np.zeros((0, 2, 2))
+
+    def recurring(self, xy: np.ndarray, R: np.ndarray) -> None:
+        """This scan's recurring contacts (the clutter map's; world positions m, covariances m^2)."""
+        self.xy, self.R = np.asarray(xy, float).reshape(-1, 2), np.asarray(R, float).reshape(-1, 2, 2)
+
+    def new_track_attrs(self, k: int) -> dict:
+        """The inner deleter's per-track counters (``inner.new_track_attrs(k)``)."""
+        return self.inner.new_track_attrs(k)
+
+    def manage(self, T: TrackArrays, hit) -> TrackArrays:
+        """The inner deleter's confirmation and deletion, then the hold of the class doc.
+
+        Parameters
+        ----------
+        T : TrackArrays
+            Tracks after the update.
+        hit : ndarray of bool, shape (n,)
+            Passed to ``inner``.
+
+        Returns
+        -------
+        TrackArrays
+            The kept tracks, a slow new confirmation on a recurring position taken back.
+        """
+        from sonartrack.tracking.tracks import TrackSnapshot
+
+        before = set(T.track_id[T.confirmed].tolist())
+        T = self.inner.manage(T, hit)
+        new = T.confirmed & ~np.isin(T.track_id, list(before))
+        if not new.any() or not len(self.xy):
+            return T
+        snap = TrackSnapshot.of(0.0, T.select(new))
+        slow = np.hypot(snap.x[:, 2], snap.x[:, 3]) < self.slow_mps
+        d = snap.x[:, None, :2] - self.xy[None]
+        S = snap.P[:, None, :2, :2] + self.R[None]
+        near = (np.einsum("tci,tcij,tcj->tc", d, np.linalg.inv(S), d) <= self.gamma).any(axis=1)
+        confirmed = T.confirmed.copy()
+        confirmed[np.nonzero(new)[0][slow & near]] = False
+        return replace(T, confirmed=confirmed)

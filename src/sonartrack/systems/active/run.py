@@ -157,6 +157,13 @@ class ContactTracker:
     turns : TurnModes or None
         Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
         None: the settings' CV modes only.
+    clutter_map : ClutterMap or None
+        detection/clutter_map.py: a contact at a recurring still world position goes only to the confirmed tracks
+        whose gate holds it (a confirmed track keeps its contacts when its target slows, stops or crosses a
+        clutter point); None: no map.
+    scan_interval_s : float or None
+        The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``); None
+        (a single ping): the settings' ``confirm_threshold``.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -177,18 +184,22 @@ class ContactTracker:
             self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
                                                                       m.clutter_density_per_m2, rate_sd_mps,
                                                                       float(max_range_rate_mps))
-        if settings.false_tracks_per_h is not None:  # confirmation at the stated rate (tracking/existence.py)
-            from sonartrack.tracking.deleters import RateConfirmation
+        if settings.false_tracks_per_h is not None and scan_interval_s is not None:  # at the stated rate
+            from sonartrack.tracking.deleters import RateConfirmation  # (tracking/existence.py; one ping: no rate)
 
-            require(scan_interval_s is not None, "false_tracks_per_h needs the ping interval: give more than one ping")
             self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
                                                     settings.initial_existence, settings.terminate_threshold)
+        self.clutter_map, self.hold = clutter_map, None
+        if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
+            from sonartrack.tracking.deleters import StillHold
+
+            self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
+                                                         gate_threshold(settings.gate_probability, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
         if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
             self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
-        self.clutter_map = clutter_map
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
@@ -232,7 +243,9 @@ class ContactTracker:
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
-        clutter = self.clutter_map.update(contacts.xy, contacts.R)
+        clutter = self.clutter_map.update(contacts.xy, contacts.R, float(t_s))
+        r = self.clutter_map.recurring
+        self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
@@ -381,7 +394,9 @@ def clutter_map_of(settings: ActiveSettings):
 
     if settings.clutter_map_pings is None:
         return None
-    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings))
+    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings),
+                      still_probability=settings.clutter_map_still_probability,
+                      slow_mps=settings.clutter_map_slow_mps)
 
 
 def geometry_of(nav) -> ActiveGeometry:

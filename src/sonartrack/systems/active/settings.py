@@ -48,6 +48,13 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "confirmed false tracks from MFTD in 3 h of reverberation 6 at 0.9, 2 at 0.97, 0 at "
                                 "0.99 (single-ping: 79, 71, 2); the targets' held fraction falls by <= 0.02 and "
                                 "their time to confirm grows by 30-60 s"),
+    "false_tracks_per_h": (1.0, "stated false confirmed tracks per hour: the confirmation threshold from Ville's bound "
+                                "on IPDA's existence odds and the tracks started so far (tracking/existence.py), in "
+                                "place of confirm_threshold (benchmarks/bench_active_defaults.py, with the clutter map "
+                                "and mftd_strong_pfa: 0 confirmed in 2 h of Rayleigh and 2 h of spiky K 0.5 "
+                                "reverberation from the independent generator, a 15 dB target confirmed in 4, 4, 9 "
+                                "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; 0.5/h "
+                                "confirmed as many false tracks on K 1 + blast + still points and one ping later)"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
                                   "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
                                   "lets a track enter a turn mode a ping sooner (tests/systems/active/"
@@ -84,10 +91,12 @@ class ActiveSettings(Settings):
               "held longer)",
         unit="1", gt=0, lt=0.1)
     mftd_strong_pfa: float | None = setting(
-        None, "single-ping detections above the single-ping threshold of this per-cell false-alarm rate join the "
+        1e-6, "single-ping detections above the single-ping threshold of this per-cell false-alarm rate join the "
               "MFTD's (not within a beam and 3 delay cells of one): a target entering the window is then detected on "
               "its first ping, not when the MFTD's K-ping stack has filled with it (a 15 dB target: its 3rd ping). "
-              "Not set: the MFTD's detections alone", unit="1", gt=0, lt=0.1)
+              "With it, the MFTD's SNR gain over single-ping detection at the same stated false-track rate is 1.6 dB "
+              "[0.6, 2.3] against 1.2 [0.1, 2.1] without (benchmarks/bench_mftd_gain.py). Not set: the MFTD's "
+              "detections alone", unit="1", gt=0, lt=0.1)
     detector: Literal["mftd", "single"] = setting(
         "mftd", "detections the tracker gets: mftd = paper P1 across pings, single = one ping's threshold", unit="")
     range_rate_gate_sigma: float | None = setting(
@@ -115,16 +124,26 @@ class ActiveSettings(Settings):
               "without it the default scene (seed 9101, not a study seed) holds 3-4 confirmed tracks on each strong "
               "target at once (not set: no merging)", unit="1", gt=0, lt=1)
     clutter_map_pings: int | None = setting(
-        None, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
-              "the last this many pings is stationary clutter and goes only to confirmed tracks whose gate holds "
-              "it (not set: no map). Off by default: at 3 hits of 8 it ate the default small scene's 5 kn target "
-              "at 15 s pings (its contacts drift 37 m a ping, inside the gate), while it kept tracks off 35 dB "
-              "still points of the independent generator (7 -> 1 confirmed in 20 pings); use it where targets "
-              "move > ~3 m/s or pings are far apart", unit="1", ge=1, le=100)
+        8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
+           "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "
+           "stationary clutter and goes only to confirmed tracks whose gate holds it; a slow new track on a recurring "
+           "contact is not confirmed until its speed or the map decides (tracking/deleters.py StillHold). On the "
+           "independent generator's K 1 + blast + 6 still points of 35 dB (2 h) it cut the confirmed tracks on the "
+           "points and their mirrors from 48 to 14, while the study's quick scene (5 kn targets, 10 s pings) is held "
+           "as without it (not set: no map)",
+        unit="1", ge=1, le=100)
     clutter_map_hits: int = setting(3, "pings of the clutter map's memory that must hold a contact in the gate of a "
                                        "new one for it to be clutter (3: learned before IPDA confirms a track on a "
                                        "strong still point, ~4 pings; at 5 the independent generator's 6 points of 35 "
                                        "dB gave 7 confirmed tracks in 20 pings, at 3 one)", unit="1", ge=1, le=100)
+    clutter_map_still_probability: float | None = setting(
+        0.9, "the clutter map's stillness test (detection/clutter_map.py): a recurring contact is clutter only when "
+             "the confidence ellipse, at this probability, of the velocity fitted through its recurrences lies "
+             "within clutter_map_slow_mps, so a moving target's contacts are spared (not set: recurrence alone)",
+        unit="1", gt=0, lt=1)
+    clutter_map_slow_mps: float = setting(
+        1.0, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
+             "than this, not yet confirmed, is taken for clutter once its fit shows it slower)", unit="m/s", gt=0)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
     front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,

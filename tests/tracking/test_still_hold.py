@@ -1,0 +1,41 @@
+"""StillHold (tracking/deleters.py): a track that has just earned its confirmation while slow and on a recurring
+world position waits; a fast one, one away from recurring contacts, and one confirmed before keep their flag."""
+
+import numpy as np
+
+from sonartrack.tracking.deleters import StillHold
+from sonartrack.tracking.tracks import TrackArrays
+
+
+class ConfirmAll:
+    def new_track_attrs(self, k):
+        return {}
+
+    def manage(self, T, hit):
+        from dataclasses import replace
+
+        return replace(T, confirmed=np.ones(len(T), bool))
+
+
+def tracks(states, confirmed):
+    n = len(states)
+    x = np.asarray(states, float)[:, None, :]
+    P = np.tile(np.diag([100.0**2, 100.0**2, 1.0, 1.0]), (n, 1, 1, 1))
+    return TrackArrays(x, P, np.ones((n, 1)), np.full(n, 0.99), np.asarray(confirmed, bool), np.arange(n),
+                       np.zeros(n), P[:, 0])
+
+
+def test_only_a_new_slow_confirmation_on_a_recurring_contact_waits():
+    hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
+    hold.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    T = tracks([[10.0, 0.0, 0.2, 0.0],     # slow, on the contact: waits
+                [10.0, 0.0, 3.0, 0.0],     # moving: confirmed
+                [5000.0, 0.0, 0.1, 0.0],   # slow, far from any recurring contact: confirmed
+                [-20.0, 0.0, 0.0, 0.1]],   # slow, on the contact, confirmed at an earlier scan: stays confirmed
+               [False, False, False, True])
+    assert hold.manage(T, np.ones(4, bool)).confirmed.tolist() == [False, True, True, True]
+
+
+def test_no_recurring_contact_no_hold():
+    hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
+    assert hold.manage(tracks([[0.0, 0.0, 0.0, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [True]
