@@ -28,7 +28,7 @@ def scene_settings(which: str, seed: int, duration_s: float):
                                 "waveform": s.waveform.model_copy(update=wave)})
 
 
-def measure(which: str, seed: int, duration_s: float, profile: bool) -> None:
+def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str | None = None) -> None:
     import pandas as pd
 
     from sonartrack.systems.active.files import run_active_files
@@ -41,7 +41,7 @@ def measure(which: str, seed: int, duration_s: float, profile: bool) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         write_active_scene(scene, Path(tmp))
         settings = ActiveSettings(spacing_m=spacing, elements=scene.sonar.elements)
-        prof = cProfile.Profile() if profile else None
+        prof = cProfile.Profile(time.process_time) if profile else None
         c0 = time.process_time()
         if prof:
             prof.enable()
@@ -50,6 +50,10 @@ def measure(which: str, seed: int, duration_s: float, profile: bool) -> None:
             prof.disable()
         cpu = time.process_time() - c0
         truth = pd.read_csv(Path(tmp) / "truth.csv")
+    if dump:
+        import pickle
+
+        Path(dump).write_bytes(pickle.dumps((res, truth)))
     scores = truth_scores(res.tracks, mirror_targets(res.tracks, res.geometry), truth, res.geometry)
     stages = ", ".join(f"{k} {v:.1f}" for k, v in sorted(res.stage_seconds.items(), key=lambda kv: -kv[1]))
     held = " / ".join(f"{k} {100 * v:.0f}" for k, v in scores["held"].items())
@@ -57,9 +61,31 @@ def measure(which: str, seed: int, duration_s: float, profile: bool) -> None:
           f"held % {held}; false targets {scores['false_targets']} "
           f"({scores['false_targets'] * 3600 / duration_s:.1f}/h)")
     print(f"   stage wall s: {stages}")
+    print("   " + detected_summary(res, truth))
     if prof:
         prof.dump_stats(f"/tmp/cw_held_{which}.prof")
         pstats.Stats(prof).sort_stats("tottime").print_stats(25)
+
+
+def detected_summary(res, truth, delay_s: float = 0.6, cone_deg: float = 8.0, rate_mps: float = 1.0) -> str:
+    """Per target: the share of its pings in the listening window (after the blast) with an MFTD / a single-ping
+    detection within ``delay_s``, ``cone_deg`` and ``rate_mps`` of its echo, and its median echo SNR (dB, the
+    simulator's echo-to-noise in one cell)."""
+    import numpy as np
+
+    out = []
+    for name in dict.fromkeys(truth["target"]):
+        t = truth[(truth["target"] == name) & truth["in_window"] & ~truth["in_blast"]]
+        found = []
+        for det in (res.mftd, res.single):
+            hit = [bool(np.any(np.isclose(det.time_s, r.time_s)
+                               & (np.abs(det.travel_time_s - r.travel_time_s) < delay_s)
+                               & (np.abs(det.cone_deg - r.cone_deg) < cone_deg)
+                               & (np.abs(det.range_rate_mps - r.range_rate_mps) < rate_mps))) for r in t.itertuples()]
+            found.append(100 * np.mean(hit) if hit else float("nan"))
+        out.append(f"{name}: mftd {found[0]:.0f} %, single {found[1]:.0f} % of {len(t)} pings, snr "
+                   f"{np.median(t['snr_db']):.1f} dB")
+    return "detected: " + "; ".join(out)
 
 
 def main() -> None:
@@ -68,9 +94,10 @@ def main() -> None:
     p.add_argument("--duration-s", type=float, default=3600.0)
     p.add_argument("--scene", default="both", choices=["default", "b", "both"])
     p.add_argument("--profile", action="store_true")
+    p.add_argument("--dump", default=None, help="pickle (result, truth) to this path + the scene's name")
     a = p.parse_args()
     for which in (["default", "b"] if a.scene == "both" else [a.scene]):
-        measure(which, a.seed, a.duration_s, a.profile)
+        measure(which, a.seed, a.duration_s, a.profile, a.dump and f"{a.dump}.{which}")
 
 
 if __name__ == "__main__":
