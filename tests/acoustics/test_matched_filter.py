@@ -107,3 +107,25 @@ def test_waveforms_the_chain_cannot_describe_are_refused():
         Waveform("hfm", 1.0, 1500.0, 100.0)
     with pytest.raises(InputError, match="positive"):
         Waveform("cw", 0.0, 1500.0)
+
+
+@pytest.mark.parametrize("hop, taper", [(50, "rect"), (37, "rect"), (50, "hann")])
+def test_cw_bank_is_each_windows_dft_at_the_kept_frequencies(hop, taper):
+    """The bank (block DFTs combined across a window's blocks, or one product) against each window's DFT written
+    here: z(d, f) = sum_t w(t) x(d + t) exp(-2 pi i f t / f_s) for the bins f = j f_s / (2 n) with |f| <= 15 Hz,
+    windows every ``hop`` samples inside the series."""
+    fs, n = 200.0, 200
+    cw = Waveform("cw", n / fs, 1500.0)
+    rng = np.random.default_rng(7)
+    x = (rng.standard_normal((3, 1337)) + 1j * rng.standard_normal((3, 1337))).astype(np.complex64)
+    z, delay, dop = cw_doppler_bank(x, fs, cw, 15.0, hop=hop, pad=2, taper=taper)
+    f = np.arange(-n, n) * fs / (2 * n)
+    f = f[np.abs(f) <= 15.0]
+    t = np.arange(n)
+    w = np.ones(n) if taper == "rect" else 1.0 - np.cos(2.0 * np.pi * (t + 0.5) / n)
+    starts = np.arange(0, x.shape[1] - n + 1, hop)
+    want = np.stack([(x[:, s: s + n] * w) @ np.exp(-2j * np.pi * np.outer(t, f) / fs) for s in starts], axis=1)
+    np.testing.assert_allclose(dop, f, atol=1e-9)
+    np.testing.assert_allclose(delay, starts / fs)
+    assert z.shape == want.shape and z.dtype == np.complex64
+    np.testing.assert_allclose(z, want, atol=2e-4 * np.abs(want).max())

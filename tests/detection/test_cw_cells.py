@@ -66,6 +66,28 @@ def test_threshold_law_matches_monte_carlo_of_sorted_exponentials():
     assert abs(float(np.mean(y / draws > 8.0)) - law.pfa(8.0)) < 5 * np.sqrt(law.pfa(8.0) / n)
 
 
+def test_pooled_statistic_draws_follow_the_max_of_sorted_exponential_cells():
+    """The calibration's draws of the max of 4 normalised noise cells (one uniform each, by the law's survival
+    table) against the max of 4 cells y / max(x_f, sqrt(x_e x_l)), each x an OS estimate by sorting exponentials."""
+    law = CwEstimate((12, 9), (4, 3))
+    rng = np.random.default_rng(13)
+    n = 100_000
+
+    def os(nn, k):
+        return np.sort(rng.exponential(1.0, (n, 4, nn)), axis=-1)[..., k - 1] / os_mean_factor(nn, k)
+
+    s = (rng.exponential(1.0, (n, 4)) / np.maximum(os(12, 9), np.sqrt(os(4, 3) * os(4, 3)))).max(axis=1)
+    draws = law.draw_statistic(np.random.default_rng(14), (n,), pool=4)
+    for alpha in (1.0, 3.0, 6.0, 10.0):
+        p = 1.0 - (1.0 - law.pfa(alpha)) ** 4
+        for x in (s, draws):
+            assert abs(float(np.mean(x > alpha)) - p) < 5 * np.sqrt(p / n) + 1e-5, (alpha, p)
+    x, a = law.survival_table()
+    assert x[0] == 0.0 and a[0] == 0.0 and np.all(np.diff(x) > 0)
+    np.testing.assert_allclose(np.exp(-np.interp([2.0, 9.0, 20.0], a, x)), [law.pfa(v) for v in (2.0, 9.0, 20.0)],
+                               rtol=1e-3)
+
+
 def test_normaliser_keeps_its_false_alarm_rate_in_homogeneous_noise():
     s = CwNormaliserSettings()
     rng = np.random.default_rng(5)

@@ -66,8 +66,12 @@ def cw_contact_errors(settings: ActiveSettings, delay_s):
 
 
 def cw_rate_sd_mps(waveform, fs_hz: float, doppler_pad: int, sound_speed_mps: float) -> float:
-    """Standard deviation of a measured range rate: the CW Doppler bank's filter step / sqrt(12) (run.py
-    ``rate_sd_of``), 1 m/s (unused) for an LFM.
+    """Standard deviation of a measured range rate: the larger of the CW Doppler bank's filter step and its
+    resolution cell 1 / tau, in range rate, over sqrt(12) (the echo's peak falls anywhere in the main lobe of the
+    filter nearest it; zero-padded filters, 1 / (pad tau) apart, share that lobe and measure it no better), 1 m/s
+    (unused) for an LFM. Measured on the default scene as CW (seed 1, 1 h, MFTD detections within 0.6 s and 8 deg
+    of a target): sd 0.29 m/s about the true range rate for the approacher (the resolution cell's 1 m/s / sqrt(12)
+    = 0.29; the filter step's 0.14), 4-17 % of the targets' detections off by more than 1 m/s.
 
     Parameters
     ----------
@@ -91,5 +95,5 @@ def cw_rate_sd_mps(waveform, fs_hz: float, doppler_pad: int, sound_speed_mps: fl
     if waveform.kind != "cw":
         return rate_sd_of([np.nan])
     n = max(int(round(waveform.duration_s * fs_hz)), 1)
-    step_hz = fs_hz / fft_length(doppler_pad * n)
+    step_hz = max(fs_hz / fft_length(doppler_pad * n), 1.0 / waveform.duration_s)
     return rate_sd_of(doppler_to_range_rate(np.array([0.0, step_hz]), waveform.carrier_hz, sound_speed_mps))

@@ -45,7 +45,7 @@ from sonartrack.systems.active.contacts import (
     range_rate_gate,
     resolve_mirrors,
 )
-from sonartrack.systems.active.cw_tracking import cw_clutter_area, cw_contact_errors
+from sonartrack.systems.active.cw_tracking import cw_clutter_area, cw_contact_errors, cw_rate_sd_mps
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.run import PositionTracks
@@ -493,7 +493,9 @@ class _Chain:
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
             self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
                                  cfar=s.cw.estimate() if self.cw else self.front_end.cfar)
-        self.rate_sd = rate_sd_of(cells.range_rate_mps)
+        w = self.table.waveform(0)  # a CW's range rate is known to its Doppler resolution cell (cw_tracking.py)
+        self.rate_sd = (cw_rate_sd_mps(w, float(self.table.fs_hz[0]), self.front_end.doppler_pad, s.sound_speed_mps)
+                        if self.cw else rate_sd_of(cells.range_rate_mps))
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,

@@ -1,0 +1,104 @@
+"""Benchmark: the active chain on CW scenes, an hour each: CPU seconds per stage, real-time factor on CPU time, and
+the targets held (systems/active/targets.py ``truth_scores``) with the false targets, for the default active scene
+simulated with a 1 s CW pulse and for a second CW scene (32 elements 0.3 m apart, a 2.4 kHz carrier).
+
+Usage: ``python benchmarks/bench_cw_held.py [--seed S] [--duration-s D] [--scene default|b|both] [--profile]``
+(the profile prints the 25 functions of most cumulative CPU time). Measures, not tests: no target is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import tempfile
+import time
+from pathlib import Path
+
+
+def scene_settings(which: str, seed: int, duration_s: float):
+    """The default active scene with a CW pulse ('default'), or on 32 x 0.3 m at 2.4 kHz ('b')."""
+    from sonartrack.sim.active_scene import ActiveSceneSettings
+
+    s = ActiveSceneSettings()
+    sonar, wave = {}, {"kind": "cw"}
+    if which == "b":
+        sonar, wave["carrier_hz"] = {"elements": 32, "spacing_m": 0.3}, 2400.0
+    return s.model_copy(update={"seed": seed, "duration_s": duration_s, "sonar": s.sonar.model_copy(update=sonar),
+                                "waveform": s.waveform.model_copy(update=wave)})
+
+
+def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str | None = None) -> None:
+    import pandas as pd
+
+    from sonartrack.systems.active.files import run_active_files
+    from sonartrack.systems.active.settings import ActiveSettings
+    from sonartrack.systems.active.targets import mirror_targets, truth_scores
+    from sonartrack.systems.simulate.active_files import write_active_scene
+
+    scene = scene_settings(which, seed, duration_s)
+    spacing = scene.sonar.spacing_m or scene.sound_speed_mps / (2.0 * scene.waveform.carrier_hz)
+    with tempfile.TemporaryDirectory() as tmp:
+        write_active_scene(scene, Path(tmp))
+        settings = ActiveSettings(spacing_m=spacing, elements=scene.sonar.elements)
+        prof = cProfile.Profile(time.process_time) if profile else None
+        c0 = time.process_time()
+        if prof:
+            prof.enable()
+        res = run_active_files(tmp, Path(tmp) / "nav.csv", settings)
+        if prof:
+            prof.disable()
+        cpu = time.process_time() - c0
+        truth = pd.read_csv(Path(tmp) / "truth.csv")
+    if dump:
+        import pickle
+
+        Path(dump).write_bytes(pickle.dumps((res, truth)))
+    scores = truth_scores(res.tracks, mirror_targets(res.tracks, res.geometry), truth, res.geometry)
+    stages = ", ".join(f"{k} {v:.1f}" for k, v in sorted(res.stage_seconds.items(), key=lambda kv: -kv[1]))
+    held = " / ".join(f"{k} {100 * v:.0f}" for k, v in scores["held"].items())
+    print(f"CW scene {which}, seed {seed}, {duration_s:.0f} s: CPU {cpu:.1f} s = {duration_s / cpu:.0f}x real time; "
+          f"held % {held}; false targets {scores['false_targets']} "
+          f"({scores['false_targets'] * 3600 / duration_s:.1f}/h)")
+    print(f"   stage wall s: {stages}")
+    print("   " + detected_summary(res, truth))
+    if prof:
+        prof.dump_stats(f"/tmp/cw_held_{which}.prof")
+        pstats.Stats(prof).sort_stats("tottime").print_stats(25)
+
+
+def detected_summary(res, truth, delay_s: float = 0.6, cone_deg: float = 8.0, rate_mps: float = 1.0) -> str:
+    """Per target: the share of its pings in the listening window (after the blast) with an MFTD / a single-ping
+    detection within ``delay_s``, ``cone_deg`` and ``rate_mps`` of its echo, and its median echo SNR (dB, the
+    simulator's echo-to-noise in one cell)."""
+    import numpy as np
+
+    out = []
+    for name in dict.fromkeys(truth["target"]):
+        t = truth[(truth["target"] == name) & truth["in_window"] & ~truth["in_blast"]]
+        found = []
+        for det in (res.mftd, res.single):
+            hit = [bool(np.any(np.isclose(det.time_s, r.time_s)
+                               & (np.abs(det.travel_time_s - r.travel_time_s) < delay_s)
+                               & (np.abs(det.cone_deg - r.cone_deg) < cone_deg)
+                               & (np.abs(det.range_rate_mps - r.range_rate_mps) < rate_mps))) for r in t.itertuples()]
+            found.append(100 * np.mean(hit) if hit else float("nan"))
+        out.append(f"{name}: mftd {found[0]:.0f} %, single {found[1]:.0f} % of {len(t)} pings, snr "
+                   f"{np.median(t['snr_db']):.1f} dB")
+    return "detected: " + "; ".join(out)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser()
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--duration-s", type=float, default=3600.0)
+    p.add_argument("--scene", default="both", choices=["default", "b", "both"])
+    p.add_argument("--profile", action="store_true")
+    p.add_argument("--dump", default=None, help="pickle (result, truth) to this path + the scene's name")
+    a = p.parse_args()
+    for which in (["default", "b"] if a.scene == "both" else [a.scene]):
+        measure(which, a.seed, a.duration_s, a.profile, a.dump and f"{a.dump}.{which}")
+
+
+if __name__ == "__main__":
+    main()
