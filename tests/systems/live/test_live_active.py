@@ -170,7 +170,9 @@ def test_growing_fixes_give_the_whole_logs_tracks(active_scene, streamed, live_f
     from sonartrack.systems.active.scene_files import iter_pings, read_ping_table
 
     _, result, updates, whole = live_fixes
-    assert not any(u["type"] == "health" for u in updates), [u for u in updates if u["type"] == "health"]
+    *health, end = [u for u in updates if u["type"] == "health"]
+    assert len(health) == 10 and all(u["nav"] == "ok" and not u["events"] for u in health), health  # never late
+    assert "ended" in end["events"][0]
     table = read_ping_table(active_scene / "ping_table.csv")
     _assert_same_tracks(result, run_active(iter_pings(active_scene, table), table, whole, SETTINGS))
 
@@ -258,4 +260,4 @@ def test_pings_without_navigation_are_shown_not_tracked(streamed):
                     active_settings=SETTINGS) is None
     assert [u["type"] for u in out if u["type"] != "health"] == ["bscan"] * 3
     said = [e for u in out if u["type"] == "health" for e in u["events"]]
-    assert len(said) == 1 and "not tracked" in said[0]
+    assert len(said) == 2 and "not tracked" in said[0] and "ended" in said[1], said

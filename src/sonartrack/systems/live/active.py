@@ -99,7 +99,7 @@ class LiveActive:
         """At the end of the stream: the pings still waiting run on the navigation there is; the chain's
         ActiveResult (None when no ping was tracked) and the last updates."""
         with self.lock:
-            updates = self._drain(final=True)
+            updates = self._drain(final=True) + [self._health(["the stream ended: the picture is final"], "ok")]
             return (self.chain.result() if self.chain is not None else None), updates
 
     def _covered(self, ping: PingBlock) -> bool:
@@ -141,8 +141,10 @@ class LiveActive:
         self.pings += 1
         if why is not None:
             return self._bscan_only(ping) + self._say(why)
-        out = self._say("navigation late: pings run on the last fixes (coasting)") if not covered else []
-        return self._tracked(ping) + out
+        late = "navigation late: pings run on the last fixes (coasting)"
+        out = self._tracked(ping)
+        said = self._say(late) if not covered else []
+        return out + (said or [self._health([], "ok" if covered else "coasting")])
 
     def _start(self, ping: PingBlock, interval: float | None) -> str | None:
         """Build the chain at its first ping (checked as the file chain checks its table); why not (None: built)."""
@@ -204,9 +206,13 @@ class LiveActive:
         if why in self.said:
             return []
         self.said.add(why)
+        return [self._health([why], "coasting" if "late" in why else ("ok" if self.chain is not None else "none"))]
+
+    def _health(self, events: list[str], nav: str) -> dict:
+        """The stream's health at the last ping (LIVE.md; no sample rate or latency for pings)."""
         t = self.last["t_s"] if self.last else 0.0
-        return [{"type": "health", "t_s": t, "rate_hz": None, "latency_s": None, "gaps": 0, "events": [why],
-                 "nav": "coasting" if "late" in why else ("ok" if self.chain is not None else "none")}]
+        return {"type": "health", "t_s": t, "rate_hz": None, "latency_s": None, "gaps": 0, "events": events,
+                "nav": nav}
 
 
 def _waveform(ping: PingBlock):
