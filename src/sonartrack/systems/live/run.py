@@ -6,7 +6,9 @@ navigation source on a thread of its own (fixes handed to the chain under its lo
 refresh takes longer than a tenth of that, every ten refresh times, so that the slow stages never take more than
 about a tenth of a core from the windows. With ``checkpoint`` the chain starts from that file when it exists (its
 display history published first) and writes it every ``checkpoint_s`` and at the end (Ctrl-C included: the
-caller's ``stop`` event, or KeyboardInterrupt).
+caller's ``stop`` event, or KeyboardInterrupt). A stream's pings go to the active chain (systems/live/active.py,
+built at the first ping; the navigation's fixes go to it as well), whose result is returned for a stream of pings
+alone.
 """
 
 from __future__ import annotations
