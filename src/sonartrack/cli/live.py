@@ -33,6 +33,16 @@ def _help(name: str, model=PassiveSettings) -> str:
     return option_help(model, name)
 
 
+#: the options of a stream's active pings (systems/live/active.py)
+ActiveConfigOpt = Annotated[Path | None, typer.Option(help="TOML file of active settings for a stream's pings (as "
+                                                           "`active --config`; --spacing applies to both).")]
+SourceTowOpt = Annotated[float | None, typer.Option("--source-tow", min=0.0, help="Active pings: the source's "
+                                                    "distance behind the ship along its track (m); with --array-tow "
+                                                    "the pings are tracked on the navigation's fixes.")]
+ArrayTowOpt = Annotated[float | None, typer.Option("--array-tow", min=0.0, help="Active pings: the array centre's "
+                                                   "distance behind the ship along its track (m).")]
+
+
 def live_cmd(
     tcp: Annotated[str | None, typer.Option(help="A recorder's sample stream to connect to, HOST:PORT (the framing "
                                                  "of sonartrack.io.stream.frames; reconnects when it drops).")] = None,
@@ -59,16 +69,7 @@ def live_cmd(
     band_hz: Annotated[tuple[float, float] | None, typer.Option(help=_help("band_hz", FrontEndSettings)
                                                               + " Two numbers: LOW HIGH.")] = None,
     config: Annotated[Path | None, typer.Option(help="TOML file of passive settings (see --print-config).")] = None,
-    active_config: Annotated[Path | None, typer.Option(help="TOML file of active settings for a stream's pings (as "
-                                                            "`active --config`; --spacing applies to both).")] = None,
-    source_tow: Annotated[float | None, typer.Option("--source-tow", help="Active pings: the source's distance "
-                                                                          "behind the ship along its track (m); "
-                                                                          "with --array-tow the pings are tracked "
-                                                                          "on the navigation's fixes.",
-                                                     min=0.0)] = None,
-    array_tow: Annotated[float | None, typer.Option("--array-tow", help="Active pings: the array centre's distance "
-                                                                        "behind the ship along its track (m).",
-                                                    min=0.0)] = None,
+    active_config: ActiveConfigOpt = None, source_tow: SourceTowOpt = None, array_tow: ArrayTowOpt = None,
     keep_open: Annotated[bool, typer.Option("--keep-open", help="When the stream ends, keep the console open (the "
                                                                 "last picture, for study) until Ctrl-C.")] = False,
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,

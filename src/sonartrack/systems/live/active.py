@@ -98,9 +98,14 @@ class LiveActive:
     def finish(self):
         """At the end of the stream: the pings still waiting run on the navigation there is; the chain's
         ActiveResult (None when no ping was tracked) and the last updates."""
+        from dataclasses import replace
+
         with self.lock:
             updates = self._drain(final=True) + [self._health(["the stream ended: the picture is final"], "ok")]
-            return (self.chain.result() if self.chain is not None else None), updates
+            if self.chain is None:
+                return None, updates
+            result, g = self.chain.result(), self.geometry
+            return (replace(result, geometry=g.current()) if hasattr(g, "current") else result), updates
 
     def _covered(self, ping: PingBlock) -> bool:
         """Whether the navigation fixes the ping's geometry for good (a whole run's always does)."""

@@ -62,18 +62,23 @@ class LiveGeometry:
         t = t - self.nav.start_utc.timestamp()
         return float(np.interp(t_s, t, x)), float(np.interp(t_s, t, y)), float(np.interp(t_s, t, h))
 
-    # ActiveGeometry's interface, on the current geometry
+    # ActiveGeometry's interface (contacts.py), on the current geometry
     def tx_at(self, t):
+        """Source position(s) (m) at time(s) ``t`` (s): ActiveGeometry.tx_at of the fixes so far."""
         return self.current().tx_at(t)
 
     def rx_at(self, t):
+        """Array centre position(s) (m) at time(s) ``t`` (s): ActiveGeometry.rx_at of the fixes so far."""
         return self.current().rx_at(t)
 
     def heading_at(self, t):
+        """Array axis heading(s) (rad, unwrapped) at ``t`` (s): ActiveGeometry.heading_at of the fixes so far."""
         return self.current().heading_at(t)
 
     def velocity(self, t, which: str, dt_s: float = VELOCITY_STEP_S):
+        """Source ("tx") or array ("rx") velocity (m/s) at ``t``: ActiveGeometry.velocity of the fixes so far."""
         return self.current().velocity(t, which, dt_s)
 
     def side_of(self, t, xy):
+        """+1 starboard / -1 port of positions ``xy`` at ``t``: ActiveGeometry.side_of of the fixes so far."""
         return self.current().side_of(t, xy)

@@ -137,28 +137,24 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         Takes each display update (thread-safe: called from this thread and the refresh and navigation threads).
     refresh_s : float
         Seconds between refreshes of the targets.
-    checkpoint : path, optional
-        Checkpoint file (module doc).
+    checkpoint, checkpoint_s : path and float, optional
+        Checkpoint file (module doc), and the seconds between checkpoints.
     stop : threading.Event, optional
         Set to end the run (the result is still made).
-    checkpoint_s : float
-        Seconds between checkpoints.
     ready : callable, optional
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
     warm : bool
         Run :func:`warm_up` before the sample source is read (a TCP source connects when read).
-    active_settings : ActiveSettings, optional
-        For the stream's pings (systems/live/active.py); default: the defaults with the passive spacing.
-    active_options : dict, optional
-        LiveActive's keywords (source_tow_m, array_tow_m: the pings' geometry from the navigation's fixes).
+    active_settings, active_options : ActiveSettings and dict, optional
+        For the stream's pings (systems/live/active.py; default: the defaults with the passive spacing), LiveActive's
+        keywords (source_tow_m, array_tow_m: the pings' geometry from the navigation's fixes).
     **options
         LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
     Returns
     -------
     PassiveResult, ActiveResult or None
-        The final result: the passive chain's; for a stream of pings alone the active chain's (None when the stream
-        ended before one window, or before a ping was tracked).
+        The passive chain's result (a stream of pings alone: the active chain's); None before one window (ping).
     """
     from sonartrack.io.navigation import Navigation
 
@@ -179,8 +175,7 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
             live_ref[0].checkpoint(checkpoint)  # Ctrl-C keeps the state: the same command resumes from here
         raise
     _stop(done, threads)
-    pinged = active.finish(publish)
-    result = _end(live_ref[0], checkpoint, publish)
+    pinged, result = active.finish(publish), _end(live_ref[0], checkpoint, publish)
     return pinged if live_ref[0] is None and pinged is not None else result
 
 
