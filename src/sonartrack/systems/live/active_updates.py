@@ -49,7 +49,9 @@ def bscan_update(t_s: float, ping: int, cone_deg, range_m, row: np.ndarray, dete
     """One ping's B-scan: ``row (beams, bins)`` the largest statistic of each bin (run.py ``_bscan_row``), in dB."""
     return {"type": "bscan", "t_s": float(t_s), "ping": int(ping), "bearing_deg": [float(c) for c in cone_deg],
             "range_m": [float(r) for r in range_m],
-            "level_db": (10.0 * np.log10(np.maximum(row, 1e-12))).round(2).tolist(), "detections": int(detections),
+            # in float64: a float32 rounded to 0.01 is printed with 17 digits (462 kB a ping instead of ~150)
+            "level_db": (10.0 * np.log10(np.maximum(np.asarray(row, float), 1e-12))).round(2).tolist(),
+            "detections": int(detections),
             "tracks": []}
 
 
