@@ -261,3 +261,21 @@ def test_pings_without_navigation_are_shown_not_tracked(streamed):
     assert [u["type"] for u in out if u["type"] != "health"] == ["bscan"] * 3
     said = [e for u in out if u["type"] == "health" for e in u["events"]]
     assert len(said) == 2 and "not tracked" in said[0] and "ended" in said[1], said
+
+
+def test_a_ping_the_fixes_do_not_reach_runs_when_the_next_comes_and_says_so(active_scene, streamed):
+    """Fixes up to just past ping 2's transmit (short of the 1 s its velocities need): ping 1 runs when ping 2
+    comes (the interval), ping 2 waits; ping 3 comes with no newer fix: ping 2 runs on the last fixes with a
+    "navigation late" warning (coasting), ping 3 waits."""
+    pings, header = streamed
+    fixes = _fixes(active_scene, header.start_utc)
+    live = LiveActive(SETTINGS, header, source_tow_m=SOURCE_TOW_M, array_tow_m=ARRAY_TOW_M)
+    early = [f for f in fixes if (f.utc - header.start_utc).total_seconds() <= pings[1].transmit_time_s + 0.5]
+    assert [u for f in early for u in live.push_nav(f)] + live.push_ping(pings[0]) == []
+    out = live.push_ping(pings[1])
+    assert [u["type"] for u in out] == ["ownship", "bscan", "active_targets", "health"]
+    assert out[1]["ping"] == 1 and out[-1]["nav"] == "ok" and [p.ping for p in live.pending] == [2]
+    out = live.push_ping(pings[2])
+    assert [u["type"] for u in out] == ["ownship", "bscan", "active_targets", "health"]
+    assert out[1]["ping"] == 2 and out[-1]["nav"] == "coasting" and "late" in out[-1]["events"][0]
+    assert [p.ping for p in live.pending] == [3]
