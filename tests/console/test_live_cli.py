@@ -30,6 +30,7 @@ from sonartrack.console.fake import FakeLive  # noqa: E402
     (["--folder", "missing-folder", "--nav", "n.csv"], "is not a folder"),
     (["--tcp", "h:5555", "--nav", "n.csv", "--config", "mftd.toml"], "cannot run [btr_mftd]"),
     (["--tcp", "h:5555", "--nav", "n.csv", "--calibration", "bad.toml"], "sensitivity"),
+    (["--tcp", "h:5555", "--nav", "n.csv", "--source-tow", "300"], "give both --source-tow and --array-tow"),
 ])
 def test_bad_options_are_one_line_and_status_2(argv, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -106,7 +107,7 @@ def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
     status = main(["live", "--tcp", "127.0.0.1:5555", "--nav", str(nav), "--port", "0", "--spacing", "0.5",
                    "--checkpoint", str(tmp_path / "state.ckpt")])
     err = capsys.readouterr().err
-    assert status == 130
+    assert status == 130, err
     assert "interrupted: the live run stopped" in err and "state.ckpt" in err and "Traceback" not in err
     assert seen["selected"] == 2 and not seen["stopped"]
     assert type(seen["samples"]).__name__ == "TcpSampleSource" and seen["samples"].args == ("127.0.0.1", 5555)

@@ -6,6 +6,9 @@ the console's server (:class:`sonartrack.console.server.ConsoleServer`, bound to
 says otherwise) and runs :func:`sonartrack.systems.live.run_live`, which publishes every display update to it;
 the operator's selection of a trace goes back to the chain. At the end of the stream the targets are printed
 as ``passive`` prints them; Ctrl-C stops the run (status 130), its state kept in ``--checkpoint`` if given.
+A stream of active pings (``simulate --kind active --stream``) runs through the active chain ping by ping
+(systems/live/active.py; ``--active-config``), tracked on the navigation's fixes with the source and the array
+``--source-tow`` and ``--array-tow`` metres behind the ship; its targets are printed as ``active`` prints them.
 
 Settings: :class:`sonartrack.systems.passive.settings.PassiveSettings`, as for ``passive`` (defaults, then
 ``--config``, then the options; ``--print-config``).
@@ -28,6 +31,16 @@ def register(app: typer.Typer) -> None:
 
 def _help(name: str, model=PassiveSettings) -> str:
     return option_help(model, name)
+
+
+#: the options of a stream's active pings (systems/live/active.py)
+ActiveConfigOpt = Annotated[Path | None, typer.Option(help="TOML file of active settings for a stream's pings (as "
+                                                           "`active --config`; --spacing applies to both).")]
+SourceTowOpt = Annotated[float | None, typer.Option("--source-tow", min=0.0, help="Active pings: the source's "
+                                                    "distance behind the ship along its track (m); with --array-tow "
+                                                    "the pings are tracked on the navigation's fixes.")]
+ArrayTowOpt = Annotated[float | None, typer.Option("--array-tow", min=0.0, help="Active pings: the array centre's "
+                                                   "distance behind the ship along its track (m).")]
 
 
 def live_cmd(
@@ -56,6 +69,7 @@ def live_cmd(
     band_hz: Annotated[tuple[float, float] | None, typer.Option(help=_help("band_hz", FrontEndSettings)
                                                               + " Two numbers: LOW HIGH.")] = None,
     config: Annotated[Path | None, typer.Option(help="TOML file of passive settings (see --print-config).")] = None,
+    active_config: ActiveConfigOpt = None, source_tow: SourceTowOpt = None, array_tow: ArrayTowOpt = None,
     keep_open: Annotated[bool, typer.Option("--keep-open", help="When the stream ends, keep the console open (the "
                                                                 "last picture, for study) until Ctrl-C.")] = False,
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
@@ -72,6 +86,7 @@ def live_cmd(
 
     check_live_settings(settings)
     plan["calibration"] = read_calibration(calibration) if calibration is not None else None  # checked before start
+    plan["active"] = _active_plan(active_config, spacing, source_tow, array_tow)
     server = ConsoleServer(host=host, port=port)
     server.start()
     typer.echo(f"live: console at {server.url} (Ctrl-C to stop)", err=True)
@@ -87,10 +102,32 @@ def live_cmd(
         server.stop()
 
 
+def _active_plan(config: Path | None, spacing: float | None, source_tow: float | None,
+                 array_tow: float | None) -> dict:
+    """The active chain's settings and tow lengths for a stream's pings (checked before anything starts)."""
+    from sonartrack.core.errors import require
+    from sonartrack.systems.active.settings import ActiveSettings
+
+    require((source_tow is None) == (array_tow is None), "give both --source-tow and --array-tow (m), or neither")
+    settings = resolve(ActiveSettings, config, spacing_m=spacing) if config is not None or spacing is not None \
+        else None
+    options = {} if source_tow is None else {"source_tow_m": source_tow, "array_tow_m": array_tow}
+    return {"settings": settings, "options": options}
+
+
 def _summary(result) -> None:
-    """The targets printed as ``passive`` prints them (or why there are none)."""
+    """The targets printed as ``passive`` (or ``active``, for a stream of pings) prints them (or why there are
+    none)."""
+    from sonartrack.systems.active.run import ActiveResult
     from sonartrack.systems.passive.files import passive_summary
 
+    if isinstance(result, ActiveResult):
+        from sonartrack.systems.active.files import summary_lines
+
+        for line in summary_lines(result):
+            typer.echo(line)
+        typer.echo("live: the stream ended", err=True)
+        return
     if result is None:
         typer.echo("live: the stream ended before one whole window of samples: no passive result", err=True)
         return
@@ -169,7 +206,8 @@ def _replayed_navigation(wav: Path, nav: Path):
 
 
 def _run(plan: dict, settings, server, *, checkpoint):
-    """Run the live chain, publishing to ``server``, until the stream ends (or Ctrl-C); its PassiveResult."""
+    """Run the live chain, publishing to ``server``, until the stream ends (or Ctrl-C); its PassiveResult (or the
+    ActiveResult of a stream of pings)."""
     import threading
 
     from sonartrack.systems.live import run_live
@@ -179,7 +217,8 @@ def _run(plan: dict, settings, server, *, checkpoint):
     try:
         return run_live(samples, navigation, settings, server.publish, checkpoint=checkpoint, stop=stop,
                         ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)]),
-                        calibration=plan.get("calibration"))
+                        calibration=plan.get("calibration"), active_settings=plan["active"]["settings"],
+                        active_options=plan["active"]["options"])
     finally:
         stop.set()
         for source in (samples, navigation):

@@ -4,7 +4,7 @@
   const $ = (id) => document.getElementById(id);
   const S = {                       // everything on screen comes from here; every list is bounded (historyRows)
     historyRows: 3600, btr: [], tracks: [], lofar: new Map(), own: [], targets: null, health: null,
-    selected: null, bscan: null, events: [], drawLog: [], messages: 0, lastMessage: 0, conn: "connecting",
+    selected: null, bscan: null, active: null, events: [], drawLog: [], messages: 0, lastMessage: 0, conn: "connecting",
     view: { rows: 240, back: 0 },   // rows shown in the waterfall, and how many rows back from the newest
   };
   const TRACK_COLOURS = ["#ff6b6b", "#4dabf7", "#ffd43b", "#da77f2", "#63e6be", "#ffa94d", "#a9e34b", "#f783ac"];
@@ -207,7 +207,7 @@
     const add = (x, y) => { if (x !== null && y !== null && isFinite(x) && isFinite(y)) { xs.push(x); ys.push(y); } };
     S.own.slice(-600).forEach((o) => add(o.x_m, o.y_m));
     // only positions with a determined range: an undetermined one is a bearing line, its x, y meaningless
-    for (const r of (S.targets ? S.targets.rows : [])) {
+    for (const r of allTargets()) {
       if (r.range_m === null || r.range_m === undefined || r.reason) continue;
       add(r.x_m, r.y_m); if (r.mirror) add(r.mirror.x_m, r.mirror.y_m);
     }
@@ -229,7 +229,7 @@
     g.strokeStyle = "#3d5566"; g.lineWidth = 1; g.beginPath();
     S.own.slice(-1200).forEach((o, k) => { const [x, y] = P(o.x_m, o.y_m); k ? g.lineTo(x, y) : g.moveTo(x, y); });
     g.stroke();
-    for (const r of (S.targets ? S.targets.rows : [])) drawTarget(g, P, r, own);
+    for (const r of allTargets()) drawTarget(g, P, r, own);
     if (own) drawOwnship(g, P, own);
   }
 
@@ -256,15 +256,22 @@
     g.restore();
   }
 
+  // passive targets (ids T1..) then the active chain's (A1..: a mirror pair each until its side is decided)
+  function allTargets() {
+    const passive = S.targets ? S.targets.rows : [];
+    return passive.concat((S.active ? S.active.rows : []).map((r) => Object.assign({ active: true }, r)));
+  }
+  const tag = (r) => `${r.active ? "A" : "T"}${r.id}`;
+
   function drawTarget(g, P, r, own) {
-    const col = r.id === S.selected ? "#ffe14d" : colourOf(r.id);
+    const col = !r.active && r.id === S.selected ? "#ffe14d" : colourOf(r.id);
     g.strokeStyle = col; g.fillStyle = col; g.lineWidth = 1.2;
     if (r.x_m === null || r.y_m === null || r.x_m === undefined) {        // range not determined: a bearing line
       if (!own || r.bearing_deg === null) return;
       const [ox, oy] = P(own.x_m, own.y_m), a = (r.bearing_deg * Math.PI) / 180;
       g.setLineDash([6, 4]); g.globalAlpha = 0.7; g.beginPath(); g.moveTo(ox, oy);
       g.lineTo(ox + 4000 * Math.sin(a), oy - 4000 * Math.cos(a)); g.stroke(); g.setLineDash([]); g.globalAlpha = 1;
-      g.font = "11px monospace"; g.fillText(`T${r.id}?`, ox + 60 * Math.sin(a) + 4, oy - 60 * Math.cos(a));
+      g.font = "11px monospace"; g.fillText(`${tag(r)}?`, ox + 60 * Math.sin(a) + 4, oy - 60 * Math.cos(a));
       return;
     }
     if (r.ellipse && r.ellipse.length > 2) {
@@ -285,7 +292,7 @@
       g.beginPath(); g.moveTo(x, y); g.lineTo(u, v); g.stroke();
     }
     g.beginPath(); g.arc(x, y, 4, 0, 2 * Math.PI); g.fill();
-    g.font = "bold 11px monospace"; g.textAlign = "left"; g.textBaseline = "bottom"; g.fillText(`T${r.id}`, x + 6, y - 3);
+    g.font = "bold 11px monospace"; g.textAlign = "left"; g.textBaseline = "bottom"; g.fillText(tag(r), x + 6, y - 3);
   }
 
   function drawLeg(g, P, leg, col) {        // a leg: [[x, y], ...] or {points: [...]} or {x_m: [...], y_m: [...]}
@@ -312,8 +319,32 @@
     const box = { x: M.l, y: M.t, w: w - M.l - M.r, h: h - M.t - M.b };
     drawImage(g, rows, "v", lo, hi, box);
     g.fillStyle = "#7f95a3"; g.font = "10px monospace"; g.textAlign = "center"; g.textBaseline = "top";
-    g.fillText(`${br[0]}°`, box.x, box.y + box.h + 4); g.fillText(`${br[br.length - 1]}°`, box.x + box.w, box.y + box.h + 4);
+    g.fillText(`${num(br[0])}°`, box.x, box.y + box.h + 4);
+    g.fillText(`${num(br[br.length - 1])}°`, box.x + box.w, box.y + box.h + 4);
     g.textAlign = "right"; g.fillText(`${(rg[rg.length - 1] / 1000).toFixed(1)} km`, box.x - 3, box.y);
+    bscanTracks(g, box, br, rg);
+  }
+
+  // the scan's tracks where their echoes fall: cone angle across, half the bistatic path up (A<id>: active ids)
+  let bscanDrawn = [];
+  function bscanTracks(g, box, br, rg) {
+    bscanDrawn = [];
+    const r0 = rg[0], r1 = rg[rg.length - 1];
+    if (!(r1 > r0)) return;
+    for (const t of S.bscan.tracks || []) {
+      if (t.range_m < r0 || t.range_m > r1 || t.cone_deg === null) continue;
+      const x = box.x + coneFrac(br, t.cone_deg) * box.w, y = box.y + (1 - (t.range_m - r0) / (r1 - r0)) * box.h;
+      const conf = t.status === "confirmed", col = colourOf(t.id);
+      g.globalAlpha = conf ? 1 : 0.5; g.lineWidth = conf ? 2 : 1;
+      g.strokeStyle = "#000"; g.beginPath(); g.arc(x, y, 7, 0, 2 * Math.PI); g.stroke();
+      g.strokeStyle = col; g.beginPath(); g.arc(x, y, 6, 0, 2 * Math.PI); g.stroke();
+      if (conf) {
+        g.font = "bold 11px monospace"; g.textAlign = "left"; g.textBaseline = "bottom"; g.fillStyle = col;
+        g.fillText(`A${t.id}`, x + 8, y - 4);
+      }
+      g.globalAlpha = 1;
+      bscanDrawn.push(t.id);
+    }
   }
 
   // ---- table, health, events ---------------------------------------------------------------------------------
@@ -321,13 +352,15 @@
 
   function drawTable() {
     const body = $("targets").tBodies[0];
-    const rows = S.targets ? S.targets.rows : [];
-    $("tbl-time").textContent = S.targets ? `solution at ${clock(S.targets.t_s)}` : "";
+    const rows = allTargets(), at = S.targets || S.active;
+    $("tbl-time").textContent = at ? `solution at ${clock(at.t_s)}` : "";
     body.replaceChildren(...rows.map((r) => {
       const tr = document.createElement("tr");
-      tr.dataset.id = r.id; if (r.id === S.selected) tr.className = "sel";
+      tr.dataset.id = r.id; if (!r.active && r.id === S.selected) tr.className = "sel";
+      if (r.active) tr.classList.add("active");
+      const side = r.active && r.side === "undecided" ? "undecided pair" : (r.side ?? "—");
       const cells = [
-        `<span class="sw" style="background:${colourOf(r.id)}"></span>T${r.id}`, esc(r.side ?? "—"),
+        `<span class="sw" style="background:${colourOf(r.id)}"></span>${tag(r)}`, esc(side),
         `${num(r.bearing_deg, 1)}°`,
         r.range_m === null || r.range_m === undefined ? null
           : `${num(r.range_m / 1000, 2)} ± ${num((r.range_sd_m ?? NaN) / 1000, 2)} km`,
@@ -337,7 +370,7 @@
       tr.innerHTML = cells.map((c, k) => (c === null
         ? `<td class="why">${esc(r.reason || "range not determined")}</td>`
         : `<td class="${k >= 2 ? "num" : ""}">${c}</td>`)).join("");
-      tr.addEventListener("click", () => select(r.id));
+      if (!r.active) tr.addEventListener("click", () => select(r.id));   // the LOFAR is a passive track's
       return tr;
     }));
   }
@@ -351,7 +384,7 @@
     $("h-msgs").textContent = S.messages;
     const conn = $("conn"); conn.dataset.state = S.conn;
     conn.textContent = { live: "LIVE", connecting: "CONNECTING", down: "RECONNECTING" }[S.conn];
-    const tNow = S.btr.length ? S.btr[S.btr.length - 1].t_s : hm ? hm.t_s : null;
+    const tNow = S.btr.length ? S.btr[S.btr.length - 1].t_s : S.bscan ? S.bscan.t_s : hm ? hm.t_s : null;
     $("h-time").textContent = clock(tNow);
     if (!hm) return;
     $("h-rate").textContent = hm.rate_hz ? `${num(hm.rate_hz / 1000, 2)} kHz` : "—";
@@ -397,6 +430,7 @@
       case "health": S.health = m; addEvents(m.t_s, m.events); break;
       case "selected": S.selected = m.track; break;
       case "bscan": S.bscan = m; break;
+      case "active_targets": S.active = m; break;
       case "error": addEvents(null, [`server: ${m.detail}`]); break;
       default: break;
     }
@@ -404,7 +438,7 @@
 
   function reset() {
     Object.assign(S, { btr: [], tracks: [], lofar: new Map(), own: [], targets: null, health: null, bscan: null,
-      events: [] });
+      active: null, events: [] });
   }
 
   let dirty = false;
@@ -480,6 +514,7 @@
       return { x: r.left + x, y: r.top + y };
     },
     drawnTracks() { return btrGeom && btrGeom.paths ? [...btrGeom.paths.keys()] : []; },
+    bscanTracks() { return bscanDrawn.slice(); },   // active track ids drawn over the B-scan
   };
   connect();
 })();

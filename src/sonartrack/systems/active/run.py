@@ -454,33 +454,64 @@ def ping_interval(ping_table, settings: ActiveSettings) -> float:
 
 
 class _Chain:
-    """The per-ping state of :func:`run_active` (front end, both detectors, tracker, B-scan)."""
+    """The per-ping core of the active chain (front end, both detectors, contacts, tracker, B-scan), shared by
+    :func:`run_active` (:meth:`of_table`) and the live chain (systems/live/active.py): each ping comes with its own
+    waveform and sample rate, and ``geometry`` is read only at and before the ping being run (a navigation that
+    grows ping by ping serves; duck-typed as :class:`ActiveGeometry`).
 
-    def __init__(self, ping_table, geometry: ActiveGeometry, settings: ActiveSettings):
+    Parameters
+    ----------
+    geometry : ActiveGeometry or like
+        Source, receiver and array heading (``tx_at``, ``rx_at``, ``heading_at``, ``velocity``, ``side_of``).
+    settings : ActiveSettings
+        The chain's settings, checked (``elements`` set).
+    cw : bool
+        The pings are CWs (the detector's threshold and the contacts' errors are a CW's).
+    period_s : float or None
+        The MFTD's ping interval (s; None when the MFTD does not run).
+    scan_interval_s : float or None
+        The tracker's scan interval (s; None: one ping).
+    bscan_rows : int or None
+        B-scan rows kept (the newest; None: every ping's).
+    """
+
+    def __init__(self, geometry, settings: ActiveSettings, *, cw: bool, period_s: float | None,
+                 scan_interval_s: float | None, bscan_rows: int | None = None):
+        from collections import deque
+
         from sonartrack.acoustics.active_beams import LineArray
         from sonartrack.detection.cells import detection_threshold
         from sonartrack.detection.cw_cells import cw_threshold
 
-        s = self.settings = settings.checked(int(ping_table.channels[0]))
-        self.table, self.geometry = ping_table, geometry
+        s = self.settings = settings
+        self.geometry, self.cw, self.period, self.scan_interval = geometry, bool(cw), period_s, scan_interval_s
         self.array = LineArray(int(s.elements), float(s.spacing_m))
         self.front_end = s.front_end_settings()
-        self.cw = len(ping_table) > 0 and ping_table.waveform(0).kind == "cw"
         self.threshold = cw_threshold(s.pfa, s.cw) if self.cw else detection_threshold(self.front_end)
         strong = s.mftd_strong_pfa
         self.strong = None if strong is None else (cw_threshold(strong, s.cw) if self.cw else detection_threshold(
             self.front_end.model_copy(update={"pfa": strong})))
-        self.period = ping_interval(ping_table, s) if s.detector == "mftd" else None
-        check_spacing(s, ping_table)
-        check_memory(s, ping_table, self.period)
         self.timer, self.mftd, self.tracker = _Timer(), None, None
         self.single: list[Detections] = []
         self.multi: list[Detections] = []
-        self.bscan: list[np.ndarray] = []
+        self.bscan: deque[np.ndarray] = deque(maxlen=bscan_rows)
+        self.times: list[float] = []
         self.gate: list[np.ndarray] = []
         self.contacts: list[Contacts] = []
         self.axes = None
         self.n_detections = 0
+
+    @classmethod
+    def of_table(cls, ping_table, geometry: ActiveGeometry, settings: ActiveSettings) -> _Chain:
+        """The chain for the pings of a table (its first ping's waveform; the intervals from its times), checked
+        against the table (the array's spacing for its band, the memory its pings need)."""
+        s = settings.checked(int(ping_table.channels[0]))
+        period = ping_interval(ping_table, s) if s.detector == "mftd" else None
+        check_spacing(s, ping_table)
+        check_memory(s, ping_table, period)
+        cw = len(ping_table) > 0 and ping_table.waveform(0).kind == "cw"
+        return cls(geometry, s, cw=cw, period_s=period,
+                   scan_interval_s=ping_interval(ping_table, s) if len(ping_table) > 1 else None)
 
     def _start(self, cells: PingCells) -> None:
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
@@ -500,17 +531,16 @@ class _Chain:
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
                                       turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
-                                      clutter_map=clutter_map_of(s),
-                                      scan_interval_s=ping_interval(self.table, s) if len(self.table) > 1 else None)
+                                      clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval)
 
-    def _front_end(self, i: int, number: int, time_s: float, samples: np.ndarray) -> PingCells:
+    def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
         arrival from the navigation), detection/cw_cells.py's for a CW (its normaliser across Doppler and delay,
         the reverberation ridge of each beam notched from the navigation)."""
         from sonartrack.detection.cells import ping_front_end
         from sonartrack.detection.cw_cells import cw_ping_cells
 
-        w, fs, g = self.table.waveform(i), float(self.table.fs_hz[i]), self.geometry
+        g = self.geometry
         if w.kind != "cw":
             direct_s = float(np.hypot(*(g.tx_at(time_s) - g.rx_at(time_s)))) / self.settings.sound_speed_mps
             return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number,
@@ -519,13 +549,15 @@ class _Chain:
         return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
                              motion=motion)
 
-    def ping(self, i: int, number: int, time_s: float, samples: np.ndarray) -> None:
+    def ping(self, number: int, time_s: float, samples: np.ndarray, waveform, fs_hz: float) -> PingCells:
+        """One ping through every stage (module doc): its number, transmit time (s), samples (channels, n) complex
+        baseband, transmitted pulse (Waveform) and sample rate (Hz); returns its cells (the B-scan row is kept)."""
         from sonartrack.detection.cells import detect_ping
 
         s, tm = self.settings, self.timer
         require(samples.shape[0] == s.elements, f"ping {number} has {samples.shape[0]} channels, the array "
                                                 f"{s.elements}: give the pings of one array")
-        cells = tm.run("front end", self._front_end, i, number, time_s, samples)
+        cells = tm.run("front end", self._front_end, waveform, float(fs_hz), number, time_s, samples)
         if self.axes is None:
             self._start(cells)
         single = tm.run("single-ping detection", detect_ping, cells, self.threshold)
@@ -543,21 +575,24 @@ class _Chain:
         self.n_detections += len(det)
         self.contacts.append(c)
         self.gate.append(tm.run("tracking", self.tracker.step, time_s, c))
+        self.times.append(float(time_s))
+        return cells
 
     def result(self) -> ActiveResult:
         from sonartrack.detection.ping_mftd import concat_detections
 
         single, multi = concat_detections(self.single), concat_detections(self.multi)
-        t = np.asarray(self.table.transmit_time_s, float)
+        t = np.asarray(self.times, float)
         a = self.axes
         bins = _bscan_axis(np.asarray(a.travel_time_s), self.settings.bscan_bins) if a is not None else np.zeros(0)
         level = np.stack(self.bscan) if self.bscan else np.zeros((0, 0, 0), np.float32)
-        bscan = BScan(t[:len(self.bscan)], np.asarray(a.cone_deg) if a is not None else np.zeros(0), bins, level)
+        cone = np.asarray(a.cone_deg) if a is not None else np.zeros(0)
+        bscan = BScan(t[len(t) - len(self.bscan):], cone, bins, level)  # the newest rows (all in a file run)
         tracks = self.tracker.result() if self.tracker is not None else ContactTracker(
             self.settings.tracker_settings(), self.geometry, None, 1.0).result()
         return ActiveResult(multi if self.mftd is not None else single, single, multi, Contacts.concat(self.contacts),
                             np.concatenate(self.gate) if self.gate else np.zeros(0, bool), tracks, bscan,
-                            self.geometry, t[:len(self.bscan)], self.settings, dict(self.timer.seconds),
+                            self.geometry, t, self.settings, dict(self.timer.seconds),
                             self._thresholds())
 
     def _thresholds(self) -> dict:
@@ -615,11 +650,11 @@ def run_active(pings: Iterable[tuple[int, float, np.ndarray]], ping_table, nav, 
     require(geometry.covers(t[0] - 1.0, t[-1] + 1.0) or geometry.covers(t[0], t[-1]),
             f"the navigation ({geometry.time_s[0]:g}..{geometry.time_s[-1]:g} s) does not cover the pings "
             f"({t[0]:g}..{t[-1]:g} s): give the navigation of the whole ping sequence")
-    chain = _Chain(ping_table, geometry, settings)
+    chain = _Chain.of_table(ping_table, geometry, settings)
     if progress is not None:
         progress.start("active pings", len(t), 0)
     for i, (number, time_s, samples) in enumerate(pings):
-        chain.ping(i, int(number), float(time_s), np.asarray(samples))
+        chain.ping(int(number), float(time_s), np.asarray(samples), ping_table.waveform(i), float(ping_table.fs_hz[i]))
         if progress is not None:
             progress.advance(1)
     return chain.result()

@@ -61,6 +61,7 @@ class LiveNavigation:
         self._nav: Navigation | None = None
         self.coasting = False
         self.dropouts = 0
+        self.version = 0  # fixes taken so far (the geometries built on them are rebuilt when it changes)
 
     def push(self, fix: NavFix) -> None:
         """Take a fix (a fix not after the newest is ignored: NMEA repeats); projected once, here."""
@@ -81,6 +82,7 @@ class LiveNavigation:
             self.fixes.popleft()
             self._n_headings -= math.isfinite(self._cols.popleft()[2])
         self._nav = None
+        self.version += 1
 
     def _unwrapped(self, heading_deg: float) -> float:
         """The logged heading (rad) unwrapped against the previous logged one, step by step as np.unwrap does it
@@ -134,22 +136,34 @@ class LiveNavigation:
         """The Navigation of the fixes kept (None with fewer than two): io/nmea.py ``navigation_from_track`` on
         them, from the positions projected as each fix came (module doc)."""
         if self._nav is None and len(self.fixes) >= 2:
-            from sonartrack.io.nmea import _towed as tow_model  # the file chain's tow model, the same floats
-            from sonartrack.io.nmea import check_tow_length
-
-            t = np.array([f[0] for f in self.fixes])
-            x, y, uw = (np.array(c) for c in zip(*self._cols, strict=True))
-            has = np.isfinite(uw)
-            if has.sum() >= 2:
-                h = np.interp(t, t[has], uw[has])
-            elif has.sum() == 1:
-                h = np.full(t.shape, uw[has][0])
-            else:  # no heading logged: the direction of motion (io/nmea.py)
-                h = np.unwrap(np.arctan2(np.gradient(x, t), np.gradient(y, t)))
-            check_tow_length(self.tow_length_m)
-            ax, ay, ah = tow_model(t, x, y, h, self.tow_length_m)
+            t, x, y, h = self.ship()
+            ax, ay, ah = self.towed(self.tow_length_m, (t, x, y, h))
             self._nav = Navigation(t - self.start_utc.timestamp(), x, y, h, ax, ay, ah)
         return self._nav
+
+    def ship(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The ship's columns of the fixes kept: (UTC unix times (s), x, y (m), heading (rad, unwrapped)), the
+        heading interpolated between logged ones, or the direction of motion when none is logged (io/nmea.py)."""
+        t = np.array([f[0] for f in self.fixes])
+        x, y, uw = (np.array(c) for c in zip(*self._cols, strict=True))
+        has = np.isfinite(uw)
+        if has.sum() >= 2:
+            h = np.interp(t, t[has], uw[has])
+        elif has.sum() == 1:
+            h = np.full(t.shape, uw[has][0])
+        else:  # no heading logged: the direction of motion (io/nmea.py)
+            h = np.unwrap(np.arctan2(np.gradient(x, t), np.gradient(y, t)))
+        return t, x, y, h
+
+    def towed(self, tow_length_m: float, ship=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A body towed ``tow_length_m`` behind the ship along its track at the fixes' times: (x, y (m), heading
+        (rad)), the file chain's tow model (io/nmea.py); ``ship`` the columns of :meth:`ship` when at hand."""
+        from sonartrack.io.nmea import _towed as tow_model  # the file chain's tow model, the same floats
+        from sonartrack.io.nmea import check_tow_length
+
+        t, x, y, h = self.ship() if ship is None else ship
+        check_tow_length(tow_length_m)
+        return tow_model(t, x, y, h, float(tow_length_m))
 
     def heading_deg(self, time_s: float) -> float | None:
         """The array's heading (deg, unwrapped) at ``time_s`` (held at the last fix when coasting), or None without
@@ -178,3 +192,4 @@ class LiveNavigation:
         origin = state["origin"]
         self.projection = None if origin is None else LocalProjection(*origin)
         self._nav = None
+        self.version += 1

@@ -6,13 +6,16 @@ navigation source on a thread of its own (fixes handed to the chain under its lo
 refresh takes longer than a tenth of that, every ten refresh times, so that the slow stages never take more than
 about a tenth of a core from the windows. With ``checkpoint`` the chain starts from that file when it exists (its
 display history published first) and writes it every ``checkpoint_s`` and at the end (Ctrl-C included: the
-caller's ``stop`` event, or KeyboardInterrupt).
+caller's ``stop`` event, or KeyboardInterrupt). A stream's pings go to the active chain (systems/live/active.py,
+built at the first ping; the navigation's fixes go to it as well), whose result is returned for a stream of pings
+alone.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -28,8 +31,9 @@ REFRESH_SHARE = 0.1
 EARLY_EVENTS = 20
 
 
-def _nav_thread(nav, live_ref: list, publish, stop: threading.Event) -> threading.Thread | None:
-    """Read the navigation source on a thread: fixes to the chain (once built), events to the health."""
+def _nav_thread(nav, live_ref: list, publish, stop: threading.Event, active=None) -> threading.Thread | None:
+    """Read the navigation source on a thread: fixes to the chains (the passive once built; the active's kept
+    until its first ping), events to the health."""
     if nav is None:
         return None
 
@@ -37,6 +41,9 @@ def _nav_thread(nav, live_ref: list, publish, stop: threading.Event) -> threadin
         for item in nav:
             if stop.is_set():
                 break
+            if isinstance(item, NavFix) and active is not None:
+                for u in active.push_nav(item):
+                    publish(u)
             live = live_ref[0]
             if live is None:
                 continue
@@ -114,7 +121,7 @@ def _build(samples, settings, checkpoint, options) -> tuple[LivePassive, bool]:
 def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], None], *, refresh_s: float = 10.0,
              checkpoint=None, stop: threading.Event | None = None, checkpoint_s: float = 60.0,
              ready: Callable[[LivePassive], None] | None = None, warm: bool = True, active_settings=None,
-             **options) -> PassiveResult | None:
+             active_options: dict | None = None, **options):
     """Run the live chain until the sample source ends or ``stop`` is set (module doc).
 
     Parameters
@@ -130,25 +137,24 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
         Takes each display update (thread-safe: called from this thread and the refresh and navigation threads).
     refresh_s : float
         Seconds between refreshes of the targets.
-    checkpoint : path, optional
-        Checkpoint file (module doc).
+    checkpoint, checkpoint_s : path and float, optional
+        Checkpoint file (module doc), and the seconds between checkpoints.
     stop : threading.Event, optional
         Set to end the run (the result is still made).
-    checkpoint_s : float
-        Seconds between checkpoints.
     ready : callable, optional
         Called with the chain once it is built (the console hooks its track selection there: ``live.select``).
     warm : bool
         Run :func:`warm_up` before the sample source is read (a TCP source connects when read).
-    active_settings : ActiveSettings, optional
-        For the stream's pings (systems/live/active.py); default: the defaults with the passive spacing.
+    active_settings, active_options : ActiveSettings and dict, optional
+        For the stream's pings (systems/live/active.py; default: the defaults with the passive spacing), LiveActive's
+        keywords (source_tow_m, array_tow_m: the pings' geometry from the navigation's fixes).
     **options
         LivePassive's keywords (history_s, tow_length_m, nav_timeout_s).
 
     Returns
     -------
-    PassiveResult or None
-        The final result; None when the stream ended before one window.
+    PassiveResult, ActiveResult or None
+        The passive chain's result (a stream of pings alone: the active chain's); None before one window (ping).
     """
     from sonartrack.io.navigation import Navigation
 
@@ -158,18 +164,19 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     if warm:
         warm_up(settings)
     done, live_ref = threading.Event(), [None]
-    threads = [_nav_thread(nav, live_ref, publish, done)]
+    active = _ActivePings(settings, active_settings, active_options or {})
+    threads = [_nav_thread(nav, live_ref, publish, done, active)]
     start = partial(_start, samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready)
     try:
-        _read(samples, stop, live_ref, start, threads, publish, _ActivePings(settings, active_settings),
-              (checkpoint, checkpoint_s))
+        _read(samples, stop, live_ref, start, threads, publish, active, (checkpoint, checkpoint_s))
     except BaseException as exc:
         _stop(done, threads)
         if isinstance(exc, KeyboardInterrupt) and checkpoint is not None and live_ref[0] is not None:
             live_ref[0].checkpoint(checkpoint)  # Ctrl-C keeps the state: the same command resumes from here
         raise
     _stop(done, threads)
-    return _end(live_ref[0], checkpoint, publish)
+    pinged, result = active.finish(publish), _end(live_ref[0], checkpoint, publish)
+    return pinged if live_ref[0] is None and pinged is not None else result
 
 
 def _read(samples, stop, live_ref: list, start, threads: list, publish, active, checkpointing) -> None:
@@ -218,19 +225,44 @@ def _start(samples, settings, checkpoint, options, live_ref: list, publish, refr
 
 
 class _ActivePings:
-    """The stream's pings to the active chain (systems/live/active.py), built at the first ping."""
+    """The stream's pings to the active chain (systems/live/active.py), built at the first ping; the navigation's
+    fixes kept until then (the newest ``KEPT_FIXES``), then given to it."""
 
-    def __init__(self, settings: PassiveSettings, active_settings):
-        self.settings, self.active_settings, self.chain = settings, active_settings, None
+    KEPT_FIXES = 7200
+
+    def __init__(self, settings: PassiveSettings, active_settings, options: dict):
+        self.settings, self.active_settings, self.options, self.chain = settings, active_settings, options, None
+        self.fixes: deque = deque(maxlen=self.KEPT_FIXES)
+        self.lock = threading.Lock()
 
     def push(self, ping, header) -> list[dict]:
-        if self.chain is None:
-            from sonartrack.systems.active.settings import ActiveSettings
-            from sonartrack.systems.live.active import LiveActive
+        with self.lock:
+            if self.chain is None:
+                from sonartrack.systems.active.settings import ActiveSettings
+                from sonartrack.systems.live.active import LiveActive
 
-            s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
-            self.chain = LiveActive(s, header)
+                s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
+                self.chain = LiveActive(s, header, **self.options)
+                out = [u for fix in self.fixes for u in self.chain.push_nav(fix)]
+                self.fixes.clear()
+                return out + self.chain.push_ping(ping)
         return self.chain.push_ping(ping)
+
+    def push_nav(self, fix) -> list[dict]:
+        with self.lock:
+            if self.chain is None:
+                self.fixes.append(fix)
+                return []
+        return self.chain.push_nav(fix)
+
+    def finish(self, publish):
+        """The pings still waiting run; the active chain's result (None without one)."""
+        if self.chain is None:
+            return None
+        result, updates = self.chain.finish()
+        for u in updates:
+            publish(u)
+        return result
 
 
 def _take(live: LivePassive, item, publish) -> None:
