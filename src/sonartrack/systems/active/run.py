@@ -513,7 +513,7 @@ class _Chain:
         return cls(geometry, s, cw=cw, period_s=period,
                    scan_interval_s=ping_interval(ping_table, s) if len(ping_table) > 1 else None)
 
-    def _start(self, cells: PingCells) -> None:
+    def _start(self, cells: PingCells, waveform, fs_hz: float) -> None:
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
 
         s = self.settings
@@ -524,8 +524,8 @@ class _Chain:
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
             self.mftd = PingMftd(self.axes, self.period, pfa, s.sound_speed_mps, s.mftd_settings(), noise_mean=1.0,
                                  cfar=s.cw.estimate() if self.cw else self.front_end.cfar)
-        w = self.table.waveform(0)  # a CW's range rate is known to its Doppler resolution cell (cw_tracking.py)
-        self.rate_sd = (cw_rate_sd_mps(w, float(self.table.fs_hz[0]), self.front_end.doppler_pad, s.sound_speed_mps)
+        # a CW's range rate is known to its Doppler resolution cell (cw_tracking.py)
+        self.rate_sd = (cw_rate_sd_mps(waveform, float(fs_hz), self.front_end.doppler_pad, s.sound_speed_mps)
                         if self.cw else rate_sd_of(cells.range_rate_mps))
         self.beam_step = float(np.median(np.diff(cells.cone_deg))) if len(cells.cone_deg) > 1 else None
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
@@ -559,7 +559,7 @@ class _Chain:
                                                 f"{s.elements}: give the pings of one array")
         cells = tm.run("front end", self._front_end, waveform, float(fs_hz), number, time_s, samples)
         if self.axes is None:
-            self._start(cells)
+            self._start(cells, waveform, fs_hz)
         single = tm.run("single-ping detection", detect_ping, cells, self.threshold)
         self.single.append(single)
         det = single
