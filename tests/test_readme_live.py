@@ -1,4 +1,4 @@
-"""The README's two live lines, run as written and together: the recorder (``simulate --stream``) and the console
+"""The README's live lines, run as written, each pair together: the recorder (``simulate --stream``) and the console
 (``live --tcp``). The console must show the default scene's ships building up (confirmed tracks pushed to a
 WebSocket client of the page), and Ctrl-C must stop both with status 130, one line each and no traceback."""
 
@@ -17,10 +17,11 @@ from wsclient import Client  # noqa: E402
 from test_readme_commands import _environment, readme_commands  # noqa: E402
 
 
-def _lines() -> tuple[str, str]:
+def _lines(active: bool = False) -> tuple[str, str]:
+    """The README's recorder and console lines: the passive pair, or the active pair (``--kind active``, tows)."""
     commands = readme_commands()
-    recorder = [c for c in commands if "--stream" in c]
-    console = [c for c in commands if c.startswith("sonartrack live --tcp")]
+    recorder = [c for c in commands if "--stream" in c and ("--kind active" in c) == active]
+    console = [c for c in commands if c.startswith("sonartrack live --tcp") and ("--source-tow" in c) == active]
     assert len(recorder) == 1 and len(console) == 1, (recorder, console)
     return recorder[0], console[0]
 
@@ -49,6 +50,49 @@ def _ships(messages) -> set[int]:
             if u["type"] == "tracks":
                 ids |= {t["id"] for t in u["tracks"] if t.get("status") == "confirmed"}
     return ids
+
+
+def _active_rows(messages) -> list[dict]:
+    """Active target rows the console has been shown."""
+    rows = []
+    for m in messages:
+        for u in m["updates"] if m["type"] == "history" else [m]:
+            if u["type"] == "active_targets":
+                rows += u["rows"]
+    return rows
+
+
+def _stop(procs) -> None:
+    for proc in procs:
+        if proc is not None and proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+    outs = [p.communicate(timeout=60) if p is not None else ("", "") for p in procs]
+    for proc, (out, err) in zip(procs, outs, strict=True):
+        assert proc.returncode == 130, (proc.returncode, out, err)
+        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("interrupted"), err
+
+
+def test_readme_live_active_lines_show_a_target(tmp_path):
+    """The active pair (its own ports, so that it may run beside the passive pair): the B-scan arrives ping by ping
+    and the default active scene's targets appear in the table (a side or an undecided pair, with a range)."""
+    recorder_line, console_line = _lines(active=True)
+    port = int(console_line.split("--port")[1].split()[0])
+    recorder = _start(recorder_line, tmp_path)
+    console = None
+    try:
+        line = recorder.stdout.readline()
+        failed = recorder.stderr.read() if recorder.poll() is not None else ""
+        assert "waiting for the live side" in line, (line, failed)
+        console = _start(console_line, tmp_path)
+        client = _wait_console(f"http://127.0.0.1:{port}/", console)
+        rows = client.wait(lambda ms: _active_rows(ms), 240)
+        assert len({u["ping"] for u in client.of_type("bscan")}) >= 2
+        client.close()
+    finally:
+        _stop((console, recorder))
+    assert all(r["side"] in ("starboard", "port", "undecided") for r in rows), rows
+    assert any(r["range_m"] is not None and r["range_m"] > 0 for r in rows), rows  # a target placed, not a bearing
+    print(f"active target rows shown: {len(rows)}")
 
 
 def test_readme_live_lines_show_the_ships(tmp_path):
