@@ -21,16 +21,10 @@ from typing import Annotated
 
 import typer
 
-from sonartrack.cli._settings import PRINT_CONFIG_HELP, option_help, print_config_and_exit, resolve
+from sonartrack.cli._settings import PRINT_CONFIG_HELP, print_config_and_exit, resolve, settings_help
 from sonartrack.systems.passive.settings import FrontEndSettings, PassiveSettings
 
-
-def register(app: typer.Typer) -> None:
-    app.command("live")(live_cmd)
-
-
-def _help(name: str, model=PassiveSettings) -> str:
-    return option_help(model, name)
+_help = settings_help(PassiveSettings)
 
 
 #: the options of a stream's active pings (systems/live/active.py)
@@ -74,7 +68,8 @@ def live_cmd(
                                                                 "last picture, for study) until Ctrl-C.")] = False,
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
 ) -> None:
-    """Live passive chain on a stream (TCP, a recorder's folder, or a replayed recording) with a browser console."""
+    """Live passive (window by window) or active (ping by ping) chain on a stream (TCP, a recorder's folder, or a
+    replayed recording) with a browser console."""
     settings = resolve(PassiveSettings, config, spacing_m=spacing, elements=elements, front_end__method=method,
                        front_end__band_hz=list(band_hz) if band_hz else None)
     if print_config:

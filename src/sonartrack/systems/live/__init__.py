@@ -13,13 +13,7 @@ active_updates.py (the B-scan and the active target rows).
 
 from __future__ import annotations
 
-import importlib
+from sonartrack.core.lazy import lazy_exports
 
 _EXPORTS = {"LivePassive": "sonartrack.systems.live.passive", "run_live": "sonartrack.systems.live.run"}
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'sonartrack.systems.live' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(__name__, _EXPORTS)
