@@ -69,12 +69,13 @@ def _slowest_tests(log_prefix: str, n: int = 20) -> None:
     """The ``n`` tests of most CPU time, from the per-worker logs ``log_prefix.gw*`` that tests/conftest.py writes."""
     rows = []
     for log in Path(log_prefix).parent.glob(Path(log_prefix).name + ".*"):
-        rows += [(float(cpu), nodeid) for cpu, nodeid in (ln.split("\t", 1) for ln in log.read_text().splitlines())]
-    total = sum(cpu for cpu, _ in rows)
-    print(f"  {len(rows)} tests, {total:.0f} s CPU inside the tests (collection and start-up not counted); the "
-          f"{n} of most CPU time:", flush=True)
-    for cpu, nodeid in sorted(rows, reverse=True)[:n]:
-        print(f"  {cpu:7.2f} s  {nodeid.strip()}", flush=True)
+        rows += [(float(cpu), nodeid, float(jit)) for cpu, nodeid, jit in (ln.split("\t") for ln in
+                                                                           log.read_text().splitlines())]
+    total, compiling = sum(row[0] for row in rows), sum(row[2] for row in rows)
+    print(f"  {len(rows)} tests, {total:.0f} s CPU inside the tests ({compiling:.0f} s of it numba compiling; "
+          f"collection and start-up not counted); the {n} of most CPU time:", flush=True)
+    for cpu, nodeid, jit in sorted(rows, reverse=True)[:n]:
+        print(f"  {cpu:7.2f} s ({jit:5.2f} s compiling)  {nodeid}", flush=True)
 
 
 def tests(cold: bool = False) -> None:
