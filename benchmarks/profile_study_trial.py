@@ -1,6 +1,6 @@
 """Benchmark: CPU time a trial of one study at its full-size config (issue 32 item 5), optionally profiled.
 
-    python benchmarks/bench_study_trial.py jpda-amplitude 2 [--profile]
+    python benchmarks/profile_study_trial.py jpda-amplitude 2 [--profile]   (not run by `make bench`: it needs a study)
 
 Runs ``prepare`` (if the study has one), one warm-up trial (numba compiles or loads its kernels), then N trials
 (seeds 1..N of master seed 2017) and prints the CPU time a trial and that times the study's full ``runs``; CPU
