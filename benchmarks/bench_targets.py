@@ -4,7 +4,11 @@
   size, each run by ``sonartrack reproduce <id> --workers 2`` into a fresh folder (the TL fields of P3 come from
   the user's cache, as in any run after the first): wall time and CPU time (all processes) per study, and the
   totals against <= 300 s together on 2 cores;
-* the test suite: ``pytest -q -n 2`` in a child process, wall time (pytest's own "in N s") against <= 240 s;
+* the test suite: ``pytest -q -n 2`` in a child process, wall time (pytest's own "in N s") against <= 240 s, and
+  the 20 tests of most CPU time (setup + call + teardown, with their waited-for subprocesses; tests/conftest.py
+  logs them when ``SONARTRACK_TEST_CPU_LOG`` is set). Whether numba's cache (``.numba-cache``) was warm matters: a
+  fresh clone compiles every kernel once (2026-12-07: the 10 tests of most CPU time took 112 s CPU with an empty
+  cache, 73 s of it compiling, and 38 s with the cache warm); ``--cold`` empties the cache first;
 * the position tracker with 100 targets and 2000 clutter points a scan (benchmarks/bench_tracker_load.py's
   scenario): ms a scan (best of 3) against <= 20 ms.
 
@@ -61,16 +65,43 @@ def studies() -> None:
           f"{STUDIES_TARGET_S:.0f} s", flush=True)
 
 
-def tests() -> None:
+def _slowest_tests(log_prefix: str, n: int = 20) -> None:
+    """The ``n`` tests of most CPU time, from the per-worker logs ``log_prefix.gw*`` that tests/conftest.py writes."""
+    rows = []
+    for log in Path(log_prefix).parent.glob(Path(log_prefix).name + ".*"):
+        rows += [(float(cpu), nodeid, float(jit)) for cpu, nodeid, jit in (ln.split("\t") for ln in
+                                                                           log.read_text().splitlines())]
+    total, compiling = sum(row[0] for row in rows), sum(row[2] for row in rows)
+    print(f"  {len(rows)} tests, {total:.0f} s CPU inside the tests ({compiling:.0f} s of it numba compiling; "
+          f"collection and start-up not counted); the {n} of most CPU time:", flush=True)
+    for cpu, nodeid, jit in sorted(rows, reverse=True)[:n]:
+        print(f"  {cpu:7.2f} s ({jit:5.2f} s compiling)  {nodeid}", flush=True)
+
+
+def tests(cold: bool = False) -> None:
     """The whole test suite on 2 workers, as ``make test`` runs it (without lint and docs)."""
+    if cold:
+        import shutil
+
+        shutil.rmtree(ROOT / ".numba-cache", ignore_errors=True)
     load = _load()
-    res, wall, cpu = run_timed([sys.executable, "-m", "pytest", "-q", "-n", "2", "-p", "no:cacheprovider"], cwd=ROOT)
+    with tempfile.TemporaryDirectory() as logs:
+        env = dict(os.environ, SONARTRACK_TEST_CPU_LOG=str(Path(logs) / "cpu"))
+        res, wall, cpu = run_timed([sys.executable, "-m", "pytest", "-q", "-n", "2", "-p", "no:cacheprovider"],
+                                   cwd=ROOT, env=env)
+        _report_tests(res, wall, cpu, load, cold)
+        _slowest_tests(str(Path(logs) / "cpu"))
+
+
+def _report_tests(res, wall: float, cpu: float, load: str, cold: bool) -> None:
     tail = res.stdout.strip().splitlines()[-1] if res.stdout.strip() else ""
     took = re.search(r" in ([\d.]+)s", tail)
     test_s = float(took.group(1)) if took else wall
+    cache = "numba cache emptied first" if cold else "numba cache as found"
     print(f"test suite (pytest -n 2): {test_s:.0f} s of test time, {wall:.0f} s with start-up, CPU {cpu:.0f} s "
           f"(~{cpu / 2:.0f} s on 2 free cores); target <= {TESTS_TARGET_S:.0f} s: {_verdict(test_s, TESTS_TARGET_S)} "
-          f"wall, {_verdict(cpu / 2, TESTS_TARGET_S)} by CPU ({load}) -- {tail[-160:]}", flush=True)
+          f"wall, {_verdict(cpu / 2, TESTS_TARGET_S)} by CPU ({load}; {cache}) -- {tail[-160:]}",
+          flush=True)
 
 
 def tracker() -> None:
@@ -88,8 +119,10 @@ def tracker() -> None:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--skip", default="", help="comma-separated parts to leave out: studies, tests, tracker")
-    skip = set(filter(None, ap.parse_args(argv).skip.split(",")))
-    for name, part in (("tracker", tracker), ("studies", studies), ("tests", tests)):
+    ap.add_argument("--cold", action="store_true", help="empty numba's cache before the test suite (a fresh clone)")
+    args = ap.parse_args(argv)
+    skip = set(filter(None, args.skip.split(",")))
+    for name, part in (("tracker", tracker), ("studies", studies), ("tests", lambda: tests(args.cold))):
         if name not in skip:
             part()
 

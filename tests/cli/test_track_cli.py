@@ -1,16 +1,18 @@
-"""`sonartrack track --contacts`: a synthetic bistatic scenario, and every kind of bad file."""
+"""`sonartrack track --contacts`: a synthetic bistatic scenario, and every kind of bad file.
 
-import subprocess
-import sys
+Each command runs in-process through :func:`sonartrack.cli.main` (the same code path as the console script, without
+a fresh interpreter's import a test; tests/cli/test_entry.py checks the process itself).
+"""
+
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from sonartrack.cli import main
 from sonartrack.sim.bistatic_sonar import simulate_scan
 from sonartrack.studies.bistatic_imm_ipda import Config
-
-CLI = [sys.executable, "-m", "sonartrack.cli", "track"]
 
 
 @pytest.fixture(scope="module")
@@ -41,12 +43,20 @@ def scenario(tmp_path_factory):
     return folder, truth
 
 
-def run(*args):
-    return subprocess.run(CLI + [str(a) for a in args], capture_output=True, text=True)
+@pytest.fixture
+def run(capsys, monkeypatch):
+    """``sonartrack track ARGS...`` in-process: its exit status, stdout and stderr."""
+    monkeypatch.setenv("COLUMNS", "200")  # typer's usage text, as wide as in a terminal
+
+    def call(*args):
+        code = main(["track", *map(str, args)])
+        out = capsys.readouterr()
+        return SimpleNamespace(returncode=code, stdout=out.out, stderr=out.err)
+    return call
 
 
 @pytest.mark.parametrize("name", ["contacts.csv", "contacts.parquet"])
-def test_tracks_the_target(scenario, tmp_path, name):
+def test_tracks_the_target(scenario, tmp_path, name, run):
     folder, truth = scenario
     res = run("--contacts", folder / name, "--out", tmp_path)
     assert res.returncode == 0, res.stderr
@@ -59,7 +69,7 @@ def test_tracks_the_target(scenario, tmp_path, name):
     assert (tmp_path / "tracks.png").stat().st_size > 1000
 
 
-def test_raw_bistatic_with_navigation(scenario, tmp_path):
+def test_raw_bistatic_with_navigation(scenario, tmp_path, run):
     folder, truth = scenario
     res = run("--contacts", folder / "raw.csv", "--nav", folder / "nav.csv", "--out", tmp_path, "--confirmed-only")
     assert res.returncode == 0, res.stderr
@@ -87,12 +97,12 @@ def bad_file(scenario, tmp_path, edit):
     return p
 
 
-def test_missing_column(scenario, tmp_path):
+def test_missing_column(scenario, tmp_path, run):
     p = bad_file(scenario, tmp_path, lambda d: d.drop(columns=["y_m"]))
     assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "y_m")
 
 
-def test_nan_values(scenario, tmp_path):
+def test_nan_values(scenario, tmp_path, run):
     def edit(d):
         d.loc[7, "x_m"] = np.nan
         return d
@@ -100,27 +110,27 @@ def test_nan_values(scenario, tmp_path):
                  "x_m", "row 8")
 
 
-def test_unsorted_times(scenario, tmp_path):
+def test_unsorted_times(scenario, tmp_path, run):
     p = bad_file(scenario, tmp_path, lambda d: d.iloc[::-1])
     assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "sort")
 
 
-def test_wrong_unit(scenario, tmp_path):
+def test_wrong_unit(scenario, tmp_path, run):
     p = bad_file(scenario, tmp_path, lambda d: d.assign(x_m=d.x_m / 1e3).rename(columns={"x_m": "x_km"}))
     assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "x_km", "x_m")
 
 
-def test_raw_without_navigation(scenario, tmp_path):
+def test_raw_without_navigation(scenario, tmp_path, run):
     folder, _ = scenario
     assert_error(run("--contacts", folder / "raw.csv", "--out", tmp_path / "o"), tmp_path / "o", "--nav")
 
 
-def test_no_covariance_and_no_default(scenario, tmp_path):
+def test_no_covariance_and_no_default(scenario, tmp_path, run):
     p = bad_file(scenario, tmp_path, lambda d: d[["time_s", "x_m", "y_m"]])
     assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "default_sigma_m")
 
 
-def test_malformed_and_empty_files(tmp_path):
+def test_malformed_and_empty_files(tmp_path, run):
     p = tmp_path / "x.parquet"
     p.write_text("not parquet")
     assert_error(run("--contacts", p, "--out", tmp_path / "o"), tmp_path / "o", "Parquet")
@@ -129,12 +139,12 @@ def test_malformed_and_empty_files(tmp_path):
     assert_error(run("--contacts", q, "--out", tmp_path / "o"), tmp_path / "o", "no rows")
 
 
-def test_needs_exactly_one_input(tmp_path):
+def test_needs_exactly_one_input(tmp_path, run):
     assert_error(run("--out", tmp_path / "o"), tmp_path / "o", "--contacts")
 
 
 @pytest.mark.parametrize("kind", ["--contacts", "--peaks"])
-def test_print_config_reads_back_to_the_same_settings(tmp_path, kind):
+def test_print_config_reads_back_to_the_same_settings(tmp_path, kind, run):
     """The printed TOML is the library's declarations with their defaults, and --config reads it back unchanged."""
     from sonartrack.io import toml as toml_io
     from sonartrack.systems.track.settings import ContactsTrackSettings, PeaksTrackSettings
@@ -156,12 +166,12 @@ def test_print_config_reads_back_to_the_same_settings(tmp_path, kind):
     assert again.returncode == 0 and again.stdout == edited
 
 
-def test_peaks_tracker_option_overrides_the_config(tmp_path):
+def test_peaks_tracker_option_overrides_the_config(tmp_path, run):
     res = run("--peaks", tmp_path / "unused.csv", "--tracker", "jpda", "--print-config")
     assert res.returncode == 0 and 'associator = "jpda"' in res.stdout
 
 
-def test_flat_tracker_keys_are_pointed_to_the_tracker_table(scenario, tmp_path):
+def test_flat_tracker_keys_are_pointed_to_the_tracker_table(scenario, tmp_path, run):
     folder, _ = scenario
     (tmp_path / "flat.toml").write_text("q = [0.001]\npd = 0.9\n")
     res = run("--contacts", folder / "contacts.csv", "--config", tmp_path / "flat.toml", "--out", tmp_path / "o")
