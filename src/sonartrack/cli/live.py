@@ -68,8 +68,7 @@ def live_cmd(
                                                                 "last picture, for study) until Ctrl-C.")] = False,
     print_config: Annotated[bool, typer.Option("--print-config", help=PRINT_CONFIG_HELP)] = False,
 ) -> None:
-    """Live passive (window by window) or active (ping by ping) chain on a stream (TCP, a recorder's folder, or a
-    replayed recording) with a browser console."""
+    """Live passive or active chain on a stream (TCP, a recorder's folder, a replayed recording), browser console."""
     settings = resolve(PassiveSettings, config, spacing_m=spacing, elements=elements, front_end__method=method,
                        front_end__band_hz=list(band_hz) if band_hz else None)
     if print_config:
