@@ -152,14 +152,10 @@ def matched_cells(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: 
 
     Parameters
     ----------
-    samples : ndarray (N, M)
-        Complex baseband samples, sample 0 at the transmit time.
-    fs_hz : float
-        Sample rate (Hz).
-    waveform : Waveform
-        The transmitted pulse.
-    array : LineArray
-        Element count and spacing.
+    samples, fs_hz
+        Complex baseband samples, ndarray (N, M), sample 0 at the transmit time, and their rate (Hz).
+    waveform, array
+        The transmitted pulse and the array (element count and spacing).
     settings : FrontEndSettings
         Beams, sound speed, CW bank.
 

@@ -80,10 +80,9 @@ def ca_pfa(alpha, n: int):
 
     Parameters
     ----------
-    alpha : float or array_like
-        Threshold on the normalised statistic s (dimensionless).
-    n : int
-        Number N of reference cells.
+    alpha, n
+        Threshold on the normalised statistic s (dimensionless, float or array_like) and the number N of reference
+        cells.
 
     Returns
     -------
@@ -98,10 +97,8 @@ def ca_threshold(pfa: float, n: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    n : int
-        Number N of reference cells.
+    pfa, n
+        The false-alarm probability per cell, in (0, 1), and the number N of reference cells.
 
     Returns
     -------
@@ -137,10 +134,8 @@ def os_threshold(pfa: float, n: int, k: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    n, k : int
-        Number N of reference cells and the rank k.
+    pfa, n, k
+        As :func:`ca_threshold`, and the rank k of the order statistic.
 
     Returns
     -------
@@ -431,12 +426,8 @@ def k_os_threshold(pfa: float, nu: float, n: int, k: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    nu : float
-        K shape.
-    n, k : int
-        Reference cells N and the OS rank k.
+    pfa, nu, n, k
+        The false-alarm probability per cell, in (0, 1), and the clutter and normaliser as :func:`k_os_log_pfa`.
 
     Returns
     -------
