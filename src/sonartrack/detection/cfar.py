@@ -58,20 +58,7 @@ class CfarSettings(Settings):
 
 
 def os_mean_factor(n: int, k: int) -> float:
-    """c_k = E[x_(k)] of N unit-mean exponentials = sum_{i=N-k+1}^{N} 1/i.
-
-    Parameters
-    ----------
-    n : int
-        Reference cells N.
-    k : int
-        Rank k (1 = smallest).
-
-    Returns
-    -------
-    float
-        c_k.
-    """
+    """c_k = E[x_(k)] of ``n`` = N unit-mean exponentials, ``k`` the rank (1 = smallest): sum_{i=N-k+1}^{N} 1/i."""
     return float(np.sum(1.0 / np.arange(n - k + 1, n + 1)))
 
 
