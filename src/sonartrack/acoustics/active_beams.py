@@ -42,18 +42,8 @@ STEERING_PHASE_RAD = 0.001
 
 
 def element_offsets_m(array: LineArray) -> np.ndarray:
-    """s_n = ((N - 1)/2 - n) d, front positive, of the array's elements.
-
-    Parameters
-    ----------
-    array : LineArray
-        Element count N and spacing d (m).
-
-    Returns
-    -------
-    ndarray (N,)
-        Offsets along the axis from the centre (m); element 0 (the front) first.
-    """
+    """s_n = ((N - 1)/2 - n) d (m), front positive: the offsets (N,) along the axis from the centre of the elements of
+    ``array`` (N elements d apart); element 0 (the front) first."""
     return ((array.elements - 1) / 2.0 - np.arange(array.elements)) * array.spacing_m
 
 

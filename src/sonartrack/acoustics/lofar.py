@@ -45,6 +45,7 @@ import numpy as np
 from sonartrack.acoustics.blas_threads import one_blas_thread
 from sonartrack.acoustics.line_array import LineArray
 from sonartrack.core.errors import require
+from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 
 
@@ -139,7 +140,7 @@ def lofar_band(array: LineArray, fs_hz: float, settings: LofarSettings) -> tuple
 
 
 @dataclass(frozen=True, slots=True)
-class LineDetections:
+class LineDetections(Rows):
     """Tonal line detections, one row each: period centre (s), cone angle (deg), frequency (Hz), statistic z,
     SNR (dB), beam index."""
 
@@ -149,9 +150,6 @@ class LineDetections:
     statistic: np.ndarray
     snr_db: np.ndarray
     beam: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.time_s)
 
 
 def beam_power_spectra(blocks: np.ndarray, fs_hz: float, array: LineArray, cone_deg: np.ndarray,

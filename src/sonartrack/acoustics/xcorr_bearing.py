@@ -261,24 +261,8 @@ def bearings_from_recording(signals, fs_hz: float, settings: BearingSettings) ->
 
 
 def peaks_summary(record: PeakRecord, n_samples: int, fs_hz: float, window_s: float) -> str:
-    """One line: windows, peaks, peaks a window and their median amplitude.
-
-    Parameters
-    ----------
-    record : PeakRecord
-        The peaks.
-    n_samples : int
-        Samples in the recording.
-    fs_hz : float
-        Sample rate (Hz).
-    window_s : float
-        Window length (s).
-
-    Returns
-    -------
-    str
-        The summary line.
-    """
+    """One line on the peaks ``record`` of a recording of ``n_samples`` samples at ``fs_hz`` (Hz), in windows of
+    ``window_s`` (s): windows, peaks, peaks a window and their median amplitude."""
     n_win = window_count(n_samples, fs_hz, window_s)
     n = len(record.time_s)
     median = float(np.median(record.amplitude)) if n else 0.0

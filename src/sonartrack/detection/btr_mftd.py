@@ -43,6 +43,7 @@ import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.core.random import trial_rng
+from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 
 # the detector's modules (detection/mftd.py, ping_mftd.py) are imported where used: the passive system's settings
@@ -80,7 +81,7 @@ class BtrMftdSettings(Settings):
 
 
 @dataclass(frozen=True, slots=True)
-class BtrDetections:
+class BtrDetections(Rows):
     """MFTD detections: window index, window centre (s), cone angle (deg) and rate (deg/s) of the best track's
     last cell (the rate the least-squares slope over its K cells: coarse, one cell step over K windows), the
     statistic S (log) and its threshold."""
@@ -91,9 +92,6 @@ class BtrDetections:
     cone_rate_deg_s: np.ndarray
     statistic: np.ndarray
     threshold: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.window)
 
 
 def _empty() -> BtrDetections:

@@ -46,6 +46,7 @@ from sonartrack.acoustics.matched_filter import (
     pulse_compress,
 )
 from sonartrack.core.errors import require
+from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, cfar_threshold, noise_estimate
 
@@ -109,7 +110,7 @@ class PingCells:
 
 
 @dataclass(frozen=True, slots=True)
-class Detections:
+class Detections(Rows):
     """Single-ping detections, arrays (n,): ``ping`` number, transmit ``time_s`` (s), ``cone_deg`` (deg),
     ``travel_time_s`` (s, to the array centre; an LFM's is biased by -f_d tau / B), ``doppler_hz`` (Hz) and
     ``range_rate_mps`` (bistatic, m/s; both NaN for an LFM), ``statistic`` (normalised s at the peak cell),
@@ -125,9 +126,6 @@ class Detections:
     beam: np.ndarray
     delay_cell: np.ndarray
     doppler_cell: np.ndarray
-
-    def __len__(self) -> int:
-        return int(self.time_s.size)
 
 
 def detection_threshold(settings: FrontEndSettings) -> float:
@@ -152,14 +150,10 @@ def matched_cells(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: 
 
     Parameters
     ----------
-    samples : ndarray (N, M)
-        Complex baseband samples, sample 0 at the transmit time.
-    fs_hz : float
-        Sample rate (Hz).
-    waveform : Waveform
-        The transmitted pulse.
-    array : LineArray
-        Element count and spacing.
+    samples, fs_hz
+        Complex baseband samples, ndarray (N, M), sample 0 at the transmit time, and their rate (Hz).
+    waveform, array
+        The transmitted pulse and the array (element count and spacing).
     settings : FrontEndSettings
         Beams, sound speed, CW bank.
 

@@ -58,20 +58,7 @@ class CfarSettings(Settings):
 
 
 def os_mean_factor(n: int, k: int) -> float:
-    """c_k = E[x_(k)] of N unit-mean exponentials = sum_{i=N-k+1}^{N} 1/i.
-
-    Parameters
-    ----------
-    n : int
-        Reference cells N.
-    k : int
-        Rank k (1 = smallest).
-
-    Returns
-    -------
-    float
-        c_k.
-    """
+    """c_k = E[x_(k)] of ``n`` = N unit-mean exponentials, ``k`` the rank (1 = smallest): sum_{i=N-k+1}^{N} 1/i."""
     return float(np.sum(1.0 / np.arange(n - k + 1, n + 1)))
 
 
@@ -80,10 +67,9 @@ def ca_pfa(alpha, n: int):
 
     Parameters
     ----------
-    alpha : float or array_like
-        Threshold on the normalised statistic s (dimensionless).
-    n : int
-        Number N of reference cells.
+    alpha, n
+        Threshold on the normalised statistic s (dimensionless, float or array_like) and the number N of reference
+        cells.
 
     Returns
     -------
@@ -98,10 +84,8 @@ def ca_threshold(pfa: float, n: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    n : int
-        Number N of reference cells.
+    pfa, n
+        The false-alarm probability per cell, in (0, 1), and the number N of reference cells.
 
     Returns
     -------
@@ -137,10 +121,8 @@ def os_threshold(pfa: float, n: int, k: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    n, k : int
-        Number N of reference cells and the rank k.
+    pfa, n, k
+        As :func:`ca_threshold`, and the rank k of the order statistic.
 
     Returns
     -------
@@ -431,12 +413,8 @@ def k_os_threshold(pfa: float, nu: float, n: int, k: int) -> float:
 
     Parameters
     ----------
-    pfa : float
-        False-alarm probability per cell, in (0, 1).
-    nu : float
-        K shape.
-    n, k : int
-        Reference cells N and the OS rank k.
+    pfa, nu, n, k
+        The false-alarm probability per cell, in (0, 1), and the clutter and normaliser as :func:`k_os_log_pfa`.
 
     Returns
     -------

@@ -165,14 +165,9 @@ def pruned_detect(frames, grid: RangeDopplerGrid, prior: KalmanPrior, snr: float
 
     Parameters
     ----------
-    frames : array_like, shape (K, Nr, Nd)
-        Square-law cell values (noise mean 2).
-    grid : RangeDopplerGrid
-        The plane.
-    prior : KalmanPrior
-        Track prior for K frames.
-    snr : float
-        Design SNR rho (linear).
+    frames, grid, prior, snr
+        The square-law cells (noise mean 2), the plane, the track prior for K frames and the design SNR rho
+        (linear), as :func:`track_log_weights`.
     n_tracks : int
         N, tracks kept after each frame's pruning.
     restrict : bool, default True

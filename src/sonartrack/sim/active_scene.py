@@ -318,19 +318,10 @@ class EchoGeometry:
 
 
 def ownship_track(scene: ActiveSceneSettings) -> ManeuveringTrack:
-    """The ownship's track (one turn starting at ``ownship.turn_start_s``, or centred on the scene).
-
-    Parameters
-    ----------
-    scene : ActiveSceneSettings
-        The scene (its ``ownship``: start x east / y north in m, speed in kn, course in deg clockwise from north,
-        turn in deg, negative to port, at a rate in deg/s).
-
-    Returns
-    -------
-    ManeuveringTrack
-        Constant speed (m/s) and start heading (rad, clockwise from north), with at most one turn.
-    """
+    """The ownship's track in ``scene``: constant speed (m/s) and start heading (rad, clockwise from north), with at
+    most one turn, starting at ``ownship.turn_start_s`` or centred on the scene (``scene.ownship``: start x east /
+    y north in m, speed in kn, course in deg clockwise from north, turn in deg, negative to port, at a rate in
+    deg/s)."""
     o = scene.ownship
     turns = ()
     if o.turn_deg != 0:

@@ -10,7 +10,7 @@ light)::
 
 from __future__ import annotations
 
-import importlib
+from sonartrack.core.lazy import lazy_exports
 
 _EXPORTS = {
     "solve_tma": "sonartrack.tma.solve", "TmaResult": "sonartrack.tma.solve",
@@ -21,10 +21,4 @@ _EXPORTS = {
     "SequentialSettings": "sonartrack.tma.settings", "BatchSettings": "sonartrack.tma.settings",
     "EmMapSettings": "sonartrack.tma.settings", "InputSettings": "sonartrack.tma.settings",
 }
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'sonartrack.tma' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(__name__, _EXPORTS)

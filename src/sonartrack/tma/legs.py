@@ -299,20 +299,28 @@ def pseudo_linear_legs(z_rad, time_s, own_xy, t0_s: float, change_times_s) -> np
     return x
 
 
-def _check_inputs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s):
-    """Arrays as float, with a one-line :class:`InputError` for what a user can get wrong."""
+def checked_bearings(time_s, bearing_rad, own_xy_m, sigma_rad, needs: str, min_n: int = 0):
+    """A bearings record as float arrays (t, z, own, sd broadcast to (n,)), with a one-line :class:`InputError` for
+    what a user can get wrong; ``needs`` says what the caller needs (the shape error's text) and ``min_n`` the fewest
+    bearings."""
     t = np.asarray(time_s, dtype=float)
     z = np.asarray(bearing_rad, dtype=float)
     own = np.asarray(own_xy_m, dtype=float)
-    c = np.atleast_1d(np.asarray(change_times_s, dtype=float)) if change_times_s is not None else np.empty(0)
-    require(t.ndim == 1 and z.shape == t.shape and own.shape == (len(t), 2),
-            f"leg-wise TMA needs times and bearings of one length n and ownship positions of shape (n, 2); got "
-            f"{t.shape}, {z.shape}, {own.shape}")
+    require(t.ndim == 1 and z.shape == t.shape and own.shape == (len(t), 2) and len(t) >= min_n,
+            f"{needs}; got {t.shape}, {z.shape}, {own.shape}")
     require(bool(np.all(np.isfinite(t)) and np.all(np.isfinite(z)) and np.all(np.isfinite(own))),
             "times, bearings and ownship positions must be finite: drop the rows with NaN or inf")
     require(bool(np.all(np.diff(t) > 0)), "bearing times must increase strictly: sort the record and drop duplicates")
     sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
     require(bool(np.all(np.isfinite(sig)) and np.all(sig > 0)), "the bearing sd must be positive and finite (rad)")
+    return t, z, own, sig
+
+
+def _check_inputs(time_s, bearing_rad, own_xy_m, sigma_rad, change_times_s):
+    """Arrays as float, with a one-line :class:`InputError` for what a user can get wrong."""
+    t, z, own, sig = checked_bearings(time_s, bearing_rad, own_xy_m, sigma_rad, "leg-wise TMA needs times and "
+                                      "bearings of one length n and ownship positions of shape (n, 2)")
+    c = np.atleast_1d(np.asarray(change_times_s, dtype=float)) if change_times_s is not None else np.empty(0)
     require(c.ndim == 1 and bool(np.all(np.isfinite(c))), "change times must be finite numbers (s)")
     require(bool(np.all(np.diff(np.r_[t[0], c, t[-1]]) > 0)),
             f"change times must increase strictly inside the record ({t[0]:g} to {t[-1]:g} s); got {list(c)}")

@@ -234,10 +234,8 @@ def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSett
 
     Parameters
     ----------
-    record : BearingRecord
-        Bearings (rad) at times (s).
-    ownship : OwnshipTrack
-        The sensor's track (m).
+    record, ownship
+        The bearings and the sensor's track, as :func:`cv_residuals`.
     settings : TmaSettings
         ``sigma_bearing_deg`` (None: estimated), ``verdict.alpha``, ``batch.correlation_inflation``. A record that
         gives each bearing's sd (``record.bearing_sd_rad``) is judged with those: its residuals are whitened by

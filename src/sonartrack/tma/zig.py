@@ -94,7 +94,15 @@ import numpy as np
 from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError, require
 from sonartrack.tma.batch_ml import bearing_model, ml_bearings_only, pseudo_linear_estimate
-from sonartrack.tma.legs import MIN_BEARINGS_PER_LEG, LegFit, _lm, _residual_fn, fit_legs, pseudo_linear_legs
+from sonartrack.tma.legs import (
+    MIN_BEARINGS_PER_LEG,
+    LegFit,
+    _lm,
+    _residual_fn,
+    checked_bearings,
+    fit_legs,
+    pseudo_linear_legs,
+)
 from sonartrack.tma.missed_zig import MISSED_ZIG_DV_SD_MPS, with_missed_zig
 
 #: the calibration table of the threshold's tail form, false zigs per hour = K(dt) (h / 2)^2 exp(-h / 2) (module
@@ -392,12 +400,9 @@ def sequential_glr(time_s, bearing_rad, own_xy_m, sigma_rad, threshold: float, *
 
     Parameters
     ----------
-    time_s, bearing_rad : ndarray, shape (n,)
-        Strictly increasing times (s) and bearings (rad).
-    own_xy_m : ndarray, shape (n, 2)
-        Ownship positions (m).
-    sigma_rad : float or array_like, shape (n,)
-        Bearing noise sd (rad).
+    time_s, bearing_rad, own_xy_m, sigma_rad
+        The record: times (s), bearings (rad), ownship positions (m) and bearing noise sd (rad), as
+        :func:`change_time_profile`.
     threshold : float
         h (:func:`glr_threshold`).
     window_s : float
@@ -453,10 +458,8 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *,
 
     Parameters
     ----------
-    time_s, bearing_rad : array_like, shape (n,)
-        Strictly increasing times (s) and bearings (rad, clockwise from north).
-    own_xy_m : array_like, shape (n, 2)
-        Ownship positions (m; x east, y north) at the bearing times.
+    time_s, bearing_rad, own_xy_m
+        Times (s), bearings (rad) and ownship positions (m), as :func:`~sonartrack.tma.legs.fit_legs`.
     sigma_rad : float or array_like, shape (n,)
         Bearing noise sd (rad): the test's false-alarm rate holds only if it is right (estimate it from the
         record's residuals when unknown).
@@ -477,17 +480,8 @@ def detect_zigs(time_s, bearing_rad, own_xy_m, sigma_rad, *,
     ZigReport
         The zigs, the legs (or None and the reason), the threshold and the statistic at each bearing.
     """
-    t = np.asarray(time_s, dtype=float)
-    z = np.asarray(bearing_rad, dtype=float)
-    own = np.asarray(own_xy_m, dtype=float)
-    require(t.ndim == 1 and z.shape == t.shape and own.shape == (len(t), 2) and len(t) >= 8,
-            f"zig detection needs at least 8 bearings with times and ownship positions (n, 2); got {t.shape}, "
-            f"{z.shape}, {own.shape}")
-    require(bool(np.all(np.isfinite(t)) and np.all(np.isfinite(z)) and np.all(np.isfinite(own))),
-            "times, bearings and ownship positions must be finite: drop the rows with NaN or inf")
-    require(bool(np.all(np.diff(t) > 0)), "bearing times must increase strictly: sort the record and drop duplicates")
-    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
-    require(bool(np.all(np.isfinite(sig)) and np.all(sig > 0)), "the bearing sd must be positive and finite (rad)")
+    t, z, own, sig = checked_bearings(time_s, bearing_rad, own_xy_m, sigma_rad, "zig detection needs at least 8 "
+                                      "bearings with times and ownship positions (n, 2)", min_n=8)
     require(window_s > 0, f"window_s must be positive, got {window_s:g}")
     h = glr_threshold(false_alarm_per_hour, float(np.median(np.diff(t))))
     stat, zigs = sequential_glr(t, z, own, sig, h, window_s=window_s)

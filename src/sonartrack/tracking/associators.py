@@ -20,11 +20,19 @@ from sonartrack.association.likelihood import Likelihoods
 from sonartrack.association.pda import AssociationWeights, pda_pair_weights
 
 
-class PDA:
-    """Probabilistic data association, every track and mode independently."""
+class _Associator:
+    """What the tracker asks of an associator part (tracking/multi_target.py): whether it takes one mode only and
+    whether it takes an existence model; its repr is its class's name."""
 
     single_mode_only = False
     supports_existence = True
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class PDA(_Associator):
+    """Probabilistic data association, every track and mode independently."""
 
     def weights(self, lik: Likelihoods) -> AssociationWeights:
         """PDA weights of every track and mode, each on its own (association/pda.py; module docstring).
@@ -41,23 +49,16 @@ class PDA:
         """
         return pda_pair_weights(lik)  # pda_weights' numbers at the gated pairs only
 
-    def __repr__(self) -> str:
-        return "PDA()"
 
-
-class JPDA:
+class JPDA(_Associator):
     """Exact joint probabilistic data association (one mode, no existence)."""
 
     single_mode_only = True
     supports_existence = False
 
     def weights(self, lik: Likelihoods) -> AssociationWeights:
-        """Exact JPDA marginals (association/jpda.py, paper P0) of single-mode tracks.
-
-        Parameters
-        ----------
-        lik : Likelihoods
-            Likelihoods with one mode (r = 1).
+        """Exact JPDA marginals (association/jpda.py, paper P0) of single-mode tracks from their likelihoods
+        ``lik`` (:class:`~sonartrack.association.likelihood.Likelihoods` with one mode, r = 1).
 
         Returns
         -------
@@ -76,6 +77,3 @@ class JPDA:
         log_miss = np.log(np.minimum(np.maximum(miss, 1e-12), 1.0))
         beta = np.exp(jpda_log_weights(ll, log_miss))
         return AssociationWeights(beta[:, :1], beta[:, None, 1:], None)
-
-    def __repr__(self) -> str:
-        return "JPDA()"

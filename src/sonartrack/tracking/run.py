@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.core.errors import require
+from sonartrack.core.rows import Rows
 from sonartrack.tracking.configurations import bearing_tracker, position_tracker
 from sonartrack.tracking.measurements import fold_cone_state
 from sonartrack.tracking.settings import BearingTrackerSettings, PositionTrackerSettings
@@ -27,7 +28,7 @@ PEAK_TRACK_COLUMNS = ["time_s", "track_id", "bearing_deg", "bearing_rate_deg_s",
 
 
 @dataclass(frozen=True, slots=True)
-class BearingTracks:
+class BearingTracks(Rows):
     """Bearing tracks, one row per live track per scan (n rows), in scan order.
 
     time_s (s), track_id, bearing_deg and bearing_rate_deg_s (the combined estimate, deg and deg/s),
@@ -46,9 +47,6 @@ class BearingTracks:
     confirmed: np.ndarray
     unfolded_deg: np.ndarray | None = None
 
-    def __len__(self) -> int:
-        return len(self.time_s)
-
     def to_frame(self):
         """The tracks as a table.
 
@@ -63,7 +61,7 @@ class BearingTracks:
 
 
 @dataclass(frozen=True, slots=True)
-class PositionTracks:
+class PositionTracks(Rows):
     """Position tracks, one row per live track per scan (n rows, r IMM modes), in scan order.
 
     time_s (s), track_id, confirmed (bool), existence (IPDA probability), x (n, 4) combined state
@@ -79,9 +77,6 @@ class PositionTracks:
     sd_x_m: np.ndarray
     sd_y_m: np.ndarray
     mode_prob: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.time_s)
 
     def to_frame(self):
         """The tracks as a table.

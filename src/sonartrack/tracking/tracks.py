@@ -85,18 +85,8 @@ class TrackArrays:
                            {k: v[keep] for k, v in self.attrs.items()})
 
     def append(self, new: TrackArrays) -> TrackArrays:
-        """These tracks followed by ``new`` (both must carry the same ``attrs`` names).
-
-        Parameters
-        ----------
-        new : TrackArrays
-            Tracks to add.
-
-        Returns
-        -------
-        TrackArrays
-            The concatenation.
-        """
+        """The concatenation, a new :class:`TrackArrays`: these tracks followed by the tracks ``new`` (both must carry
+        the same ``attrs`` names)."""
         if not len(new):
             return self
         if not len(self):

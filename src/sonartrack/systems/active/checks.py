@@ -46,9 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from sonartrack.core.errors import InputError
-
-#: working memory the chain may plan for (bytes; the passive chain's figure): settings asking for more are refused
-MEMORY_LIMIT_BYTES = 2 * 1024**3
+from sonartrack.core.memory import MEMORY_LIMIT_BYTES, refuse_over_limit  # noqa: F401  (the limit re-exported here)
 
 
 def check_spacing(settings, table) -> None:
@@ -177,10 +175,4 @@ def check_memory(settings, table, period_s: float | None) -> None:
     InputError
         Naming the array, its size in GB and the settings that make it.
     """
-    needs = memory_needs(settings, table, period_s)
-    total = sum(need for need, _, _ in needs)
-    if total > MEMORY_LIMIT_BYTES:
-        need, what, fix = max(needs, key=lambda x: x[0])
-        raise InputError(f"the active chain's working arrays would take {total / 1e9:.3g} GB of memory, more than the "
-                         f"{MEMORY_LIMIT_BYTES / 1e9:.3g} GB it plans for; the largest, {what}, {need / 1e9:.3g} GB: "
-                         f"{fix}")
+    refuse_over_limit(memory_needs(settings, table, period_s), "the active chain's")

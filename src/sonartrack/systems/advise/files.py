@@ -140,20 +140,9 @@ def read_targets(solutions, bearings, ownship, sigma_bearing_deg: float):
 
 
 def write_advice_csv(result: AdviceResult, out) -> Path:
-    """Write every candidate leg's predicted range sd as ``advice.csv`` in ``out``, atomically (module doc).
-
-    Parameters
-    ----------
-    result : AdviceResult
-        What :func:`~sonartrack.systems.advise.run.run_advice` returned.
-    out : path-like
-        Output folder.
-
-    Returns
-    -------
-    Path
-        The file written.
-    """
+    """Write every candidate leg's predicted range sd of ``result`` (what
+    :func:`~sonartrack.systems.advise.run.run_advice` returned) as ``advice.csv`` in the output folder ``out``,
+    atomically (module doc); returns the file's path."""
     import pandas as pd
 
     from sonartrack.io.atomic import write_csv

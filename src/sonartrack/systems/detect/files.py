@@ -34,20 +34,9 @@ def read_frames_file(path) -> np.ndarray:
 
 
 def write_detection(detection, out) -> Path:
-    """Write a detection's best track (frame, cells, centres, cell values) as ``detection.csv``, atomically.
-
-    Parameters
-    ----------
-    detection : FrameDetection
-        What :func:`~sonartrack.systems.detect.run.run_detect` returned.
-    out : path-like
-        Output folder.
-
-    Returns
-    -------
-    Path
-        The file written (10 significant digits).
-    """
+    """Write ``detection``'s best track (frame, cells, centres, cell values: what
+    :func:`~sonartrack.systems.detect.run.run_detect` returned) as ``detection.csv`` (10 significant digits) in the
+    output folder ``out``, atomically; returns the file's path."""
     import pandas as pd
 
     from sonartrack.io.atomic import write_csv

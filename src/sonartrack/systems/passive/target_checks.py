@@ -90,10 +90,7 @@ def jackknife_checked(result: TmaResult, side: SideDecision, record, min_log_lr:
         j = int(np.argmin((1.0 if side.side == "starboard" else -1.0) * np.nan_to_num(jk.log_lr)))
         return _undetermined(result, SIDE_UNRESOLVED, f"without the {ordinal(j + 1)} {span} the side is not decided "
                              f"{side.side} (ln LR {jk.log_lr[j]:+.3g}): the decision rests on it")
-    foreign = _foreign_block_note(jk, beamwidth_deg, span, "another source's or the mirror's")
-    if foreign is not None:
-        return _undetermined(result, NOT_ONE_TARGET, foreign)
-    return _jackknife_widened(result, jk.covariance, len(jk.log_lr), span)
+    return _jackknife_verdict(result, jk, beamwidth_deg, span, "another source's or the mirror's", len(jk.log_lr))
 
 
 def axis_checked(result: TmaResult, side: SideDecision, record, min_log_lr: float, beamwidth_deg: float
@@ -189,6 +186,16 @@ def _foreign_block_note(jk, beamwidth_deg: float, span: str, whose: str) -> str 
             f"{np.rad2deg(jk.block_rms_rad[j]):.3g} deg away (rms; the prediction's sd "
             f"{np.rad2deg(jk.block_sd_rad[j]):.2g} deg), more than a beamwidth ({beamwidth_deg:.2g} deg): they are "
             f"{whose}")
+
+
+def _jackknife_verdict(result: TmaResult, jk, beamwidth_deg: float, span: str, whose: str, blocks: int) -> TmaResult:
+    """``result`` undetermined (not one target) when the jackknife's worst-predicted block is ``whose``
+    (:func:`_foreign_block_note`), else widened to the jackknife's spread over its ``blocks`` blocks
+    (:func:`_jackknife_widened`)."""
+    foreign = _foreign_block_note(jk, beamwidth_deg, span, whose)
+    if foreign is not None:
+        return _undetermined(result, NOT_ONE_TARGET, foreign)
+    return _jackknife_widened(result, jk.covariance, blocks, span)
 
 
 def _jackknife_widened(result: TmaResult, p_jack, blocks: int, span: str) -> TmaResult:

@@ -83,8 +83,7 @@ from sonartrack.systems.passive.target_checks import (
     _end_stretch_note as _end_stretch_note,
 )
 from sonartrack.systems.passive.target_checks import (
-    _foreign_block_note,
-    _jackknife_widened,
+    _jackknife_verdict,
     axis_checked,
     jackknife_checked,
     ordinal,
@@ -128,7 +127,6 @@ from sonartrack.tma.verdict import (
     FIXED_CONE,
     FLAT_LIKELIHOOD,
     INCONSISTENT_RESIDUALS,
-    NOT_ONE_TARGET,
     SIDE_UNRESOLVED,
     UNOBSERVABLE,
     with_reasons,
@@ -277,10 +275,7 @@ def legs_checked(legs: TargetLegs, ml: TmaResult, t_end_s: float, beamwidth_deg:
         j = int(np.flatnonzero(~np.all(np.isfinite(jk.state), axis=1))[0])
         return _undetermined(rows, UNOBSERVABLE, f"without the {ordinal(j + 1)} {span} the legs cannot be fitted: "
                              "they rest on it")
-    foreign = _foreign_block_note(jk, beamwidth_deg, span, "another source's or the mirror's")
-    if foreign is not None:
-        return _undetermined(rows, NOT_ONE_TARGET, foreign)
-    return _jackknife_widened(rows, jk.covariance, len(jk.log_lr), span)
+    return _jackknife_verdict(rows, jk, beamwidth_deg, span, "another source's or the mirror's", len(jk.log_lr))
 
 
 def _side_of(m: TrackMeasurements, t, heading, xy, min_log_lr: float) -> tuple[SideDecision, np.ndarray]:
@@ -564,7 +559,4 @@ def bf_jackknife_checked(result: TmaResult, est, sigma, c_mps: float, beamwidth_
     if failed.size:
         return _undetermined(result, DIVERGED, f"without the {ordinal(int(failed[0]) + 1)} {span} the bearings + "
                              "frequency ML fails or has fewer than 6 measurements: the solution rests on it")
-    foreign = _foreign_block_note(jk, beamwidth_deg, span, "another source's")
-    if foreign is not None:
-        return _undetermined(result, NOT_ONE_TARGET, foreign)
-    return _jackknife_widened(result, jk.covariance, len(jk.state), span)
+    return _jackknife_verdict(result, jk, beamwidth_deg, span, "another source's", len(jk.state))

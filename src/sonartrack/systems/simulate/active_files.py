@@ -213,18 +213,8 @@ def write_active(settings: ActiveSceneSettings, out, *, progress=None, cache=Non
 
 
 def active_scene_summary(settings: ActiveSceneSettings) -> str:
-    """One line: pings, waveform, array, and each target's echo SNR range over the scene.
-
-    Parameters
-    ----------
-    settings : ActiveSceneSettings
-        The scene.
-
-    Returns
-    -------
-    str
-        The summary; the echo SNR (dB) of each target only with spherical propagation.
-    """
+    """One line on the scene ``settings``: pings, waveform, array, and each target's echo SNR (dB) range over the
+    scene (only with spherical propagation)."""
     from sonartrack.sim.active_scene import target_truth, transmission_loss_model
 
     w = settings.waveform

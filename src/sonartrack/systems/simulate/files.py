@@ -240,12 +240,9 @@ def write_sample_files(scene: PassiveSceneSettings, folder: Path, *, store=None)
 
     Parameters
     ----------
-    scene : PassiveSceneSettings
-        The scene.
-    folder : Path
-        Output folder (existing).
-    store : FieldStore, optional
-        Cache of RAM transmission-loss fields.
+    scene, folder, store
+        The scene, the output folder (existing) and the cache of RAM transmission-loss fields (optional), as
+        :func:`write_passive_files`.
 
     Returns
     -------

@@ -147,10 +147,8 @@ def scene_summary(scene: PassiveSceneSettings, store=None) -> str:
 
     Parameters
     ----------
-    scene : PassiveSceneSettings
-        The scene.
-    store : FieldStore, optional
-        Cache of RAM transmission-loss fields.
+    scene, store
+        The scene and the cache of RAM transmission-loss fields (optional), as :func:`simulate_passive`.
 
     Returns
     -------

@@ -63,20 +63,9 @@ def read_tma_inputs(bearings, ownship, settings: TmaSettings) -> TmaInputs:
 
 
 def write_tma_solution(result, out) -> Path:
-    """Write a solved record's target solution as ``tma_solution.csv`` in ``out``, atomically.
-
-    Parameters
-    ----------
-    result : TmaResult
-        What :func:`~sonartrack.systems.tma.run.run_tma` returned.
-    out : path-like
-        Output folder.
-
-    Returns
-    -------
-    Path
-        The file written: the solution table's columns, then :data:`NOISE_COLUMNS`.
-    """
+    """Write the target solution of ``result`` (a TmaResult, what :func:`~sonartrack.systems.tma.run.run_tma`
+    returned) as ``tma_solution.csv`` in the output folder ``out``, atomically: the solution table's columns, then
+    :data:`NOISE_COLUMNS`; returns the file's path."""
     import numpy as np
     import pandas as pd
 

@@ -65,40 +65,18 @@ def read_peaks_file(path):
 
 
 def write_contact_tracks(result, out) -> Path:
-    """Write a :class:`~sonartrack.systems.track.run.ContactTrackResult`'s tracks as ``tracks.csv``.
-
-    Parameters
-    ----------
-    result : ContactTrackResult
-        What :func:`~sonartrack.systems.track.run.run_contacts` returned.
-    out : path-like
-        Output folder (existing).
-
-    Returns
-    -------
-    Path
-        The file written.
-    """
+    """Write the tracks of ``result`` (a :class:`~sonartrack.systems.track.run.ContactTrackResult`, what
+    :func:`~sonartrack.systems.track.run.run_contacts` returned) as ``tracks.csv`` in the existing output folder
+    ``out``; returns the file's path."""
     from sonartrack.io.atomic import write_csv
 
     return write_csv(result.tracks.to_frame(), Path(out) / CONTACT_TRACKS_CSV)
 
 
 def write_peak_tracks(result, out) -> Path:
-    """Write a :class:`~sonartrack.systems.track.run.PeakTrackResult`'s tracks as ``bearing_tracks.csv``.
-
-    Parameters
-    ----------
-    result : PeakTrackResult
-        What :func:`~sonartrack.systems.track.run.run_peaks` returned.
-    out : path-like
-        Output folder (existing).
-
-    Returns
-    -------
-    Path
-        The file written (6 significant digits).
-    """
+    """Write the tracks of ``result`` (a :class:`~sonartrack.systems.track.run.PeakTrackResult`, what
+    :func:`~sonartrack.systems.track.run.run_peaks` returned) as ``bearing_tracks.csv`` (6 significant digits) in the
+    existing output folder ``out``; returns the file's path."""
     from sonartrack.io.atomic import write_csv
 
     return write_csv(result.tracks.to_frame(), Path(out) / PEAK_TRACKS_CSV, float_format="%.6g")
