@@ -279,3 +279,39 @@ def test_a_ping_the_fixes_do_not_reach_runs_when_the_next_comes_and_says_so(acti
     assert [u["type"] for u in out] == ["ownship", "bscan", "active_targets", "health"]
     assert out[1]["ping"] == 2 and out[-1]["nav"] == "coasting" and "late" in out[-1]["events"][0]
     assert [p.ping for p in live.pending] == [3]
+
+
+def test_a_checkpoint_and_resume_give_one_runs_tracks(active_scene, streamed, live_fixes, tmp_path):
+    """Ping by ping with the fixes (the geometry rebuilt from them on restore): 4 pings, a checkpoint, a new chain
+    read from it, the other 6 pings = the uninterrupted live run (itself the whole log's file run); the restored
+    chain's display history is the B-scan rows and the target table sent before the checkpoint."""
+    pings, header = streamed
+    fixes = _fixes(active_scene, header.start_utc)
+    live = LiveActive(SETTINGS, header, source_tow_m=SOURCE_TOW_M, array_tow_m=ARRAY_TOW_M)
+    k, sent, path = 0, [], tmp_path / "active.ckpt"
+    for i, p in enumerate(pings):
+        if i == 4:
+            live.checkpoint(path)
+            live = LiveActive.restore(path)
+            before = [u for u in sent if u["type"] in ("bscan", "active_targets")]
+            assert live.history() == [u for u in before if u["type"] == "bscan"] + [
+                [u for u in before if u["type"] == "active_targets"][-1]]
+        sent += live.push_ping(p)
+        due = p.transmit_time_s + p.samples.shape[1] / p.fs_hz
+        while k < len(fixes) and (fixes[k].utc - header.start_utc).total_seconds() <= due:
+            sent += live.push_nav(fixes[k])
+            k += 1
+    result, _ = live.finish()
+    _assert_same_tracks(result, live_fixes[1])
+    np.testing.assert_array_equal(result.bscan.level, live_fixes[1].bscan.level)
+
+
+def test_a_checkpoint_of_another_kind_is_refused(streamed, tmp_path):
+    from sonartrack.core.errors import InputError
+
+    path = tmp_path / "x.ckpt"
+    path.write_bytes(b"not a pickle")
+    with pytest.raises(InputError, match="unreadable"):
+        LiveActive.restore(path)
+    with pytest.raises(InputError, match="not found"):
+        LiveActive.restore(tmp_path / "missing.ckpt")
