@@ -58,12 +58,11 @@ class LiveActive:
     def __init__(self, settings, header: StreamHeader, *, nav=None, source_tow_m: float | None = None,
                  array_tow_m: float | None = None, bscan_rows: int = 32, history_s: float = 3600.0):
         from sonartrack.acoustics.active_beams import LineArray
+        from sonartrack.core.errors import require
         from sonartrack.systems.active.contacts import ActiveGeometry
         from sonartrack.systems.active.run import geometry_of
         from sonartrack.systems.live.active_geometry import LiveGeometry
         from sonartrack.systems.live.navigation import LiveNavigation
-
-        from sonartrack.core.errors import require
 
         require(history_s > 0, f"history_s {history_s:g} s: give a positive history to keep")
         s = self.settings = settings.checked(int(header.channels))
