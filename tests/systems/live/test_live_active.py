@@ -315,3 +315,39 @@ def test_a_checkpoint_of_another_kind_is_refused(streamed, tmp_path):
         LiveActive.restore(path)
     with pytest.raises(InputError, match="not found"):
         LiveActive.restore(tmp_path / "missing.ckpt")
+
+
+def test_run_live_ctrl_c_checkpoints_the_pings_and_the_same_command_resumes(active_scene, streamed, file_run,
+                                                                             tmp_path):
+    """Ctrl-C at the 5th ping of a stream of pings (with the run's navigation) writes FILE.active; the same command
+    on the stream replayed from its start publishes the B-scan rows and targets kept, skips the 4 pings it holds,
+    runs the other 6: the file run's tracks."""
+    from sonartrack.systems.active.scene_files import read_active_nav
+    from sonartrack.systems.live import run_live
+    from sonartrack.systems.passive import PassiveSettings
+
+    pings, header = streamed
+
+    class Pings:
+        def __init__(self, stop_at=None):
+            self.header, self.stop_at = header, stop_at
+
+        def __iter__(self):
+            for i, p in enumerate(pings):
+                if i == self.stop_at:
+                    raise KeyboardInterrupt
+                yield p
+
+    path, options = tmp_path / "live.ckpt", {"nav": read_active_nav(active_scene / "nav.csv")}
+    first, again = [], []
+    with pytest.raises(KeyboardInterrupt):
+        run_live(Pings(4), None, PassiveSettings(spacing_m=0.5), first.append, warm=False, active_settings=SETTINGS,
+                 active_options=options, checkpoint=path)
+    assert (tmp_path / "live.ckpt.active").is_file() and not path.exists()
+    result = run_live(Pings(), None, PassiveSettings(spacing_m=0.5), again.append, warm=False,
+                      active_settings=SETTINGS, active_options=options, checkpoint=path)
+    _assert_same_tracks(result, file_run)
+    shown = [u["ping"] for u in first if u["type"] == "bscan"]
+    assert shown == [1, 2, 3, 4] and [u["ping"] for u in again if u["type"] == "bscan"] == list(range(1, 11))
+    said = [e for u in again if u["type"] == "health" for e in u["events"]]
+    assert any("skipped" in e for e in said), said

@@ -80,7 +80,7 @@ class LiveActive:
             self.geometry = None  # no tow lengths: no geometry from the fixes (B-scan only, said)
         self.chain = None
         self.pending: deque[PingBlock] = deque()
-        self.pings, self.last, self.said = 0, None, set()
+        self.pings, self.last, self.said, self.newest = 0, None, set(), None
         self.shown: deque[dict] = deque(maxlen=self.bscan_rows)  # the B-scan updates sent (a restart's history)
         self.targets: dict | None = None  # the last target table sent
         self.lock = threading.RLock()
@@ -101,6 +101,10 @@ class LiveActive:
         require(ping.samples.shape[0] == s.elements, f"ping {ping.ping} has {ping.samples.shape[0]} channels, the "
                                                      f"stream {s.elements}: give the pings of one array")
         with self.lock:
+            if self.newest is not None and ping.transmit_time_s <= self.newest:
+                return self._say("pings at or before one already taken are skipped (repeated, out of order, or a "
+                                 "resumed stream's replay)")
+            self.newest = float(ping.transmit_time_s)
             self.pending.append(ping)
             return self._drain()
 

@@ -85,7 +85,7 @@ ACTIVE_CHECKPOINT_FORMAT = "sonartrack-live-active"
 ACTIVE_CHECKPOINT_VERSION = 1
 #: LiveActive's attributes a checkpoint keeps as they are (the chain: its tracker, MFTD stack, clutter map, sides,
 #: B-scan rows and the per-ping rows of its history)
-_ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets")
+_ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets", "newest")
 
 
 class _ActivePickler(pickle.Pickler):
