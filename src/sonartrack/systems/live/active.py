@@ -20,8 +20,14 @@ settings, else the first two pings' interval (the file chain takes the ping tabl
 a regular interval), so the first ping's updates come with the second's when the interval is not set.
 
 Updates per ping (active_updates.py): the B-scan (with the scan's tracks where their echoes fall), the active
-targets (``active_targets``: confirmed pairs, a side each once decided) and the ownship; memory per ping is the
-tracker's rows and the contacts (small), the B-scan rows kept are the newest ``bscan_rows``.
+targets (``active_targets``: confirmed pairs, a side each once decided) and the ownship.
+
+Bounded state (issue 31 item 4): the chain keeps the per-ping rows (detections, contacts, gate verdicts, tracker
+rows) of the last ``history_s`` only, and the newest ``bscan_rows`` B-scan rows; the live tracks, the MFTD stack and
+the clutter map are the chain's own (bounded by what is live), so a run longer than ``history_s`` returns the last
+``history_s`` of the run's result (the tracks of each ping there are the unbounded run's). :meth:`checkpoint` and
+:meth:`restore` keep the whole state (systems/live/checkpoint.py); a ping at or before the newest taken is skipped
+(a resumed stream's replay, a repeated or out-of-order frame), said once.
 """
 
 from __future__ import annotations

@@ -10,6 +10,11 @@ tonal band's spectra ring (0.4 GB an hour, on disk); the tonal lines after a res
 hold the windows before the checkpoint and those since (the final pass too reads them then, not the ring).
 Version 2 (the accumulators and the navigation's columns); a version 1 file is refused with what to do.
 
+The active chain's (systems/live/active.py ``LiveActive``) is its own file (format ``sonartrack-live-active``,
+version 1): its ``_Chain`` (tracker, MFTD stack, clutter map, sides, B-scan rows, the kept per-ping rows), the
+pings waiting, the display's B-scan updates and target table, and the fixes (LiveNavigation.state()); its geometry
+is pickled as a reference and rebuilt on restore from the fixes or the given navigation.
+
 A checkpoint is read only from a path the operator gave (pickle runs code from the file: never load one from an
 untrusted source).
 """
