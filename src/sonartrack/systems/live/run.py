@@ -174,9 +174,7 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     except BaseException as exc:
         _stop(done, threads)
         if isinstance(exc, KeyboardInterrupt) and checkpoint is not None:
-            active.checkpoint()  # Ctrl-C keeps the state: the same command resumes from here
-            if live_ref[0] is not None:
-                live_ref[0].checkpoint(checkpoint)
+            _keep(checkpoint, active, live_ref[0])  # Ctrl-C keeps the state: the same command resumes from here
         raise
     _stop(done, threads)
     active.checkpoint()
@@ -210,6 +208,13 @@ def _read(samples, stop, live_ref: list, start, threads: list, publish, active, 
         if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
             live_ref[0].checkpoint(checkpoint)
             live_ref[1] = time.monotonic()
+
+
+def _keep(checkpoint, active, live: LivePassive | None) -> None:
+    """Write both chains' checkpoints (those built)."""
+    active.checkpoint()
+    if live is not None:
+        live.checkpoint(checkpoint)
 
 
 def _stop(done: threading.Event, threads: list) -> None:
