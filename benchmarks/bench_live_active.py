@@ -148,9 +148,14 @@ def bounded(n: int = 500, history_s: float = 400.0) -> None:
                 rows = len(live.chain.tracker._rows["time_s"])
                 at[p.ping] = (1e3 * float(np.median(cpu[-20:])), rows, len(live.chain.contacts), _rss_mb())
         (a_ms, a_rows, a_c, a_rss), (b_ms, b_rows, b_c, b_rss) = at[50], at[n]
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            size = live.checkpoint(Path(tmp) / "active.ckpt").stat().st_size
+            write_s = time.perf_counter() - t0
         print(f"live active bounded state, {label}: per ping {a_ms:.0f} ms at ping 50, {b_ms:.0f} ms at ping {n} "
               f"(ratio {b_ms / a_ms:.2f}); tracker scans kept {a_rows} -> {b_rows}, contact pings {a_c} -> {b_c}; "
-              f"RSS {a_rss:.0f} -> {b_rss:.0f} MB")
+              f"RSS {a_rss:.0f} -> {b_rss:.0f} MB; a checkpoint at ping {n}: {size / 1e6:.1f} MB in "
+              f"{1e3 * write_s:.0f} ms")
 
 
 if __name__ == "__main__":
