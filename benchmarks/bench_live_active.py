@@ -10,12 +10,18 @@ ratio (the live chain's extra is its geometry rebuilt from the fixes and the upd
 to the console, and the live chain's time per ping against the ping interval (its share of one core at real-time
 rate).
 
-    python benchmarks/bench_live_active.py
+Bounded state (issue 31 item 4): 500 cheap synthetic pings (8 elements, a 3 s listening window at 1 kHz baseband,
+one target's echo, every 4 s: 2000 s) through the live chain with ``history_s`` 400 s (its per-ping rows dropped
+past that) and with the history unbounded: CPU per ping (median of 20 pings) at ping 50 and at ping 500, the rows
+kept and the process's RSS at each.
+
+    python benchmarks/bench_live_active.py [--bounded-only]
 """
 
 from __future__ import annotations
 
 import json
+import sys
 import tempfile
 import time
 from datetime import timedelta
@@ -95,5 +101,64 @@ def run() -> None:
           f"{100 * live_s / n / interval:.2f} % of one core at one ping every {interval:g} s")
 
 
+def _synthetic_pings(n: int):
+    """Noise and one target's echo on an 8-element array (the echo from the geometry: 1500 m abeam, closing)."""
+    from sonartrack.systems.active.contacts import ActiveGeometry
+
+    c, fc, bw, pulse_s, fs, window_s, interval_s, elements, d = 1500.0, 1500.0, 400.0, 0.1, 1000.0, 3.0, 4.0, 8, 0.5
+    geometry = ActiveGeometry(np.array([-10.0, n * interval_s + 10.0]), np.array([[100.0, 0.0]] * 2),
+                              np.zeros((2, 2)), np.zeros(2))
+    rng, m = np.random.default_rng(7), np.arange(elements) - 0.5 * (elements - 1)
+    tp = np.arange(int(pulse_s * fs)) / fs
+    pulse = np.exp(1j * np.pi * (bw / pulse_s) * (tp - 0.5 * pulse_s) ** 2)
+
+    def pings():
+        for k in range(n):
+            target = np.array([0.0, 1500.0 - 0.5 * k * interval_s])
+            i0 = int(round((np.hypot(*(target - [100.0, 0.0])) + np.hypot(*target)) / c * fs))
+            x = (rng.standard_normal((elements, int(window_s * fs))) + 1j * rng.standard_normal(
+                (elements, int(window_s * fs)))) / np.sqrt(2)
+            steer = np.exp(2j * np.pi * fc * m * d * target[0] / np.hypot(*target) / c)
+            x[:, i0:i0 + len(pulse)] += 3.0 * steer[:, None] * pulse
+            yield PingBlock(k + 1, k * interval_s, fc, bw, pulse_s, fs, x.astype(np.complex64))
+
+    return geometry, pings(), ActiveSettings(spacing_m=d, sound_speed_mps=c)
+
+
+def _rss_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return float(line.split()[1]) / 1e3
+    return float("nan")
+
+
+def bounded(n: int = 500, history_s: float = 400.0) -> None:
+    """Per-ping CPU and RSS at ping 50 and ping ``n``, bounded against unbounded (module doc)."""
+    for label, h in ((f"history_s {history_s:g} s", history_s), ("unbounded", 1e12)):
+        geometry, pings, settings = _synthetic_pings(n)
+        live, cpu, at = None, [], {}
+        for p in pings:
+            if live is None:
+                live = LiveActive(settings, StreamHeader(p.samples.shape[0], p.fs_hz, "float32", START_UTC),
+                                  nav=geometry, history_s=h)
+            t0 = time.process_time()
+            live.push_ping(p)
+            cpu.append(time.process_time() - t0)
+            if p.ping in (50, n):
+                rows = len(live.chain.tracker._rows["time_s"])
+                at[p.ping] = (1e3 * float(np.median(cpu[-20:])), rows, len(live.chain.contacts), _rss_mb())
+        (a_ms, a_rows, a_c, a_rss), (b_ms, b_rows, b_c, b_rss) = at[50], at[n]
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            size = live.checkpoint(Path(tmp) / "active.ckpt").stat().st_size
+            write_s = time.perf_counter() - t0
+        print(f"live active bounded state, {label}: per ping {a_ms:.0f} ms at ping 50, {b_ms:.0f} ms at ping {n} "
+              f"(ratio {b_ms / a_ms:.2f}); tracker scans kept {a_rows} -> {b_rows}, contact pings {a_c} -> {b_c}; "
+              f"RSS {a_rss:.0f} -> {b_rss:.0f} MB; a checkpoint at ping {n}: {size / 1e6:.1f} MB in "
+              f"{1e3 * write_s:.0f} ms")
+
+
 if __name__ == "__main__":
-    run()
+    if "--bounded-only" not in sys.argv[1:]:
+        run()
+    bounded()

@@ -279,3 +279,75 @@ def test_a_ping_the_fixes_do_not_reach_runs_when_the_next_comes_and_says_so(acti
     assert [u["type"] for u in out] == ["ownship", "bscan", "active_targets", "health"]
     assert out[1]["ping"] == 2 and out[-1]["nav"] == "coasting" and "late" in out[-1]["events"][0]
     assert [p.ping for p in live.pending] == [3]
+
+
+def test_a_checkpoint_and_resume_give_one_runs_tracks(active_scene, streamed, live_fixes, tmp_path):
+    """Ping by ping with the fixes (the geometry rebuilt from them on restore): 4 pings, a checkpoint, a new chain
+    read from it, the other 6 pings = the uninterrupted live run (itself the whole log's file run); the restored
+    chain's display history is the B-scan rows and the target table sent before the checkpoint."""
+    pings, header = streamed
+    fixes = _fixes(active_scene, header.start_utc)
+    live = LiveActive(SETTINGS, header, source_tow_m=SOURCE_TOW_M, array_tow_m=ARRAY_TOW_M)
+    k, sent, path = 0, [], tmp_path / "active.ckpt"
+    for i, p in enumerate(pings):
+        if i == 4:
+            live.checkpoint(path)
+            live = LiveActive.restore(path)
+            before = [u for u in sent if u["type"] in ("bscan", "active_targets")]
+            assert live.history() == [u for u in before if u["type"] == "bscan"] + [
+                [u for u in before if u["type"] == "active_targets"][-1]]
+        sent += live.push_ping(p)
+        due = p.transmit_time_s + p.samples.shape[1] / p.fs_hz
+        while k < len(fixes) and (fixes[k].utc - header.start_utc).total_seconds() <= due:
+            sent += live.push_nav(fixes[k])
+            k += 1
+    result, _ = live.finish()
+    _assert_same_tracks(result, live_fixes[1])
+    np.testing.assert_array_equal(result.bscan.level, live_fixes[1].bscan.level)
+
+
+def test_a_checkpoint_of_another_kind_is_refused(streamed, tmp_path):
+    from sonartrack.core.errors import InputError
+
+    path = tmp_path / "x.ckpt"
+    path.write_bytes(b"not a pickle")
+    with pytest.raises(InputError, match="unreadable"):
+        LiveActive.restore(path)
+    with pytest.raises(InputError, match="not found"):
+        LiveActive.restore(tmp_path / "missing.ckpt")
+
+
+def test_run_live_ctrl_c_checkpoints_the_pings_and_the_same_command_resumes(active_scene, streamed, file_run,
+                                                                             tmp_path):
+    """Ctrl-C at the 5th ping of a stream of pings (with the run's navigation) writes FILE.active; the same command
+    on the stream replayed from its start publishes the B-scan rows and targets kept, skips the 4 pings it holds,
+    runs the other 6: the file run's tracks."""
+    from sonartrack.systems.active.scene_files import read_active_nav
+    from sonartrack.systems.live import run_live
+    from sonartrack.systems.passive import PassiveSettings
+
+    pings, header = streamed
+
+    class Pings:
+        def __init__(self, stop_at=None):
+            self.header, self.stop_at = header, stop_at
+
+        def __iter__(self):
+            for i, p in enumerate(pings):
+                if i == self.stop_at:
+                    raise KeyboardInterrupt
+                yield p
+
+    path, options = tmp_path / "live.ckpt", {"nav": read_active_nav(active_scene / "nav.csv")}
+    first, again = [], []
+    with pytest.raises(KeyboardInterrupt):
+        run_live(Pings(4), None, PassiveSettings(spacing_m=0.5), first.append, warm=False, active_settings=SETTINGS,
+                 active_options=options, checkpoint=path)
+    assert (tmp_path / "live.ckpt.active").is_file() and not path.exists()
+    result = run_live(Pings(), None, PassiveSettings(spacing_m=0.5), again.append, warm=False,
+                      active_settings=SETTINGS, active_options=options, checkpoint=path)
+    _assert_same_tracks(result, file_run)
+    shown = [u["ping"] for u in first if u["type"] == "bscan"]
+    assert shown == [1, 2, 3, 4] and [u["ping"] for u in again if u["type"] == "bscan"] == list(range(1, 11))
+    said = [e for u in again if u["type"] == "health" for e in u["events"]]
+    assert any("skipped" in e for e in said), said

@@ -310,6 +310,12 @@ class ContactTracker:
                                 cat("mu", np.zeros((0, n_modes))))
         return ActiveTracks(tracks, P, self.sides.result())
 
+    def drop_scans(self, n: int) -> None:
+        """Forget the rows of the oldest ``n`` scans (the live chain's bounded history, systems/live/active.py):
+        :meth:`result` then holds the scans since; the live tracks and the side decisions are untouched."""
+        for rows in self._rows.values():
+            del rows[:max(int(n), 0)]
+
 
 def rate_sd_of(cells_range_rate_mps) -> float:
     """Standard deviation of a measured range rate: one Doppler cell / sqrt(12) (uniform within the cell); 1 m/s
@@ -473,10 +479,15 @@ class _Chain:
         The tracker's scan interval (s; None: one ping).
     bscan_rows : int or None
         B-scan rows kept (the newest; None: every ping's).
+    history_s : float or None
+        The live chain's bounded history (s): the per-ping rows (detections, contacts, gate verdicts, tracker rows,
+        B-scan rows) of pings more than this before the newest are dropped, so memory and the per-ping cost of
+        :meth:`result` stop growing; :meth:`result` is then that of the last ``history_s``. None (the file run):
+        every ping's.
     """
 
     def __init__(self, geometry, settings: ActiveSettings, *, cw: bool, period_s: float | None,
-                 scan_interval_s: float | None, bscan_rows: int | None = None):
+                 scan_interval_s: float | None, bscan_rows: int | None = None, history_s: float | None = None):
         from collections import deque
 
         from sonartrack.acoustics.active_beams import LineArray
@@ -500,6 +511,9 @@ class _Chain:
         self.contacts: list[Contacts] = []
         self.axes = None
         self.n_detections = 0
+        self.history_s = None if history_s is None else float(history_s)
+        self.ping_detections: list[int] = []  # each kept ping's detections (their rows dropped with it)
+        self.dropped_detections = 0
 
     @classmethod
     def of_table(cls, ping_table, geometry: ActiveGeometry, settings: ActiveSettings) -> _Chain:
@@ -576,7 +590,22 @@ class _Chain:
         self.contacts.append(c)
         self.gate.append(tm.run("tracking", self.tracker.step, time_s, c))
         self.times.append(float(time_s))
+        self.ping_detections.append(len(det))
+        if self.history_s is not None:
+            self._forget(float(time_s) - self.history_s)
         return cells
+
+    def _forget(self, before_s: float) -> None:
+        """Drop the rows of the pings sent before ``before_s`` (s): the bounded history of a live run."""
+        n = int(np.searchsorted(np.asarray(self.times), before_s, side="left"))
+        if n <= 0:
+            return
+        self.dropped_detections += sum(self.ping_detections[:n])
+        for rows in (self.single, self.multi, self.contacts, self.gate, self.times, self.ping_detections):
+            del rows[:n]
+        self.tracker.drop_scans(n)
+        while len(self.bscan) > len(self.times):
+            self.bscan.popleft()
 
     def result(self) -> ActiveResult:
         from sonartrack.detection.ping_mftd import concat_detections
@@ -590,7 +619,10 @@ class _Chain:
         bscan = BScan(t[len(t) - len(self.bscan):], cone, bins, level)  # the newest rows (all in a file run)
         tracks = self.tracker.result() if self.tracker is not None else ContactTracker(
             self.settings.tracker_settings(), self.geometry, None, 1.0).result()
-        return ActiveResult(multi if self.mftd is not None else single, single, multi, Contacts.concat(self.contacts),
+        contacts = Contacts.concat(self.contacts)
+        if self.dropped_detections:  # the rows of the kept detections (a bounded live history)
+            contacts = replace(contacts, detection=contacts.detection - self.dropped_detections)
+        return ActiveResult(multi if self.mftd is not None else single, single, multi, contacts,
                             np.concatenate(self.gate) if self.gate else np.zeros(0, bool), tracks, bscan,
                             self.geometry, t, self.settings, dict(self.timer.seconds),
                             self._thresholds())

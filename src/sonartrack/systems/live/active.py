@@ -20,8 +20,14 @@ settings, else the first two pings' interval (the file chain takes the ping tabl
 a regular interval), so the first ping's updates come with the second's when the interval is not set.
 
 Updates per ping (active_updates.py): the B-scan (with the scan's tracks where their echoes fall), the active
-targets (``active_targets``: confirmed pairs, a side each once decided) and the ownship; memory per ping is the
-tracker's rows and the contacts (small), the B-scan rows kept are the newest ``bscan_rows``.
+targets (``active_targets``: confirmed pairs, a side each once decided) and the ownship.
+
+Bounded state (issue 31 item 4): the chain keeps the per-ping rows (detections, contacts, gate verdicts, tracker
+rows) of the last ``history_s`` only, and the newest ``bscan_rows`` B-scan rows; the live tracks, the MFTD stack and
+the clutter map are the chain's own (bounded by what is live), so a run longer than ``history_s`` returns the last
+``history_s`` of the run's result (the tracks of each ping there are the unbounded run's). :meth:`checkpoint` and
+:meth:`restore` keep the whole state (systems/live/checkpoint.py); a ping at or before the newest taken is skipped
+(a resumed stream's replay, a repeated or out-of-order frame), said once.
 """
 
 from __future__ import annotations
@@ -50,18 +56,25 @@ class LiveActive:
         The source and the array centre behind the ship along its track (m), for the live fixes.
     bscan_rows : int
         B-scan rows the chain keeps (the newest).
+    history_s : float
+        The chain's per-ping rows kept (s before the newest ping; module doc): the final result of a longer run is
+        that of the last ``history_s``.
     """
 
     def __init__(self, settings, header: StreamHeader, *, nav=None, source_tow_m: float | None = None,
-                 array_tow_m: float | None = None, bscan_rows: int = 32):
+                 array_tow_m: float | None = None, bscan_rows: int = 32, history_s: float = 3600.0):
         from sonartrack.acoustics.active_beams import LineArray
+        from sonartrack.core.errors import require
         from sonartrack.systems.active.contacts import ActiveGeometry
         from sonartrack.systems.active.run import geometry_of
         from sonartrack.systems.live.active_geometry import LiveGeometry
         from sonartrack.systems.live.navigation import LiveNavigation
 
+        require(history_s > 0, f"history_s {history_s:g} s: give a positive history to keep")
         s = self.settings = settings.checked(int(header.channels))
-        self.header, self.bscan_rows = header, int(bscan_rows)
+        self.header, self.bscan_rows, self.history_s = header, int(bscan_rows), float(history_s)
+        self.options = {"nav": nav, "source_tow_m": source_tow_m, "array_tow_m": array_tow_m,
+                        "bscan_rows": self.bscan_rows, "history_s": self.history_s}
         self.array = LineArray(int(s.elements), float(s.spacing_m))
         self.front_end = s.front_end_settings()
         self.fixes = None if nav is not None else LiveNavigation(header.start_utc)
@@ -73,7 +86,9 @@ class LiveActive:
             self.geometry = None  # no tow lengths: no geometry from the fixes (B-scan only, said)
         self.chain = None
         self.pending: deque[PingBlock] = deque()
-        self.pings, self.last, self.said = 0, None, set()
+        self.pings, self.last, self.said, self.newest = 0, None, set(), None
+        self.shown: deque[dict] = deque(maxlen=self.bscan_rows)  # the B-scan updates sent (a restart's history)
+        self.targets: dict | None = None  # the last target table sent
         self.lock = threading.RLock()
 
     def push_nav(self, fix: NavFix) -> list[dict]:
@@ -92,6 +107,10 @@ class LiveActive:
         require(ping.samples.shape[0] == s.elements, f"ping {ping.ping} has {ping.samples.shape[0]} channels, the "
                                                      f"stream {s.elements}: give the pings of one array")
         with self.lock:
+            if self.newest is not None and ping.transmit_time_s <= self.newest:
+                return self._say("pings at or before one already taken are skipped (repeated, out of order, or a "
+                                 "resumed stream's replay)")
+            self.newest = float(ping.transmit_time_s)
             self.pending.append(ping)
             return self._drain()
 
@@ -164,7 +183,7 @@ class LiveActive:
         check_spacing(s, table)
         check_memory(s, table, period if s.detector == "mftd" else None)
         self.chain = _Chain(self.geometry, s, cw=ping.kind == "cw", period_s=period if s.detector == "mftd" else None,
-                            scan_interval_s=period, bscan_rows=self.bscan_rows)
+                            scan_interval_s=period, bscan_rows=self.bscan_rows, history_s=self.history_s)
         return None
 
     def _tracked(self, ping: PingBlock) -> list[dict]:
@@ -180,10 +199,11 @@ class LiveActive:
         bscan = au.bscan_update(t, ping.ping, cells.cone_deg, range_m, c.bscan[-1], c.n_detections - n_before)
         bscan["tracks"] = au.scan_tracks(tracks, g, t)
         self.last = bscan
+        self.shown.append(bscan)
         ship = g.ship_at(t) if hasattr(g, "ship_at") else None
         aperture = (int(s.elements) - 1) * float(s.spacing_m)
-        return [au.active_ownship_update(t, g, ship, aperture), bscan,
-                au.active_targets_update(t, ping.ping, tracks, g)]
+        self.targets = au.active_targets_update(t, ping.ping, tracks, g)
+        return [au.active_ownship_update(t, g, ship, aperture), bscan, self.targets]
 
     def _bscan_only(self, ping: PingBlock) -> list[dict]:
         """A ping's B-scan without tracking: its front end for a platform at rest (no navigation)."""
@@ -204,7 +224,28 @@ class LiveActive:
         range_m = 0.5 * s.sound_speed_mps * _bscan_axis(np.asarray(cells.delay_s, float), s.bscan_bins)
         self.last = au.bscan_update(ping.transmit_time_s, ping.ping, cells.cone_deg, range_m,
                                     _bscan_row(cells.statistic, s.bscan_bins), len(detections))
+        self.shown.append(self.last)
         return [self.last]
+
+    def history(self) -> list[dict]:
+        """The display's history (a client that joins, or the chain restored): the B-scan updates kept and the
+        last target table."""
+        with self.lock:
+            return list(self.shown) + ([self.targets] if self.targets is not None else [])
+
+    def checkpoint(self, path):
+        """Write the chain's state to ``path`` (systems/live/checkpoint.py, atomically); returns the path."""
+        from sonartrack.systems.live.checkpoint import write_active_checkpoint
+
+        with self.lock:
+            return write_active_checkpoint(self, path)
+
+    @classmethod
+    def restore(cls, path) -> LiveActive:
+        """The chain of a checkpoint file :meth:`checkpoint` wrote (InputError when it is not one)."""
+        from sonartrack.systems.live.checkpoint import read_active_checkpoint
+
+        return read_active_checkpoint(cls, path)
 
     def _say(self, why: str) -> list[dict]:
         """A health update with ``why``, once per reason."""

@@ -10,6 +10,11 @@ tonal band's spectra ring (0.4 GB an hour, on disk); the tonal lines after a res
 hold the windows before the checkpoint and those since (the final pass too reads them then, not the ring).
 Version 2 (the accumulators and the navigation's columns); a version 1 file is refused with what to do.
 
+The active chain's (systems/live/active.py ``LiveActive``) is its own file (format ``sonartrack-live-active``,
+version 1): its ``_Chain`` (tracker, MFTD stack, clutter map, sides, B-scan rows, the kept per-ping rows), the
+pings waiting, the display's B-scan updates and target table, and the fixes (LiveNavigation.state()); its geometry
+is pickled as a reference and rebuilt on restore from the fixes or the given navigation.
+
 A checkpoint is read only from a path the operator gave (pickle runs code from the file: never load one from an
 untrusted source).
 """
@@ -77,4 +82,77 @@ def read_checkpoint(cls, path):
         live.core.front.lofar.restore(state["lofar"])
     live.tonals.tracks = state["tonals"]
     live.spill.skip_to(live.k_next)
+    return live
+
+
+#: the active chain's checkpoint format and version (systems/live/active.py)
+ACTIVE_CHECKPOINT_FORMAT = "sonartrack-live-active"
+ACTIVE_CHECKPOINT_VERSION = 1
+#: LiveActive's attributes a checkpoint keeps as they are (the chain: its tracker, MFTD stack, clutter map, sides,
+#: B-scan rows and the per-ping rows of its history)
+_ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets", "newest")
+
+
+class _ActivePickler(pickle.Pickler):
+    """Pickles the chain with its geometry as a reference: the geometry is rebuilt from the fixes on restore (the
+    fixes' map projection is rebuilt from its origin, not pickled)."""
+
+    def __init__(self, file, geometry):
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.geometry = geometry
+
+    def persistent_id(self, obj):
+        return "geometry" if obj is not None and obj is self.geometry else None
+
+
+class _ActiveUnpickler(pickle.Unpickler):
+    def __init__(self, file, geometry):
+        super().__init__(file)
+        self.geometry = geometry
+
+    def persistent_load(self, pid):
+        require(pid == "geometry", "the checkpoint holds an unknown reference: delete it to start afresh")
+        return self.geometry
+
+
+def write_active_checkpoint(live, path) -> Path:
+    """Write the live active chain's state (LiveActive: the chain, the pings waiting, the display's B-scan and
+    target rows; the fixes as LiveNavigation.state()) to ``path`` atomically; returns the path."""
+    import io
+
+    buf = io.BytesIO()
+    _ActivePickler(buf, live.geometry).dump({name: getattr(live, name) for name in _ACTIVE_STATE})
+    doc = {"format": ACTIVE_CHECKPOINT_FORMAT, "version": ACTIVE_CHECKPOINT_VERSION,
+           "settings": live.settings.model_dump(mode="json"), "header": live.header, "options": live.options,
+           "fixes": None if live.fixes is None else live.fixes.state(), "state": buf.getvalue()}
+    p = Path(path)
+    with atomic_path(p) as tmp:
+        tmp.write_bytes(pickle.dumps(doc, protocol=pickle.HIGHEST_PROTOCOL))
+    return p
+
+
+def read_active_checkpoint(cls, path):
+    """The live active chain of a checkpoint file: InputError when it is missing, unreadable, or of another format
+    or version."""
+    import io
+
+    from sonartrack.systems.active.settings import ActiveSettings
+
+    p = Path(path)
+    require(p.is_file(), f"checkpoint {p} not found: give the file a live run wrote with --checkpoint")
+    try:
+        doc = pickle.loads(p.read_bytes())  # noqa: S301 - the operator's own file (module doc)
+    except Exception as exc:  # noqa: BLE001 - any damage reads as one message
+        raise InputError(f"checkpoint {p} is unreadable ({type(exc).__name__}): delete it to start afresh") from None
+    require(isinstance(doc, dict) and doc.get("format") == ACTIVE_CHECKPOINT_FORMAT,
+            f"{p} is no live active checkpoint: give the file a live run wrote, or delete it to start afresh")
+    require(doc.get("version") == ACTIVE_CHECKPOINT_VERSION,
+            f"checkpoint {p} is version {doc.get('version')}, this sonartrack reads version "
+            f"{ACTIVE_CHECKPOINT_VERSION}: delete it to start afresh")
+    live = cls(ActiveSettings.model_validate(doc["settings"]), doc["header"], **doc["options"])
+    if doc["fixes"] is not None:
+        live.fixes.restore(doc["fixes"])
+    state = _ActiveUnpickler(io.BytesIO(doc["state"]), live.geometry).load()
+    for name in _ACTIVE_STATE:
+        setattr(live, name, state[name])
     return live

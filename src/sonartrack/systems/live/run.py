@@ -8,7 +8,9 @@ about a tenth of a core from the windows. With ``checkpoint`` the chain starts f
 display history published first) and writes it every ``checkpoint_s`` and at the end (Ctrl-C included: the
 caller's ``stop`` event, or KeyboardInterrupt). A stream's pings go to the active chain (systems/live/active.py,
 built at the first ping; the navigation's fixes go to it as well), whose result is returned for a stream of pings
-alone.
+alone. The active chain's checkpoint is ``checkpoint`` + ".active" beside the passive one (:func:`active_checkpoint`),
+written on the same schedule and at Ctrl-C; the same command resumes it at the stream's first ping (its B-scan
+rows and target table published first; pings the checkpoint already holds are skipped).
 """
 
 from __future__ import annotations
@@ -164,17 +166,18 @@ def run_live(samples, nav, settings: PassiveSettings, publish: Callable[[dict], 
     if warm:
         warm_up(settings)
     done, live_ref = threading.Event(), [None]
-    active = _ActivePings(settings, active_settings, active_options or {})
+    active = _ActivePings(settings, active_settings, active_options or {}, active_checkpoint(checkpoint))
     threads = [_nav_thread(nav, live_ref, publish, done, active)]
     start = partial(_start, samples, settings, checkpoint, options, live_ref, publish, refresh_s, done, ready)
     try:
         _read(samples, stop, live_ref, start, threads, publish, active, (checkpoint, checkpoint_s))
     except BaseException as exc:
         _stop(done, threads)
-        if isinstance(exc, KeyboardInterrupt) and checkpoint is not None and live_ref[0] is not None:
-            live_ref[0].checkpoint(checkpoint)  # Ctrl-C keeps the state: the same command resumes from here
+        if isinstance(exc, KeyboardInterrupt) and checkpoint is not None:
+            _keep(checkpoint, active, live_ref[0])  # Ctrl-C keeps the state: the same command resumes from here
         raise
     _stop(done, threads)
+    active.checkpoint()
     pinged, result = active.finish(publish), _end(live_ref[0], checkpoint, publish)
     return pinged if live_ref[0] is None and pinged is not None else result
 
@@ -191,6 +194,8 @@ def _read(samples, stop, live_ref: list, start, threads: list, publish, active, 
         if isinstance(item, PingBlock):
             for u in active.push(item, samples.header):
                 publish(u)
+            if checkpoint is not None and time.monotonic() - active.saved > checkpoint_s:
+                active.checkpoint()
             continue
         if live_ref[0] is None and not isinstance(item, SampleBlock):
             early = [*early[-EARLY_EVENTS + 1:], item]  # a TCP source's events before its first block
@@ -203,6 +208,13 @@ def _read(samples, stop, live_ref: list, start, threads: list, publish, active, 
         if checkpoint is not None and time.monotonic() - live_ref[1] > checkpoint_s:
             live_ref[0].checkpoint(checkpoint)
             live_ref[1] = time.monotonic()
+
+
+def _keep(checkpoint, active, live: LivePassive | None) -> None:
+    """Write both chains' checkpoints (those built)."""
+    active.checkpoint()
+    if live is not None:
+        live.checkpoint(checkpoint)
 
 
 def _stop(done: threading.Event, threads: list) -> None:
@@ -224,16 +236,23 @@ def _start(samples, settings, checkpoint, options, live_ref: list, publish, refr
     return _refresh_thread(live, publish, refresh_s, done)
 
 
+def active_checkpoint(checkpoint) -> Path | None:
+    """The active chain's checkpoint file beside the passive chain's ``checkpoint`` (None: none)."""
+    return None if checkpoint is None else Path(str(checkpoint) + ".active")
+
+
 class _ActivePings:
-    """The stream's pings to the active chain (systems/live/active.py), built at the first ping; the navigation's
-    fixes kept until then (the newest ``KEPT_FIXES``), then given to it."""
+    """The stream's pings to the active chain (systems/live/active.py), built at the first ping (restored from
+    ``checkpoint`` when that file exists: its display history published first); the navigation's fixes kept until
+    then (the newest ``KEPT_FIXES``), then given to it."""
 
     KEPT_FIXES = 7200
 
-    def __init__(self, settings: PassiveSettings, active_settings, options: dict):
+    def __init__(self, settings: PassiveSettings, active_settings, options: dict, checkpoint: Path | None = None):
         self.settings, self.active_settings, self.options, self.chain = settings, active_settings, options, None
         self.fixes: deque = deque(maxlen=self.KEPT_FIXES)
         self.lock = threading.Lock()
+        self.path, self.saved = checkpoint, time.monotonic()
 
     def push(self, ping, header) -> list[dict]:
         with self.lock:
@@ -241,12 +260,23 @@ class _ActivePings:
                 from sonartrack.systems.active.settings import ActiveSettings
                 from sonartrack.systems.live.active import LiveActive
 
-                s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
-                self.chain = LiveActive(s, header, **self.options)
-                out = [u for fix in self.fixes for u in self.chain.push_nav(fix)]
+                out = []
+                if self.path is not None and self.path.is_file():
+                    self.chain = LiveActive.restore(self.path)
+                    out = self.chain.history()
+                else:
+                    s = self.active_settings or ActiveSettings(spacing_m=self.settings.spacing_m)
+                    self.chain = LiveActive(s, header, **self.options)
+                out += [u for fix in self.fixes for u in self.chain.push_nav(fix)]
                 self.fixes.clear()
                 return out + self.chain.push_ping(ping)
         return self.chain.push_ping(ping)
+
+    def checkpoint(self) -> None:
+        """Write the active chain's checkpoint (with a file given and a chain built)."""
+        if self.path is not None and self.chain is not None:
+            self.chain.checkpoint(self.path)
+            self.saved = time.monotonic()
 
     def push_nav(self, fix) -> list[dict]:
         with self.lock:
