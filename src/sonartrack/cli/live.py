@@ -51,8 +51,9 @@ def live_cmd(
     host: Annotated[str, typer.Option(help="Address the console listens on (127.0.0.1: this machine only; 0.0.0.0 "
                                            "opens it to the network).")] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="Port of the console (0 picks a free one).", min=0, max=65535)] = 8765,
-    checkpoint: Annotated[Path | None, typer.Option(help="Keep the chain's state in this file, so that a restart "
-                                                         "resumes (and the display with it).")] = None,
+    checkpoint: Annotated[Path | None, typer.Option(help="Keep the chain's state in this file (a stream's pings: in "
+                                                         "FILE.active), so that a restart resumes (and the display "
+                                                         "with it).")] = None,
     calibration: Annotated[Path | None, typer.Option(help="Hydrophone calibration TOML/CSV, as for passive: "
                                                           "sensitivity_db (dB re 1 V/uPa), gain_db[, full_scale_v]; "
                                                           "a stream's header may state the full scale itself. Not "
@@ -226,6 +227,7 @@ def _interrupted(exc: KeyboardInterrupt, checkpoint: Path | None) -> KeyboardInt
 
     from sonartrack.cli import Interrupted
 
-    kept = (f"the chain's state is in {checkpoint} as of its last checkpoint; run the same command to resume"
+    kept = (f"the chain's state is in {checkpoint} (pings: {checkpoint}.active) as of its last checkpoint; run the "
+            "same command to resume"
             if checkpoint is not None else "nothing was kept (give --checkpoint FILE to resume after a restart)")
     return Interrupted(getattr(exc, "signum", signal.SIGINT), f"interrupted: the live run stopped; {kept}")
