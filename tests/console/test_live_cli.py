@@ -57,9 +57,12 @@ def _fake_modules(monkeypatch, run_live) -> None:
     sources = types.ModuleType("sonartrack.io.stream.sources")
     for name in ("TcpSampleSource", "FolderSampleSource", "ReplaySampleSource", "UdpNmeaSource", "FileNavSource"):
         setattr(sources, name, type(name, (_Source,), {}))
+    import sonartrack.io.stream as real_stream
+    import sonartrack.systems.live as real_live
+
     stream = types.ModuleType("sonartrack.io.stream")
     stream.sources = sources
-    import sonartrack.systems.live as real_live
+    stream.__path__ = real_stream.__path__  # its other submodules (types, frames) are the real ones, run alone too
 
     live = types.ModuleType("sonartrack.systems.live")
     live.run_live = run_live
@@ -90,10 +93,10 @@ def test_wiring_source_chain_console_and_ctrl_c(monkeypatch, capsys, tmp_path):
         for _ in range(5):
             for update in fake.step():
                 publish(update)
-        client.wait(lambda m: len(client.of_type("btr")) == 5)
+        client.wait(lambda m: len(client.of_type("btr")) == 5, 60)  # generous: the test machine may be loaded
         client.send(json.dumps({"select": 2}))
-        client.wait(lambda m: client.of_type("selected"))
-        deadline = time.monotonic() + 10
+        client.wait(lambda m: client.of_type("selected"), 60)
+        deadline = time.monotonic() + 60
         while chain.selected is None and time.monotonic() < deadline:  # the callback runs on its own thread
             time.sleep(0.02)
         seen.update(selected=chain.selected, samples=samples, nav=nav, checkpoint=checkpoint, stopped=stop.is_set())
