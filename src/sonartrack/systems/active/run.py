@@ -250,8 +250,9 @@ class ContactTracker:
         if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
             from sonartrack.detection.clutter_map import same_range
 
+            g = self.geometry
             clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
-                contacts.xy, self.geometry.tx_at(t_s), self.geometry.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+                contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
