@@ -239,8 +239,9 @@ class ContactTracker:
 
     def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
-        ping, still, and the contacts at its bistatic range (its mirror twin, its lobe images) go only to the
-        confirmed tracks whose gate holds them (True: not withheld)."""
+        ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
+        clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
+        withheld)."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
