@@ -53,9 +53,9 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "place of confirm_threshold (benchmarks/bench_active_defaults.py, with the clutter map "
                                 "and mftd_strong_pfa: 0 confirmed in 2 h of Rayleigh and 2 h of spiky K 0.5 "
                                 "reverberation from the independent generator, a 15 dB target confirmed in 4, 4, 9 "
-                                "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; K 1 + blast + "
-                                "6 still points: 2 in 2 h with the map's lobe images (36 before); 0.5/h confirmed as "
-                                "many false tracks there and one ping later)"),
+                                "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; K 1 + "
+                                "blast + 6 still points: 2 in 2 h with the map's lobe images (36 before); 0.5/h "
+                                "confirmed as many false tracks there and one ping later)"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
                                   "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
                                   "lets a track enter a turn mode a ping sooner (tests/systems/active/"
