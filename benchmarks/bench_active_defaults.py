@@ -45,7 +45,9 @@ measured by putting its src first on the path, ``git archive 84718dd src``; ~2 m
   StillHold's hold until the track moves (the 7 left were tracks held on a point's mirror, still while the array ran
   straight, released at the ownship's turn): 10 -> 2 (the hold alone: 30). The 2 left sit on still points (31, 82 m)
   after the turn, at 1.1 and 3.9 m/s. Acquisition 4, 4, 9 / 7, never, 10 and the quick scene (LFM 47 / 0, CW
-  80 / 0, 0 false) are unchanged.
+  80 / 0, 0 false) are unchanged; so is the 1-hour default scene (front ends 205 s LFM, 65 s CW; held % approacher /
+  weak / crossing-a / crossing-b / maneuvering, false confirmed): LFM 41 / 0 / 52 / 53 / 95, 2; CW 52 / 2 / 40 / 55 /
+  71, 2, before and after.
 """
 
 from __future__ import annotations
