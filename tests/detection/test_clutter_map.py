@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from sonartrack.detection.clutter_map import ClutterMap, _add_point, speed_bound, velocity_fit
+from sonartrack.detection.clutter_map import ClutterMap, _add_point, same_range, speed_bound, velocity_fit
 
 
 def lstsq_velocity(points, times, R):
@@ -84,3 +84,20 @@ def test_a_target_along_the_beam_is_spared():
 
 def test_the_ellipse_level_is_the_stated_quantile():
     assert ClutterMap(still_probability=0.95).still_gamma == pytest.approx(chi2.ppf(0.95, 2))
+
+
+def test_same_range_marks_the_weaker_contacts_on_a_recurring_echos_ellipse():
+    # Tx (0, 0), Rx (300, 0): the anchor (0, 4000) has r_B = 4000 + hypot(300, 4000) = 8011.23 m; on the x axis
+    # beyond Rx, r_B = x + (x - 300), so the same ellipse is at x = 4155.61 m
+    x_img = (4000.0 + np.hypot(300.0, 4000.0) + 300.0) / 2.0
+    xy = np.array([[0.0, 4000.0],          # the anchor (recurring), statistic 100
+                   [x_img + 5.0, 0.0],     # r_B 10 m longer, weaker: an image
+                   [x_img - 5.0, 0.0],     # r_B 10 m shorter, stronger: not an image
+                   [x_img + 20.0, 0.0],    # r_B 40 m longer: outside the window
+                   [0.0, -4000.0],         # the anchor's mirror twin, equal statistic: not an image
+                   [-1000.0, 100.0]])      # far off the ellipse, weaker
+    stat = np.array([100.0, 40.0, 150.0, 40.0, 100.0, 10.0])
+    anchor = np.array([True, False, False, False, False, False])
+    got = same_range(xy, [0.0, 0.0], [300.0, 0.0], anchor, stat, 15.0)
+    assert got.tolist() == [False, True, False, False, False, False]
+    assert not same_range(xy, [0.0, 0.0], [300.0, 0.0], np.zeros(6, bool), stat, 15.0).any()

@@ -1,5 +1,8 @@
 """StillHold (tracking/deleters.py): a track that has just earned its confirmation while slow and on a recurring
-world position waits; a fast one, one away from recurring contacts, and one confirmed before keep their flag."""
+world position waits; a fast one, one away from recurring contacts, and one confirmed before keep their flag; a hold,
+once taken, lasts until the track moves."""
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -12,8 +15,6 @@ class ConfirmAll:
         return {}
 
     def manage(self, T, hit):
-        from dataclasses import replace
-
         return replace(T, confirmed=np.ones(len(T), bool))
 
 
@@ -39,3 +40,28 @@ def test_only_a_new_slow_confirmation_on_a_recurring_contact_waits():
 def test_no_recurring_contact_no_hold():
     hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
     assert hold.manage(tracks([[0.0, 0.0, 0.0, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [True]
+
+
+def test_a_hold_taken_stays_until_the_track_moves():
+    # a track held on a recurring position (a still point's mirror twin before the ownship's turn) is not confirmed
+    # when the twin moves off it at the turn; it is once its own speed shows it moving
+    hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
+    hold.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    assert hold.manage(tracks([[10.0, 0.0, 0.1, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [False]
+    hold.recurring(np.array([[3000.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])  # the twin has left
+    assert hold.manage(tracks([[10.0, 0.0, 0.1, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [False]
+    hold.recurring(np.zeros((0, 2)), np.zeros((0, 2, 2)))  # no recurring contact at all: still held
+    assert hold.manage(tracks([[10.0, 0.0, 0.1, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [False]
+    assert hold.manage(tracks([[10.0, 0.0, 2.0, 0.0]], [False]), np.ones(1, bool)).confirmed.tolist() == [True]
+
+
+def test_a_hold_is_forgotten_with_its_track():
+    hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
+    hold.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    hold.manage(tracks([[10.0, 0.0, 0.1, 0.0]], [False]), np.ones(1, bool))
+    assert hold.held.tolist() == [0]
+    T = tracks([[5000.0, 0.0, 0.1, 0.0]], [False])  # another track (id 1), far from any recurring contact
+    T = replace(T, track_id=np.array([1]))
+    hold.recurring(np.zeros((0, 2)), np.zeros((0, 2, 2)))
+    assert hold.manage(T, np.ones(1, bool)).confirmed.tolist() == [True]
+    assert hold.held.tolist() == []

@@ -30,6 +30,18 @@ enters the window is taken for clutter (a still target is a still echo: nothing 
 one that slows or stops after its track is confirmed keeps its contacts: the chain withholds clutter contacts only
 from tracks that are not confirmed (systems/active/run.py), so a confirmed track still gets the contacts in its
 gate, whether its target stops or passes over a clutter point.
+
+A still point's echo gives more contacts than its own: its mirror twin (the same detection on the other side of the
+array) and the images of its echo in the other beams (a line array's grating lobe: at a spacing of half a wavelength
+a beam steered to one endfire hears the other endfire at nearly full gain, and sidelobes elsewhere). All of them have
+the echo's travel time, so the point's bistatic range r_B = |z - Tx| + |z - Rx|, and none is still in the world
+(the twin and the images move as the array turns and moves). Measured on the independent generator's K 1 world with 6
+points of 35 dB (2 h): 14 of 36 false confirmed tracks sat at endfire ahead on a point's delay while the point was at
+cone 160-175 deg, 9 on a point's mirror. :func:`same_range` marks the contacts of a ping whose r_B lies within
+``image_range_m`` of a stronger recurring contact (recurring, not only still: near endfire a point's position is
+known to a few hundred metres across the beam, and the stillness test does not pass in the map's 8 pings); the chain
+withholds them, and the mirror twins of the clutter contacts, as it withholds the point. The price: a target's echo
+within ``image_range_m`` in r_B of a stronger recurring echo is withheld at that ping from the tracks not confirmed.
 """
 
 from __future__ import annotations
@@ -57,11 +69,15 @@ class ClutterMap:
         alone).
     slow_mps : float
         A contact is clutter only when its fit shows it slower than this (m/s).
+    image_range_m : float or None
+        A weaker contact of the same ping whose bistatic range is within this of a recurring contact's is a lobe image
+        (module doc; :func:`same_range`), m; None: the clutter contacts alone (not their twins either).
     """
 
     def __init__(self, span: int = 8, min_hits: int = 3, gate_probability: float = 0.99,
-                 still_probability: float | None = 0.9, slow_mps: float = 1.5):
+                 still_probability: float | None = 0.9, slow_mps: float = 1.5, image_range_m: float | None = 15.0):
         self.span, self.min_hits, self.slow_mps = int(span), int(min_hits), float(slow_mps)
+        self.image_range_m = None if image_range_m is None else float(image_range_m)
         self.gamma = float(gate_threshold(gate_probability, 2))
         self.still_gamma = None if still_probability is None else float(gate_threshold(still_probability, 2))
         self._pings: deque = deque(maxlen=self.span)
@@ -103,6 +119,39 @@ class ClutterMap:
         if self.still_gamma is not None and clutter.any():
             clutter[clutter] = speed_bound(info[clutter], vec[clutter], self.still_gamma) <= self.slow_mps
         return clutter
+
+
+def same_range(xy: np.ndarray, tx_xy, rx_xy, anchor: np.ndarray, statistic: np.ndarray, tol_m: float) -> np.ndarray:
+    """The contacts of one ping weaker than an ``anchor`` contact whose bistatic range r_B = |z - Tx| + |z - Rx| lies
+    within ``tol_m`` of the anchor's (module doc: a strong echo's lobe images share its travel time t = r_B / c and
+    are weaker than it).
+
+    Parameters
+    ----------
+    xy : ndarray (m, 2)
+        The ping's contact positions (m).
+    tx_xy, rx_xy : array (2,)
+        Source and receiver at the ping (m).
+    anchor : ndarray (m,) bool
+        The contacts whose images are sought (the clutter map's recurring ones).
+    statistic : ndarray (m,)
+        Each contact's detection statistic: an image is strictly weaker than its anchor (so a mirror twin, of equal
+        statistic, is not one).
+    tol_m : float
+        Half-width of the r_B window (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool: within ``tol_m`` in r_B of a stronger anchor.
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    anchor, stat = np.asarray(anchor, bool), np.asarray(statistic, float)
+    if not anchor.any():
+        return np.zeros(len(xy), bool)
+    r_b = np.linalg.norm(xy - np.asarray(tx_xy, float), axis=1) + np.linalg.norm(xy - np.asarray(rx_xy, float), axis=1)
+    near = np.abs(r_b[:, None] - r_b[None, anchor]) <= tol_m
+    return (near & (stat[:, None] < stat[None, anchor])).any(axis=1)
 
 
 def _inv2(R: np.ndarray) -> np.ndarray:

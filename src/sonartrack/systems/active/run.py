@@ -239,12 +239,21 @@ class ContactTracker:
 
     def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
-        ping goes only to the confirmed tracks whose gate holds it (True: not withheld)."""
+        ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
+        clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
+        withheld)."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
-        clutter = self.clutter_map.update(contacts.xy, contacts.R, float(t_s))
-        r = self.clutter_map.recurring
+        cm = self.clutter_map
+        clutter = cm.update(contacts.xy, contacts.R, float(t_s))
+        r = cm.recurring
+        if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
+            from sonartrack.detection.clutter_map import same_range
+
+            g = self.geometry
+            clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
+                contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)

@@ -53,8 +53,9 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "place of confirm_threshold (benchmarks/bench_active_defaults.py, with the clutter map "
                                 "and mftd_strong_pfa: 0 confirmed in 2 h of Rayleigh and 2 h of spiky K 0.5 "
                                 "reverberation from the independent generator, a 15 dB target confirmed in 4, 4, 9 "
-                                "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; 0.5/h "
-                                "confirmed as many false tracks on K 1 + blast + still points and one ping later)"),
+                                "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; K 1 + "
+                                "blast + 6 still points: 2 in 2 h with the map's lobe images (36 before); 0.5/h "
+                                "confirmed as many false tracks there and one ping later)"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
                                   "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
                                   "lets a track enter a turn mode a ping sooner (tests/systems/active/"
@@ -129,8 +130,10 @@ class ActiveSettings(Settings):
            "stationary clutter and goes only to confirmed tracks whose gate holds it; a slow new track on a recurring "
            "contact is not confirmed until its speed or the map decides (tracking/deleters.py StillHold). On the "
            "independent generator's K 1 + blast + 6 still points of 35 dB (2 h) it cut the confirmed tracks on the "
-           "points and their mirrors from 48 to 14, while the study's quick scene (5 kn targets, 10 s pings) is held "
-           "as without it (not set: no map)",
+           "points and their mirrors from 48 to 14, and with the points' mirror twins and lobe images withheld too "
+           "(clutter_map.py same_range: weaker contacts at a recurring echo's bistatic range) and StillHold kept "
+           "until a track moves, all false confirmed tracks there from 36 to 2; the study's quick scene (5 kn "
+           "targets, 10 s pings) is held as without it (not set: no map)",
         unit="1", ge=1, le=100)
     clutter_map_hits: int = setting(3, "pings of the clutter map's memory that must hold a contact in the gate of a "
                                        "new one for it to be clutter (3: learned before IPDA confirms a track on a "
