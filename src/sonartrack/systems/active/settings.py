@@ -147,6 +147,11 @@ class ActiveSettings(Settings):
     clutter_map_slow_mps: float = setting(
         1.0, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
              "than this, not yet confirmed, is taken for clutter once its fit shows it slower)", unit="m/s", gt=0)
+    clutter_map_image_m: float | None = setting(
+        15.0, "bistatic-range window of the clutter map's lobe images (detection/clutter_map.py same_range): a contact "
+              "of the same ping weaker than a recurring one and within this of its bistatic range is withheld from "
+              "unconfirmed tracks (a beam at one endfire hears the other's clutter; about 2 LFM delay cells; not set: "
+              "off)", unit="m", gt=0)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
     front_end: ActiveFrontEndSettings = setting(default_factory=ActiveFrontEndSettings,

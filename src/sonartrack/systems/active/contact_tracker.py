@@ -1,0 +1,331 @@
+"""The active chain's tracker on contacts: P4's IMM-IPDA per ping with the gates in front of it (range rate, decided
+sides, clutter map) and the mirror-pair deleters behind it (stages 4-5 of systems/active/run.py's module doc), and
+:func:`track_detections`, stages 3-5 on stored detections (the study tracks one set of detections with several
+trackers)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonartrack.detection.cells import Detections
+from sonartrack.systems.active.contacts import (
+    ActiveGeometry,
+    Contacts,
+    form_contacts,
+    in_position_gate,
+    range_rate_gate,
+    resolve_mirrors,
+)
+from sonartrack.systems.active.cw_tracking import cw_clutter_area
+from sonartrack.systems.active.settings import ActiveSettings
+from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
+from sonartrack.tracking.run import PositionTracks
+from sonartrack.tracking.settings import PositionTrackerSettings
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveTracks:
+    """The tracker's output, one row per live track per ping: ``tracks`` (tracking/run.py :class:`PositionTracks`)
+    and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds);
+    ``sides`` the side decision of each confirmed track (sides.py)."""
+
+    tracks: PositionTracks
+    P: np.ndarray
+    sides: SideDecisions | None = None
+
+    def __len__(self) -> int:
+        return len(self.tracks)
+
+
+class ContactTracker:
+    """P4's IMM-IPDA over the pings' contacts, with the range-rate gate in front (stages 4-5 of the module doc).
+
+    Parameters
+    ----------
+    settings : PositionTrackerSettings
+        The tracker.
+    geometry : ActiveGeometry
+        Source and receiver (their velocities enter the predicted range rate).
+    gate_sigma : float or None
+        Width of the range-rate gate in standard deviations (None: no gate).
+    rate_sd_mps : float
+        Standard deviation of a measured range rate (m/s): a Doppler cell / sqrt(12).
+    side_turn_deg : float or None
+        A confirmed track that has lived through this much change of the array's heading has its side decided
+        by the likelihood ratio of sides.py; a track on its target's side then has the mirror contacts of the
+        detections it gates dropped (contacts.py :func:`resolve_mirrors`), a ghost the contacts in its gate;
+        None: the decisions are reported only, both mirror contacts always go to the tracker.
+    merge_probability : float or None
+        Gate probability of the track-to-track test (tracking/duplicates.py) by which a track that follows the
+        same target as a confirmed one is deleted after each scan; None: no merging.
+    max_range_rate_mps : float or None
+        The range rates searched span +-this (m/s): a contact's measured range rate (a CW's) multiplies its
+        likelihood ratio by its Gaussian likelihood over this uniform clutter law (tracking/measurements.py
+        :class:`RangeRatePositionMeasurements`); None: position only.
+    clutter_area_m2 : float or None
+        The area the contacts can fall in (m^2): the clutter density of each scan is then the contacts' own,
+        lambda = (contacts so far + 1) / ((scans so far + 1) area) (the nonparametric density of the PDA,
+        Bar-Shalom, Willett, Tian 2011, sec. 3.4.2, pooled over the scans), not ``settings``'s: a CW gives ~100 times
+        fewer contacts than the LFM P4's 1e-6 was tuned on (measured on the default scene as CW, 900 s, single-ping
+        detections: 6.4 contacts a ping over ~1.6e9 m^2, 4e-9; with 1e-6 no track was confirmed, with 1e-8 the
+        strongest target was held 87 % of the pings, no false track). None: the setting's.
+    turns : TurnModes or None
+        Coordinated-turn modes added to the tracker's IMM (tracking/configurations.py ``position_motion``);
+        None: the settings' CV modes only.
+    clutter_map : ClutterMap or None
+        detection/clutter_map.py: a contact at a recurring still world position goes only to the confirmed tracks
+        whose gate holds it (a confirmed track keeps its contacts when its target slows, stops or crosses a
+        clutter point); None: no map.
+    scan_interval_s : float or None
+        The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``); None
+        (a single ping): the settings' ``confirm_threshold``.
+    """
+
+    def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
+                 rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
+                 max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
+                 clutter_map=None, scan_interval_s: float | None = None):
+        from sonartrack.association.gating import gate_threshold
+        from sonartrack.tracking.configurations import position_tracker
+        from sonartrack.tracking.duplicates import DuplicateMerger
+        from sonartrack.tracking.measurements import RangeRatePositionMeasurements
+
+        self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
+        self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
+        self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
+        self.tracker = position_tracker(settings, turns=turns)
+        if max_range_rate_mps is not None:
+            m = self.tracker.measurements
+            self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
+                                                                      m.clutter_density_per_m2, rate_sd_mps,
+                                                                      float(max_range_rate_mps))
+        if settings.false_tracks_per_h is not None and scan_interval_s is not None:  # at the stated rate
+            from sonartrack.tracking.deleters import RateConfirmation  # (tracking/existence.py; one ping: no rate)
+
+            self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
+                                                    settings.initial_existence, settings.terminate_threshold)
+        self.clutter_map, self.hold = clutter_map, None
+        if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
+            from sonartrack.tracking.deleters import StillHold
+
+            self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
+                                                         gate_threshold(settings.gate_probability, 2))
+        if merge_probability is not None:
+            self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
+        self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
+        if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
+            self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
+        self._last_t: float | None = None
+        self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
+
+    def _predicted_confirmed(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Confirmed tracks' combined states and covariances predicted to ``t_s`` (CV with the largest q), and
+        their ids."""
+        from sonartrack.tracking.tracks import TrackSnapshot
+
+        T = self.tracker.tracks
+        if not len(T) or not T.confirmed.any() or self._last_t is None:
+            return np.zeros((0, 4)), np.zeros((0, 4, 4)), np.zeros(0, np.int64)
+        snap = TrackSnapshot.of(self._last_t, T.select(T.confirmed))
+        dt, q = t_s - self._last_t, max(self.settings.q)
+        F = np.eye(4)
+        F[0, 2] = F[1, 3] = dt
+        Q = q * np.kron(np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]]), np.eye(2))
+        return snap.x @ F.T, F @ snap.P @ F.T + Q, snap.track_id
+
+    def _gates(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The range-rate gate and the resolved sides' mirror drop (True: the contact goes to the tracker)."""
+        keep = np.ones(len(contacts), bool)
+        if not len(contacts) or (self.gate_sigma is None and self.side_turn is None):
+            return keep
+        x, P, ids = self._predicted_confirmed(t_s)
+        g, pg = self.geometry, self.settings.gate_probability
+        if self.gate_sigma is not None:
+            tx = (g.tx_at(t_s), g.velocity(t_s, "tx"))
+            rx = (g.rx_at(t_s), g.velocity(t_s, "rx"))
+            keep &= range_rate_gate(contacts, self.rate_sd, x, P, tx, rx, n_sigma=self.gate_sigma, gate_probability=pg)
+        if self.side_turn is not None and len(ids):
+            d = np.array([self.sides.decision(int(i)) for i in ids])
+            keep &= resolve_mirrors(contacts, x[d > 0], P[d > 0], pg)
+            if (d < 0).any():  # a ghost's contacts (unless a decided track holds them too) go to no track
+                gate = in_position_gate(contacts, x, P, pg)
+                keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
+        return keep
+
+    def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
+        ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
+        clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
+        withheld)."""
+        keep = np.ones(len(contacts), bool)
+        if self.clutter_map is None:
+            return keep
+        cm = self.clutter_map
+        clutter = cm.update(contacts.xy, contacts.R, float(t_s))
+        r = cm.recurring
+        if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
+            from sonartrack.detection.clutter_map import same_range
+
+            g = self.geometry
+            clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
+                contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+        self.hold.recurring(contacts.xy[r], contacts.R[r])
+        if clutter.any():
+            x, P, _ = self._predicted_confirmed(t_s)
+            held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
+            keep &= ~clutter | held
+        return keep
+
+    def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
+        range-rate gate or the mirror of a resolved side).
+
+        Parameters
+        ----------
+        t_s : float
+            The scan time (s), the ping's transmit time.
+        contacts : Contacts
+            The ping's mirror-pair contacts (positions m, covariances m^2).
+
+        Returns
+        -------
+        numpy.ndarray
+            (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
+        """
+        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
+        if hasattr(self.tracker.measurements, "at_scan"):
+            g, lam = self.geometry, None
+            if self.clutter_area is not None:
+                self._counts = [self._counts[0] + int(keep.sum()), self._counts[1] + 1]
+                lam = (self._counts[0] + 1) / ((self._counts[1] + 1) * self.clutter_area)
+            self.tracker.measurements = self.tracker.measurements.at_scan(
+                (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
+                contacts.range_rate_mps[keep], lam)
+        snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
+        self._last_t = float(t_s)
+        c = snap.confirmed
+        self.sides.update(float(t_s), float(self.geometry.heading_at(t_s)), contacts, snap.track_id[c], snap.x[c],
+                          snap.P[c], self.geometry.side_of)
+        r = self._rows
+        for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
+                     ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
+            r[k].append(v)
+        r["time_s"].append(np.full(len(snap.track_id), float(t_s)))
+        return keep
+
+    def result(self) -> ActiveTracks:
+        """Every ping's live tracks (:class:`ActiveTracks`).
+
+        Returns
+        -------
+        ActiveTracks
+            The tracks of every scan so far (states [x, y, vx, vy] in m and m/s, covariances, mode probabilities) and
+            the side decisions.
+        """
+        r, n_modes = self._rows, len(self.settings.q)
+
+        def cat(k, empty):
+            return np.concatenate(r[k]) if r[k] else empty
+
+        P = cat("P", np.zeros((0, 4, 4)))
+        tracks = PositionTracks(cat("time_s", np.zeros(0)), cat("track_id", np.zeros(0, np.int64)),
+                                cat("confirmed", np.zeros(0, bool)), cat("existence", np.zeros(0)),
+                                cat("x", np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
+                                cat("mu", np.zeros((0, n_modes))))
+        return ActiveTracks(tracks, P, self.sides.result())
+
+    def drop_scans(self, n: int) -> None:
+        """Forget the rows of the oldest ``n`` scans (the live chain's bounded history, systems/live/active.py):
+        :meth:`result` then holds the scans since; the live tracks and the side decisions are untouched."""
+        for rows in self._rows.values():
+            del rows[:max(int(n), 0)]
+
+
+def rate_sd_of(cells_range_rate_mps) -> float:
+    """Standard deviation of a measured range rate: one Doppler cell / sqrt(12) (uniform within the cell); 1 m/s
+    when the pulse measures none (the gate then skips those contacts anyway).
+
+    Parameters
+    ----------
+    cells_range_rate_mps : array
+        Range rate (m/s) of each Doppler cell, evenly spaced; NaN or fewer than two cells when none is measured.
+
+    Returns
+    -------
+    float
+        Standard deviation (m/s).
+    """
+    v = np.asarray(cells_range_rate_mps, float)
+    if len(v) < 2 or not np.all(np.isfinite(v)):
+        return 1.0
+    return float(abs(v[1] - v[0]) / np.sqrt(12.0))
+
+
+def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeometry, settings: ActiveSettings, *,
+                     tracker: PositionTrackerSettings | None = None, rate_sd_mps: float = 1.0,
+                     beam_step_deg: float | None = None, ping_numbers=None) -> tuple[Contacts, np.ndarray,
+                                                                                      ActiveTracks]:
+    """Stages 3-5 on stored detections: mirror contacts, range-rate gate, IMM-IPDA (module doc).
+
+    Parameters
+    ----------
+    detections : Detections
+        Detections of the pings, sorted by ping.
+    ping_time_s : array
+        Transmit time of each ping (s); every ping is a scan, with or without contacts.
+    geometry : ActiveGeometry
+        Source, receiver and array heading.
+    settings : ActiveSettings
+        The chain (sound speed, contact errors, gate, tracker).
+    tracker : PositionTrackerSettings, optional
+        Another tracker than ``settings``'s (e.g. one IPDA mode), without the settings' turn modes.
+    rate_sd_mps : float
+        Standard deviation of a measured range rate (m/s).
+    beam_step_deg : float, optional
+        The beams' cone-angle step (deg): the default cone-angle error of a contact.
+    ping_numbers : array, optional
+        The number of each ping (default 0, 1, 2, ...), as the detections' ``ping``.
+
+    Returns
+    -------
+    tuple
+        (contacts, gate verdict per contact, tracks).
+    """
+    t = np.asarray(ping_time_s, float)
+    numbers = np.arange(len(t)) if ping_numbers is None else np.asarray(ping_numbers, np.int64)
+    contacts = form_contacts(detections, t, geometry, settings.sound_speed_mps, settings.contacts, beam_step_deg,
+                             numbers)
+    trk = ContactTracker(tracker or settings.tracker_settings(), geometry, settings.range_rate_gate_sigma,
+                         rate_sd_mps, settings.side_turn_deg, settings.merge_probability, settings.max_range_rate_mps,
+                         turns=settings.turn_modes() if tracker is None else None,
+                         clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
+                         clutter_map=clutter_map_of(settings),
+                         scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None)
+    bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
+    keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
+                           for k in range(len(t))]) if len(t) else np.zeros(0, bool)
+    return contacts, keep, trk.result()
+
+
+def clutter_map_of(settings: ActiveSettings):
+    """The chain's clutter map (detection/clutter_map.py), or None when ``clutter_map_pings`` is not set.
+
+    Parameters
+    ----------
+    settings : ActiveSettings
+        ``clutter_map_pings`` and ``clutter_map_hits``.
+
+    Returns
+    -------
+    ClutterMap or None
+        A fresh map.
+    """
+    from sonartrack.detection.clutter_map import ClutterMap
+
+    if settings.clutter_map_pings is None:
+        return None
+    return ClutterMap(settings.clutter_map_pings, min(settings.clutter_map_hits, settings.clutter_map_pings),
+                      still_probability=settings.clutter_map_still_probability,
+                      slow_mps=settings.clutter_map_slow_mps, image_range_m=settings.clutter_map_image_m)
