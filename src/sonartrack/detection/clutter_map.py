@@ -248,16 +248,8 @@ def mahalanobis2(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.nd
 
 
 def in_gate(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray, gamma: float) -> np.ndarray:
-    """(a, b) bool: d^2 = (z_a - z_b)^T (R_a + R_b)^(-1) (z_a - z_b) <= gamma (:func:`mahalanobis2`).
-
-    Parameters
-    ----------
-    xy_a, xy_b : ndarray (a, 2), (b, 2)
-        Positions (m).
-    R_a, R_b : ndarray (a, 2, 2), (b, 2, 2)
-        Covariances (m^2).
-    gamma : float
-        Gate threshold on d^2.
+    """(a, b) bool: d^2 = (z_a - z_b)^T (R_a + R_b)^(-1) (z_a - z_b) <= gamma, the positions (m) and covariances
+    (m^2) as :func:`mahalanobis2`'s, ``gamma`` the gate threshold on d^2.
 
     Returns
     -------

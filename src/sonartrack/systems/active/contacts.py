@@ -170,33 +170,13 @@ class ActiveGeometry:
         return self._interp(t, self.tx_xy)
 
     def rx_at(self, t) -> np.ndarray:
-        """Receiver (array centre) position(s) (m) at time(s) ``t`` (s).
-
-        Parameters
-        ----------
-        t : float or array (k,)
-            Time(s) (s); held at the end rows outside the navigation's span.
-
-        Returns
-        -------
-        numpy.ndarray
-            (2,) or (k, 2) position [x east, y north] (m).
-        """
+        """Receiver (array centre) position(s) (m), (2,) or (k, 2) [x east, y north], at time(s) ``t`` (s), as
+        :meth:`tx_at`."""
         return self._interp(t, self.rx_xy)
 
     def heading_at(self, t) -> np.ndarray:
-        """Array axis heading(s) (rad, unwrapped) at time(s) ``t`` (s).
-
-        Parameters
-        ----------
-        t : float or array (k,)
-            Time(s) (s); held at the end rows outside the navigation's span.
-
-        Returns
-        -------
-        numpy.ndarray
-            () or (k,) heading of the array's forward axis (rad, clockwise from north, unwrapped).
-        """
+        """Heading(s) of the array's forward axis, () or (k,) (rad, clockwise from north, unwrapped), at time(s) ``t``
+        (s), held at the end rows outside the navigation's span."""
         return self._interp(t, self.array_heading_rad)
 
     def velocity(self, t, which: str, dt_s: float = 1.0) -> np.ndarray:

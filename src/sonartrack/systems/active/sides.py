@@ -93,18 +93,7 @@ class SideDecisions:
         return len(self.track_id)
 
     def of(self, track_id: int) -> int | None:
-        """Row of ``track_id`` (None: not a confirmed track).
-
-        Parameters
-        ----------
-        track_id : int
-            The track's id.
-
-        Returns
-        -------
-        int or None
-            The first row with that id, or None.
-        """
+        """The first row of the track ``track_id`` (None: not a confirmed track)."""
         hit = np.nonzero(self.track_id == track_id)[0]
         return int(hit[0]) if len(hit) else None
 
@@ -354,19 +343,9 @@ class SideTracker:
         return None if other is None else (best, other)
 
     def decision(self, track_id: int) -> int:
-        """+1 the track is on its target's side, -1 a ghost, 0 undecided (so far).
-
-        Parameters
-        ----------
-        track_id : int
-            The track's id.
-
-        Returns
-        -------
-        int
-            The sign of the track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also 0 for
-            a track with no history).
-        """
+        """+1 the track ``track_id`` is on its target's side, -1 a ghost, 0 undecided so far: the sign of the
+        track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also for a track with no
+        history)."""
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0

@@ -59,17 +59,7 @@ def read_checkpoint(cls, path):
     format or version."""
     from sonartrack.systems.passive.settings import PassiveSettings
 
-    p = Path(path)
-    require(p.is_file(), f"checkpoint {p} not found: give the file a live run wrote with --checkpoint")
-    try:
-        doc = pickle.loads(p.read_bytes())  # noqa: S301 - the operator's own file (module doc)
-    except Exception as exc:  # noqa: BLE001 - any damage reads as one message
-        raise InputError(f"checkpoint {p} is unreadable ({type(exc).__name__}): delete it to start afresh") from None
-    require(isinstance(doc, dict) and doc.get("format") == CHECKPOINT_FORMAT,
-            f"{p} is no live passive checkpoint: give the file a live run wrote, or delete it to start afresh")
-    require(doc.get("version") == CHECKPOINT_VERSION,
-            f"checkpoint {p} is version {doc.get('version')}, this sonartrack reads version {CHECKPOINT_VERSION}: "
-            "delete it to start afresh")
+    doc = _checkpoint_doc(path, CHECKPOINT_FORMAT, CHECKPOINT_VERSION, "passive")
     live = cls(PassiveSettings.model_validate(doc["settings"]), doc["header"], history_s=doc["history_s"],
                nav=doc["fixed_nav"], **doc["options"])
     state = doc["state"]
@@ -138,17 +128,7 @@ def read_active_checkpoint(cls, path):
 
     from sonartrack.systems.active.settings import ActiveSettings
 
-    p = Path(path)
-    require(p.is_file(), f"checkpoint {p} not found: give the file a live run wrote with --checkpoint")
-    try:
-        doc = pickle.loads(p.read_bytes())  # noqa: S301 - the operator's own file (module doc)
-    except Exception as exc:  # noqa: BLE001 - any damage reads as one message
-        raise InputError(f"checkpoint {p} is unreadable ({type(exc).__name__}): delete it to start afresh") from None
-    require(isinstance(doc, dict) and doc.get("format") == ACTIVE_CHECKPOINT_FORMAT,
-            f"{p} is no live active checkpoint: give the file a live run wrote, or delete it to start afresh")
-    require(doc.get("version") == ACTIVE_CHECKPOINT_VERSION,
-            f"checkpoint {p} is version {doc.get('version')}, this sonartrack reads version "
-            f"{ACTIVE_CHECKPOINT_VERSION}: delete it to start afresh")
+    doc = _checkpoint_doc(path, ACTIVE_CHECKPOINT_FORMAT, ACTIVE_CHECKPOINT_VERSION, "active")
     live = cls(ActiveSettings.model_validate(doc["settings"]), doc["header"], **doc["options"])
     if doc["fixes"] is not None:
         live.fixes.restore(doc["fixes"])
@@ -156,3 +136,20 @@ def read_active_checkpoint(cls, path):
     for name in _ACTIVE_STATE:
         setattr(live, name, state[name])
     return live
+
+
+def _checkpoint_doc(path, fmt: str, version: int, kind: str) -> dict:
+    """The checked dictionary of a checkpoint file of ``fmt`` and ``version`` (InputError, one line, when the file is
+    missing, unreadable, or of another format or version)."""
+    p = Path(path)
+    require(p.is_file(), f"checkpoint {p} not found: give the file a live run wrote with --checkpoint")
+    try:
+        doc = pickle.loads(p.read_bytes())  # noqa: S301 - the operator's own file (module doc)
+    except Exception as exc:  # noqa: BLE001 - any damage reads as one message
+        raise InputError(f"checkpoint {p} is unreadable ({type(exc).__name__}): delete it to start afresh") from None
+    require(isinstance(doc, dict) and doc.get("format") == fmt,
+            f"{p} is no live {kind} checkpoint: give the file a live run wrote, or delete it to start afresh")
+    require(doc.get("version") == version,
+            f"checkpoint {p} is version {doc.get('version')}, this sonartrack reads version {version}: "
+            "delete it to start afresh")
+    return doc
