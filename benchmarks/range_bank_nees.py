@@ -10,7 +10,10 @@ asserts the short version). Three worlds, all the tests' numpy generators (not t
    linearised bearing, turn or not);
 2. own model: the same bank on targets drawn from its own prior and Markov chain of modes: ANEES over the record
    and the mean NEES at the times the target has been in the quietest mode for 600 s;
-3. constant velocity: a bank of single CV MGEKFs (q = 1e-9) on constant-velocity targets.
+3. constant velocity: a bank of single CV MGEKFs (q = 1e-9) on constant-velocity targets;
+4. the bearing sd ``sonartrack tma`` gives the filter when none is given (tma/motion_verdict.py: the scale of a
+   whole-record constant-velocity fit's residuals) on the turn scene, beside a model-free estimate (second
+   differences of the bearings, robust: sd^2 = median(d2^2) / (6 x 0.455), chi2(1)'s median 0.455).
 
 Usage: ``python benchmarks/range_bank_nees.py [runs]`` (default 30 runs per case; ~1 s of CPU per run and case).
 """
@@ -65,6 +68,26 @@ def turn_world(turn_deg: float, n_runs: int, model: ImmBfModel):
     return t, np.array(nees), closest
 
 
+def face_sd_deg(turn_deg: float, n_runs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per run of the turn scene: the bearing sd the face estimates (deg) and the second-difference estimate."""
+    from sonartrack.tma.motion_verdict import judge_record
+    from sonartrack.tma.records import BearingRecord, OwnshipTrack
+    from sonartrack.tma.settings import TmaSettings
+
+    rng = np.random.default_rng(11)
+    t1, own, tgt = _paths(rng, n_runs, turn_deg)
+    t = np.arange(0.0, 4200.0 + 1e-9, DT_S)
+    k = np.searchsorted(t1, t)
+    face, d2 = [], []
+    for i in range(n_runs):
+        rel = tgt[i, k] - own[i, k]
+        zb = np.arctan2(rel[:, 0], rel[:, 1]) + SIGMA_B * rng.standard_normal(len(t))
+        nav = OwnshipTrack(time_s=t1, x_m=own[i, :, 0], y_m=own[i, :, 1])
+        face.append(judge_record(BearingRecord(time_s=t, bearing_rad=zb), nav, TmaSettings()).sigma_deg(TmaSettings()))
+        d2.append(np.rad2deg(np.sqrt(np.median(np.diff(np.unwrap(zb), 2) ** 2) / (6.0 * chi2.ppf(0.5, 1)))))
+    return np.array(face), np.array(d2)
+
+
 def window_medians(t, nees) -> str:
     a = nees.mean(axis=0)
     return " / ".join(f"{np.median(a[(t >= lo) & (t < hi)]):6.2f}" for lo, hi in WINDOWS_S.values())
@@ -93,6 +116,10 @@ def main(n_runs: int) -> None:
     t, nees, _ = own_model._monte_carlo(cv, own_model._markov_truth([0.0], [[1.0]]))
     print("constant velocity bank on constant-velocity targets: ANEES median "
           f"{np.median(nees.mean(axis=0)[window]):.2f}")
+    for turn in (20.0, 60.0, 120.0):
+        face, d2 = face_sd_deg(turn, n_runs)
+        print(f"turn {turn:5.0f} deg: bearing sd (true 1 deg) the face estimates: median {np.median(face):.2f}, "
+              f"range {face.min():.2f}-{face.max():.2f}; second differences: {d2.min():.2f}-{d2.max():.2f}")
     print(f"({time.perf_counter() - t0:.0f} s)")
 
 
