@@ -25,6 +25,14 @@ and the bank's estimate is the mixture's moments, x = sum_i w_i x_i, P = sum_i w
 its mode probabilities are sum_i w_i mu_i. A filter whose weight falls below :data:`PRUNE_WEIGHT` is dropped (it
 stays dropped: its weight only keeps falling while the data disagree with it; Peach prunes likewise).
 
+Consistency (issue 30; tests/tma/test_range_bank_consistency.py, benchmarks/range_bank_nees.py): on targets drawn
+from the bank's prior and its members' motion model the bank's ANEES lies in chi-square's interval (a bank of
+constant-velocity MGEKFs on constant-velocity targets: 3.8 over 30 runs), so the mixture's spread between range
+filters and the MGEKF's covariance rows do not bias it; with IMM members its NEES is below the interval where the
+target has not manoeuvred for a while, a property of the IMM's modes (tma/settings.py ImmSettings), not of the bank.
+A target passing within ~1 km of the ownship breaks every member's linearised bearing (NEES in the hundreds after a
+28 m pass), turn or not.
+
 The functions here take arrays (the filter's relative state [x, y, vx, vy, f0] of tma/sequential_bf.py) and return
 arrays; tma/sequential_bf.py runs the bank for ``sequential.range_filters`` > 1.
 """
