@@ -25,8 +25,14 @@ after the cell is its level at the cell (where it is convex, as t^-3 is, above i
 of the two (the first version) took the earlier, louder side: measured on the default scene with a CW (seed 9101,
 every 3rd ping of 3600 s) the strongest target's median statistic rose from 10.6 to 22.3 and the echoes found
 from 54 to 71 of 200 with the geometric mean. Where no earlier reference lies after the blanking (the first
-``delay_guard + 1`` pulse lengths after ``blank_s``) the trend is not known: those delays are not searched
-(measured: the detections off the targets fell from 209 to 81 in 40 pings, the echoes found 71 -> 68). s = y / mu.
+``delay_guard + 1`` pulse lengths after ``blank_s``) the trend is not known: with the geometric mean there those
+delays were not searched (measured: the detections off the targets fell from 209 to 81 in 40 pings, the echoes
+found 71 -> 68), which lost the echoes that come early (a quarter of crossing-b's pings on the default scene). With
+``early_search`` they are searched with mu = max(mu_f, mu_l), the later delay estimate alone against the Doppler
+estimate of the same delay (the reverberation's leakage off the ridge is in mu_f), at their own exact law (below,
+F_G replaced by F_l, the OS law of mu_l) mapped to the two-sided law by equal tails,
+s -> Q_2^-1(Q_1(s)), Q(a) = P(s > a) (:func:`equal_tail_map`): in homogeneous noise the early cells then have the
+same law as the others, so one threshold and the MFTD's calibration (detection/mftd_tiles.py) hold for all. s = y / mu.
 
 Threshold. In homogeneous exponential noise the three estimates use disjoint cells, so they are independent,
 and for s = y / M with y exponential (mean 1):
@@ -85,6 +91,11 @@ class CwNormaliserSettings(Settings):
         1.0, "cells within this many Doppler resolution cells (c / (f_c tau) m/s each) of a beam's reverberation ridge "
              "are not searched (not set: no notch)", unit="1", ge=0, le=20)
 
+    early_search: bool = setting(
+        True, "search the delays from blank_s to the first two-sided delay too, with the Doppler estimate and the "
+              "later delay estimate alone, their statistic mapped to the two-sided law's (the same false-alarm rate; "
+              "module doc)", unit="")
+
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
         """One axis's OS-CFAR settings (detection/cfar.py) with this rank.
 
@@ -99,6 +110,17 @@ class CwNormaliserSettings(Settings):
             Order statistic, these cells, ``os_rank``.
         """
         return CfarSettings(method="os", guard_cells=guard, reference_cells=reference, os_rank=self.os_rank)
+
+    def early_estimate(self) -> CwEstimate | None:
+        """The law of the early delays' estimate max(mu_f, mu_l) (module doc), or None without the delay estimate.
+
+        Returns
+        -------
+        CwEstimate or None
+            :meth:`estimate` with ``one_sided``.
+        """
+        e = self.estimate()
+        return None if e.delay is None else CwEstimate(e.doppler, e.delay, True)
 
     def estimate(self) -> CwEstimate:
         """The law of the noise estimate (module doc): the Doppler estimate's and the delay estimates' (N, k).
@@ -163,9 +185,10 @@ class CwEstimate:
 
     doppler: tuple[int, int]
     delay: tuple[int, int] | None
+    one_sided: bool = False
 
     def cdf(self, m) -> np.ndarray:
-        """F_M(m) = F_f(m) F_G(m).
+        """F_M(m) = F_f(m) F_G(m) (one-sided: F_f(m) F_l(m), F_l the OS law of mu_l).
 
         Parameters
         ----------
@@ -181,6 +204,8 @@ class CwEstimate:
         f = os_cdf(m, *self.doppler)
         if self.delay is None:
             return f
+        if self.one_sided:
+            return f * os_cdf(m, *self.delay)
         log_m, table = _geometric_cdf_table(*self.delay)
         return f * np.interp(np.log(np.maximum(m, 1e-300)), log_m, table, left=0.0, right=1.0)
 
@@ -281,6 +306,8 @@ class CwEstimate:
             M.
         """
         m = os_draws(rng, *self.doppler, shape)
+        if self.delay is not None and self.one_sided:
+            return np.maximum(m, os_draws(rng, *self.delay, shape))
         if self.delay is not None:
             m = np.maximum(m, np.sqrt(os_draws(rng, *self.delay, shape) * os_draws(rng, *self.delay, shape)))
         return m
@@ -355,8 +382,9 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
 
 
 def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_stride: int,
-                      doppler_step: int) -> np.ndarray:
-    """mu = max(mu_f, sqrt(mu_early mu_late)) of every cell of (beams, delays, Dopplers) power (module doc), float32.
+                      doppler_step: int, early_rows: int = 0) -> np.ndarray:
+    """mu = max(mu_f, sqrt(mu_early mu_late)) of every cell of (beams, delays, Dopplers) power (module doc), float32;
+    max(mu_f, mu_late) in the first ``early_rows`` delays.
 
     Parameters
     ----------
@@ -368,6 +396,8 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
         Delay cells per pulse length (the delay references are this far apart).
     doppler_step : int
         Doppler filters per resolution cell (:func:`doppler_stride`).
+    early_rows : int
+        Delays (from the first) whose earlier reference is not known (module doc): the later estimate alone.
 
     Returns
     -------
@@ -385,7 +415,36 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
         return mu_f
     k_t = s.estimate().delay[1]
     early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride)
-    return np.maximum(mu_f, np.moveaxis(np.sqrt(early * late), -1, 1))
+    mu_t = np.sqrt(early * late)
+    mu_t[..., :early_rows] = late[..., :early_rows]
+    return np.maximum(mu_f, np.moveaxis(mu_t, -1, 1))
+
+
+def equal_tail_map(stat: np.ndarray, source: CwEstimate, target: CwEstimate) -> np.ndarray:
+    """The statistic of ``source``'s law mapped to ``target``'s at the same tail probability,
+    a -> Q_target^-1(Q_source(a)), Q(a) = P(s > a) (:meth:`CwEstimate.survival_table`): in homogeneous noise the
+    mapped cells have ``target``'s law, so its thresholds and the MFTD's calibration hold for them (module doc).
+    Beyond the tables' ends (P < 1e-16) the map goes on in proportion.
+
+    Parameters
+    ----------
+    stat : ndarray
+        Normalised cells s = y / M, M of ``source``'s law.
+    source, target : CwEstimate
+        The laws.
+
+    Returns
+    -------
+    ndarray
+        float32, the shape of ``stat``.
+    """
+    x_s, a_s = source.survival_table()
+    x_t, a_t = target.survival_table()
+    v = np.asarray(stat, np.float64)
+    out = np.interp(np.interp(v, a_s, x_s), x_t, a_t)
+    far = v > a_s[-1]
+    out[far] = a_t[-1] * v[far] / a_s[-1]
+    return out.astype(np.float32)
 
 
 def cw_matched_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end, taper: str):
@@ -459,13 +518,19 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
     require(waveform.kind == "cw", "the CW front end takes a CW pulse")
     power, delay, doppler = cw_matched_cells(samples, fs_hz, waveform, array, front_end, settings.taper)
     step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
-    mu = cw_noise_estimate(power, settings, max(int(round(waveform.duration_s / step)), 1),
-                           doppler_stride(waveform.duration_s, doppler))
-    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
     first = first_searched_delay_s(front_end, settings, waveform.duration_s)
-    keep = delay >= first - 1e-9
-    require(bool(keep.any()), f"the CW search starts at {first:g} s (blank_s and the delay estimate's cells), past "
+    early_law = settings.early_estimate() if settings.early_search else None
+    start = float(front_end.blank_s) if early_law is not None else first
+    keep = delay >= start - 1e-9
+    require(bool(keep.any()), f"the CW search starts at {start:g} s (blank_s and the delay estimate's cells), past "
                               f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
+    early = np.nonzero(keep & (delay < first - 1e-9))[0]
+    n_early = int(early[-1]) + 1 if early.size else 0
+    mu = cw_noise_estimate(power, settings, max(int(round(waveform.duration_s / step)), 1),
+                           doppler_stride(waveform.duration_s, doppler), n_early)
+    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
+    if early.size:
+        stat[:, early] = equal_tail_map(stat[:, early], early_law, settings.estimate())
     rate = doppler_to_range_rate(doppler, waveform.carrier_hz, front_end.sound_speed_mps)
     stat = np.ascontiguousarray(stat[:, keep])
     cone = cone_grid_deg(front_end.beams)
