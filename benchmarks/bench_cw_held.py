@@ -2,7 +2,8 @@
 the targets held (systems/active/targets.py ``truth_scores``) with the false targets, for the default active scene
 simulated with a 1 s CW pulse and for a second CW scene (32 elements 0.3 m apart, a 2.4 kHz carrier).
 
-Usage: ``python benchmarks/bench_cw_held.py [--seed S] [--duration-s D] [--scene default|b|both] [--profile]``
+Usage: ``python benchmarks/bench_cw_held.py [--seed S] [--duration-s D] [--scene default|b|both] [--profile]
+[--cw NAME=VALUE ...]``
 (the profile prints the 25 functions of most cumulative CPU time). Measures, not tests: no target is asserted.
 """
 
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import json
 import pstats
 import tempfile
 import time
@@ -28,7 +30,8 @@ def scene_settings(which: str, seed: int, duration_s: float):
                                 "waveform": s.waveform.model_copy(update=wave)})
 
 
-def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str | None = None) -> None:
+def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str | None = None,
+            cw: dict | None = None) -> None:
     import pandas as pd
 
     from sonartrack.systems.active.files import run_active_files
@@ -41,6 +44,7 @@ def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str |
     with tempfile.TemporaryDirectory() as tmp:
         write_active_scene(scene, Path(tmp))
         settings = ActiveSettings(spacing_m=spacing, elements=scene.sonar.elements)
+        settings = settings.model_copy(update={"cw": settings.cw.model_copy(update=cw or {})})
         prof = cProfile.Profile(time.process_time) if profile else None
         c0 = time.process_time()
         if prof:
@@ -106,9 +110,12 @@ def main() -> None:
     p.add_argument("--scene", default="both", choices=["default", "b", "both"])
     p.add_argument("--profile", action="store_true")
     p.add_argument("--dump", default=None, help="pickle (result, truth) to this path + the scene's name")
+    p.add_argument("--cw", action="append", default=[], metavar="NAME=VALUE",
+                   help="a CwNormaliserSettings field (detection/cw_cells.py), repeatable; the value read as JSON")
     a = p.parse_args()
+    cw = {k: json.loads(v) for k, v in (item.split("=", 1) for item in a.cw)}
     for which in (["default", "b"] if a.scene == "both" else [a.scene]):
-        measure(which, a.seed, a.duration_s, a.profile, a.dump and f"{a.dump}.{which}")
+        measure(which, a.seed, a.duration_s, a.profile, a.dump and f"{a.dump}.{which}", cw)
 
 
 if __name__ == "__main__":

@@ -238,8 +238,8 @@ def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_t
     """The early delays' statistic y / max(x_f, x_l), each x an OS estimate by sorting exponentials: its tail is the
     one-sided law's integral, and mapped by equal tails its cells exceed the two-sided law's thresholds at their
     false-alarm rates (the map checked on Monte Carlo cells, not on the tables it is built from)."""
-    one, two = CwEstimate((12, 9), (4, 3), True), CwEstimate((12, 9), (4, 3))
-    assert CwNormaliserSettings().early_estimate() == one
+    one, two = CwEstimate((12, 9), (4, 3), 0.0), CwEstimate((12, 9), (4, 3))
+    assert CwNormaliserSettings(early_search="late").early_estimate() == one
     rng = np.random.default_rng(21)
     n = 400_000
 
@@ -250,6 +250,12 @@ def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_t
     for alpha in (3.0, 8.0, 14.0):
         p = one.pfa(alpha)
         assert abs(float(np.mean(s > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
+    trend = CwEstimate((12, 9), (4, 3), 0.875)
+    assert CwNormaliserSettings().early_estimate() == trend
+    s_trend = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3) ** 1.875 / os(4, 3) ** 0.875)
+    for alpha in (3.0, 8.0, 14.0):
+        p = trend.pfa(alpha)
+        assert abs(float(np.mean(s_trend > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
     assert one.pfa(8.0) > 1.05 * two.pfa(8.0)  # one side: a noisier estimate, a heavier tail (x_f tames it)
     mapped = equal_tail_map(s, one, two)
     for pfa in (1e-2, 1e-3, 1e-4):
@@ -267,13 +273,13 @@ def test_an_echo_before_the_two_sided_delays_is_found_by_the_early_search():
     fe = FrontEndSettings()
     assert first_searched_delay_s(fe, CwNormaliserSettings(), TAU) == pytest.approx(3.5)
     found = []
-    for early in (True, False):
+    for early in ("trend", "late", "off"):
         s = CwNormaliserSettings(early_search=early)
         cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
         det = detect_ping(cells, cw_threshold(fe.pfa, s))
         found.append(bool((np.abs(det.travel_time_s - 2.3) < 0.2).any()))
-        assert cells.delay_s[0] == pytest.approx(fe.blank_s if early else 3.5, abs=0.13)
-    assert found == [True, False]
+        assert cells.delay_s[0] == pytest.approx(fe.blank_s if early != "off" else 3.5, abs=0.13)
+    assert found == [True, True, False]
     y = np.random.default_rng(6).exponential(1.0, (40, 120, 61)).astype(np.float32)
     s = CwNormaliserSettings()
     stat = equal_tail_map(y[:, :8] / cw_noise_estimate(y, s, 4, 2, early_rows=8)[:, :8], s.early_estimate(),

@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -91,10 +92,11 @@ class CwNormaliserSettings(Settings):
         1.0, "cells within this many Doppler resolution cells (c / (f_c tau) m/s each) of a beam's reverberation ridge "
              "are not searched (not set: no notch)", unit="1", ge=0, le=20)
 
-    early_search: bool = setting(
-        True, "search the delays from blank_s to the first two-sided delay too, with the Doppler estimate and the "
-              "later delay estimate alone, their statistic mapped to the two-sided law's (the same false-alarm rate; "
-              "module doc)", unit="")
+    early_search: Literal["off", "late", "trend"] = setting(
+        "trend", "the delays from blank_s to the first two-sided delay: off (not searched), late (searched with the "
+                 "Doppler estimate and the next later delay estimate) or trend (the later two delay estimates' log "
+                 "level extrapolated to the cell); their statistic mapped to the two-sided law's (module doc)",
+        unit="")
 
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
         """One axis's OS-CFAR settings (detection/cfar.py) with this rank.
@@ -112,15 +114,24 @@ class CwNormaliserSettings(Settings):
         return CfarSettings(method="os", guard_cells=guard, reference_cells=reference, os_rank=self.os_rank)
 
     def early_estimate(self) -> CwEstimate | None:
-        """The law of the early delays' estimate max(mu_f, mu_l) (module doc), or None without the delay estimate.
+        """The law of the early delays' estimate (module doc), or None when they are not searched.
 
         Returns
         -------
         CwEstimate or None
-            :meth:`estimate` with ``one_sided``.
+            :meth:`estimate` with ``trend`` :meth:`early_trend`.
         """
         e = self.estimate()
-        return None if e.delay is None else CwEstimate(e.doppler, e.delay, True)
+        return None if e.delay is None or self.early_search == "off" else CwEstimate(e.doppler, e.delay,
+                                                                                     self.early_trend())
+
+    def early_trend(self) -> float:
+        """r of the early estimate mu_1^(1 + r) / mu_2^r: the cell's distance to the centre of the next later
+        window over the two windows' distance, (delay_guard + (delay_reference + 1) / 2) / delay_reference
+        (log level linear in delay); 0 for ``late``."""
+        if self.early_search != "trend" or self.delay_reference is None:
+            return 0.0
+        return (self.delay_guard + (self.delay_reference + 1) / 2.0) / self.delay_reference
 
     def estimate(self) -> CwEstimate:
         """The law of the noise estimate (module doc): the Doppler estimate's and the delay estimates' (N, k).
@@ -178,17 +189,31 @@ def _geometric_cdf_table(n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
     return log_m, total
 
 
+@functools.lru_cache(maxsize=16)
+def _trend_cdf_table(n: int, k: int, trend: float) -> tuple[np.ndarray, np.ndarray]:
+    """(log m grid, P(mu_1^(1 + r) / mu_2^r <= m)) for two independent OS estimates (n, k), r = ``trend``:
+    P((1 + r) X_1 - r X_2 <= z) = sum_j P(X_2 in cell j) F_X1((z + r x_j) / (1 + r)), X = log mu (module doc)."""
+    u = np.linspace(np.log(1e-7), np.log(1e3), 4_001)
+    cdf = os_cdf(np.exp(u), n, k)
+    mass, centre = np.diff(cdf), 0.5 * (u[1:] + u[:-1])
+    z = np.linspace((1.0 + trend) * u[0] - trend * u[-1], (1.0 + trend) * u[-1] - trend * u[0], 4_001)
+    f1 = np.interp((z[:, None] + trend * centre[None, :]) / (1.0 + trend), u, cdf, left=0.0, right=1.0)
+    return z, np.clip(f1 @ mass, 0.0, 1.0)
+
+
 @dataclass(frozen=True, slots=True)
 class CwEstimate:
     """The law of a CW cell's noise estimate M = max(mu_f, sqrt(mu_e mu_l)) in homogeneous exponential noise
-    (module doc): ``doppler`` the (N, k) of mu_f, ``delay`` the (N, k) of each of mu_e, mu_l (None: M = mu_f)."""
+    (module doc): ``doppler`` the (N, k) of mu_f, ``delay`` the (N, k) of each of mu_e, mu_l (None: M = mu_f);
+    ``trend`` r set: the early delays' M = max(mu_f, mu_1^(1 + r) / mu_2^r), mu_1 and mu_2 the next two later
+    windows (r = 0: mu_1 alone)."""
 
     doppler: tuple[int, int]
     delay: tuple[int, int] | None
-    one_sided: bool = False
+    trend: float | None = None
 
     def cdf(self, m) -> np.ndarray:
-        """F_M(m) = F_f(m) F_G(m) (one-sided: F_f(m) F_l(m), F_l the OS law of mu_l).
+        """F_M(m) = F_f(m) F_G(m) (with ``trend`` r: F_G the law of mu_1^(1 + r) / mu_2^r instead).
 
         Parameters
         ----------
@@ -204,8 +229,9 @@ class CwEstimate:
         f = os_cdf(m, *self.doppler)
         if self.delay is None:
             return f
-        if self.one_sided:
-            return f * os_cdf(m, *self.delay)
+        if self.trend is not None:
+            log_m, table = _trend_cdf_table(*self.delay, self.trend)
+            return f * np.interp(np.log(np.maximum(m, 1e-300)), log_m, table, left=0.0, right=1.0)
         log_m, table = _geometric_cdf_table(*self.delay)
         return f * np.interp(np.log(np.maximum(m, 1e-300)), log_m, table, left=0.0, right=1.0)
 
@@ -306,8 +332,9 @@ class CwEstimate:
             M.
         """
         m = os_draws(rng, *self.doppler, shape)
-        if self.delay is not None and self.one_sided:
-            return np.maximum(m, os_draws(rng, *self.delay, shape))
+        if self.delay is not None and self.trend is not None:
+            near, far = os_draws(rng, *self.delay, shape), os_draws(rng, *self.delay, shape)
+            return np.maximum(m, near ** (1.0 + self.trend) / far**self.trend)
         if self.delay is not None:
             m = np.maximum(m, np.sqrt(os_draws(rng, *self.delay, shape) * os_draws(rng, *self.delay, shape)))
         return m
@@ -384,7 +411,8 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
 def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_stride: int,
                       doppler_step: int, early_rows: int = 0) -> np.ndarray:
     """mu = max(mu_f, sqrt(mu_early mu_late)) of every cell of (beams, delays, Dopplers) power (module doc), float32;
-    max(mu_f, mu_late) in the first ``early_rows`` delays.
+    max(mu_f, mu_1^(1 + r) / mu_2^r) in the first ``early_rows`` delays (``early_trend`` r; mu_1 the later
+    estimate, mu_2 the later estimate ``delay_reference`` pulse lengths on).
 
     Parameters
     ----------
@@ -416,7 +444,10 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
     k_t = s.estimate().delay[1]
     early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride)
     mu_t = np.sqrt(early * late)
-    mu_t[..., :early_rows] = late[..., :early_rows]
+    near = late[..., :early_rows]
+    far = late[..., np.minimum(np.arange(early_rows) + s.delay_reference * delay_stride, late.shape[-1] - 1)]
+    r = s.early_trend()
+    mu_t[..., :early_rows] = near if r == 0 else near ** (1.0 + r) / np.maximum(far, 1e-30) ** r
     return np.maximum(mu_f, np.moveaxis(mu_t, -1, 1))
 
 
@@ -519,7 +550,7 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
     power, delay, doppler = cw_matched_cells(samples, fs_hz, waveform, array, front_end, settings.taper)
     step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
     first = first_searched_delay_s(front_end, settings, waveform.duration_s)
-    early_law = settings.early_estimate() if settings.early_search else None
+    early_law = settings.early_estimate()
     start = float(front_end.blank_s) if early_law is not None else first
     keep = delay >= start - 1e-9
     require(bool(keep.any()), f"the CW search starts at {start:g} s (blank_s and the delay estimate's cells), past "
