@@ -98,6 +98,10 @@ class CwNormaliserSettings(Settings):
                  "level extrapolated to the cell); their statistic mapped to the two-sided law's (module doc)",
         unit="")
 
+    ridge_excess_db: float | None = setting(
+        None, "a ridge cell is notched only at the delays where its background stands this far above its beam's "
+              "median over Doppler (the ridge's reverberation above the noise; not set: at every delay)", unit="dB")
+
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
         """One axis's OS-CFAR settings (detection/cfar.py) with this rank.
 
@@ -569,6 +573,31 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
         margin = settings.ridge_margin_cells * front_end.sound_speed_mps / (waveform.carrier_hz * waveform.duration_s)
         notch = beam_ridge_notch(rate, cone, *motion, array, waveform.carrier_hz, front_end.sound_speed_mps,
                                  settings.ridge_beam_level_db, margin)
-        stat[np.broadcast_to(notch[:, None, :], stat.shape)] = 0.0
+        stat[ridge_cells(notch, mu[:, keep], settings.ridge_excess_db)] = 0.0
     return PingCells(int(ping), float(time_s), cone, delay[keep], doppler, rate, stat, True,
                      np.ascontiguousarray(mu[:, keep]))
+
+
+def ridge_cells(notch: np.ndarray, mu: np.ndarray, excess_db: float | None) -> np.ndarray:
+    """(B, D, J) the cells notched: the (beam, Doppler) cells of ``notch`` at every delay, or (``excess_db`` set)
+    only at the delays where their background ``mu`` stands ``excess_db`` above the beam's median background over
+    Doppler at that delay (the noise, most filters being off the ridge): where the ridge's reverberation has fallen
+    into the noise, the cell is searched like any other (module doc).
+
+    Parameters
+    ----------
+    notch : ndarray (B, J) bool
+        Cells near each beam's ridge (detection/cw_ridge.py).
+    mu : ndarray (B, D, J)
+        Background estimate of every cell.
+    excess_db : float or None
+        Level above the noise (dB) from which a ridge cell is notched; None: at every delay.
+
+    Returns
+    -------
+    ndarray (B, D, J) bool
+    """
+    if excess_db is None:
+        return np.broadcast_to(notch[:, None, :], mu.shape)
+    floor = np.median(mu, axis=2, keepdims=True)
+    return notch[:, None, :] & (mu > floor * np.float32(10.0 ** (excess_db / 10.0)))
