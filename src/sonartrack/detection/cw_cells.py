@@ -102,6 +102,10 @@ class CwNormaliserSettings(Settings):
         None, "a ridge cell is notched only at the delays where its background stands this far above its beam's "
               "median over Doppler (the ridge's reverberation above the noise; not set: at every delay)", unit="dB")
 
+    references_after_blank: bool = setting(
+        False, "the delay estimates take only the cells after blank_s (the blanked start holds the direct blast; "
+               "the earlier references of the first delays then repeat the first cell after it)", unit="")
+
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
         """One axis's OS-CFAR settings (detection/cfar.py) with this rank.
 
@@ -561,8 +565,10 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
                               f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
     early = np.nonzero(keep & (delay < first - 1e-9))[0]
     n_early = int(early[-1]) + 1 if early.size else 0
-    mu = cw_noise_estimate(power, settings, max(int(round(waveform.duration_s / step)), 1),
-                           doppler_stride(waveform.duration_s, doppler), n_early)
+    start = int(np.argmax(keep)) if settings.references_after_blank else 0
+    mu = np.full_like(power, np.inf)
+    mu[:, start:] = cw_noise_estimate(power[:, start:], settings, max(int(round(waveform.duration_s / step)), 1),
+                                      doppler_stride(waveform.duration_s, doppler), max(n_early - start, 0))
     stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
     if early.size:
         stat[:, early] = equal_tail_map(stat[:, early], early_law, settings.estimate())
