@@ -251,7 +251,8 @@ def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_t
         p = one.pfa(alpha)
         assert abs(float(np.mean(s > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
     trend = CwEstimate((12, 9), (4, 3), 0.875)
-    assert CwNormaliserSettings().early_estimate() == trend
+    assert CwNormaliserSettings(early_search="trend").early_estimate() == trend
+    assert CwNormaliserSettings().early_estimate() is None  # off by default (module doc: false alarms measured)
     s_trend = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3) ** 1.875 / os(4, 3) ** 0.875)
     for alpha in (3.0, 8.0, 14.0):
         p = trend.pfa(alpha)
@@ -281,7 +282,22 @@ def test_an_echo_before_the_two_sided_delays_is_found_by_the_early_search():
         assert cells.delay_s[0] == pytest.approx(fe.blank_s if early != "off" else 3.5, abs=0.13)
     assert found == [True, True, False]
     y = np.random.default_rng(6).exponential(1.0, (40, 120, 61)).astype(np.float32)
-    s = CwNormaliserSettings()
+    s = CwNormaliserSettings(early_search="trend")
     stat = equal_tail_map(y[:, :8] / cw_noise_estimate(y, s, 4, 2, early_rows=8)[:, :8], s.early_estimate(),
                           s.estimate())
     assert 0.6e-3 < float(np.mean(stat > cw_threshold(1e-3, s))) < 1.5e-3
+
+
+def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
+    """A blast 50 dB up in the blanked start, in the echo's beam and Doppler: the earlier delay references of an echo
+    at 4.5 s (0 to 3 s back) hold two blast cells and its rank-3-of-4 estimate masks the echo; with the references
+    taken after the blanking only the echo is found."""
+    x = cw_ping(np.random.default_rng(14), [(0.2, 70.0, 4.1, 100.0), (4.5, 70.0, 4.1, 0.3)])
+    fe = FrontEndSettings()
+    found = []
+    for after in (False, True):
+        s = CwNormaliserSettings(references_after_blank=after)
+        cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
+        det = detect_ping(cells, cw_threshold(fe.pfa, s))
+        found.append(bool((np.abs(det.travel_time_s - 4.5) < 0.2).any()))
+    assert found == [False, True]
