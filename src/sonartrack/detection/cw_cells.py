@@ -525,6 +525,35 @@ def first_searched_delay_s(front_end, settings: CwNormaliserSettings, duration_s
     return float(front_end.blank_s + (settings.delay_guard + 1) * duration_s)
 
 
+def cw_statistic(power: np.ndarray, delay: np.ndarray, doppler: np.ndarray, waveform, front_end,
+                 settings: CwNormaliserSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The normalised cells s = y / mu of (B, D, J) power (module doc), the early delays' mapped to the two-sided
+    law (``early_search``), the delay estimates over every delay or after ``blank_s`` (``references_after_blank``).
+
+    Returns
+    -------
+    tuple of ndarray
+        (s (B, D, J), mu (B, D, J), the delays searched (D,) bool).
+    """
+    step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
+    first = first_searched_delay_s(front_end, settings, waveform.duration_s)
+    early_law = settings.early_estimate()
+    start_s = float(front_end.blank_s) if early_law is not None else first
+    keep = delay >= start_s - 1e-9
+    require(bool(keep.any()), f"the CW search starts at {start_s:g} s (blank_s and the delay estimate's cells), past "
+                              f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
+    early = np.nonzero(keep & (delay < first - 1e-9))[0]
+    n_early = int(early[-1]) + 1 if early.size else 0
+    start = int(np.argmax(delay >= front_end.blank_s - 1e-9)) if settings.references_after_blank else 0
+    mu = np.full_like(power, np.inf)
+    mu[:, start:] = cw_noise_estimate(power[:, start:], settings, max(int(round(waveform.duration_s / step)), 1),
+                                      doppler_stride(waveform.duration_s, doppler), max(n_early - start, 0))
+    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
+    if early.size:
+        stat[:, early] = equal_tail_map(stat[:, early], early_law, settings.estimate())
+    return stat, mu, keep
+
+
 def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end, settings: CwNormaliserSettings, *,
                   time_s: float = 0.0, ping: int = 0, motion: tuple | None = None):
     """One CW ping's normalised cells (module doc): the beams and the Doppler bank (:func:`cw_matched_cells`),
@@ -564,22 +593,7 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
 
     require(waveform.kind == "cw", "the CW front end takes a CW pulse")
     power, delay, doppler = cw_matched_cells(samples, fs_hz, waveform, array, front_end, settings.taper)
-    step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
-    first = first_searched_delay_s(front_end, settings, waveform.duration_s)
-    early_law = settings.early_estimate()
-    start = float(front_end.blank_s) if early_law is not None else first
-    keep = delay >= start - 1e-9
-    require(bool(keep.any()), f"the CW search starts at {start:g} s (blank_s and the delay estimate's cells), past "
-                              f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
-    early = np.nonzero(keep & (delay < first - 1e-9))[0]
-    n_early = int(early[-1]) + 1 if early.size else 0
-    start = int(np.argmax(keep)) if settings.references_after_blank else 0
-    mu = np.full_like(power, np.inf)
-    mu[:, start:] = cw_noise_estimate(power[:, start:], settings, max(int(round(waveform.duration_s / step)), 1),
-                                      doppler_stride(waveform.duration_s, doppler), max(n_early - start, 0))
-    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
-    if early.size:
-        stat[:, early] = equal_tail_map(stat[:, early], early_law, settings.estimate())
+    stat, mu, keep = cw_statistic(power, delay, doppler, waveform, front_end, settings)
     rate = doppler_to_range_rate(doppler, waveform.carrier_hz, front_end.sound_speed_mps)
     stat = np.ascontiguousarray(stat[:, keep])
     cone = cone_grid_deg(front_end.beams)
