@@ -394,7 +394,8 @@ def doppler_stride(duration_s: float, doppler_hz) -> int:
     return max(int(round(1.0 / (duration_s * step))), 1)
 
 
-def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: int) -> np.ndarray:
+def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: int,
+                 pad_with_max: bool = False) -> np.ndarray:
     """(2, ...) the OS estimates x_(k) / c_k of the ``reference`` cells before and of those after each cell along
     the last axis, beyond ``guard`` cells, the cells ``stride`` apart (the same residue modulo ``stride``); past the
     ends of the axis the end cell is repeated (the start of a ping's delays is the direct blast: the early
@@ -408,6 +409,10 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
         Guard and reference cells on each side (in strides) and the rank k (1..reference).
     stride : int
         Cells between references.
+    pad_with_max : bool
+        Past the ends repeat the largest of the ``reference`` end cells instead (the axis starts after the
+        blanking: one repeated cell would be an estimate of one cell, not of the OS law, and alarm; the largest
+        errs high, masking).
 
     Returns
     -------
@@ -417,7 +422,8 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
     out = np.empty((2,) + y.shape, np.float32)
     half, c_k = guard + reference, os_mean_factor(reference, rank)
     for c in range(stride):
-        z = np.pad(y[..., c::stride], [(0, 0)] * (y.ndim - 1) + [(half, half)], mode="edge")
+        z = np.pad(y[..., c::stride], [(0, 0)] * (y.ndim - 1) + [(half, half)],
+                   **({"mode": "maximum", "stat_length": reference} if pad_with_max else {"mode": "edge"}))
         w = np.lib.stride_tricks.sliding_window_view(z, 2 * half + 1, axis=-1)
         for side, cells in enumerate((w[..., :reference], w[..., reference + 2 * guard + 1:])):
             out[side, ..., c::stride] = np.partition(cells, rank - 1, axis=-1)[..., rank - 1] / c_k
@@ -458,7 +464,8 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
     if s.delay_reference is None:
         return mu_f
     k_t = s.estimate().delay[1]
-    early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride)
+    early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride,
+                               s.references_after_blank)
     mu_t = np.sqrt(early * late)
     near = late[..., :early_rows]
     far = late[..., np.minimum(np.arange(early_rows) + s.delay_reference * delay_stride, late.shape[-1] - 1)]
