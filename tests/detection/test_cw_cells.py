@@ -301,3 +301,4 @@ def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
         det = detect_ping(cells, cw_threshold(fe.pfa, s))
         found.append(bool((np.abs(det.travel_time_s - 4.5) < 0.2).any()))
     assert found == [False, True]
+    assert CwNormaliserSettings().references_after_blank

@@ -47,7 +47,8 @@ repeated is an estimate of one cell, not of the OS law, and alarmed: off-target 
 120 pings, 7 false targets, nearly all 3.5-4.5 s). Measured (default scene as CW, 1 h, benchmarks/bench_cw_held.py,
 held % of detectable pings approacher / crossing-a / crossing-b / maneuvering, false targets; MFTD detections of the
 approacher and crossing-b): seed 1 86/72/72/71, 1 -> 90/72/76/70, 1 (18 -> 24 %, 27 -> 28 %); seed 2 74/82/71/79, 1
--> 75/82/76/79, 1 (24 -> 28 %, 18 -> 22 %). s = y / mu.
+-> 75/82/76/79, 1 (24 -> 28 %, 18 -> 22 %); the second CW scene (32 x 0.3 m, 2.4 kHz) seed 1 100/82/93/82, 1 ->
+100/82/87/83, 0. On by default. s = y / mu.
 
 Threshold: the law of M and the threshold on s are detection/cw_law.py's.
 
@@ -108,7 +109,7 @@ class CwNormaliserSettings(Settings):
         unit="")
 
     references_after_blank: bool = setting(
-        False, "the delay estimates take only the cells after blank_s (the blanked start holds the direct blast; "
+        True, "the delay estimates take only the cells after blank_s (the blanked start holds the direct blast; "
                "the earlier references of the first delays then repeat the first cell after it)", unit="")
 
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
