@@ -27,6 +27,8 @@ from sonartrack.detection.cw_cells import (
     cw_noise_estimate,
     cw_ping_cells,
     cw_threshold,
+    equal_tail_map,
+    first_searched_delay_s,
 )
 from sonartrack.detection.cw_ridge import beam_ridge_notch, ridge_notch, ridge_range_rates
 from sonartrack.detection.ping_mftd import CellAxes, PingMftd, PingMftdSettings
@@ -230,3 +232,73 @@ def test_doppler_estimate_alone_has_rohlings_os_threshold():
     assert s.estimate() == CwEstimate((12, 9), None)
     for pfa in (1e-3, 1e-5):
         np.testing.assert_allclose(cw_threshold(pfa, s), os_threshold(pfa, 12, 9), rtol=2e-3)
+
+
+def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_two_sided_law():
+    """The early delays' statistic y / max(x_f, x_l), each x an OS estimate by sorting exponentials: its tail is the
+    one-sided law's integral, and mapped by equal tails its cells exceed the two-sided law's thresholds at their
+    false-alarm rates (the map checked on Monte Carlo cells, not on the tables it is built from)."""
+    one, two = CwEstimate((12, 9), (4, 3), 0.0), CwEstimate((12, 9), (4, 3))
+    assert CwNormaliserSettings(early_search="late").early_estimate() == one
+    rng = np.random.default_rng(21)
+    n = 400_000
+
+    def os(nn, k):
+        return np.sort(rng.exponential(1.0, (n, nn)), axis=1)[:, k - 1] / os_mean_factor(nn, k)
+
+    s = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3))
+    for alpha in (3.0, 8.0, 14.0):
+        p = one.pfa(alpha)
+        assert abs(float(np.mean(s > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
+    trend = CwEstimate((12, 9), (4, 3), 0.875)
+    assert CwNormaliserSettings(early_search="trend").early_estimate() == trend
+    assert CwNormaliserSettings().early_estimate() is None  # off by default (module doc: false alarms measured)
+    s_trend = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3) ** 1.875 / os(4, 3) ** 0.875)
+    for alpha in (3.0, 8.0, 14.0):
+        p = trend.pfa(alpha)
+        assert abs(float(np.mean(s_trend > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
+    assert one.pfa(8.0) > 1.05 * two.pfa(8.0)  # one side: a noisier estimate, a heavier tail (x_f tames it)
+    mapped = equal_tail_map(s, one, two)
+    for pfa in (1e-2, 1e-3, 1e-4):
+        rate = float(np.mean(mapped > two.threshold(pfa)))
+        assert abs(rate - pfa) < 5 * np.sqrt(pfa / n), (pfa, rate)
+    grid = np.array([0.5, 2.0, 9.0, 30.0, 5e4])
+    assert np.all(np.diff(equal_tail_map(grid, one, two)) > 0)
+    assert np.all(equal_tail_map(grid[2:], one, two) < grid[2:])  # in the tail the one-sided cells are marked down
+
+
+def test_an_echo_before_the_two_sided_delays_is_found_by_the_early_search():
+    """An echo 0.8 s after the blanking, before the first delay with earlier references: found with the early
+    search at its delay, not searched without it; the early cells' mapped statistic keeps the false-alarm rate."""
+    x = cw_ping(np.random.default_rng(12), [(2.3, 70.0, 4.1, 0.3)])
+    fe = FrontEndSettings()
+    assert first_searched_delay_s(fe, CwNormaliserSettings(), TAU) == pytest.approx(3.5)
+    found = []
+    for early in ("trend", "late", "off"):
+        s = CwNormaliserSettings(early_search=early)
+        cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
+        det = detect_ping(cells, cw_threshold(fe.pfa, s))
+        found.append(bool((np.abs(det.travel_time_s - 2.3) < 0.2).any()))
+        assert cells.delay_s[0] == pytest.approx(fe.blank_s if early != "off" else 3.5, abs=0.13)
+    assert found == [True, True, False]
+    y = np.random.default_rng(6).exponential(1.0, (40, 120, 61)).astype(np.float32)
+    s = CwNormaliserSettings(early_search="trend")
+    stat = equal_tail_map(y[:, :8] / cw_noise_estimate(y, s, 4, 2, early_rows=8)[:, :8], s.early_estimate(),
+                          s.estimate())
+    assert 0.6e-3 < float(np.mean(stat > cw_threshold(1e-3, s))) < 1.5e-3
+
+
+def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
+    """A blast 50 dB up in the blanked start, in the echo's beam and Doppler: the earlier delay references of an echo
+    at 4.5 s (0 to 3 s back) hold two blast cells and its rank-3-of-4 estimate masks the echo; with the references
+    taken after the blanking only the echo is found."""
+    x = cw_ping(np.random.default_rng(14), [(0.2, 70.0, 4.1, 100.0), (4.5, 70.0, 4.1, 0.3)])
+    fe = FrontEndSettings()
+    found = []
+    for after in (False, True):
+        s = CwNormaliserSettings(references_after_blank=after)
+        cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
+        det = detect_ping(cells, cw_threshold(fe.pfa, s))
+        found.append(bool((np.abs(det.travel_time_s - 4.5) < 0.2).any()))
+    assert found == [False, True]
+    assert CwNormaliserSettings().references_after_blank

@@ -25,18 +25,32 @@ after the cell is its level at the cell (where it is convex, as t^-3 is, above i
 of the two (the first version) took the earlier, louder side: measured on the default scene with a CW (seed 9101,
 every 3rd ping of 3600 s) the strongest target's median statistic rose from 10.6 to 22.3 and the echoes found
 from 54 to 71 of 200 with the geometric mean. Where no earlier reference lies after the blanking (the first
-``delay_guard + 1`` pulse lengths after ``blank_s``) the trend is not known: those delays are not searched
-(measured: the detections off the targets fell from 209 to 81 in 40 pings, the echoes found 71 -> 68). s = y / mu.
+``delay_guard + 1`` pulse lengths after ``blank_s``) the trend is not known: with the geometric mean there those
+delays were not searched (measured: the detections off the targets fell from 209 to 81 in 40 pings, the echoes
+found 71 -> 68), which lost the echoes that come early (a quarter of crossing-b's pings on the default scene). With
+``early_search`` they are searched with mu = max(mu_f, mu_l), the later delay estimate alone against the Doppler
+estimate of the same delay (the reverberation's leakage off the ridge is in mu_f), at their own exact law
+(detection/cw_law.py, F_G replaced by F_l, the OS law of mu_l) mapped to the two-sided law by equal tails,
+s -> Q_2^-1(Q_1(s)), Q(a) = P(s > a) (:func:`equal_tail_map`): in homogeneous noise the early cells then have the
+same law as the others, so one threshold and the MFTD's calibration (detection/mftd_tiles.py) hold for all.
+``trend`` extrapolates instead the log level of the two later windows, mu_1^(1 + r) / mu_2^r (r the cell's distance
+to the first window's centre over the windows' spacing; law by the convolution of the two log estimates' laws).
+Measured (default scene as CW, seed 1, 1 h, benchmarks/bench_cw_held.py; held % of detectable pings approacher /
+crossing-a / crossing-b / maneuvering, false targets): off 86/72/72/71, 1; late 67/58/90/80, 100; trend 77/65/100/81,
+70: the echoes there are found, but the reverberation right after the blanking is heavier-tailed than the
+exponential law (K-distributed, the sea's discrete scatterers) and ~11 cells a ping alarm: off by default.
+The delay estimates run over every delay, the blanked start too, whose direct blast then lifts the earlier estimate
+of the delays up to (delay_guard + delay_reference + 1) pulse lengths after ``blank_s`` (most of the default scene's
+echoes lie 3.5 to 10 s out): with ``references_after_blank`` they take only the cells from ``blank_s`` on, the
+window's part before it filled with the largest of the first ``delay_reference`` cells (conservative: one cell
+repeated is an estimate of one cell, not of the OS law, and alarmed: off-target single-ping detections 282 -> 446 in
+120 pings, 7 false targets, nearly all 3.5-4.5 s). Measured (default scene as CW, 1 h, benchmarks/bench_cw_held.py,
+held % of detectable pings approacher / crossing-a / crossing-b / maneuvering, false targets; MFTD detections of the
+approacher and crossing-b): seed 1 86/72/72/71, 1 -> 90/72/76/70, 1 (18 -> 24 %, 27 -> 28 %); seed 2 74/82/71/79, 1
+-> 75/82/76/79, 1 (24 -> 28 %, 18 -> 22 %); the second CW scene (32 x 0.3 m, 2.4 kHz) seed 1 100/82/93/82, 1 ->
+100/82/87/83, 0. On by default. s = y / mu.
 
-Threshold. In homogeneous exponential noise the three estimates use disjoint cells, so they are independent,
-and for s = y / M with y exponential (mean 1):
-
-    P(s > alpha) = E[exp(-alpha M)] = alpha int_0^inf exp(-alpha m) F_M(m) dm,   M = max(mu_f, G), G = sqrt(mu_e mu_l)
-
-(integration by parts), F_M = F_f F_G, F_f the CDF of an OS estimate x_(k) / c_k of N unit exponentials,
-P(x_(k) <= x) = sum_{j=k}^{N} C(N, j) (1 - e^-x)^j e^(-x (N - j)), and F_G(m) = P(log mu_e + log mu_l <= 2 log m)
-by the convolution of the two log estimates' laws on a fine grid; alpha is the root of P(alpha) = pfa
-(:meth:`CwEstimate.threshold`, checked against Monte Carlo in tests/detection/test_cw_cells.py).
+Threshold: the law of M and the threshold on s are detection/cw_law.py's.
 
 Ridge. A stationary scatterer in the direction u (unit vector) from the far field has bistatic range rate
 rdot = -(u . v_T + u . v_R) (v_T, v_R the source's and receiver's velocities; far field: u_T = u_R = u).
@@ -54,14 +68,17 @@ Measured (as above): the detections off the targets fell from 164 to 90 (40 ping
 
 from __future__ import annotations
 
-import functools
-from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, noise_estimate, os_mean_factor
+from sonartrack.detection.cw_law import CwEstimate, equal_tail_map, os_cdf, os_draws
+
+__all__ = ["CwEstimate", "CwNormaliserSettings", "cw_noise_estimate", "cw_ping_cells", "cw_statistic", "cw_threshold",
+           "doppler_stride", "equal_tail_map", "first_searched_delay_s", "one_sided_os", "os_cdf", "os_draws"]
 
 
 class CwNormaliserSettings(Settings):
@@ -85,6 +102,16 @@ class CwNormaliserSettings(Settings):
         1.0, "cells within this many Doppler resolution cells (c / (f_c tau) m/s each) of a beam's reverberation ridge "
              "are not searched (not set: no notch)", unit="1", ge=0, le=20)
 
+    early_search: Literal["off", "late", "trend"] = setting(
+        "off", "the delays from blank_s to the first two-sided delay: off (not searched), late (searched with the "
+                 "Doppler estimate and the next later delay estimate) or trend (the later two delay estimates' log "
+                 "level extrapolated to the cell); their statistic mapped to the two-sided law's (module doc)",
+        unit="")
+
+    references_after_blank: bool = setting(
+        True, "the delay estimates take only the cells after blank_s (the blanked start holds the direct blast; "
+               "the earlier references of the first delays then repeat the first cell after it)", unit="")
+
     def axis_cfar(self, guard: int, reference: int) -> CfarSettings:
         """One axis's OS-CFAR settings (detection/cfar.py) with this rank.
 
@@ -100,6 +127,26 @@ class CwNormaliserSettings(Settings):
         """
         return CfarSettings(method="os", guard_cells=guard, reference_cells=reference, os_rank=self.os_rank)
 
+    def early_estimate(self) -> CwEstimate | None:
+        """The law of the early delays' estimate (module doc), or None when they are not searched.
+
+        Returns
+        -------
+        CwEstimate or None
+            :meth:`estimate` with ``trend`` :meth:`early_trend`.
+        """
+        e = self.estimate()
+        return None if e.delay is None or self.early_search == "off" else CwEstimate(e.doppler, e.delay,
+                                                                                     self.early_trend())
+
+    def early_trend(self) -> float:
+        """r of the early estimate mu_1^(1 + r) / mu_2^r: the cell's distance to the centre of the next later
+        window over the two windows' distance, (delay_guard + (delay_reference + 1) / 2) / delay_reference
+        (log level linear in delay); 0 for ``late``."""
+        if self.early_search != "trend" or self.delay_reference is None:
+            return 0.0
+        return (self.delay_guard + (self.delay_reference + 1) / 2.0) / self.delay_reference
+
     def estimate(self) -> CwEstimate:
         """The law of the noise estimate (module doc): the Doppler estimate's and the delay estimates' (N, k).
 
@@ -113,177 +160,6 @@ class CwNormaliserSettings(Settings):
             return CwEstimate((f.n_reference, f.rank), None)
         n_t = self.delay_reference
         return CwEstimate((f.n_reference, f.rank), (n_t, int(min(max(round(self.os_rank * n_t), 1), n_t))))
-
-
-def os_cdf(m, n: int, k: int) -> np.ndarray:
-    """CDF of the OS estimate x_(k) / c_k of n unit exponentials at m (module doc).
-
-    Parameters
-    ----------
-    m : array
-        Values (>= 0).
-    n, k : int
-        Reference cells and rank.
-
-    Returns
-    -------
-    numpy.ndarray
-        P(x_(k) / c_k <= m).
-    """
-    from scipy.stats import binom
-
-    p = -np.expm1(-os_mean_factor(n, k) * np.asarray(m, float))
-    return binom.sf(k - 1, n, p)
-
-
-def os_draws(rng: np.random.Generator, n: int, k: int, shape) -> np.ndarray:
-    """Draws of x_(k) / c_k, x_(k) the k-th smallest of n unit exponentials, by x_(k) = -log(1 - U_(k)),
-    U_(k) ~ Beta(k, n - k + 1), float32 of ``shape``."""
-    return (-np.log1p(-rng.beta(k, n - k + 1, shape)) / os_mean_factor(n, k)).astype(np.float32)
-
-
-@functools.lru_cache(maxsize=16)
-def _geometric_cdf_table(n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """(log m grid, P(sqrt(mu_e mu_l) <= m)) for two independent OS estimates (n, k): the law of log mu on a
-    uniform grid of cell masses, convolved with itself (module doc)."""
-    from scipy.signal import fftconvolve
-
-    u = np.linspace(np.log(1e-7), np.log(1e3), 16_001)
-    mass = np.diff(os_cdf(np.exp(u), n, k))
-    total = np.clip(np.cumsum(fftconvolve(mass, mass)), 0.0, 1.0)  # P(i + j <= s), cell centres u_0 + (i + 1/2) h
-    h = u[1] - u[0]
-    log_m = (2.0 * u[0] + (np.arange(total.size) + 1.0) * h) / 2.0
-    return log_m, total
-
-
-@dataclass(frozen=True, slots=True)
-class CwEstimate:
-    """The law of a CW cell's noise estimate M = max(mu_f, sqrt(mu_e mu_l)) in homogeneous exponential noise
-    (module doc): ``doppler`` the (N, k) of mu_f, ``delay`` the (N, k) of each of mu_e, mu_l (None: M = mu_f)."""
-
-    doppler: tuple[int, int]
-    delay: tuple[int, int] | None
-
-    def cdf(self, m) -> np.ndarray:
-        """F_M(m) = F_f(m) F_G(m).
-
-        Parameters
-        ----------
-        m : array
-            Values (>= 0).
-
-        Returns
-        -------
-        numpy.ndarray
-            P(M <= m).
-        """
-        m = np.asarray(m, float)
-        f = os_cdf(m, *self.doppler)
-        if self.delay is None:
-            return f
-        log_m, table = _geometric_cdf_table(*self.delay)
-        return f * np.interp(np.log(np.maximum(m, 1e-300)), log_m, table, left=0.0, right=1.0)
-
-    def pfa(self, alpha: float) -> float:
-        """P(y / M > alpha) = alpha int exp(-alpha m) F_M(m) dm (trapezoid on a grid fine against 1 / alpha).
-
-        Parameters
-        ----------
-        alpha : float
-            Threshold on s.
-
-        Returns
-        -------
-        float
-            False-alarm probability per cell.
-        """
-        m = np.linspace(0.0, 40.0 / max(alpha, 1e-3) + 8.0, 20_001)
-        return float(alpha * np.trapezoid(np.exp(-alpha * m) * self.cdf(m), m))
-
-    @functools.cache  # noqa: B019 -- a frozen, hashable value: the cache holds a few thresholds
-    def threshold(self, pfa: float) -> float:
-        """alpha with :meth:`pfa` (alpha) = pfa (bisection on log alpha).
-
-        Parameters
-        ----------
-        pfa : float
-            False-alarm probability per cell, in (0, 1).
-
-        Returns
-        -------
-        float
-            The threshold on s.
-        """
-        require(0.0 < pfa < 1.0, f"the false-alarm rate must be in (0, 1), got {pfa}")
-        lo, hi = np.log(1e-3), np.log(1e6)
-        for _ in range(48):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if self.pfa(float(np.exp(mid))) > pfa else (lo, mid)
-        return float(np.exp(0.5 * (lo + hi)))
-
-    @functools.cache  # noqa: B019 -- a frozen, hashable value: one table per law
-    def survival_table(self) -> tuple[np.ndarray, np.ndarray]:
-        """(-log P(s > a), a) of the normalised noise cell s = y / M on a grid of a from 0 to where P < 1e-16:
-        P(s > a) = E[exp(-a M)] = sum_i exp(-a m_i) (F_M(m_i+1) - F_M(m_i)) on a log grid of m fine against the
-        scale 1 / a (cell ratio 1 + 3e-3), all a at once (the integral of :meth:`pfa`, by Stieltjes sums).
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            (-log P(s > a) increasing from 0, a (>= 0)), up to 601 points.
-        """
-        edges = np.geomspace(1e-8, 1e3, 8_001)
-        mass = np.diff(self.cdf(edges))
-        m = np.sqrt(edges[1:] * edges[:-1])
-        a = np.concatenate([[0.0], np.geomspace(1e-3, 1e3, 600)])
-        q = np.exp(-np.outer(a, m)) @ mass
-        keep = q > 1e-16
-        return -np.log(q[keep] / q[0]), a[keep]
-
-    def draw_statistic(self, rng: np.random.Generator, shape, pool: int = 1) -> np.ndarray:
-        """Draws of the max of ``pool`` independent normalised noise cells s = y / M (y a unit exponential, M this
-        law), by inverting P(max <= a) = (1 - P(s > a))^pool on :meth:`survival_table`: one uniform per draw, the
-        law of ``max(y / draw(...))`` exactly (up to the table's interpolation).
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            Source of the draws.
-        shape : tuple of int
-            Shape of the draws.
-        pool : int
-            Independent cells whose max is one draw (>= 1).
-
-        Returns
-        -------
-        numpy.ndarray
-            float64 draws of ``shape``.
-        """
-        x, a = self.survival_table()
-        v = rng.random(shape)
-        with np.errstate(divide="ignore"):
-            tail = -np.log(-np.expm1(np.log(v) / pool))  # -log P(s > a) of the draw: P(max <= a) = v
-        return np.interp(tail, x, a)
-
-    def draw(self, rng: np.random.Generator, shape) -> np.ndarray:
-        """Independent draws of M (:func:`os_draws`), float32 of ``shape``.
-
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            Source of the draws.
-        shape : tuple of int
-            Shape of the draws.
-
-        Returns
-        -------
-        numpy.ndarray
-            M.
-        """
-        m = os_draws(rng, *self.doppler, shape)
-        if self.delay is not None:
-            m = np.maximum(m, np.sqrt(os_draws(rng, *self.delay, shape) * os_draws(rng, *self.delay, shape)))
-        return m
 
 
 def cw_threshold(pfa: float, settings: CwNormaliserSettings) -> float:
@@ -324,7 +200,8 @@ def doppler_stride(duration_s: float, doppler_hz) -> int:
     return max(int(round(1.0 / (duration_s * step))), 1)
 
 
-def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: int) -> np.ndarray:
+def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: int,
+                 pad_with_max: bool = False) -> np.ndarray:
     """(2, ...) the OS estimates x_(k) / c_k of the ``reference`` cells before and of those after each cell along
     the last axis, beyond ``guard`` cells, the cells ``stride`` apart (the same residue modulo ``stride``); past the
     ends of the axis the end cell is repeated (the start of a ping's delays is the direct blast: the early
@@ -338,6 +215,10 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
         Guard and reference cells on each side (in strides) and the rank k (1..reference).
     stride : int
         Cells between references.
+    pad_with_max : bool
+        Past the ends repeat the largest of the ``reference`` end cells instead (the axis starts after the
+        blanking: one repeated cell would be an estimate of one cell, not of the OS law, and alarm; the largest
+        errs high, masking).
 
     Returns
     -------
@@ -347,7 +228,8 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
     out = np.empty((2,) + y.shape, np.float32)
     half, c_k = guard + reference, os_mean_factor(reference, rank)
     for c in range(stride):
-        z = np.pad(y[..., c::stride], [(0, 0)] * (y.ndim - 1) + [(half, half)], mode="edge")
+        z = np.pad(y[..., c::stride], [(0, 0)] * (y.ndim - 1) + [(half, half)],
+                   **({"mode": "maximum", "stat_length": reference} if pad_with_max else {"mode": "edge"}))
         w = np.lib.stride_tricks.sliding_window_view(z, 2 * half + 1, axis=-1)
         for side, cells in enumerate((w[..., :reference], w[..., reference + 2 * guard + 1:])):
             out[side, ..., c::stride] = np.partition(cells, rank - 1, axis=-1)[..., rank - 1] / c_k
@@ -355,8 +237,10 @@ def one_sided_os(y: np.ndarray, guard: int, reference: int, rank: int, stride: i
 
 
 def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_stride: int,
-                      doppler_step: int) -> np.ndarray:
-    """mu = max(mu_f, sqrt(mu_early mu_late)) of every cell of (beams, delays, Dopplers) power (module doc), float32.
+                      doppler_step: int, early_rows: int = 0) -> np.ndarray:
+    """mu = max(mu_f, sqrt(mu_early mu_late)) of every cell of (beams, delays, Dopplers) power (module doc), float32;
+    max(mu_f, mu_1^(1 + r) / mu_2^r) in the first ``early_rows`` delays (``early_trend`` r; mu_1 the later
+    estimate, mu_2 the later estimate ``delay_reference`` pulse lengths on).
 
     Parameters
     ----------
@@ -368,6 +252,8 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
         Delay cells per pulse length (the delay references are this far apart).
     doppler_step : int
         Doppler filters per resolution cell (:func:`doppler_stride`).
+    early_rows : int
+        Delays (from the first) whose earlier reference is not known (module doc): the later estimate alone.
 
     Returns
     -------
@@ -384,8 +270,14 @@ def cw_noise_estimate(power: np.ndarray, settings: CwNormaliserSettings, delay_s
     if s.delay_reference is None:
         return mu_f
     k_t = s.estimate().delay[1]
-    early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride)
-    return np.maximum(mu_f, np.moveaxis(np.sqrt(early * late), -1, 1))
+    early, late = one_sided_os(np.moveaxis(y, 1, -1), s.delay_guard, s.delay_reference, k_t, delay_stride,
+                               s.references_after_blank)
+    mu_t = np.sqrt(early * late)
+    near = late[..., :early_rows]
+    far = late[..., np.minimum(np.arange(early_rows) + s.delay_reference * delay_stride, late.shape[-1] - 1)]
+    r = s.early_trend()
+    mu_t[..., :early_rows] = near if r == 0 else near ** (1.0 + r) / np.maximum(far, 1e-30) ** r
+    return np.maximum(mu_f, np.moveaxis(mu_t, -1, 1))
 
 
 def cw_matched_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end, taper: str):
@@ -417,6 +309,35 @@ def first_searched_delay_s(front_end, settings: CwNormaliserSettings, duration_s
     if settings.delay_reference is None:
         return float(front_end.blank_s)
     return float(front_end.blank_s + (settings.delay_guard + 1) * duration_s)
+
+
+def cw_statistic(power: np.ndarray, delay: np.ndarray, doppler: np.ndarray, waveform, front_end,
+                 settings: CwNormaliserSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The normalised cells s = y / mu of (B, D, J) power (module doc), the early delays' mapped to the two-sided
+    law (``early_search``), the delay estimates over every delay or after ``blank_s`` (``references_after_blank``).
+
+    Returns
+    -------
+    tuple of ndarray
+        (s (B, D, J), mu (B, D, J), the delays searched (D,) bool).
+    """
+    step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
+    first = first_searched_delay_s(front_end, settings, waveform.duration_s)
+    early_law = settings.early_estimate()
+    start_s = float(front_end.blank_s) if early_law is not None else first
+    keep = delay >= start_s - 1e-9
+    require(bool(keep.any()), f"the CW search starts at {start_s:g} s (blank_s and the delay estimate's cells), past "
+                              f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
+    early = np.nonzero(keep & (delay < first - 1e-9))[0]
+    n_early = int(early[-1]) + 1 if early.size else 0
+    start = int(np.argmax(delay >= front_end.blank_s - 1e-9)) if settings.references_after_blank else 0
+    mu = np.full_like(power, np.inf)
+    mu[:, start:] = cw_noise_estimate(power[:, start:], settings, max(int(round(waveform.duration_s / step)), 1),
+                                      doppler_stride(waveform.duration_s, doppler), max(n_early - start, 0))
+    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
+    if early.size:
+        stat[:, early] = equal_tail_map(stat[:, early], early_law, settings.estimate())
+    return stat, mu, keep
 
 
 def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end, settings: CwNormaliserSettings, *,
@@ -458,14 +379,7 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
 
     require(waveform.kind == "cw", "the CW front end takes a CW pulse")
     power, delay, doppler = cw_matched_cells(samples, fs_hz, waveform, array, front_end, settings.taper)
-    step = float(delay[1] - delay[0]) if delay.size > 1 else waveform.duration_s
-    mu = cw_noise_estimate(power, settings, max(int(round(waveform.duration_s / step)), 1),
-                           doppler_stride(waveform.duration_s, doppler))
-    stat = np.divide(power, mu, out=np.zeros_like(power), where=mu > 0)
-    first = first_searched_delay_s(front_end, settings, waveform.duration_s)
-    keep = delay >= first - 1e-9
-    require(bool(keep.any()), f"the CW search starts at {first:g} s (blank_s and the delay estimate's cells), past "
-                              f"the {delay[-1]:.3g} s window: lower blank_s or delay_guard")
+    stat, mu, keep = cw_statistic(power, delay, doppler, waveform, front_end, settings)
     rate = doppler_to_range_rate(doppler, waveform.carrier_hz, front_end.sound_speed_mps)
     stat = np.ascontiguousarray(stat[:, keep])
     cone = cone_grid_deg(front_end.beams)
@@ -476,3 +390,4 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
         stat[np.broadcast_to(notch[:, None, :], stat.shape)] = 0.0
     return PingCells(int(ping), float(time_s), cone, delay[keep], doppler, rate, stat, True,
                      np.ascontiguousarray(mu[:, keep]))
+
