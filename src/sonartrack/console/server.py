@@ -17,7 +17,6 @@ so no client can make the server's memory grow.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import json
 import threading
 from collections.abc import Callable
@@ -99,11 +98,17 @@ class ConsoleServer:
         """Keep ``update`` in the history and push it to every client; safe to call from any thread. ValueError
         for an update that is not a JSON-able dict with a ``"type"`` (NaN and inf are sent as null)."""
         kind, text = encode_update(update)
-        self.history.add(kind, text, has_events=kind == "health" and bool(update.get("events")))
+        events = kind == "health" and bool(update.get("events"))
         loop = self._loop
         if loop is not None:
-            with contextlib.suppress(RuntimeError):  # the loop closed under us: stop() is running
-                loop.call_soon_threadsafe(self._broadcast, text)
+            # kept and pushed together on the server's loop, so that a client joining meanwhile gets the update once
+            # (in its history or pushed), never both
+            try:
+                loop.call_soon_threadsafe(self._keep_and_broadcast, kind, text, events)
+                return
+            except RuntimeError:  # the loop closed under us: stop() is running
+                pass
+        self.history.add(kind, text, has_events=events)
 
     def start(self) -> None:
         """Bind the port and serve from a background thread; InputError naming the address if it cannot bind."""
@@ -172,7 +177,8 @@ class ConsoleServer:
         name = host_header.rsplit(":", 1)[0] if not host_header.endswith("]") else host_header
         return name.strip("[]").lower() in _LOOPBACK
 
-    def _broadcast(self, text: str) -> None:
+    def _keep_and_broadcast(self, kind: str, text: str, has_events: bool) -> None:
+        self.history.add(kind, text, has_events=has_events)
         for client in list(self._clients):
             client.push(text)
 
