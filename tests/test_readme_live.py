@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 sys.path[:0] = [str(Path(__file__).parent), str(Path(__file__).parent / "console")]
@@ -62,21 +63,12 @@ def _active_rows(messages) -> list[dict]:
     return rows
 
 
-def _stop(procs) -> None:
-    for proc in procs:
-        if proc is not None and proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-    outs = [p.communicate(timeout=60) if p is not None else ("", "") for p in procs]
-    for proc, (out, err) in zip(procs, outs, strict=True):
-        assert proc.returncode == 130, (proc.returncode, out, err)
-        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("interrupted"), err
-
-
-def test_readme_live_active_lines_show_a_target(tmp_path):
-    """The active pair (its own ports, so that it may run beside the passive pair): the B-scan arrives ping by ping
-    and the default active scene's targets appear in the table (a side or an undecided pair, with a range)."""
-    recorder_line, console_line = _lines(active=True)
-    port = int(console_line.split("--port")[1].split()[0])
+@contextmanager
+def _running(lines: tuple[str, str], tmp_path: Path):
+    """The recorder and console lines started as the README says (the console's port from its line, else 8765); a
+    WebSocket client of the console while the block runs; then Ctrl-C to both, each exiting 130 with one line."""
+    recorder_line, console_line = lines
+    port = int(console_line.split("--port")[1].split()[0]) if "--port" in console_line else 8765
     recorder = _start(recorder_line, tmp_path)
     console = None
     try:
@@ -85,36 +77,33 @@ def test_readme_live_active_lines_show_a_target(tmp_path):
         assert "waiting for the live side" in line, (line, failed)
         console = _start(console_line, tmp_path)
         client = _wait_console(f"http://127.0.0.1:{port}/", console)
-        rows = client.wait(lambda ms: _active_rows(ms), 240)
-        assert len({u["ping"] for u in client.of_type("bscan")}) >= 2
+        yield client
         client.close()
     finally:
-        _stop((console, recorder))
+        procs = [p for p in (console, recorder) if p is not None]
+        for proc in procs:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+        outs = [p.communicate(timeout=60) for p in procs]
+    for proc, (out, err) in zip(procs, outs, strict=True):
+        assert proc.returncode == 130, (proc.returncode, out, err)
+        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("interrupted"), err
+
+
+def test_readme_live_active_lines_show_a_target(tmp_path):
+    """The active pair (its own ports, so that it may run beside the passive pair): the B-scan arrives ping by ping
+    and the default active scene's targets appear in the table (a side or an undecided pair, with a range)."""
+    with _running(_lines(active=True), tmp_path) as client:
+        rows = client.wait(lambda ms: _active_rows(ms), 240)
+        assert len({u["ping"] for u in client.of_type("bscan")}) >= 2
     assert all(r["side"] in ("starboard", "port", "undecided") for r in rows), rows
     assert any(r["range_m"] is not None and r["range_m"] > 0 for r in rows), rows  # a target placed, not a bearing
     print(f"active target rows shown: {len(rows)}")
 
 
 def test_readme_live_lines_show_the_ships(tmp_path):
-    recorder_line, console_line = _lines()
-    recorder = _start(recorder_line, tmp_path)
-    console = None
-    try:
-        line = recorder.stdout.readline()
-        failed = recorder.stderr.read() if recorder.poll() is not None else ""
-        assert "waiting for the live side" in line, (line, failed)
-        console = _start(console_line, tmp_path)
-        client = _wait_console("http://127.0.0.1:8765/", console)
+    with _running(_lines(), tmp_path) as client:
         ships = client.wait(lambda ms: len(_ships(ms)) >= 2 and _ships(ms), 120)
         assert client.of_type("btr")
         client.wait(lambda ms: client.of_type("ownship") and client.of_type("targets"), 120)  # the first refresh
-        client.close()
-    finally:
-        for proc in (console, recorder):
-            if proc is not None and proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        outs = [p.communicate(timeout=60) if p is not None else ("", "") for p in (console, recorder)]
-    for proc, (out, err) in zip((console, recorder), outs, strict=True):
-        assert proc.returncode == 130, (proc.returncode, out, err)
-        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("interrupted"), err
     print(f"confirmed tracks shown: {sorted(ships)}")
