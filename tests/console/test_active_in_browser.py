@@ -10,13 +10,13 @@ JavaScript error; keeps a screenshot with the test's output.
 from __future__ import annotations
 
 import sys
-import threading
 from pathlib import Path
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from cdp import Browser, chromium_path  # noqa: E402
+from streaming import serve_and_run  # noqa: E402
 
 from sonartrack.console.server import ConsoleServer  # noqa: E402
 from sonartrack.io.stream.nav import UdpNmeaSource  # noqa: E402
@@ -39,31 +39,10 @@ def active_stream():
     nav = UdpNmeaSource(0).start()
     streamer = ActiveSceneStreamer(scene, speed=20.0, nav_udp=nav.port)
     samples = TcpSampleSource("127.0.0.1", streamer.port)
-    stop, state = threading.Event(), {}
     tows = {"source_tow_m": scene.sonar.source_tow_m, "array_tow_m": scene.sonar.array_tow_m}
-
-    def play():
-        state["summary"] = streamer.serve(stop)
-
-    def chain():
-        try:
-            state["result"] = run_live(samples, nav, PassiveSettings(spacing_m=0.5), server.publish, stop=stop,
-                                       warm=False, active_settings=ActiveSettings(spacing_m=0.5),
-                                       active_options=tows)
-        except BaseException as exc:  # shown by the test, not lost in the thread
-            state["error"] = exc
-
-    threads = [threading.Thread(target=play, daemon=True), threading.Thread(target=chain, daemon=True)]
-    for t in threads:
-        t.start()
-    yield server, state
-    stop.set()
-    for source in (samples, nav):
-        source.close()
-    for t in threads:
-        t.join(30)
-    streamer.close()
-    server.stop()
+    yield from serve_and_run(streamer, samples, nav, server, lambda stop: run_live(
+        samples, nav, PassiveSettings(spacing_m=0.5), server.publish, stop=stop, warm=False,
+        active_settings=ActiveSettings(spacing_m=0.5), active_options=tows))
 
 
 def test_active_pings_in_headless_chromium(active_stream, tmp_path):

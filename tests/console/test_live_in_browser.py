@@ -9,7 +9,6 @@ the ships (a side each), and that the page raised no JavaScript error; keeps a s
 from __future__ import annotations
 
 import sys
-import threading
 import tomllib
 from pathlib import Path
 
@@ -17,6 +16,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from cdp import Browser, chromium_path  # noqa: E402
+from streaming import serve_and_run  # noqa: E402
 
 from sonartrack.console.server import ConsoleServer  # noqa: E402
 from sonartrack.io.stream.nav import UdpNmeaSource  # noqa: E402
@@ -64,31 +64,9 @@ def live_stream():
     nav = UdpNmeaSource(0).start()
     streamer = SceneStreamer(scene, speed=10.0, nav_udp=nav.port)
     samples = TcpSampleSource("127.0.0.1", streamer.port)
-    stop, state = threading.Event(), {}
-
-    def play():
-        state["summary"] = streamer.serve(stop)
-
-    def chain():
-        try:
-            state["result"] = run_live(samples, nav, PassiveSettings(spacing_m=2.5, min_track_s=60.0),
-                                       server.publish, stop=stop, refresh_s=2.0,
-                                       ready=lambda live: server.on_select(
-                                           lambda i: [server.publish(u) for u in live.select(i)]))
-        except BaseException as exc:  # shown by the test, not lost in the thread
-            state["error"] = exc
-
-    threads = [threading.Thread(target=play, daemon=True), threading.Thread(target=chain, daemon=True)]
-    for t in threads:
-        t.start()
-    yield server, state
-    stop.set()
-    for source in (samples, nav):
-        source.close()
-    for t in threads:
-        t.join(30)
-    streamer.close()
-    server.stop()
+    yield from serve_and_run(streamer, samples, nav, server, lambda stop: run_live(
+        samples, nav, PassiveSettings(spacing_m=2.5, min_track_s=60.0), server.publish, stop=stop, refresh_s=2.0,
+        ready=lambda live: server.on_select(lambda i: [server.publish(u) for u in live.select(i)])))
 
 
 def test_live_chain_in_headless_chromium(live_stream, tmp_path):
