@@ -3,9 +3,12 @@ independent generator tests/worlds/bearings_only_literature.py (numpy alone), ag
 
 The scenarios: Ristic, Arulampalam & Gordon, Beyond the Kalman Filter, 2004, ch. 6 ('m', as Leong, Arulampalam,
 Lamahewa & Abhayapala, IEEE SPL 21(5) 2014 pose it in their published MATLAB) and Leong et al.'s 'h'. Neither
-source prints its bound as numbers (Ristic et al. plot it, Leong et al.'s code plots it; no table was found in
-the searched literature, see the report of branch h10-crbscen), so the bounds are checked here against independent
-computations and analytic identities, not against published values:
+source prints its bound as numbers (Ristic et al. plot it, Leong et al.'s code plots it), and none of the others
+searched gave one we could read: Dogancay, Signal Processing 85 (2005) 481-490 (c.coek.info copy: abstract only);
+Brehard & Le Cadre, IEEE Trans. AES 42(4) 2006 / IRISA PI 1701 (pdfkul copies: abstract only); Gilson, MIT Lincoln
+Laboratory TR 809, 1989 (fdocuments.net: title pages only); Nardone, Lindgren & Gong 1984, Aidala & Hammel 1983 and
+Bar-Shalom, Li & Kirubarajan 2001's example not in the stored corpora. So the bounds are checked here against
+independent computations and analytic identities, not against published values:
 
 (a) our PCRB (tma/pcrb.py, Tichavsky et al. 1998's recursion) against the last block of the inverse of the whole
     trajectory's Fisher information, assembled here with a finite-difference bearing gradient (a different
