@@ -95,6 +95,24 @@ def test_crb_position_sd_by_hand():
     assert np.isnan(crb_position_sd_m(x0, tau[:2], own[:2], sigma, T))
 
 
+def test_crb_position_sd_is_nan_for_an_ownship_that_never_turns():
+    """Nardone, Lindgren and Gong (IEEE TAC 29(9), 1984): a constant-velocity target seen from an ownship on one
+    straight leg is unobservable, so the Fisher information is singular in exact arithmetic; in floating point it
+    is ~1e17-conditioned and its inverse gave ~1e10 m, a "bound" any error passes. It must be NaN, and a turn must
+    give a finite bound."""
+    from sonartrack.tma.batch_ml import crb_position_sd_m
+
+    t = np.arange(0.0, 1800.0, 60.0)
+    own_straight = np.column_stack([np.zeros_like(t), 2.5 * t])
+    x0 = np.array([6000.0, 8000.0, -3.0, 1.0])
+    sigma = np.deg2rad(1.0)
+    assert np.isnan(crb_position_sd_m(x0, t, own_straight, sigma, t[-1]))
+    turned = np.where(t[:, None] < 900.0, own_straight,
+                      own_straight[t == 900.0][0] + np.column_stack([2.5 * (t - 900.0), np.zeros_like(t)]))
+    sd = crb_position_sd_m(x0, t, turned, sigma, t[-1])
+    assert np.isfinite(sd) and 1.0 < sd < 5000.0
+
+
 @pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
 def test_fisher_information_of_ar1_errors_is_h_r_inverse_h(rho):
     """With AR(1) errors, R_ij = sigma_i sigma_j rho^|i - j|, the information is H^T R^-1 H (R inverted by numpy, not
