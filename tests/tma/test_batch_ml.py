@@ -103,10 +103,13 @@ def test_crb_position_sd_is_nan_for_an_ownship_that_never_turns():
     from sonartrack.tma.batch_ml import crb_position_sd_m
 
     t = np.arange(0.0, 1800.0, 60.0)
-    own_straight = np.column_stack([np.zeros_like(t), 2.5 * t])
     x0 = np.array([6000.0, 8000.0, -3.0, 1.0])
     sigma = np.deg2rad(1.0)
-    assert np.isnan(crb_position_sd_m(x0, t, own_straight, sigma, t[-1]))
+    for course_deg in (0.0, 38.7, 90.0, 141.3, 200.0):  # off-axis courses gave ~1e9 m, on-axis ones a negative variance
+        c = np.deg2rad(course_deg)
+        leg = np.column_stack([1000.0 + 2.5 * np.sin(c) * t, 30.0 + 2.5 * np.cos(c) * t])
+        assert np.isnan(crb_position_sd_m(x0, t, leg, sigma, t[-1])), course_deg
+    own_straight = np.column_stack([np.zeros_like(t), 2.5 * t])
     turned = np.where(t[:, None] < 900.0, own_straight,
                       own_straight[t == 900.0][0] + np.column_stack([2.5 * (t - 900.0), np.zeros_like(t)]))
     sd = crb_position_sd_m(x0, t, turned, sigma, t[-1])
