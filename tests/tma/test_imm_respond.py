@@ -23,8 +23,9 @@ from sonartrack.tma.solution_table import solution_columns
 T_TURN_S, DURATION_S, DT_S, SIGMA_B = 2100.0, 4200.0, 10.0, np.deg2rad(1.0)
 
 
-def _paths(rng, n_runs: int, turn_deg: float):
-    """Ownship and target [x, y, vx, vy] (n_runs, n_t, 4) at 1 s, by integrating course and speed."""
+def _paths(rng, n_runs: int, turn_deg: float, speed_change_mps: float = 0.0):
+    """Ownship and target [x, y, vx, vy] (n_runs, n_t, 4) at 1 s, by integrating course and speed; at T_TURN_S the
+    target turns by ``turn_deg`` at 1 deg/s and changes speed by ``speed_change_mps`` at 0.05 m/s^2."""
     t = np.arange(0.0, DURATION_S + 1.0)
     base = rng.uniform(0, 360, n_runs)
     own_course = base[:, None] + np.select([t < 900, t < 1800, t < 2700, t < 3600], [0, 60, -30, 60], -30)[None]
@@ -34,7 +35,9 @@ def _paths(rng, n_runs: int, turn_deg: float):
     course0 = rng.uniform(0, 360, n_runs)
     turned = np.clip(t - T_TURN_S, 0.0, abs(turn_deg))  # 1 deg/s
     tgt_course = course0[:, None] + sign[:, None] * turned[None]
-    tgt = _integrate(10e3 * np.stack([np.sin(b0), np.cos(b0)], -1), tgt_course, rng.uniform(3, 7, n_runs))
+    speed = rng.uniform(3, 7, n_runs)[:, None] + np.sign(speed_change_mps) * np.clip(
+        0.05 * (t - T_TURN_S), 0.0, abs(speed_change_mps))[None]
+    tgt = _integrate(10e3 * np.stack([np.sin(b0), np.cos(b0)], -1), tgt_course, speed)
     return t, own, tgt
 
 
@@ -47,21 +50,25 @@ def _slew(course_deg):
 
 
 def _integrate(p0, course_deg, speed):
+    """Positions and velocities from the initial positions p0 (n_runs, 2), course (deg) and speed (m/s) per second:
+    speed (n_runs,) constant or (n_runs, n_t)."""
     c = np.deg2rad(course_deg)
-    v = speed[:, None, None] * np.stack([np.sin(c), np.cos(c)], -1)
+    v = np.broadcast_to(np.reshape(speed, (len(speed), -1)), c.shape)[..., None] * np.stack([np.sin(c), np.cos(c)], -1)
     p = p0[:, None, :] + np.concatenate([np.zeros_like(v[:, :1]), np.cumsum(v[:, :-1], axis=1)], axis=1)
     return np.concatenate([p, v], -1)
 
 
-def _monte_carlo(n_runs: int, turn_deg: float, seed: int = 1):
-    """Mode probabilities and 4-state NEES of the IMM-MGEKF with the default bank over ``n_runs`` runs."""
+def _monte_carlo(n_runs: int, turn_deg: float, seed: int = 1, model: ImmBfModel | None = None):
+    """Manoeuvre probabilities and 4-state NEES of one IMM-MGEKF (default: the default bank) over ``n_runs`` runs."""
     rng = np.random.default_rng(seed)
     t1, own, tgt = _paths(rng, n_runs, turn_deg)
     t = np.arange(0.0, DURATION_S + 1e-9, DT_S)
     k = np.searchsorted(t1, t)
     imm = ImmSettings()
-    model = ImmBfModel(qs=np.asarray(imm.q_values), Pi=transition_matrix(len(imm.q_values), imm.transition_diagonal),
-                       sigma_bearing_rad=SIGMA_B, q_f0=imm.q_f0)
+    if model is None:
+        model = ImmBfModel(qs=np.asarray(imm.q_values), Pi=transition_matrix(len(imm.q_values),
+                                                                             imm.transition_diagonal),
+                           sigma_bearing_rad=SIGMA_B, q_f0=imm.q_f0)
     man, nees = [], []
     for i in range(n_runs):
         o, rel = own[i, k], tgt[i, k] - own[i, k]

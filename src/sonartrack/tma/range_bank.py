@@ -101,7 +101,7 @@ def mixture_moments(weight, x, P) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.einsum("i,ijk->jk", w, P) + np.einsum("i,ij,ik->jk", w, d, d)
 
 
-def run_range_bank(times_s, z, u, x0, P0, model: ImmBfModel) -> tuple[np.ndarray, ...]:
+def run_range_bank(times_s, z, u, x0, P0, model: ImmBfModel, *, mu0=None) -> tuple[np.ndarray, ...]:
     """Run the bank over a record (module doc): N_F filters from their own initial estimates.
 
     Parameters
@@ -116,6 +116,8 @@ def run_range_bank(times_s, z, u, x0, P0, model: ImmBfModel) -> tuple[np.ndarray
         Each filter's initial relative estimate at times_s[0].
     model : ImmBfModel
         The IMM (or single filter) each member runs.
+    mu0 : array_like, shape (r,), optional
+        Every filter's initial mode probabilities (default equal; e.g. the Markov matrix's stationary law).
 
     Returns
     -------
@@ -134,7 +136,7 @@ def run_range_bank(times_s, z, u, x0, P0, model: ImmBfModel) -> tuple[np.ndarray
     n, n_f, r = len(t), len(x0), len(model.qs)
     xs = np.repeat(np.array(x0, float)[:, None], r, axis=1)
     Ps = np.repeat(np.array(P0, float)[:, None], r, axis=1)
-    mus = np.full((n_f, r), 1.0 / r)
+    mus = np.full((n_f, r), 1.0 / r) if mu0 is None else np.repeat(np.asarray(mu0, float)[None], n_f, axis=0)
     log_w = np.full(n_f, -np.log(n_f))
     out = (np.full((n, 5), np.nan), np.full((n, 5, 5), np.nan), np.full((n, r), np.nan), np.zeros((n, n_f)))
     _record(out, 0, np.exp(log_w), np.asarray(x0, float), np.asarray(P0, float), mus)
