@@ -128,7 +128,8 @@ def track(c: dict, settings=None):
     s = settings or ActiveSettings(spacing_m=c["settings"].spacing_m, elements=c["settings"].elements)
     trk = ContactTracker(s.tracker_settings(), c["geometry"], s.range_rate_gate_sigma, c["rate_sd"],
                          s.side_turn_deg, s.merge_probability, s.max_range_rate_mps, turns=s.turn_modes(),
-                         clutter_map=clutter_map_of(s), rejoin_s=s.rejoin_s, **c["kwargs"])
+                         clutter_map=clutter_map_of(s), **c["kwargs"],
+                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}))  # (an older chain: none)
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -183,8 +184,9 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
     detectable = sorted(set(det["target"].astype(str)))
     held = truth_scores(res, targets, det, g)["held"]
     rows_of: dict[str, int] = {}
-    false_rows = ghost_rows = 0
+    false_rows = ghost_rows = short_rows = 0
     for k in range(len(targets)):
+        short_rows += _ping(c, targets.last_s[k]) - _ping(c, targets.first_s[k]) + 1 <= 2
         tid = int(targets.track_id[k]) if targets.track_id[k] >= 0 else int(targets.mirror_track_id[k])
         name = labels.get(tid, ("false", 0))[0]
         rows_of[name] = rows_of.get(name, 0) + 1
@@ -211,11 +213,11 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
     extra = sum(max(rows_of.get(n, 0) - 1, 0) for n in detectable) + sum(
         v for n, v in rows_of.items() if n not in detectable and n != "false")
     print(f"{label}: {len(targets)} rows for {len(detectable)} detectable targets; false rows {n_false}, duplicate/"
-          f"extra rows {extra}, ghost-only rows {ghost_rows}; confirmed tracks {len(labels)}, of them confirmed on "
+          f"extra rows {extra}, ghost-only rows {ghost_rows}, rows of <= 2 pings {short_rows}; confirmed tracks {len(labels)}, of them confirmed on "
           f"<= 2 pings {short}; ends {ends}; held % of detectable pings (mean) "
           f"{100 * np.mean([held.get(n, 0) for n in detectable]):.0f}")
     print("\n".join(lines))
-    return {"rows": len(targets), "false": n_false, "extra": extra, "ghost_rows": ghost_rows, "short": short,
+    return {"rows": len(targets), "false": n_false, "short_rows": short_rows, "extra": extra, "ghost_rows": ghost_rows, "short": short,
             "held": {n: held.get(n, 0.0) for n in detectable}}
 
 

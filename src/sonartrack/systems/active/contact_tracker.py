@@ -254,7 +254,7 @@ class ContactTracker:
                 continue
             best, d2_best = None, self.rejoin_gamma
             for old, (t0, x0, P0) in self._lost.items():
-                xp, Pp = _predict(x0, P0, t_s - t0, max(self.settings.q))
+                xp, Pp = _predict(x0, P0, t_s - t0, min(self.settings.q))
                 nu = x - xp
                 d2 = float(nu @ np.linalg.solve(P + Pp, nu))
                 if d2 < d2_best:
