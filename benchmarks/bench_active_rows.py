@@ -213,12 +213,12 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
     extra = sum(max(rows_of.get(n, 0) - 1, 0) for n in detectable) + sum(
         v for n, v in rows_of.items() if n not in detectable and n != "false")
     print(f"{label}: {len(targets)} rows for {len(detectable)} detectable targets; false rows {n_false}, duplicate/"
-          f"extra rows {extra}, ghost-only rows {ghost_rows}, rows of <= 2 pings {short_rows}; confirmed tracks {len(labels)}, of them confirmed on "
-          f"<= 2 pings {short}; ends {ends}; held % of detectable pings (mean) "
+          f"extra rows {extra}, ghost-only rows {ghost_rows}, rows of <= 2 pings {short_rows}; confirmed tracks "
+          f"{len(labels)}, of them confirmed on <= 2 pings {short}; ends {ends}; held % of detectable pings (mean) "
           f"{100 * np.mean([held.get(n, 0) for n in detectable]):.0f}")
     print("\n".join(lines))
-    return {"rows": len(targets), "false": n_false, "short_rows": short_rows, "extra": extra, "ghost_rows": ghost_rows, "short": short,
-            "held": {n: held.get(n, 0.0) for n in detectable}}
+    return {"rows": len(targets), "false": n_false, "short_rows": short_rows, "extra": extra, "ghost_rows": ghost_rows,
+            "short": short, "held": {n: held.get(n, 0.0) for n in detectable}}
 
 
 def with_changes(c: dict, changes: list[str]):

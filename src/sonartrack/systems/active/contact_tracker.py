@@ -197,6 +197,26 @@ class ContactTracker:
             keep &= ~clutter | held
         return keep
 
+    def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact of the ping weaker
+        than one in a confirmed track's gate, within the clutter map's ``image_range_m`` of its bistatic range
+        (clutter_map.py :func:`same_range`: a strong echo's images share its travel time), and in no confirmed
+        track's gate, starts and feeds no track. As the map does for recurring still echoes; measured on the default
+        scene (LFM, seeds 1 and 2): crossing-b at 44 dB echo SNR near the aft endfire gave a false track of 16
+        pings at the fore endfire, at its bistatic range within 8 m."""
+        keep = np.ones(len(contacts), bool)
+        tol = None if self.clutter_map is None else self.clutter_map.image_range_m
+        if tol is None or not len(contacts):
+            return keep
+        x, P, _ = self._predicted_confirmed(t_s)
+        if not len(x):
+            return keep
+        from sonartrack.detection.clutter_map import same_range
+
+        held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0)
+        g = self.geometry
+        return ~(same_range(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), held, contacts.statistic, tol) & ~held)
+
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
@@ -213,7 +233,7 @@ class ContactTracker:
         numpy.ndarray
             (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
+        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts) & self._not_images(t_s, contacts)
         if hasattr(self.tracker.measurements, "at_scan"):
             g, lam = self.geometry, None
             if self.clutter_area is not None:
