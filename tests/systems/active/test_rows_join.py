@@ -65,13 +65,15 @@ def _targets(t):
     return [np.array([4000.0 + 3.0 * t, 6000.0 - 1.0 * t]), np.array([-9000.0 + 2.0 * t, 2000.0 + 1.5 * t])]
 
 
-def _run(rejoin_s, pings=50, gap=range(20, 28), seed=3, pd=0.9, clutter=3.0):
+def _run(rejoin_s, pings=50, gap=range(20, 28), seed=3, pd=0.9, clutter=3.0, image=False, clutter_map=None):
+    """The contacts of the module doc through a ContactTracker; ``image``: each echo of target a has a weaker
+    lobe image at the same range on the opposite bearing (a line array's other endfire)."""
     rng = np.random.default_rng(seed)
     nav_t = np.arange(-60.0, PING_S * pings + 60.0, 10.0)
     rx_all = np.stack([np.zeros_like(nav_t), SPEED_MPS * nav_t], -1)
     geometry = ActiveGeometry(nav_t, rx_all, rx_all, np.zeros_like(nav_t))
     trk = ContactTracker(ActiveSettings().tracker_settings(), geometry, None, 1.0, side_turn_deg=20.0,
-                         merge_probability=0.99, rejoin_s=rejoin_s, scan_interval_s=PING_S)
+                         merge_probability=0.99, rejoin_s=rejoin_s, scan_interval_s=PING_S, clutter_map=clutter_map)
     det = 0
     for k in range(pings):
         tk = PING_S * k
@@ -79,19 +81,24 @@ def _run(rejoin_s, pings=50, gap=range(20, 28), seed=3, pd=0.9, clutter=3.0):
         a, b = _targets(tk)
         echoes = ([a] if k not in gap and rng.random() < pd else []) + ([b] if k >= 34 and rng.random() < pd else [])
         echoes += [rx + rng.uniform(-12000, 12000, 2) for _ in range(rng.poisson(clutter))]
-        xy, R, side, dets = [], [], [], []
-        for e in echoes:
-            z = e + rng.multivariate_normal(np.zeros(2), _cov(e, rx))
+        xy, R, side, dets, stat = [], [], [], [], []
+        noisy = [(e + rng.multivariate_normal(np.zeros(2), _cov(e, rx)), 30.0) for e in echoes]
+        if image and len(echoes) and echoes[0] is a:  # the image: same range, opposite bearing, weaker
+            noisy[0] = (noisy[0][0], 100.0)
+            noisy.append((2 * rx - noisy[0][0], 20.0))
+        for z, level in noisy:
             for p, s in ((z, 1), (np.array([2 * rx[0] - z[0], z[1]]), -1)):
                 xy += [p]
                 R += [_cov(p, rx)]
                 side += [s]
                 dets += [det]
+                stat += [level]
             det += 1
         m = len(xy)
         xy = np.array(xy).reshape(-1, 2)
         trk.step(tk, Contacts(np.full(m, k), np.full(m, tk), np.array(dets, np.int64), np.array(side, np.int8), xy,
-                              np.array(R).reshape(-1, 2, 2), np.full(m, np.nan), np.hypot(*(xy - rx).T), np.ones(m)))
+                              np.array(R).reshape(-1, 2, 2), np.full(m, np.nan), np.hypot(*(xy - rx).T),
+                              np.array(stat)))
     return trk.result(), geometry
 
 
@@ -128,3 +135,23 @@ def test_a_target_lost_and_reconfirmed_is_one_row(runs):
     # the target appearing far off after the gap is not joined onto the lost one: a row of its own
     _, rows_b = _rows_of(tracks, geometry, 1)
     assert len(rows_b) == 1 and rows_b.isdisjoint({k + 1})
+
+
+def test_a_strong_targets_lobe_image_starts_no_track():
+    from sonartrack.systems.active.run import clutter_map_of
+
+    def image_tracks(tracks):
+        t, n = tracks.tracks, set()
+        for r in np.nonzero(t.confirmed)[0]:
+            rx = np.array([0.0, SPEED_MPS * t.time_s[r]])
+            p = 2 * rx - _targets(t.time_s[r])[0]  # the image, and its mirror about the axis
+            if min(np.hypot(*(t.x[r, :2] - p)), np.hypot(*(t.x[r, :2] - [-p[0], p[1]]))) < 1000.0:
+                n.add(int(t.track_id[r]))
+        return n
+
+    without, _ = _run(None, pings=30, gap=(), image=True)
+    assert image_tracks(without)  # the image is a CV line: tracked and confirmed when nothing withholds it
+    with_map, geometry = _run(None, pings=30, gap=(), image=True, clutter_map=clutter_map_of(ActiveSettings()))
+    assert not image_tracks(with_map)
+    _, rows_a = _rows_of(with_map, geometry, 0)
+    assert len(rows_a) == 1  # the target itself still held
