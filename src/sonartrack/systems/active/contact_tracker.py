@@ -88,8 +88,11 @@ class ContactTracker:
     rejoin_s : float or None
         A track confirmed within this time (s) of the loss of a confirmed track (deleted for its existence), whose
         state passes the track-to-track test (tracking/duplicates.py, gate ``merge_probability``, 0.99 when not set)
-        against that track's last state predicted to now (CV, the largest q), is recorded as the same target's next
-        segment (``ActiveTracks.joins``; the nearest such lost track, each once); None: no re-joining.
+        against that track's last state predicted to now (CV with the straight-running, smallest q: with the largest
+        a target appearing 3 km off a lost one was joined to it in tests/systems/active/test_rows_join.py), is
+        recorded as the same target's next segment (``ActiveTracks.joins``; the nearest such lost track, each once);
+        None: no re-joining. (A re-join onto the reflection of a lost track, the other hypothesis, was tried: with
+        the duplicate merges it chained two crossing targets into one row on the default scene as CW, seed 1.)
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,

@@ -108,32 +108,42 @@ def _decide(d, members: list[int]) -> tuple[int, int, float, float, str] | None:
     return best
 
 
-def _root(joins: dict, tid: int) -> int:
-    """The first segment of ``tid``'s chain of joins (``ActiveTracks.joins``: later -> earlier segment)."""
-    seen = set()
-    while tid in joins and tid not in seen:
-        seen.add(tid)
-        tid = int(joins[tid])
-    return tid
-
-
-def _groups(tracks, d, joins: dict | None = None) -> list[tuple[list[int], list[int]]]:
-    """Confirmed tracks grouped into targets, in order of first confirmation: (the chain of segments of the first
-    track, the chain of its mirror twins' segments); a chain is the tracks joined one after another (``joins``)."""
+def _groups(tracks, d, joins: dict | None = None) -> list[tuple[list, list]]:
+    """Confirmed tracks grouped into targets, in order of first confirmation: (the segments on the side of the
+    group's first track, the segments on the other side). Tracks are linked on the same side by ``joins`` (a later
+    segment -> an earlier one) and across by their mirror twins (sides.py); a group is a connected set of links,
+    each track's side its parity along them from the first (a breadth-first walk; a track reached twice keeps its
+    first side)."""
     order = list(dict.fromkeys(tracks.track_id[tracks.confirmed].tolist()))
-    joins = {k: v for k, v in (joins or {}).items() if k in order and v in order}
-    chain: dict[int, list[int]] = {}
+    live = set(order)
+    links: dict[int, list[tuple[int, int]]] = {t: [] for t in order}
+
+    def link(a: int, b: int, parity: int) -> None:
+        if a in live and b in live and a != b:
+            links[a].append((b, parity))
+            links[b].append((a, parity))
+
+    for a, b in (joins or {}).items():
+        link(int(a), int(b), 0)
+    for m in order:
+        k = d.of(m) if d is not None else None
+        if k is not None and d.twin[k] >= 0:
+            link(m, int(d.twin[k]), 1)
+    side: dict[int, int] = {}
+    out = []
     for tid in order:
-        chain.setdefault(_root(joins, tid), []).append(tid)
-    seen, out = set(), []
-    for tid in order:
-        if tid in seen:
+        if tid in side:
             continue
-        own = chain[_root(joins, tid)]
-        twins = [int(d.twin[k]) for m in own if d is not None and (k := d.of(m)) is not None and d.twin[k] >= 0]
-        other = next((chain[_root(joins, t)] for t in twins if t in order and t not in seen and t not in own), [])
-        seen.update(own + other)
-        out.append((own, other))
+        side[tid], queue, members = 0, [tid], [tid]
+        while queue:
+            a = queue.pop(0)
+            for b, parity in links[a]:
+                if b not in side:
+                    side[b] = side[a] ^ parity
+                    queue.append(b)
+                    members.append(b)
+        members.sort(key=order.index)
+        out.append(([m for m in members if side[m] == 0], [m for m in members if side[m] == 1]))
     return out
 
 
@@ -160,7 +170,8 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
     """
     tracks, d = active_tracks.tracks, active_tracks.sides
     rows, chains = [], []
-    for n, (first_chain, twin_chain) in enumerate(_groups(tracks, d, getattr(active_tracks, "joins", None)), start=1):
+    groups = _groups(tracks, d, getattr(active_tracks, "joins", None))
+    for n, (first_chain, twin_chain) in enumerate(groups, start=1):
         group = first_chain + twin_chain
         spans = [s for s in (_last(tracks, m) for m in group) if s is not None]
         first, last = min(s[2] for s in spans), max(s[0] for s in spans)
