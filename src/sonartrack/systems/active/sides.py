@@ -67,8 +67,10 @@ MAX_MISSES = 3
 STRAY_PROBABILITY = 1e-6
 #: refits of the capped CV fit beyond two per contact (it stops when the kept set repeats)
 MAX_REFITS = 10
-#: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings
-MIN_TWIN_PINGS = 2
+#: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings (the
+#: pair with the most such pings wins): 1, not 2, so that a pair confirmed together is one target from its first
+#: ping (the default scene as CW, seed 1: a pair confirmed on the last ping was listed as two rows)
+MIN_TWIN_PINGS = 1
 
 
 @dataclass(frozen=True, slots=True)
