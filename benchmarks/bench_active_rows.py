@@ -15,7 +15,23 @@ ghost counts for its target). Printed per pulse and seed:
 * the confirmed tracks confirmed on 1-2 pings of contacts (pings from birth to confirmation).
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_active_rows.py [--cache /tmp/active_rows] [--kinds lfm cw]
-[--seeds 1 2]``. Measures, not tests: nothing is asserted.
+[--seeds 1 2] [--set NAME=VALUE ...]``. Measures, not tests: nothing is asserted. A row counts for the target of its
+latest track (1 km gate); "before" is measured with the code before (``git archive 7fec702 src``) first on the path.
+
+Measured (2026-12-07, h10-acthold; the chain once per scene, ~2-6 min each on the shared machine, then ~10 s of
+tracking per run of this script; per pulse/seed: rows for the 4 detectable targets, false rows, duplicate rows,
+ghost-only rows, rows of <= 2 pings; held % of detectable pings approacher / crossing-a / crossing-b / maneuvering):
+    before   LFM 1: 9, 2, 3, 3, 3; 74/70/80/99     after  4, 0, 0, 0, 0; 74/70/90/99
+             LFM 2: 7, 1, 2, 0, 1; 78/82/89/98            4, 0, 0, 0, 0; 78/82/89/98
+             CW 1: 22, 2, 16, 4, 10; 90/72/76/70          6, 1, 1, 0, 1; 90/72/76/79
+             CW 2: 23, 2, 17, 3, 9; 74/82/76/79           8, 1, 3, 1, 0; 78/85/76/79
+The changes, each measured here: a ghost with no live twin reflected onto its target's side (sides.py GhostDeleter:
+LFM 1 crossing-b 3 rows -> 1, held 80 -> 90 %); merged duplicates and re-confirmed lost tracks listed as one target
+(contact_tracker.py ``rejoin_s`` 600 s, targets.py: CW 22/23 -> 8/9 rows); confirmed targets' lobe images withheld
+(contact_tracker.py ``_not_images``: LFM's one false row a seed, 16 pings at the fore endfire at crossing-b's range,
+-> 0); twins from one shared ping (sides.py MIN_TWIN_PINGS 1: CW 1 7 -> 6). Tried and left off: confirmation after
+3 scans in the gate (tracking confirm_min_hits 3: CW 1 6 rows, CW 2 10); rejoin_s 1200 s (CW 1 4 rows, but CW 2
+chains three targets' fragments into one row through merges at crossings).
 """
 
 from __future__ import annotations
