@@ -155,3 +155,33 @@ def test_a_strong_targets_lobe_image_starts_no_track():
     assert not image_tracks(with_map)
     _, rows_a = _rows_of(with_map, geometry, 0)
     assert len(rows_a) == 1  # the target itself still held
+
+
+def test_a_ghost_whose_twin_joined_an_earlier_row_is_listed_in_that_row():
+    """By hand: track 37 and its twin 38; 83 a later segment of 37 (merged into it); 81 the twin of 83, decided a
+    ghost. One target: (37, 83) on its side, (38, 81) the other; before, 81 was a row of its own ("only its mirror
+    was tracked")."""
+    from sonartrack.systems.active.contact_tracker import ActiveTracks
+    from sonartrack.systems.active.sides import SideDecisions
+    from sonartrack.tracking.run import PositionTracks
+
+    rows = [(0.0, 37), (0.0, 38), (30.0, 37), (30.0, 38), (30.0, 83), (30.0, 81), (60.0, 37), (60.0, 83), (60.0, 81)]
+    t = np.array([r[0] for r in rows])
+    ids = np.array([r[1] for r in rows], np.int64)
+    x = np.zeros((len(rows), 4))
+    x[:, 0] = np.where(np.isin(ids, [38, 81]), -3000.0, 3000.0)
+    x[:, 1] = 5000.0
+    n = len(rows)
+    tracks = PositionTracks(t, ids, np.ones(n, bool), np.full(n, 0.9), x, np.full(n, 50.0), np.full(n, 50.0),
+                            np.ones((n, 1)))
+    sides = SideDecisions(np.array([37, 38, 81, 83]), np.array(["track", "undecided", "mirror", "undecided"], object),
+                          np.array(["starboard", "", "starboard", ""], object), np.array([9.0, 0.0, -9.0, 0.0]),
+                          np.array([30.0, np.nan, 30.0, np.nan]), np.full(4, 5), np.array([38, 37, 83, 81]))
+    nav_t = np.array([-60.0, 120.0])
+    geometry = ActiveGeometry(nav_t, np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
+    P = np.stack([np.eye(4)] * n)
+    m = mirror_targets(ActiveTracks(tracks, P, sides, {83: 37}), geometry)
+    assert len(m) == 1 and m.decision[0] == "decided" and m.side[0] == "starboard"
+    assert m.chains[0] == ((37, 83), (38, 81)) and int(m.track_id[0]) == 83
+    # without the join the twins make two targets (37/38 and 83/81), each one row
+    assert len(mirror_targets(ActiveTracks(tracks, P, sides), geometry)) == 2
