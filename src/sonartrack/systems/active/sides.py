@@ -475,8 +475,8 @@ class GhostDeleter:
         for k, tid in enumerate(T.track_id.tolist()):
             if self.sides.rejected(tid):
                 twin = self.sides.twin_of(tid)
-                drop[k] = twin is not None and twin in live
-                flip[k] = not drop[k] and self.axis is not None
+                drop[k] = (twin is not None and twin in live) or self.axis is None  # no axis: deleted, as before
+                flip[k] = not drop[k]
         if flip.any():
             rx, heading = self.axis
             M = _reflection(heading)
