@@ -19,7 +19,7 @@ import numpy as np
 
 from sonartrack.association.amplitude import STRENGTH_INITIAL
 from sonartrack.tracking.associators import JPDA, PDA
-from sonartrack.tracking.deleters import ExistenceDeleter, MOfNDeleter
+from sonartrack.tracking.deleters import ExistenceDeleter, MinHits, MOfNDeleter
 from sonartrack.tracking.existence import IpdaExistence
 from sonartrack.tracking.initiators import OnePointInitiator, PeakInitiator, bearing_covariance
 from sonartrack.tracking.measurements import BearingMeasurements, PositionMeasurements
@@ -90,13 +90,14 @@ def position_tracker(settings: PositionTrackerSettings | None = None, *, associa
         If the associator cannot drive these parts.
     """
     s = settings or PositionTrackerSettings()
+    deleter = ExistenceDeleter(s.confirm_threshold, s.terminate_threshold)
     return MultiTargetTracker(
         position_motion(s, turns),
         PositionMeasurements(s.pd, s.gate_probability, s.clutter_density_per_m2),
         associator or PDA(),
         existence=IpdaExistence(s.p_survive, s.p_birth),
         initiator=OnePointInitiator(s.init_velocity_std_mps, s.initial_existence, s.max_tracks),
-        deleter=ExistenceDeleter(s.confirm_threshold, s.terminate_threshold))
+        deleter=MinHits(deleter, s.confirm_min_hits) if s.confirm_min_hits > 1 else deleter)
 
 
 def bearing_tracker(settings: BearingTrackerSettings | None = None, *, amplitude_aided: bool = True,

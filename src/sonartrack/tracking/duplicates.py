@@ -31,7 +31,7 @@ the cost at (confirmed x live) pairs per scan.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,7 +39,13 @@ from sonartrack.tracking.tracks import TrackArrays, TrackSnapshot
 
 
 def duplicate_mask(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarray:
-    """Which tracks to keep (bool (n,)) after deleting duplicates by the track-to-track test (module doc).
+    """Which tracks to keep (bool (n,)) after deleting duplicates by the track-to-track test (module doc):
+    ``duplicate_of(...) < 0``."""
+    return duplicate_of(x, P, confirmed, born_s, existence, gamma) < 0
+
+
+def duplicate_of(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarray:
+    """The kept track each track duplicates (index, (n,) int; -1: kept) by the track-to-track test (module doc).
 
     Parameters
     ----------
@@ -59,14 +65,14 @@ def duplicate_mask(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarr
     Returns
     -------
     numpy.ndarray
-        (n,) bool, False for each track that duplicates a kept, higher-ranked track.
+        (n,) int: for each track that duplicates a kept, higher-ranked track, that track's index; -1 for a kept one.
     """
     x, P = np.asarray(x, float), np.asarray(P, float)
     n = len(x)
-    keep = np.ones(n, bool)
+    into = np.full(n, -1, np.int64)
     conf = np.nonzero(np.asarray(confirmed, bool))[0]
     if n < 2 or not len(conf):
-        return keep
+        return into
     nu = x[None, :, :] - x[conf, None, :]  # (c, n, d)
     S = P[None, :, :, :] + P[conf, None, :, :]
     d2 = np.einsum("cni,cni->cn", nu, np.linalg.solve(S, nu[..., None])[..., 0])
@@ -78,16 +84,18 @@ def duplicate_mask(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarr
     rank[order] = np.arange(n)
     row = {int(c): k for k, c in enumerate(conf)}
     for i in order:
-        if not keep[i] or i not in row:
+        if into[i] >= 0 or i not in row:
             continue
-        dup = (d2[row[i]] < gamma) & (rank > rank[i]) & keep
-        keep[dup] = False
-    return keep
+        dup = (d2[row[i]] < gamma) & (rank > rank[i]) & (into < 0)
+        into[dup] = i
+    return into
 
 
 @dataclass(frozen=True)
 class DuplicateMerger:
-    """A deleter part that runs ``inner`` and then deletes duplicate tracks (module doc).
+    """A deleter part that runs ``inner`` and then deletes duplicate tracks (module doc); ``merged`` records, for each
+    deleted track that had been confirmed, the id of the track it duplicated (the same target: its listing joins
+    them, systems/active/targets.py).
 
     Parameters
     ----------
@@ -99,6 +107,7 @@ class DuplicateMerger:
 
     inner: object
     gamma: float
+    merged: dict = field(default_factory=dict)
 
     def new_track_attrs(self, k: int) -> dict:
         """The inner deleter's per-track counters of ``k`` new tracks (the deleter-part protocol:
@@ -112,4 +121,7 @@ class DuplicateMerger:
         if len(T) < 2 or not T.confirmed.any():
             return T
         snap = TrackSnapshot.of(0.0, T)
-        return T.select(duplicate_mask(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma))
+        into = duplicate_of(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma)
+        for k in np.nonzero((into >= 0) & T.confirmed)[0]:
+            self.merged[int(T.track_id[k])] = int(T.track_id[into[k]])
+        return T.select(into < 0)

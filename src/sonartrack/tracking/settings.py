@@ -44,6 +44,9 @@ class PositionTrackerSettings(Settings):
               "started per scan so far by Ville's inequality on IPDA's existence odds (tracking/existence.py "
               "confirm_threshold_for_rate), in place of confirm_threshold (not set: confirm_threshold)",
         unit="1/h", gt=0)
+    confirm_min_hits: int = setting(
+        1, "fewest scans with a measurement in its gate (its initiating one counted) before a track may be confirmed, "
+           "whatever its existence (tracking/deleters.py MinHits; 1: the existence alone, P4)", unit="1", ge=1, le=20)
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "

@@ -29,11 +29,15 @@ from sonartrack.tracking.settings import PositionTrackerSettings
 class ActiveTracks:
     """The tracker's output, one row per live track per ping: ``tracks`` (tracking/run.py :class:`PositionTracks`)
     and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds);
-    ``sides`` the side decision of each confirmed track (sides.py)."""
+    ``sides`` the side decision of each confirmed track (sides.py); ``joins`` {track id: earlier track id}: a
+    confirmed track deleted as the duplicate of another (tracking/duplicates.py), or confirmed soon after a confirmed
+    track was lost and passing the track-to-track test against that track's prediction (:class:`ContactTracker`
+    ``rejoin_s``), is a later segment of the same target (targets.py lists them as one)."""
 
     tracks: PositionTracks
     P: np.ndarray
     sides: SideDecisions | None = None
+    joins: dict | None = None  # track id -> an earlier confirmed track of the same target (merged into / re-joined)
 
     def __len__(self) -> int:
         return len(self.tracks)
@@ -81,12 +85,20 @@ class ContactTracker:
     scan_interval_s : float or None
         The ping interval (s): the stated false-track rate per hour to one per scan (``false_tracks_per_h``); None
         (a single ping): the settings' ``confirm_threshold``.
+    rejoin_s : float or None
+        A track confirmed within this time (s) of the loss of a confirmed track (deleted for its existence), whose
+        state passes the track-to-track test (tracking/duplicates.py, gate ``merge_probability``, 0.99 when not set)
+        against that track's last state predicted to now (CV with the straight-running, smallest q: with the largest
+        a target appearing 3 km off a lost one was joined to it in tests/systems/active/test_rows_join.py), is
+        recorded as the same target's next segment (``ActiveTracks.joins``; the nearest such lost track, each once);
+        None: no re-joining. (A re-join onto the reflection of a lost track, the other hypothesis, was tried: with
+        the duplicate merges it chained two crossing targets into one row on the default scene as CW, seed 1.)
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
-                 clutter_map=None, scan_interval_s: float | None = None):
+                 clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -106,6 +118,10 @@ class ContactTracker:
 
             self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
                                                     settings.initial_existence, settings.terminate_threshold)
+            if settings.confirm_min_hits > 1:
+                from sonartrack.tracking.deleters import MinHits
+
+                self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
         self.clutter_map, self.hold = clutter_map, None
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
@@ -114,9 +130,15 @@ class ContactTracker:
                                                          gate_threshold(settings.gate_probability, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4))
+        self.merger = self.tracker.deleter if merge_probability is not None else None
+        self.rejoin_s, self.joins = rejoin_s, {}
+        self.rejoin_gamma = gate_threshold(merge_probability or 0.99, 4)
+        self._lost: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # id -> (time s, x, P) at its last scan
+        self._confirmed: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # the last scan's confirmed tracks
         self.sides = SideTracker(settings.gate_probability, self.side_turn or 0.0, q=max(settings.q))
-        if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted at the next scan
-            self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
+        self.ghosts = None
+        if self.side_turn is not None:  # a track decided a ghost (its target's mirror) is deleted or reflected
+            self.ghosts = self.tracker.deleter = GhostDeleter(self.tracker.deleter, self.sides)
         self._last_t: float | None = None
         self._rows: dict[str, list] = {k: [] for k in ("time_s", "track_id", "confirmed", "existence", "x", "P", "mu")}
 
@@ -178,6 +200,26 @@ class ContactTracker:
             keep &= ~clutter | held
         return keep
 
+    def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
+        """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact of the ping weaker
+        than one in a confirmed track's gate, within the clutter map's ``image_range_m`` of its bistatic range
+        (clutter_map.py :func:`same_range`: a strong echo's images share its travel time), and in no confirmed
+        track's gate, starts and feeds no track. As the map does for recurring still echoes; measured on the default
+        scene (LFM, seeds 1 and 2): crossing-b at 44 dB echo SNR near the aft endfire gave a false track of 16
+        pings at the fore endfire, at its bistatic range within 8 m."""
+        keep = np.ones(len(contacts), bool)
+        tol = None if self.clutter_map is None else self.clutter_map.image_range_m
+        if tol is None or not len(contacts):
+            return keep
+        x, P, _ = self._predicted_confirmed(t_s)
+        if not len(x):
+            return keep
+        from sonartrack.detection.clutter_map import same_range
+
+        held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0)
+        g = self.geometry
+        return ~(same_range(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), held, contacts.statistic, tol) & ~held)
+
     def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
@@ -194,7 +236,7 @@ class ContactTracker:
         numpy.ndarray
             (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts)
+        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts) & self._not_images(t_s, contacts)
         if hasattr(self.tracker.measurements, "at_scan"):
             g, lam = self.geometry, None
             if self.clutter_area is not None:
@@ -203,17 +245,47 @@ class ContactTracker:
             self.tracker.measurements = self.tracker.measurements.at_scan(
                 (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
                 contacts.range_rate_mps[keep], lam)
+        if self.ghosts is not None:  # the axis a ghost is reflected about at this scan (sides.py GhostDeleter)
+            self.ghosts.axis = (np.asarray(self.geometry.rx_at(t_s), float), float(self.geometry.heading_at(t_s)))
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
         self.sides.update(float(t_s), float(self.geometry.heading_at(t_s)), contacts, snap.track_id[c], snap.x[c],
                           snap.P[c], self.geometry.side_of)
+        if self.rejoin_s is not None:
+            self._rejoin(float(t_s), snap)
         r = self._rows
         for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
                      ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
             r[k].append(v)
         r["time_s"].append(np.full(len(snap.track_id), float(t_s)))
         return keep
+
+    def _rejoin(self, t_s: float, snap) -> None:
+        """Record the re-joins of this scan's newly confirmed tracks onto lost ones (``rejoin_s``, class doc)."""
+        from sonartrack.systems.active.sides import _predict
+
+        c = np.nonzero(snap.confirmed)[0]
+        now = {int(snap.track_id[k]): (t_s, snap.x[k], snap.P[k]) for k in c}
+        merged = self.merger.merged if self.merger is not None else {}
+        for tid, state in self._confirmed.items():
+            if tid not in now and tid not in merged and not self.sides.rejected(tid):
+                self._lost[tid] = state
+        self._lost = {k: v for k, v in self._lost.items() if t_s - v[0] <= self.rejoin_s}
+        for tid, (_, x, P) in now.items():
+            if tid in self._confirmed or not self._lost:
+                continue
+            best, d2_best = None, self.rejoin_gamma
+            for old, (t0, x0, P0) in self._lost.items():
+                xp, Pp = _predict(x0, P0, t_s - t0, min(self.settings.q))
+                nu = x - xp
+                d2 = float(nu @ np.linalg.solve(P + Pp, nu))
+                if d2 < d2_best:
+                    best, d2_best = old, d2
+            if best is not None:
+                self.joins[tid] = best
+                del self._lost[best]
+        self._confirmed = now
 
     def result(self) -> ActiveTracks:
         """Every ping's live tracks (:class:`ActiveTracks`).
@@ -234,7 +306,8 @@ class ContactTracker:
                                 cat("confirmed", np.zeros(0, bool)), cat("existence", np.zeros(0)),
                                 cat("x", np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
                                 cat("mu", np.zeros((0, n_modes))))
-        return ActiveTracks(tracks, P, self.sides.result())
+        joins = {**(self.merger.merged if self.merger is not None else {}), **self.joins}
+        return ActiveTracks(tracks, P, self.sides.result(), joins)
 
     def drop_scans(self, n: int) -> None:
         """Forget the rows of the oldest ``n`` scans (the live chain's bounded history, systems/live/active.py):
@@ -302,7 +375,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
                          turns=settings.turn_modes() if tracker is None else None,
                          clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
                          clutter_map=clutter_map_of(settings),
-                         scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None)
+                         scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None,
+                         rejoin_s=settings.rejoin_s)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)

@@ -249,7 +249,8 @@ class _Chain:
         self.tracker = ContactTracker(s.tracker_settings(), self.geometry, s.range_rate_gate_sigma, self.rate_sd,
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
                                       turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
-                                      clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval)
+                                      clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval,
+                                      rejoin_s=s.rejoin_s)
 
     def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its

@@ -124,6 +124,11 @@ class ActiveSettings(Settings):
               "gates, so a track started on a stray contact beside a target coalesces with the target's track: "
               "without it the default scene (seed 9101, not a study seed) holds 3-4 confirmed tracks on each strong "
               "target at once (not set: no merging)", unit="1", gt=0, lt=1)
+    rejoin_s: float | None = setting(
+        600.0, "a track confirmed within this time of the loss of a confirmed track (its existence fell), whose state "
+               "passes the track-to-track test (merge_probability) against that track's prediction, is listed as the "
+               "same target's next segment (one row, systems/active/targets.py), as is a confirmed track merged into "
+               "another as its duplicate (not set: no re-joining)", unit="s", gt=0)
     clutter_map_pings: int | None = setting(
         8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
            "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "

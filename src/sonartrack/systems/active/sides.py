@@ -67,8 +67,10 @@ MAX_MISSES = 3
 STRAY_PROBABILITY = 1e-6
 #: refits of the capped CV fit beyond two per contact (it stops when the kept set repeats)
 MAX_REFITS = 10
-#: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings
-MIN_TWIN_PINGS = 2
+#: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings (the
+#: pair with the most such pings wins): 1, not 2, so that a pair confirmed together is one target from its first
+#: ping (the default scene as CW, seed 1: a pair confirmed on the last ping was listed as two rows)
+MIN_TWIN_PINGS = 1
 
 
 @dataclass(frozen=True, slots=True)
@@ -366,6 +368,23 @@ class SideTracker:
                 out[a], out[b] = b, a
         return out
 
+    def twin_of(self, track_id: int) -> int | None:
+        """The mirror twin of ``track_id`` (:meth:`twins`), None when it has none."""
+        return self._twins.get(int(track_id))
+
+    def flip(self, track_id: int) -> None:
+        """The track ``track_id`` has been reflected onto the other side (:class:`GhostDeleter`): its two contact
+        sequences swap, its ln LR history changes sign and it is no one's twin any more (it now lies on its former
+        twin's side), so it is no longer a rejected track."""
+        tid = int(track_id)
+        self._shared = {k: n for k, n in self._shared.items() if tid not in k}
+        self._twins = self.twins()
+        if tid in self._sums:
+            self._sums[tid] = self._sums[tid][::-1]
+        self._history[tid] = [(t, -lr) for t, lr in self._history.get(tid, [])]
+        if tid in self._last_side:
+            self._last_side[tid] = -self._last_side[tid]
+
     def rejected(self, track_id: int) -> bool:
         """True when ``track_id`` is the rejected hypothesis of a decided target: decided a ghost itself, or the
         mirror twin (:meth:`twins`) of a track decided on its target's side.
@@ -411,11 +430,21 @@ class SideTracker:
                              np.array([twins.get(i, -1) for i in ids], np.int64))
 
 
-@dataclass(frozen=True)
 class GhostDeleter:
-    """A deleter part that runs ``inner`` and then deletes every track ``sides`` has rejected (the mirror of a
-    target decided on the other side: :meth:`SideTracker.rejected`), so the rejected hypothesis of a mirror pair
-    leaves the picture at the scan after its side is decided instead of starving for several pings.
+    """A deleter part that runs ``inner`` and then acts on every track ``sides`` has rejected, so that a decided
+    target is held by one track on its side (issue 34 item 4):
+
+    * the rejected mirror of a target whose track on its side is alive (the track is decided a ghost, or is the twin
+      of a live track decided on its target's side) is deleted at the scan after the decision instead of starving;
+    * a rejected track with no live twin (decided a ghost itself, or the twin of a dead track decided on its
+      target's side; its target was only confirmed on the wrong side, e.g. a track first
+      confirmed after the array's turn, whose retrodiction (module doc) decides it the mirror at once) is reflected
+      onto its target's side: its state x -> (p_a + M (p - p_a), M v) and covariances P -> M4 P M4^T (M the
+      reflection about the array's axis through the receiver p_a at this scan, M4 = diag(M, M)), and its side
+      evidence swapped (:meth:`SideTracker.flip`), so it goes on as the target's track with its identity and its
+      confirmation. Deleting it instead (as before) left the target unheld until a new track on its side was
+      confirmed 2-10 pings later and listed it twice (the default scene, seed 1, LFM: crossing-b as 3 rows, two of
+      them a ghost that lived one ping).
 
     Parameters
     ----------
@@ -425,17 +454,38 @@ class GhostDeleter:
         The running side decisions.
     """
 
-    inner: object
-    sides: SideTracker
+    def __init__(self, inner, sides: SideTracker):
+        self.inner, self.sides = inner, sides
+        self.axis: tuple[np.ndarray, float] | None = None  # (receiver xy m, array heading rad) of the scan
 
     def new_track_attrs(self, k: int) -> dict:
         """The inner deleter's per-track counters (``inner.new_track_attrs(k)``)."""
         return self.inner.new_track_attrs(k)
 
     def manage(self, T, hit):
-        """The inner deleter's confirmation and deletion, then the ghosts' deletion (TrackArrays in and out)."""
+        """The inner deleter's confirmation and deletion, then the rejected tracks deleted or reflected (TrackArrays
+        in and out)."""
+        from dataclasses import replace
+
         T = self.inner.manage(T, hit)
         if not len(T):
             return T
-        ghost = np.array([self.sides.rejected(int(i)) for i in T.track_id], bool)
-        return T.select(~ghost) if ghost.any() else T
+        live = set(T.track_id.tolist())
+        drop, flip = np.zeros(len(T), bool), np.zeros(len(T), bool)
+        for k, tid in enumerate(T.track_id.tolist()):
+            if self.sides.rejected(tid):
+                twin = self.sides.twin_of(tid)
+                drop[k] = (twin is not None and twin in live) or self.axis is None  # no axis: deleted, as before
+                flip[k] = not drop[k]
+        if flip.any():
+            rx, heading = self.axis
+            M = _reflection(heading)
+            M4 = np.kron(np.eye(2), M)
+            x, P = T.x.copy(), T.P.copy()
+            x[flip, :, :2] = rx + (x[flip, :, :2] - rx) @ M.T
+            x[flip, :, 2:] = x[flip, :, 2:] @ M.T
+            P[flip] = M4 @ P[flip] @ M4.T
+            T = replace(T, x=x, P=P)
+            for tid in T.track_id[flip].tolist():
+                self.sides.flip(int(tid))
+        return T.select(~drop) if drop.any() else T

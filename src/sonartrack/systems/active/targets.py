@@ -37,7 +37,10 @@ class MirrorTargets:
     of ``track_id``'s side against the other; ``resolved_s`` the ping time the side was decided from (NaN: not);
     ``first_s``, ``last_s`` the first and last confirmed pings of either track; ``xy (n, 2)`` ``track_id``'s last
     confirmed position (m; NaN: no track), ``mirror_xy (n, 2)`` the other hypothesis's (its track's last
-    position, or, undecided with no twin, the reflection of ``xy``; NaN for a decided target without a twin)."""
+    position, or, undecided with no twin, the reflection of ``xy``; NaN for a decided target without a twin);
+    ``chains`` per row (the target's side's segments, the other side's segments): every confirmed track of the
+    target, earlier segments joined to later ones (``ActiveTracks.joins``), of which ``track_id`` and
+    ``mirror_track_id`` are the latest (None: one track a side)."""
 
     target: np.ndarray
     decision: np.ndarray
@@ -51,6 +54,7 @@ class MirrorTargets:
     last_s: np.ndarray
     xy: np.ndarray
     mirror_xy: np.ndarray
+    chains: tuple | None = None
 
     def __len__(self) -> int:
         return len(self.target)
@@ -69,6 +73,8 @@ class MirrorTargets:
             The row, or None.
         """
         hit = np.nonzero((self.track_id == track_id) | (self.mirror_track_id == track_id))[0]
+        if not len(hit) and self.chains is not None:
+            hit = [k for k, (own, other) in enumerate(self.chains) if track_id in own or track_id in other]
         return int(hit[0]) if len(hit) else None
 
 
@@ -102,19 +108,49 @@ def _decide(d, members: list[int]) -> tuple[int, int, float, float, str] | None:
     return best
 
 
-def _groups(tracks, d) -> list[list[int]]:
-    """Confirmed tracks grouped with their twins, in order of first confirmation."""
+def _groups(tracks, d, joins: dict | None = None) -> list[tuple[list, list]]:
+    """Confirmed tracks grouped into targets, in order of first confirmation: (the segments on the side of the
+    group's first track, the segments on the other side). Tracks are linked on the same side by ``joins`` (a later
+    segment -> an earlier one) and across by their mirror twins (sides.py); a group is a connected set of links,
+    each track's side its parity along them from the first (a breadth-first walk; a track reached twice keeps its
+    first side)."""
     order = list(dict.fromkeys(tracks.track_id[tracks.confirmed].tolist()))
-    seen, out = set(), []
+    live = set(order)
+    links: dict[int, list[tuple[int, int]]] = {t: [] for t in order}
+
+    def link(a: int, b: int, parity: int) -> None:
+        if a in live and b in live and a != b:
+            links[a].append((b, parity))
+            links[b].append((a, parity))
+
+    for a, b in (joins or {}).items():
+        link(int(a), int(b), 0)
+    for m in order:
+        k = d.of(m) if d is not None else None
+        if k is not None and d.twin[k] >= 0:
+            link(m, int(d.twin[k]), 1)
+    side: dict[int, int] = {}
+    out = []
     for tid in order:
-        if tid in seen:
+        if tid in side:
             continue
-        k = d.of(tid) if d is not None else None
-        twin = int(d.twin[k]) if k is not None else -1
-        group = [tid] + ([twin] if twin >= 0 and twin not in seen and twin in order else [])
-        seen.update(group)
-        out.append(group)
+        side[tid], queue, members = 0, [tid], [tid]
+        while queue:
+            a = queue.pop(0)
+            for b, parity in links[a]:
+                if b not in side:
+                    side[b] = side[a] ^ parity
+                    queue.append(b)
+                    members.append(b)
+        members.sort(key=order.index)
+        out.append(([m for m in members if side[m] == 0], [m for m in members if side[m] == 1]))
     return out
+
+
+def _latest(tracks, chain: list[int]) -> int:
+    """The segment of a chain confirmed last (-1: an empty chain)."""
+    spans = [(s[0], m) for m in chain if (s := _last(tracks, m)) is not None]
+    return max(spans)[1] if spans else -1
 
 
 def mirror_targets(active_tracks, geometry) -> MirrorTargets:
@@ -133,17 +169,24 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
         One row per target.
     """
     tracks, d = active_tracks.tracks, active_tracks.sides
-    rows = []
-    for n, group in enumerate(_groups(tracks, d), start=1):
+    rows, chains = [], []
+    groups = _groups(tracks, d, getattr(active_tracks, "joins", None))
+    for n, (first_chain, twin_chain) in enumerate(groups, start=1):
+        group = first_chain + twin_chain
         spans = [s for s in (_last(tracks, m) for m in group) if s is not None]
         first, last = min(s[2] for s in spans), max(s[0] for s in spans)
         decided = _decide(d, group) if d is not None else None
         if decided is not None:
             own, mirror, lr, when, side = decided
+            flip = own in twin_chain or mirror in first_chain
+            own_chain, mirror_chain = (twin_chain, first_chain) if flip else (first_chain, twin_chain)
+            own, mirror = _latest(tracks, own_chain), _latest(tracks, mirror_chain)
         else:
-            own, mirror, when, side = group[0], (group[1] if len(group) > 1 else -1), np.nan, ""
+            own_chain, mirror_chain = first_chain, twin_chain
+            own, mirror, when, side = _latest(tracks, first_chain), _latest(tracks, twin_chain), np.nan, ""
             k = d.of(own) if d is not None else None
             lr = float(d.log_lr[k]) if k is not None else 0.0
+        chains.append((tuple(own_chain), tuple(mirror_chain)))
         a, b = _last(tracks, own), _last(tracks, mirror)
         xy = a[1] if a is not None else np.full(2, np.nan)
         if b is not None:
@@ -156,7 +199,8 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
     cols = list(zip(*rows, strict=True)) if rows else [[] for _ in range(12)]
     kinds = (np.int64, object, object, np.int64, object, np.int64, float, float, float, float)
     arrays = [np.array(c, dtype=k) for c, k in zip(cols[:10], kinds, strict=True)]
-    return MirrorTargets(*arrays, np.array(cols[10], float).reshape(-1, 2), np.array(cols[11], float).reshape(-1, 2))
+    return MirrorTargets(*arrays, np.array(cols[10], float).reshape(-1, 2), np.array(cols[11], float).reshape(-1, 2),
+                         tuple(chains))
 
 
 def track_hypotheses(active_tracks, targets: MirrorTargets, geometry) -> tuple[np.ndarray, np.ndarray]:
@@ -186,9 +230,11 @@ def track_hypotheses(active_tracks, targets: MirrorTargets, geometry) -> tuple[n
         return target, hyp
     side = np.where(geometry.side_of(t.time_s, t.x[:, :2]) > 0, "starboard", "port").astype(object)
     for k in range(len(targets)):
-        for tid, label in ((targets.track_id[k], "decided"), (targets.mirror_track_id[k], "mirror")):
-            rows = t.track_id == tid
-            if tid < 0 or not rows.any():
+        own, other = targets.chains[k] if targets.chains is not None else ((targets.track_id[k],),
+                                                                            (targets.mirror_track_id[k],))
+        for ids, label in ((own, "decided"), (other, "mirror")):
+            rows = np.isin(t.track_id, [i for i in ids if i >= 0])
+            if not rows.any():
                 continue
             target[rows] = targets.target[k]
             after = rows & (t.time_s >= targets.resolved_s[k])  # NaN: never

@@ -1,0 +1,274 @@
+"""Benchmark: the rows a user reads from ``sonartrack active`` on the default scene, both pulses, against the truth.
+
+For the default active scene (sim/active_scene.py) simulated with its LFM and with a 1 s CW, seeds 1 and 2, the
+chain is run once (front end, detectors, contacts: cached under ``--cache``, a pickle per scene) and its tracker stage
+is re-run on the stored contacts with the settings on the path. Each listed target row (systems/active/targets.py
+``mirror_targets``) and each confirmed track is associated with the truth: a track belongs to the true target that
+lies within ``--gate-m`` of its confirmed rows, or whose mirror about the array's axis does, on most of them (a
+ghost counts for its target). Printed per pulse and seed:
+
+* rows, rows per true target (1 wanted), rows of no true target (false), rows listing only a ghost;
+* per true target, its confirmed track segments with their ping spans and pings to confirm;
+* the held % of each target's detectable pings (bench_cw_held.py ``detectable_rows``; truth_scores' rule);
+* why each track ended: coasted out (existence fell below the termination threshold), merged (a duplicate of a
+  confirmed track), ghost (its side decided the mirror), held (StillHold), or alive at the end;
+* the confirmed tracks confirmed on 1-2 pings of contacts (pings from birth to confirmation).
+
+Usage: ``PYTHONPATH=src python benchmarks/bench_active_rows.py [--cache /tmp/active_rows] [--kinds lfm cw]
+[--seeds 1 2] [--set NAME=VALUE ...]``. Measures, not tests: nothing is asserted. A row counts for the target of its
+latest track (1 km gate); "before" is measured with the code before (``git archive 7fec702 src``) first on the path.
+
+Measured (2026-12-07, h10-acthold; the chain once per scene, ~2-6 min each on the shared machine, then ~10 s of
+tracking per run of this script; per pulse/seed: rows for the 4 detectable targets, false rows, duplicate rows,
+ghost-only rows, rows of <= 2 pings; held % of detectable pings approacher / crossing-a / crossing-b / maneuvering):
+    before   LFM 1: 9, 2, 3, 3, 3; 74/70/80/99     after  4, 0, 0, 0, 0; 74/70/90/99
+             LFM 2: 7, 1, 2, 0, 1; 78/82/89/98            4, 0, 0, 0, 0; 78/82/89/98
+             CW 1: 22, 2, 16, 4, 10; 90/72/76/70          6, 1, 1, 0, 1; 90/72/76/79
+             CW 2: 23, 2, 17, 3, 9; 74/82/76/79           8, 1, 3, 1, 0; 78/85/76/79
+The changes, each measured here: a ghost with no live twin reflected onto its target's side (sides.py GhostDeleter:
+LFM 1 crossing-b 3 rows -> 1, held 80 -> 90 %); merged duplicates and re-confirmed lost tracks listed as one target
+(contact_tracker.py ``rejoin_s`` 600 s, targets.py: CW 22/23 -> 8/9 rows); confirmed targets' lobe images withheld
+(contact_tracker.py ``_not_images``: LFM's one false row a seed, 16 pings at the fore endfire at crossing-b's range,
+-> 0); twins from one shared ping (sides.py MIN_TWIN_PINGS 1: CW 1 7 -> 6). Tried and left off: confirmation after
+3 scans in the gate (tracking confirm_min_hits 3: CW 1 6 rows, CW 2 10); rejoin_s 1200 s (CW 1 4 rows, but CW 2
+chains three targets' fragments into one row through merges at crossings).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+
+def scene(kind: str, seed: int):
+    """The default active scene with pulse ``kind`` (lfm | cw, the other waveform fields the default's)."""
+    from sonartrack.sim.active_scene import ActiveSceneSettings
+
+    s = ActiveSceneSettings()
+    return s.model_copy(update={"seed": seed, "waveform": s.waveform.model_copy(update={"kind": kind})})
+
+
+class _Recorder:
+    """Captures the chain's ContactTracker arguments (to rebuild it on the stored contacts)."""
+
+    args: tuple = ()
+    kwargs: dict = {}
+
+
+def run_scene(kind: str, seed: int, cache: Path, folder: Path | None = None) -> dict:
+    """The chain's contacts per ping, its tracker's arguments, geometry and truth (cached pickle); ``folder``: a
+    scene already simulated (``sonartrack simulate --kind active``) of this pulse and seed."""
+    import pandas as pd
+
+    import sonartrack.systems.active.run as run_mod
+    from sonartrack.systems.active.files import run_active_files
+    from sonartrack.systems.active.settings import ActiveSettings
+    from sonartrack.systems.simulate.active_files import write_active_scene
+
+    path = cache / f"{kind}_{seed}.pkl"
+    if path.exists():
+        return pickle.loads(path.read_bytes())
+    sc = scene(kind, seed)
+    spacing = sc.sonar.spacing_m or sc.sound_speed_mps / (2.0 * sc.waveform.carrier_hz)
+    real = run_mod.ContactTracker
+
+    class Recording(real):
+        def __init__(self, *args, **kwargs):
+            _Recorder.args, _Recorder.kwargs = args, kwargs
+            super().__init__(*args, **kwargs)
+
+    run_mod.ContactTracker = Recording
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            where = Path(folder) if folder is not None else Path(tmp)
+            if folder is None:
+                write_active_scene(sc, where)
+            res = run_active_files(where, where / "nav.csv", ActiveSettings(spacing_m=spacing,
+                                                                             elements=sc.sonar.elements))
+            truth = pd.read_csv(where / "truth.csv")
+    finally:
+        run_mod.ContactTracker = real
+    a = _Recorder.args
+    out = {"contacts": res.contacts, "time_s": res.ping_time_s, "geometry": res.geometry, "truth": truth,
+           "settings": res.settings, "rate_sd": a[3], "kwargs": {k: v for k, v in _Recorder.kwargs.items()
+                                                                if k in ("clutter_area_m2", "scan_interval_s")}}
+    cache.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(pickle.dumps(out))
+    return out
+
+
+class _Spy:
+    """A deleter layer's stand-in that records the tracks its ``inner`` layer removed, with its depth."""
+
+    def __init__(self, inner, depth: int, log: dict):
+        self.inner, self.depth, self.log = inner, depth, log
+
+    def new_track_attrs(self, k: int) -> dict:
+        return self.inner.new_track_attrs(k)
+
+    def manage(self, T, hit):
+        out = self.inner.manage(T, hit)
+        gone = set(T.track_id.tolist()) - set(out.track_id.tolist())
+        for tid in gone:  # the deepest layer that removed a track is the one that removed it
+            if self.depth > self.log.get(tid, (-1, ""))[0]:
+                self.log[tid] = (self.depth, type(self.inner).__name__)
+        return out
+
+
+def _spy_deleters(tracker, log: dict) -> None:
+    """Wrap each layer of the tracker's deleter chain (outermost .. innermost) in a :class:`_Spy`."""
+    layers, d = [], tracker.deleter
+    while d is not None:
+        layers.append(d)
+        d = getattr(d, "inner", None)
+    for depth, layer in enumerate(layers):
+        if depth + 1 < len(layers):
+            object.__setattr__(layer, "inner", _Spy(layers[depth + 1], depth + 1, log))
+    tracker.deleter = _Spy(layers[0], 0, log)
+
+
+REASONS = {"RateConfirmation": "coasted out", "ExistenceDeleter": "coasted out", "DuplicateMerger": "merged",
+           "GhostDeleter": "ghost", "StillHold": "held"}
+
+
+def track(c: dict, settings=None):
+    """The chain's tracker stage over the cached contacts with ``settings`` (default: ActiveSettings() on the path,
+    the CW contacts' errors as cached); returns (ActiveTracks, {track: reason it ended})."""
+    from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of
+    from sonartrack.systems.active.settings import ActiveSettings
+
+    s = settings or ActiveSettings(spacing_m=c["settings"].spacing_m, elements=c["settings"].elements)
+    trk = ContactTracker(s.tracker_settings(), c["geometry"], s.range_rate_gate_sigma, c["rate_sd"],
+                         s.side_turn_deg, s.merge_probability, s.max_range_rate_mps, turns=s.turn_modes(),
+                         clutter_map=clutter_map_of(s), **c["kwargs"],
+                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}))  # (an older chain: none)
+    log: dict = {}
+    _spy_deleters(trk.tracker, log)
+    con = c["contacts"]
+    for t in c["time_s"]:
+        trk.step(float(t), con.rows(np.nonzero(np.isclose(con.time_s, t))[0]))
+    return trk.result(), {tid: REASONS.get(name, name) for tid, (_, name) in log.items()}
+
+
+def _truth_arrays(truth, geometry):
+    from sonartrack.systems.active.targets import _reflect
+
+    tt = np.asarray(truth["time_s"], float)
+    xy = np.stack([np.asarray(truth["x_m"], float), np.asarray(truth["y_m"], float)], -1)
+    mirror = np.array([_reflect(geometry, a, b) for a, b in zip(tt, xy, strict=True)]).reshape(-1, 2)
+    return tt, np.asarray(truth["target"]).astype(str), xy, mirror
+
+
+def track_labels(tracks, truth, geometry, gate_m: float) -> dict:
+    """track id -> (true target name or "false", ghost share): the target within ``gate_m`` (it or its mirror) on
+    most of the track's confirmed rows; the share of those rows nearer its mirror."""
+    t = tracks.tracks
+    tt, names, xy, mirror = _truth_arrays(truth, geometry)
+    out = {}
+    for tid in np.unique(t.track_id[t.confirmed]):
+        votes, ghost = {}, {}
+        for r in np.nonzero((t.track_id == tid) & t.confirmed)[0]:
+            at = np.nonzero(np.isclose(tt, t.time_s[r]))[0]
+            d, dm = np.hypot(*(xy[at] - t.x[r, :2]).T), np.hypot(*(mirror[at] - t.x[r, :2]).T)
+            k = int(np.argmin(np.minimum(d, dm))) if len(at) else -1
+            name = names[at[k]] if k >= 0 and min(d[k], dm[k]) < gate_m else "false"
+            votes[name] = votes.get(name, 0) + 1
+            ghost[name] = ghost.get(name, 0) + (k >= 0 and dm[k] < d[k])
+        n = sum(votes.values())
+        best = max(votes, key=lambda k: (votes[k], k != "false"))
+        out[int(tid)] = (best if votes[best] * 2 > n or best != "false" else "false", ghost[best] / votes[best])
+    return out
+
+
+def _ping(c, t_s: float) -> int:
+    return int(np.argmin(np.abs(c["time_s"] - t_s)))
+
+
+def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "") -> dict:
+    """Print the rows, segments, held % and ends of one run (module doc); returns the counts."""
+    from bench_cw_held import detectable_rows
+    from sonartrack.systems.active.targets import mirror_targets, truth_scores
+
+    g, truth, t = c["geometry"], c["truth"], res.tracks
+    targets = mirror_targets(res, g)
+    labels = track_labels(res, truth, g, gate_m)
+    det = detectable_rows(truth)
+    detectable = sorted(set(det["target"].astype(str)))
+    held = truth_scores(res, targets, det, g)["held"]
+    rows_of: dict[str, int] = {}
+    false_rows = ghost_rows = short_rows = 0
+    for k in range(len(targets)):
+        short_rows += _ping(c, targets.last_s[k]) - _ping(c, targets.first_s[k]) + 1 <= 2
+        tid = int(targets.track_id[k]) if targets.track_id[k] >= 0 else int(targets.mirror_track_id[k])
+        name = labels.get(tid, ("false", 0))[0]
+        rows_of[name] = rows_of.get(name, 0) + 1
+        false_rows += name == "false"
+        ghost_rows += bool(targets.decision[k] == "decided" and targets.track_id[k] < 0)
+    short, ends, lines = 0, {}, []
+    for name in detectable + sorted({v[0] for v in labels.values()} - set(detectable)):
+        segs = []
+        for tid, (lab, ghost) in labels.items():
+            if lab != name:
+                continue
+            rows = np.nonzero(t.track_id == tid)[0]
+            conf = rows[t.confirmed[rows]]
+            p0, p1, born = _ping(c, t.time_s[conf[0]]), _ping(c, t.time_s[conf[-1]]), _ping(c, t.time_s[rows[0]])
+            why = reasons.get(tid, "alive")
+            ends[why] = ends.get(why, 0) + 1
+            short += p1 - p0 + 1 <= 2
+            segs.append(f"{tid}:{p0}-{p1}({p1 - p0 + 1}p, conf@{p0 - born + 1}{', ghost' if ghost > 0.5 else ''}, "
+                        f"{why})")
+        h = held.get(name)
+        lines.append(f"    {name}: rows {rows_of.get(name, 0)}, held {'-' if h is None else f'{100 * h:.0f}'} %; "
+                     + " ".join(segs))
+    n_false = rows_of.get("false", 0)
+    extra = sum(max(rows_of.get(n, 0) - 1, 0) for n in detectable) + sum(
+        v for n, v in rows_of.items() if n not in detectable and n != "false")
+    print(f"{label}: {len(targets)} rows for {len(detectable)} detectable targets; false rows {n_false}, duplicate/"
+          f"extra rows {extra}, ghost-only rows {ghost_rows}, rows of <= 2 pings {short_rows}; confirmed tracks "
+          f"{len(labels)}, of them confirmed on <= 2 pings {short}; ends {ends}; held % of detectable pings (mean) "
+          f"{100 * np.mean([held.get(n, 0) for n in detectable]):.0f}")
+    print("\n".join(lines))
+    return {"rows": len(targets), "false": n_false, "short_rows": short_rows, "extra": extra, "ghost_rows": ghost_rows,
+            "short": short, "held": {n: held.get(n, 0.0) for n in detectable}}
+
+
+def with_changes(c: dict, changes: list[str]):
+    """ActiveSettings() on the path for the cached scene with ``NAME=VALUE`` changes (``tracker.NAME``: the
+    tracker's)."""
+    import json
+
+    from sonartrack.systems.active.settings import ActiveSettings
+
+    s = ActiveSettings(spacing_m=c["settings"].spacing_m, elements=c["settings"].elements)
+    for item in changes:
+        name, value = item.split("=", 1)
+        if name.startswith("tracker."):
+            s = s.model_copy(update={"tracker": s.tracker.model_copy(update={name[8:]: json.loads(value)})})
+        else:
+            s = s.model_copy(update={name: json.loads(value)})
+    return s
+
+
+def main() -> None:
+    p = argparse.ArgumentParser()
+    p.add_argument("--cache", default="/tmp/active_rows")
+    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"])
+    p.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
+    p.add_argument("--gate-m", type=float, default=1000.0)
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="an ActiveSettings field (tracker.NAME for the tracker's), the value read as JSON; repeatable")
+    a = p.parse_args()
+    for kind in a.kinds:
+        for seed in a.seeds:
+            c = run_scene(kind, seed, Path(a.cache))
+            res, reasons = track(c, with_changes(c, a.set))
+            report(c, res, reasons, a.gate_m, f"{kind.upper()} seed {seed}")
+
+
+if __name__ == "__main__":
+    main()

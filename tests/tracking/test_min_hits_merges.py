@@ -1,0 +1,56 @@
+"""Confirmation held back until a track has had enough scans in its gate (tracking/deleters.py MinHits), and the
+duplicate merger's record of which track each deleted duplicate followed (tracking/duplicates.py), on hand-made
+tracks."""
+
+import numpy as np
+
+from sonartrack.association.gating import gate_threshold
+from sonartrack.tracking.deleters import ExistenceDeleter, MinHits
+from sonartrack.tracking.duplicates import DuplicateMerger, duplicate_of
+from sonartrack.tracking.tracks import TrackArrays
+
+GAMMA = gate_threshold(0.99, 4)
+
+
+def _tracks(existence, confirmed, hits, x=None, born=None):
+    n = len(existence)
+    x = np.zeros((n, 4)) if x is None else np.asarray(x, float)
+    P = np.stack([np.diag([100.0, 100.0, 1.0, 1.0])] * n)
+    return TrackArrays(x[:, None], P[:, None], np.ones((n, 1)), np.asarray(existence, float), np.asarray(confirmed),
+                       np.arange(n, dtype=np.int64), np.zeros(n) if born is None else np.asarray(born, float), P,
+                       {"hits": np.asarray(hits)})
+
+
+def test_a_track_is_confirmed_only_with_min_hits_scans_in_its_gate():
+    part = MinHits(ExistenceDeleter(0.9, 0.01), 3)
+    # both above the existence threshold; track 0 has had 1 + 1 scans with a contact, track 1 2 + 1
+    T = part.manage(_tracks([0.95, 0.95], [False, False], [1, 2]), np.array([True, True]))
+    assert T.confirmed.tolist() == [False, True] and T.attrs["hits"].tolist() == [2, 3]
+    # a miss does not count; the next hit does
+    T = part.manage(T, np.array([False, False]))
+    assert T.confirmed.tolist() == [False, True] and T.attrs["hits"].tolist() == [2, 3]
+    T = part.manage(T, np.array([True, False]))
+    assert T.confirmed.tolist() == [True, True]
+    # with min_hits 1 the existence alone decides (the wrapper changes nothing)
+    T1 = MinHits(ExistenceDeleter(0.9, 0.01), 1).manage(_tracks([0.95, 0.5], [False, False], [1, 1]),
+                                                        np.array([True, True]))
+    assert T1.confirmed.tolist() == [True, False]
+    # a confirmed track stays confirmed, a track below the termination threshold is deleted
+    T2 = part.manage(_tracks([0.95, 0.005], [True, False], [1, 5]), np.array([False, True]))
+    assert T2.confirmed.tolist() == [True] and T2.track_id.tolist() == [0]
+    # new tracks' counter: the initiating scan counts one
+    assert part.new_track_attrs(2)["hits"].tolist() == [1, 1]
+
+
+def test_duplicate_of_names_the_kept_track_and_the_merger_records_confirmed_duplicates():
+    # tracks 0 (confirmed, oldest) and 1 (confirmed, younger) 20 m apart: d^2 = 400 / 200 = 2 < 13.3, a duplicate;
+    # track 2 far off; track 3 tentative, 10 m from track 0
+    x = np.array([[0.0, 0, 2, 0], [20.0, 0, 2, 0], [5000.0, 0, 2, 0], [0.0, 10, 2, 0]])
+    P = np.stack([np.diag([100.0, 100.0, 1.0, 1.0])] * 4)
+    into = duplicate_of(x, P, np.array([True, True, False, False]), np.array([0.0, 60, 0, 90]), np.full(4, 0.9), GAMMA)
+    assert into.tolist() == [-1, 0, -1, 0]
+    merger = DuplicateMerger(ExistenceDeleter(0.9, 0.01), GAMMA)
+    T = merger.manage(_tracks([0.99, 0.99, 0.5, 0.5], [True, True, False, False], [1] * 4, x, [0.0, 60, 0, 90]),
+                      np.ones(4, bool))
+    assert T.track_id.tolist() == [0, 2]
+    assert merger.merged == {1: 0}  # the tentative duplicate was never listed: not recorded
