@@ -37,10 +37,10 @@ def detect_pings(pings, table, geometry, settings) -> dict:
     """Every ping's detections of both detectors (``pings``: (number, time s, samples) as run_active's)."""
     from sonartrack.systems.active.run import _Chain
 
-    chain = _Chain(table, geometry, settings)
+    chain = _Chain.of_table(table, geometry, settings)
     numbers, times = [], []
     for i, (number, time_s, x) in enumerate(pings):
-        chain.ping(i, int(number), float(time_s), np.asarray(x))
+        chain.ping(int(number), float(time_s), np.asarray(x), table.waveform(i), float(table.fs_hz[i]))
         numbers.append(int(number))
         times.append(float(time_s))
     t = np.asarray(times)
