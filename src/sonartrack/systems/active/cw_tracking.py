@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from sonartrack.systems.active.contacts import ContactSettings
     from sonartrack.systems.active.settings import ActiveSettings
 
 
@@ -41,27 +42,34 @@ def cw_clutter_area(cells, sound_speed_mps: float) -> float | None:
 
 
 def cw_contact_errors(settings: ActiveSettings, delay_s):
-    """The contacts' input errors with the travel-time error of a CW's delay cells: the larger of the setting and
-    (cells pooled per detection) x (cell step) / sqrt(12) (uniform within the cell; pooled: the MFTD's pool_cells).
-    Measured on the default scene as CW (seed 9101, 900 s): median |delay offset| 0.064 s single-ping (cell step
-    0.25 s: sd 0.072 s), 0.22 s MFTD (pooled pair: 0.14 s) against P4's 0.01 s, with which no CW track was formed.
+    """The contacts' input errors with the travel-time error of a CW's echo: the largest of the setting, (cells
+    pooled per detection) x (cell step) / sqrt(12) (uniform within the cell; pooled: the MFTD's pool_cells) and the
+    pulse length tau / sqrt(12), tau = cell step / ``cw_hop``: a CW's matched filter answers an echo with a triangle
+    2 tau wide at its base (its delay resolution cell is tau), and at a ping where the MFTD holds the echo on its
+    earlier pings the cell it names is anywhere in that cell. Measured (benchmarks/bench_cw_contacts.py, default scene
+    as CW, seed 1, 1 h, MFTD detections near the 4 strong targets, 176): travel-time error sd 0.30 s (mean +0.10 s;
+    0.17 s for the 118 with a single-ping peak at that ping, 0.45 s for the 60 without), against 0.14 s stated by
+    the pooled pair (error / stated sd 1.4-2.7 per target, > 3 for 6-31 % of them); tau / sqrt(12) = 0.29 s.
+    Earlier (seed 9101, 900 s): median |delay offset| 0.064 s single-ping, 0.22 s MFTD, against P4's 0.01 s, with
+    which no CW track was formed.
 
     Parameters
     ----------
     settings : ActiveSettings
-        The chain (its contacts' errors, detector and MFTD pooling).
+        The chain (its contacts' errors, detector, MFTD pooling and the front end's ``cw_hop``).
     delay_s : array
         The CW cells' delays (s), evenly spaced.
 
     Returns
     -------
     ContactSettings
-        ``settings.contacts`` with ``sigma_time_s`` raised where the cells are coarser.
+        ``settings.contacts`` with ``sigma_time_s`` raised where the echo's delay is known worse.
     """
     d = np.asarray(delay_s, float)
     step = float(d[1] - d[0]) if d.size > 1 else 0.0
     pool = settings.mftd_settings().pool_cells if settings.detector == "mftd" else 1
-    sd = max(float(settings.contacts.sigma_time_s), pool * step / np.sqrt(12.0))
+    tau = step / float(settings.front_end_settings().cw_hop)
+    sd = max(float(settings.contacts.sigma_time_s), pool * step / np.sqrt(12.0), tau / np.sqrt(12.0))
     return settings.contacts.model_copy(update={"sigma_time_s": sd})
 
 
@@ -97,3 +105,102 @@ def cw_rate_sd_mps(waveform, fs_hz: float, doppler_pad: int, sound_speed_mps: fl
     n = max(int(round(waveform.duration_s * fs_hz)), 1)
     step_hz = max(fs_hz / fft_length(doppler_pad * n), 1.0 / waveform.duration_s)
     return rate_sd_of(doppler_to_range_rate(np.array([0.0, step_hz]), waveform.carrier_hz, sound_speed_mps))
+
+
+def cw_peaked(det, single, beams: int, delay_cells: int, doppler_cells: int):
+    """One ping's MFTD detections measured by that ping's own echo: each takes the cone, travel time, Doppler and
+    range rate of the strongest single-ping peak (detection/cells.py ``detect_ping``) within ``beams``,
+    ``delay_cells`` and ``doppler_cells`` of its cell, where there is one (its statistic, the MFTD's, kept).
+
+    Why. The MFTD detects a target from its last K pings and names, at this ping, the cell of its pooled block
+    that holds the block's maximum (detection/ping_mftd.py): where this ping's echo is weak that cell is any
+    of the block's. Measured (benchmarks/bench_cw_contacts.py, default scene as CW, seed 1, 1 h, the 176 MFTD
+    detections near the 4 strong targets): with a single-ping peak at their ping (118) the errors had sd 0.17 s,
+    1.1 deg (cone x sin cone), 0.37 m/s; without (60) 0.45 s, 3.1 deg, 0.69 m/s; and of the 18 false MFTD
+    detections 16 had no peak.
+
+    Parameters
+    ----------
+    det, single : Detections
+        The MFTD's and the single-ping detections of one ping (beam, delay and Doppler cells on the same axes).
+    beams, delay_cells, doppler_cells : int
+        Half-widths of the search about each MFTD cell (the MFTD's pooled block: pool_beams, pool_cells; one
+        Doppler resolution cell).
+
+    Returns
+    -------
+    tuple
+        (Detections with the peaks' measurements where found, (n,) bool True there).
+    """
+    n = len(det)
+    peaked = np.zeros(n, bool)
+    if not n or not len(single):
+        return det, peaked
+    near = ((np.abs(np.asarray(det.beam)[:, None] - np.asarray(single.beam)[None, :]) <= beams)
+            & (np.abs(np.asarray(det.delay_cell)[:, None] - np.asarray(single.delay_cell)[None, :]) <= delay_cells)
+            & (np.abs(np.asarray(det.doppler_cell)[:, None] - np.asarray(single.doppler_cell)[None, :])
+               <= doppler_cells))
+    peaked = near.any(axis=1)
+    best = np.argmax(np.where(near, np.asarray(single.statistic, float)[None, :], -np.inf), axis=1)
+    fields = {}
+    for name in ("cone_deg", "travel_time_s", "doppler_hz", "range_rate_mps", "beam", "delay_cell", "doppler_cell"):
+        own, peak = np.asarray(getattr(det, name)), np.asarray(getattr(single, name))
+        fields[name] = np.where(peaked, peak[best], own)
+    return type(det)(**{f: fields.get(f, getattr(det, f)) for f in det.__dataclass_fields__}), peaked
+
+
+def cw_unpeaked_errors(contacts: ContactSettings, tau_s: float, elements: int, spacing_m: float,
+                       carrier_hz: float, sound_speed_mps: float) -> ContactSettings:
+    """The input errors of a CW detection with no echo peak at its ping (:func:`cw_peaked`): its cell is anywhere in
+    the echo's response, the travel time uniform over the matched filter's base 2 tau (sd 2 tau / sqrt(12)), the
+    direction cosine over the main lobe between its nulls, 2 c / (N d f_c) (sd that / sqrt(12), the cone's
+    1 / sin cone growth then ContactSettings'). Measured (as :func:`cw_peaked`): sd 0.45 s and 3.1 deg x sin cone
+    against 0.58 s and 4.1 deg x sin cone here (16 elements half a wavelength apart, tau = 1 s).
+
+    Parameters
+    ----------
+    contacts : ContactSettings
+        The peaked detections' errors (held as a floor).
+    tau_s : float
+        Pulse length (s).
+    elements : int
+        Array elements N.
+    spacing_m, carrier_hz, sound_speed_mps : float
+        Element spacing d (m), carrier f_c (Hz), sound speed c (m/s).
+
+    Returns
+    -------
+    ContactSettings
+        ``contacts`` with ``sigma_time_s`` and ``sigma_cone_deg`` (at broadside) raised.
+    """
+    lobe_u = 2.0 * sound_speed_mps / (elements * spacing_m * carrier_hz)
+    cone_deg = float(np.rad2deg(np.arcsin(min(lobe_u / np.sqrt(12.0), 1.0))))
+    floor = float(np.rad2deg(contacts.cone_sigma_rad(None)))
+    return contacts.model_copy(update={"sigma_time_s": max(contacts.sigma_time_s, 2.0 * tau_s / np.sqrt(12.0)),
+                                       "sigma_cone_deg": max(cone_deg, floor)})
+
+
+def cw_form_contacts(det, peaked, ping_time_s, geometry, sound_speed_mps: float, peaked_errors: ContactSettings,
+                     unpeaked_errors: ContactSettings, beam_step_deg: float | None = None, ping_numbers=None):
+    """contacts.py's ``form_contacts`` of one ping's CW detections, those with an echo peak at the ping with
+    ``peaked_errors``, the others with ``unpeaked_errors`` (:func:`cw_unpeaked_errors`); ``detection`` the row of
+    ``det`` each contact came from, rows in ``det``'s order (side +1 then -1 of each).
+
+    Returns
+    -------
+    Contacts
+        As ``form_contacts``.
+    """
+    from dataclasses import replace
+
+    from sonartrack.systems.active.contacts import Contacts, form_contacts
+
+    peaked = np.asarray(peaked, bool)
+    parts = []
+    for rows, errors in ((np.nonzero(peaked)[0], peaked_errors), (np.nonzero(~peaked)[0], unpeaked_errors)):
+        if len(rows):
+            sub = type(det)(**{f: np.asarray(getattr(det, f))[rows] for f in det.__dataclass_fields__})
+            c = form_contacts(sub, ping_time_s, geometry, sound_speed_mps, errors, beam_step_deg, ping_numbers)
+            parts.append(replace(c, detection=rows[c.detection]))
+    c = Contacts.concat(parts)
+    return c.rows(np.lexsort((-c.side, c.detection))) if len(c) else c
