@@ -134,6 +134,66 @@ def false_lines(det, truth, res, scene, tau_s: float) -> list[str]:
             f"  false {false.sum()} ({false.sum() / n_pings:.2f}/ping): {where}; by delay {hist}"]
 
 
+class CellProbe:
+    """While the chain runs, each CW ping's cells at the true echoes (detection/cw_cells.py ``cw_ping_cells``
+    wrapped): per truth row, the largest statistic s within +-1 beam, +-2 delay cells and +-1 Doppler resolution
+    cell of the echo's cell (s - 1 estimates the echo-to-background ratio; 0 in the ridge notch), whether the
+    echo's cell is notched, and 10 log10 of the background estimate mu there over the ping's median mu (the
+    reverberation above the ping's typical, mostly noise, level)."""
+
+    def __init__(self, truth):
+        self.truth, self.rows = truth, {}
+
+    def __enter__(self):
+        import sonartrack.detection.cw_cells as cw_cells
+
+        self.module, self.original = cw_cells, cw_cells.cw_ping_cells
+
+        def probed(*args, **kwargs):
+            cells = self.original(*args, **kwargs)
+            self.record(cells)
+            return cells
+
+        cw_cells.cw_ping_cells = probed
+        return self
+
+    def __exit__(self, *exc):
+        self.module.cw_ping_cells = self.original
+
+    def record(self, cells) -> None:
+        t = self.truth
+        at = np.nonzero(np.isclose(t["time_s"].to_numpy(), cells.time_s))[0]
+        stat, mu = cells.statistic, cells.level
+        pad = max(int(round(1.0 / (np.median(np.diff(cells.doppler_hz)) * self.tau_s))), 1)
+        median_mu = float(np.median(mu))
+        for i in at:
+            r = t.iloc[i]
+            b = int(np.argmin(np.abs(cells.cone_deg - r["cone_deg"])))
+            d = int(np.argmin(np.abs(cells.delay_s - r["travel_time_s"])))
+            j = int(np.argmin(np.abs(cells.range_rate_mps - r["range_rate_mps"])))
+            box = stat[max(b - 1, 0):b + 2, max(d - 2, 0):d + 3, max(j - pad, 0):j + pad + 1]
+            self.rows[i] = (float(box.max()) if box.size else np.nan, bool(stat[b, d, j] == 0.0),
+                            10 * np.log10(max(float(mu[b, d, j]), 1e-30) / median_mu))
+
+
+def probe_lines(probe: CellProbe, truth, threshold: float) -> list[str]:
+    """Per target (pings in the window, clear of the blast, echo SNR >= 15 dB): the echo's statistic and
+    background (:class:`CellProbe`)."""
+    out = []
+    ok = truth["in_window"].astype(bool) & ~truth["in_blast"].astype(bool) & (truth["snr_db"] >= 15.0)
+    for name in dict.fromkeys(truth["target"]):
+        idx = [i for i in np.nonzero((ok & (truth["target"] == name)).to_numpy())[0] if i in probe.rows]
+        if not idx:
+            continue
+        v = np.array([probe.rows[i] for i in idx])
+        s_db = 10 * np.log10(np.maximum(v[:, 0] - 1.0, 1e-3))
+        out.append(f"  {name:12s} at its {len(idx)} pings of snr>=15: s - 1 median {np.median(s_db):.1f} dB "
+                   f"[p25 {np.percentile(s_db, 25):.1f}, p75 {np.percentile(s_db, 75):.1f}], s >= the single-ping "
+                   f"threshold {100 * np.mean(v[:, 0] >= threshold):.0f} %, notched {100 * np.mean(v[:, 1] > 0):.0f}"
+                   f" %, background over the ping's median {np.median(v[:, 2]):.1f} dB")
+    return out
+
+
 def measure(which: str, seed: int, duration_s: float, cache: str | None, cw: dict, dump: str | None = None) -> None:
     import pandas as pd
 
@@ -150,10 +210,12 @@ def measure(which: str, seed: int, duration_s: float, cache: str | None, cw: dic
             write_active_scene(scene, folder)
         settings = ActiveSettings(spacing_m=spacing, elements=scene.sonar.elements)
         settings = settings.model_copy(update={"cw": settings.cw.model_copy(update=cw)})
-        c0 = time.process_time()
-        res = run_active_files(folder, folder / "nav.csv", settings)
-        cpu = time.process_time() - c0
         truth = pd.read_csv(folder / "truth.csv")
+        c0 = time.process_time()
+        with CellProbe(truth) as probe:
+            probe.tau_s = scene.waveform.duration_s
+            res = run_active_files(folder, folder / "nav.csv", settings)
+        cpu = time.process_time() - c0
     if dump:
         import pickle
 
@@ -162,6 +224,9 @@ def measure(which: str, seed: int, duration_s: float, cache: str | None, cw: dic
     sds = stated_sds(res, scene)
     print(f"CW scene {which}, seed {seed}, {duration_s:.0f} s (chain CPU {cpu:.0f} s): stated sds t {sds[0]:.3f} s, "
           f"rate {sds[2]:.2f} m/s, cone at broadside {np.rad2deg(sds[1](np.array([np.pi / 2]))[0]):.2f} deg")
+    print(f" the echoes' cells (single-ping threshold s = {res.thresholds['single']:.1f}):")
+    for line in probe_lines(probe, truth, res.thresholds["single"]):
+        print(line)
     for label, det in ((f"tracked ({res.settings.detector})", res.detections), ("single-ping", res.single)):
         print(f" {label}:")
         for line in target_lines(det, truth, sds, tau) + false_lines(det, truth, res, scene, tau):
