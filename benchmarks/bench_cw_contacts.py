@@ -1,7 +1,8 @@
 """Benchmark: the contacts a CW ping gives the tracker, against the truth: one per echo, errors as stated.
 
 On the default active scene simulated with a CW pulse and on the second CW scene of bench_cw_held.py (32 x 0.3 m,
-2.4 kHz), the chain's tracked detections (each one mirror pair of contacts) are matched per ping to the true
+2.4 kHz), the chain's tracked detections (the MFTD's with the strong single-ping ones, run.py ``with_strong``; each
+one mirror pair of contacts) are matched per ping to the true
 echoes (truth.csv: travel time, cone, bistatic range rate). Printed per true target: the number of detections
 near its echo per ping (near: within ``NEAR`` of it in travel time, cone and range rate; more than one = a source
 that fragments into several contacts), Pd on its detectable pings (echo SNR >= 15 dB, in the window, clear of
@@ -53,6 +54,31 @@ def ridge_distance_mps(det, geometry, array, carrier_hz: float, c_mps: float, be
             ridge = rates[heard[int(det.beam[r])]].ravel()
             out[r] = np.abs(det.range_rate_mps[r] - ridge).min() if ridge.size else np.inf
     return out
+
+
+def rows_of(det, keep):
+    """The rows ``keep`` of a detections record."""
+    return type(det)(**{f: np.asarray(getattr(det, f))[keep] for f in det.__dataclass_fields__})
+
+
+def tracked_detections(res, tau_s: float):
+    """The detections the tracker got: the MFTD's and the strong single-ping ones that join them (run.py
+    ``with_strong``; ``res.detections`` holds the MFTD's alone), ping by ping."""
+    from sonartrack.detection.cw_cells import cw_threshold
+    from sonartrack.detection.ping_mftd import concat_detections
+    from sonartrack.systems.active.run import with_strong
+
+    s = res.settings
+    if s.detector != "mftd" or s.mftd_strong_pfa is None:
+        return res.detections
+    strong = cw_threshold(s.mftd_strong_pfa, s.cw)
+    step = s.front_end_settings().cw_hop * tau_s  # the CW delay cells' step
+    m, one = res.mftd, res.single
+    parts = []
+    for t in res.ping_time_s:
+        a, b = np.isclose(m.time_s, t), np.isclose(one.time_s, t)
+        parts.append(with_strong(rows_of(m, a), rows_of(one, b), strong, step))
+    return concat_detections(parts)
 
 
 def stated_sds(res, scene) -> tuple[float, object, float]:
@@ -227,7 +253,8 @@ def measure(which: str, seed: int, duration_s: float, cache: str | None, cw: dic
     print(f" the echoes' cells (single-ping threshold s = {res.thresholds['single']:.1f}):")
     for line in probe_lines(probe, truth, res.thresholds["single"]):
         print(line)
-    for label, det in ((f"tracked ({res.settings.detector})", res.detections), ("single-ping", res.single)):
+    tracked = tracked_detections(res, tau)
+    for label, det in ((f"tracked ({res.settings.detector} + strong)", tracked), ("single-ping", res.single)):
         print(f" {label}:")
         for line in target_lines(det, truth, sds, tau) + false_lines(det, truth, res, scene, tau):
             print(line)

@@ -1,9 +1,12 @@
 """What a CW's contacts tell the tracker: their travel-time error, their range rate's error, their own clutter density.
 
-A CW's delay is known to its cells (a quarter pulse; the MFTD's pooled pair), not to the 10 ms P4 states for its
-pulse; its range rate to the Doppler bank's filter step; and it gives ~100 times fewer false contacts than the LFM
-the tracker's clutter density (1e-6 per m^2) was tuned on, so the IMM-IPDA takes the density of its own contacts
-(systems/active/run.py ``ContactTracker``).
+A CW's delay is known to its resolution cell, the pulse length tau (the matched filter's triangle is 2 tau wide at
+its base), not to the 10 ms P4 states for its pulse; its range rate to the Doppler bank's resolution cell; and it
+gives ~100 times fewer false contacts than the LFM the tracker's clutter density (1e-6 per m^2) was tuned on, so the
+IMM-IPDA takes the density of its own contacts (systems/active/run.py ``ContactTracker``). An MFTD detection names,
+at its ping, a cell of its pooled block: where the ping's own echo peaks there (:func:`cw_peaked`) the peak measures
+it, elsewhere the cell is anywhere in the echo's response and its contacts state that (:func:`cw_unpeaked_errors`,
+:func:`cw_form_contacts`). Measured with benchmarks/bench_cw_contacts.py.
 """
 
 from __future__ import annotations
