@@ -8,7 +8,13 @@ import pytest
 
 from sonartrack.detection.cells import Detections
 from sonartrack.systems.active.contacts import ActiveGeometry, ContactSettings, form_contacts
-from sonartrack.systems.active.cw_tracking import cw_contact_errors, cw_form_contacts, cw_peaked, cw_unpeaked_errors
+from sonartrack.systems.active.cw_tracking import (
+    cw_contact_errors,
+    cw_form_contacts,
+    cw_merge_echoes,
+    cw_peaked,
+    cw_unpeaked_errors,
+)
 from sonartrack.systems.active.settings import ActiveSettings
 
 
@@ -79,3 +85,19 @@ def test_contacts_of_peaked_and_unpeaked_detections():
     loose_R = form_contacts(det, [0.0], _geometry(), 1500.0, loose, 3.0, [0]).R
     np.testing.assert_allclose(got.R[4:], loose_R[4:])
     assert np.all(np.linalg.eigvalsh(got.R[4] - got.R[0]) > 0)
+
+
+def test_one_detection_per_echo_the_strongest_or_the_preferred_group():
+    cones = np.arange(0.0, 181.0, 3.0)  # beam 30 at broadside: u = cos(cone) steps 0.052 there
+    # beams 30 and 32 (u 0 and -0.105): one lobe (0.125 each side); beam 36 (u -0.309): not; delay 4 cells: one echo,
+    # 5: not; Doppler 3 filters: one, 4: not
+    det = _det([30, 32, 36, 30, 30, 30], [40, 40, 40, 44, 40, 45], [20, 20, 20, 20, 23, 24],
+               [20.0, 50.0, 10.0, 18.0, 17.0, 16.0])
+    keep = cw_merge_echoes(det, cones, delay_cells=4, lobe_u=0.125, doppler_cells=3)
+    # the strongest (beam 32) takes beam 30 (same cells) but not the others: beam 30 at delay 44 is 4 cells away
+    # and within its lobe (|u| 0.105) and Doppler: taken too; the Doppler-23 one likewise; delay 45 / Doppler 24: kept
+    assert keep.tolist() == [False, True, True, False, False, True]
+    group = np.array([1, 1, 1, 0, 1, 1])  # an MFTD detection (group 0) wins over stronger single-ping ones
+    keep = cw_merge_echoes(det, cones, 4, 0.125, 3, group)
+    assert keep.tolist() == [False, False, True, True, False, True]
+    assert cw_merge_echoes(_det([30], [40], [20], [9.0]), cones, 4, 0.125, 3).tolist() == [True]
