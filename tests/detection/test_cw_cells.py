@@ -251,7 +251,7 @@ def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_t
         p = one.pfa(alpha)
         assert abs(float(np.mean(s > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
     trend = CwEstimate((12, 9), (4, 3), 0.875)
-    assert CwNormaliserSettings(early_search="trend").early_estimate() == trend
+    assert CwNormaliserSettings(early_search="trend", delay_guard=1).early_estimate() == trend  # r = 3.5 / 4
     assert CwNormaliserSettings().early_estimate() is None  # off by default (module doc: false alarms measured)
     s_trend = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3) ** 1.875 / os(4, 3) ** 0.875)
     for alpha in (3.0, 8.0, 14.0):
@@ -297,7 +297,7 @@ def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
     fe = FrontEndSettings()
     found = []
     for after in (False, True):
-        s = CwNormaliserSettings(references_after_blank=after)
+        s = CwNormaliserSettings(references_after_blank=after, delay_guard=1)  # references 3 to 0 s before
         cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
         det = detect_ping(cells, cw_threshold(fe.pfa, s))
         found.append(bool((np.abs(det.travel_time_s - 4.5) < 0.2).any()))
@@ -308,8 +308,7 @@ def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
 def test_without_a_delay_guard_the_echo_stays_out_of_its_own_references():
     """A CW's matched-filter response to its echo is a triangle 2 tau wide at its base: the delay references one
     pulse length either side of the cell (delay_guard 0) hold none of it, so the echo's statistic is the one it has
-    with a guard pulse (delay_guard 1); the first delay searched is one pulse
-    length after the blanking's end plus the earlier window's first cell (2.5 s, not 3.5 s)."""
+    with a guard pulse (delay_guard 1)."""
     x = cw_ping(np.random.default_rng(21), [(10.0, 90.0, 2.0, 2.0)])
     fe = FrontEndSettings()
     got = {}
