@@ -101,3 +101,15 @@ def test_one_detection_per_echo_the_strongest_or_the_preferred_group():
     keep = cw_merge_echoes(det, cones, 4, 0.125, 3, group)
     assert keep.tolist() == [False, False, True, True, False, True]
     assert cw_merge_echoes(_det([30], [40], [20], [9.0]), cones, 4, 0.125, 3).tolist() == [True]
+
+
+def test_echo_window_by_hand():
+    from sonartrack.acoustics.matched_filter import Waveform
+    from sonartrack.systems.active.cw_tracking import cw_echo_window
+
+    # a quarter-pulse hop: 4 cells a pulse; 16 x 0.5 m at 1500 Hz: nulls at u = 1500 / (16 * 0.5 * 1500) = 0.125;
+    # filters half a resolution cell apart: the first sidelobe (1.5 cells) 3 filters out
+    s = ActiveSettings(spacing_m=0.5, elements=16)
+    assert cw_echo_window(s, Waveform("cw", 1.0, 1500.0)) == (4, pytest.approx(0.125), 3)
+    assert cw_echo_window(ActiveSettings(spacing_m=0.3, elements=32), Waveform("cw", 1.0, 2400.0))[1] == \
+        pytest.approx(1500.0 / (32 * 0.3 * 2400.0))
