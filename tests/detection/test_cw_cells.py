@@ -111,10 +111,10 @@ def test_normaliser_keeps_its_rate_on_a_steeply_falling_background():
     delay = np.arange(120) * 0.25
     level = 10.0 ** (4.0 - np.clip(delay - 1.5, 0.0, None))[None, :, None] + 1.0
     y = (rng.exponential(1.0, (30, 120, 61)) * level).astype(np.float32)
-    s = CwNormaliserSettings()
+    s = CwNormaliserSettings(delay_guard=1)
     stat = y / cw_noise_estimate(y, s, 4, 2)
     first = int(round(first_searched_delay_s(FrontEndSettings(), s, TAU) / 0.25))
-    assert first == 14  # blank 1.5 s + 2 pulse lengths
+    assert first == 14  # blank 1.5 s + 2 pulse lengths (one guard pulse)
     pfa = 1e-3
     assert float(np.mean(stat[:, first:first + 24] > cw_threshold(pfa, s))) < 2 * pfa
     d = np.arange(first, first + 8)
@@ -251,7 +251,7 @@ def test_one_sided_law_matches_monte_carlo_and_the_map_carries_its_tail_to_the_t
         p = one.pfa(alpha)
         assert abs(float(np.mean(s > alpha)) - p) < 5 * np.sqrt(p / n) + 2e-5, (alpha, p)
     trend = CwEstimate((12, 9), (4, 3), 0.875)
-    assert CwNormaliserSettings(early_search="trend").early_estimate() == trend
+    assert CwNormaliserSettings(early_search="trend", delay_guard=1).early_estimate() == trend  # r = 3.5 / 4
     assert CwNormaliserSettings().early_estimate() is None  # off by default (module doc: false alarms measured)
     s_trend = rng.exponential(1.0, n) / np.maximum(os(12, 9), os(4, 3) ** 1.875 / os(4, 3) ** 0.875)
     for alpha in (3.0, 8.0, 14.0):
@@ -272,10 +272,11 @@ def test_an_echo_before_the_two_sided_delays_is_found_by_the_early_search():
     search at its delay, not searched without it; the early cells' mapped statistic keeps the false-alarm rate."""
     x = cw_ping(np.random.default_rng(12), [(2.3, 70.0, 4.1, 0.3)])
     fe = FrontEndSettings()
-    assert first_searched_delay_s(fe, CwNormaliserSettings(), TAU) == pytest.approx(3.5)
+    assert first_searched_delay_s(fe, CwNormaliserSettings(delay_guard=1), TAU) == pytest.approx(3.5)
+    assert first_searched_delay_s(fe, CwNormaliserSettings(delay_guard=0), TAU) == pytest.approx(2.5)
     found = []
     for early in ("trend", "late", "off"):
-        s = CwNormaliserSettings(early_search=early)
+        s = CwNormaliserSettings(early_search=early, delay_guard=1)
         cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
         det = detect_ping(cells, cw_threshold(fe.pfa, s))
         found.append(bool((np.abs(det.travel_time_s - 2.3) < 0.2).any()))
@@ -296,9 +297,26 @@ def test_references_after_the_blanking_unmask_an_echo_behind_the_blast():
     fe = FrontEndSettings()
     found = []
     for after in (False, True):
-        s = CwNormaliserSettings(references_after_blank=after)
+        s = CwNormaliserSettings(references_after_blank=after, delay_guard=1)  # references 3 to 0 s before
         cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
         det = detect_ping(cells, cw_threshold(fe.pfa, s))
         found.append(bool((np.abs(det.travel_time_s - 4.5) < 0.2).any()))
     assert found == [False, True]
     assert CwNormaliserSettings().references_after_blank
+
+
+def test_without_a_delay_guard_the_echo_stays_out_of_its_own_references():
+    """A CW's matched-filter response to its echo is a triangle 2 tau wide at its base: the delay references one
+    pulse length either side of the cell (delay_guard 0) hold none of it, so the echo's statistic is the one it has
+    with a guard pulse (delay_guard 1)."""
+    x = cw_ping(np.random.default_rng(21), [(10.0, 90.0, 2.0, 2.0)])
+    fe = FrontEndSettings()
+    got = {}
+    for guard in (0, 1):
+        s = CwNormaliserSettings(delay_guard=guard)
+        cells = cw_ping_cells(x, FS, Waveform("cw", TAU, FC), LineArray(N, D), fe, s)
+        at = np.unravel_index(np.argmax(cells.statistic), cells.statistic.shape)
+        assert abs(cells.delay_s[at[1]] - 10.0) < 0.2
+        got[guard] = float(cells.statistic[at])
+    # within 1 dB: the echo (29 dB over the noise after the filter) leaking -25 dB into the references would lift mu
+    assert got[0] == pytest.approx(got[1], rel=0.26)

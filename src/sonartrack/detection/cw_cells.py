@@ -50,6 +50,17 @@ approacher and crossing-b): seed 1 86/72/72/71, 1 -> 90/72/76/70, 1 (18 -> 24 %,
 -> 75/82/76/79, 1 (24 -> 28 %, 18 -> 22 %); the second CW scene (32 x 0.3 m, 2.4 kHz) seed 1 100/82/93/82, 1 ->
 100/82/87/83, 0. On by default. s = y / mu.
 
+Delay guard. A CW's matched filter answers its echo with a triangle 2 tau wide at its base: the delay references
+one pulse length from the cell (``delay_guard`` 0) hold none of the echo (at most -18 dB of it with the echo's peak
+an eighth of a pulse off the cell grid), so no guard pulse is needed, and without one the first delay searched is
+blank_s + tau (2.5 s, not 3.5 s) and the references lie nearer the cell, where the reverberation's level is.
+Measured (benchmarks/bench_cw_held.py, 1 h, held % of detectable pings approacher / crossing-a / crossing-b /
+maneuvering, false targets; guard 1 -> 0): default scene as CW seed 1 90/73/76/84, 1 -> 90/75/94/84, 1; seed 2
+86/80/76/79, 1 -> 86/80/93/77, 2; the second CW scene (32 x 0.3 m, 2.4 kHz) seed 1 100/76/85/92, 1 -> 80/80/99/88,
+1. Its cost (benchmarks/bench_cw_contacts.py, seed 2): false detections given to the tracker 0.32 -> 0.48 a ping,
+single-ping ones 1.48 -> 2.29 (the nearer references follow the reverberation more closely, and it is
+heavier-tailed than the exponential law the threshold assumes); the detectable pings' Pd of crossing-b 54 -> 67 %.
+
 Threshold: the law of M and the threshold on s are detection/cw_law.py's.
 
 Ridge. A stationary scatterer in the direction u (unit vector) from the far field has bistatic range rate
@@ -90,7 +101,9 @@ class CwNormaliserSettings(Settings):
                                  unit="1", ge=0, le=16)
     doppler_reference: int = setting(6, "reference cells each side across Doppler, in resolution cells", unit="1",
                                      ge=1, le=64)
-    delay_guard: int = setting(1, "guard cells each side along delay, in pulse lengths", unit="1", ge=0, le=16)
+    delay_guard: int = setting(0, "guard cells each side along delay, in pulse lengths beyond the first (0: the "
+                                  "references start one pulse length from the cell, where the echo's triangle ends; "
+                                  "module doc)", unit="1", ge=0, le=16)
     delay_reference: int | None = setting(4, "reference cells each side along delay, in pulse lengths (short: the "
                                              "reverberation falls with delay); not set: the Doppler estimate alone",
                                           unit="1", ge=1, le=64)
