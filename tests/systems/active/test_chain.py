@@ -163,3 +163,23 @@ def test_scene_without_target_gives_empty_tables_and_says_so(tmp_path):
     assert not res.tracks.tracks.confirmed.any()
     assert summary_lines(res)[0].startswith("active: no confirmed track in 6 pings")
     write_active_tables(res, tmp_path / "out")
+
+
+def test_contacts_point_at_their_rows_of_detections_csv(result, tmp_path):
+    """contacts.csv's ``detection`` is a row of detections.csv: the row's ping and travel time are the contact's
+    (the strong single-ping rows the MFTD missed are among the tracked rows; before, the index counted them but
+    detections.csv listed only the MFTD's, so every contact after the first strong one pointed at another row)."""
+    import pandas as pd
+
+    from sonartrack.systems.active.files import write_active_tables
+
+    write_active_tables(result, tmp_path)
+    det = pd.read_csv(tmp_path / "detections.csv")
+    con = pd.read_csv(tmp_path / "contacts.csv")
+    assert set(det.detector) >= {"mftd", "single"}
+    assert (det.detector == "strong").any()  # the scene has strong single-ping rows: the case that went wrong
+    rows = det.iloc[con.detection.to_numpy()]
+    np.testing.assert_array_equal(rows.ping.to_numpy(), con.ping.to_numpy())
+    assert set(rows.detector) <= {"mftd", "strong"}
+    tracked = det[det.detector != "single"]
+    assert len(tracked) == len(result.detections)

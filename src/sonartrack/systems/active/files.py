@@ -4,7 +4,9 @@ Reading goes through the checked readers of ``systems/active/scene_files.py`` (o
 Written into the output folder, all or nothing (every file is rendered in memory before the first is written,
 and each is written atomically, so a failure leaves no half-written output):
 
-* detections.csv: one row per detection of both detectors (``detector`` = mftd | single): ping, time_s,
+* detections.csv: first the tracked detections, the rows contacts.csv's ``detection`` counts (``detector`` = mftd
+  or strong, a strong single-ping one the MFTD missed; single when the single-ping detector is tracked), then,
+  when the MFTD ran, every single-ping detection (``detector`` = single; a strong one appears in both): ping, time_s,
   cone_deg, travel_time_s, doppler_hz, range_rate_mps (NaN for an LFM), statistic (single: the normalised
   statistic s; mftd: P1's log statistic S), beam, delay_cell, doppler_cell;
 * contacts.csv: the tracked detector's mirror pairs, in the Cartesian contact format of ``sonartrack track``
@@ -106,20 +108,23 @@ def detections_table(result: ActiveResult):
     Parameters
     ----------
     result : ActiveResult
-        The chain's result (its ``mftd`` and ``single`` detections).
+        The chain's result (its tracked ``detections`` and ``single`` ones).
 
     Returns
     -------
     pandas.DataFrame
-        The MFTD detections then the single-ping ones, columns ``DETECTION_COLUMNS`` (times s, cone angle deg from
-        the array axis, Doppler Hz, range rate m/s).
+        The tracked detections (the rows contacts.csv's ``detection`` counts) then, when the MFTD ran, every
+        single-ping one; columns ``DETECTION_COLUMNS`` (times s, cone angle deg from the array axis, Doppler Hz,
+        range rate m/s).
     """
     import pandas as pd
 
-    parts = []
-    for name, d in (("mftd", result.mftd), ("single", result.single)):
-        cols = {c: getattr(d, c) for c in DETECTION_COLUMNS[1:]}
-        parts.append(pd.DataFrame({"detector": np.full(len(d), name), **cols}))
+    tracked = result.detections
+    kind = result.detection_kind if len(result.detection_kind) == len(tracked) else np.full(
+        len(tracked), result.settings.detector, dtype=object)
+    blocks = [(kind, tracked)] + ([(np.full(len(result.single), "single", dtype=object), result.single)]
+                                  if tracked is not result.single else [])
+    parts = [pd.DataFrame({"detector": k, **{c: getattr(d, c) for c in DETECTION_COLUMNS[1:]}}) for k, d in blocks]
     return pd.concat(parts, ignore_index=True)
 
 

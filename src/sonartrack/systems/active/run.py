@@ -72,8 +72,10 @@ class BScan:
 class ActiveResult:
     """Everything the chain produced (the faces write and draw it).
 
-    ``detections``: the tracked detector's (``settings.detector``); ``single`` and ``mftd``: each detector's
-    (``mftd`` empty when the MFTD did not run); ``contacts`` the mirror pairs of ``detections`` with the gate's
+    ``detections``: the tracked ones, whose rows ``contacts.detection`` counts (the single-ping detector's, or the
+    MFTD's with the strong single-ping ones :func:`with_strong` adds, ``detection_kind`` saying which row is which:
+    "single", "mftd" or "strong"); ``single`` and ``mftd``: each detector's (``mftd`` empty when the MFTD did not
+    run); ``contacts`` the mirror pairs of ``detections`` with the gate's
     verdict (``gated_out``: refused by the range-rate gate); ``tracks``; ``bscan``; ``geometry`` the source and
     receiver; ``ping_time_s``; ``stage_seconds`` wall time per stage (s); ``thresholds`` each detector's
     threshold on its statistic ("single": on s; "mftd": on P1's S for K pings)."""
@@ -90,6 +92,7 @@ class ActiveResult:
     settings: ActiveSettings
     stage_seconds: dict = field(default_factory=dict)
     thresholds: dict = field(default_factory=dict)
+    detection_kind: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
 
     @property
     def duration_s(self) -> float:
@@ -209,6 +212,8 @@ class _Chain:
         self.timer, self.mftd, self.tracker = _Timer(), None, None
         self.single: list[Detections] = []
         self.multi: list[Detections] = []
+        self.tracked: list[Detections] = []  # what the contacts were formed from: the MFTD's + strong single-ping
+        self.tracked_mftd_rows: list[int] = []  # how many of each ping's tracked rows are the MFTD's (the rest strong)
         self.bscan: deque[np.ndarray] = deque(maxlen=bscan_rows)
         self.times: list[float] = []
         self.gate: list[np.ndarray] = []
@@ -287,6 +292,8 @@ class _Chain:
             self.multi.append(det)
             if self.strong is not None:
                 det = with_strong(det, single, self.strong, float(np.median(np.diff(self.axes.travel_time_s))))
+        self.tracked.append(det)
+        self.tracked_mftd_rows.append(len(self.multi[-1]) if self.mftd is not None else 0)
         self.bscan.append(tm.run("b-scan", _bscan_row, cells.statistic, s.bscan_bins))
         c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
                    self.beam_step, [number])
@@ -306,7 +313,8 @@ class _Chain:
         if n <= 0:
             return
         self.dropped_detections += sum(self.ping_detections[:n])
-        for rows in (self.single, self.multi, self.contacts, self.gate, self.times, self.ping_detections):
+        for rows in (self.single, self.multi, self.tracked, self.tracked_mftd_rows, self.contacts, self.gate,
+                     self.times, self.ping_detections):
             del rows[:n]
         self.tracker.drop_scans(n)
         while len(self.bscan) > len(self.times):
@@ -316,6 +324,7 @@ class _Chain:
         from sonartrack.detection.ping_mftd import concat_detections
 
         single, multi = concat_detections(self.single), concat_detections(self.multi)
+        tracked = concat_detections(self.tracked) if self.mftd is not None else single
         t = np.asarray(self.times, float)
         a = self.axes
         bins = _bscan_axis(np.asarray(a.travel_time_s), self.settings.bscan_bins) if a is not None else np.zeros(0)
@@ -327,10 +336,18 @@ class _Chain:
         contacts = Contacts.concat(self.contacts)
         if self.dropped_detections:  # the rows of the kept detections (a bounded live history)
             contacts = replace(contacts, detection=contacts.detection - self.dropped_detections)
-        return ActiveResult(multi if self.mftd is not None else single, single, multi, contacts,
+        return ActiveResult(tracked, single, multi, contacts,
                             np.concatenate(self.gate) if self.gate else np.zeros(0, bool), tracks, bscan,
                             self.geometry, t, self.settings, dict(self.timer.seconds),
-                            self._thresholds())
+                            self._thresholds(), self._tracked_kind(len(tracked)))
+
+    def _tracked_kind(self, n: int) -> np.ndarray:
+        """Each tracked row's source: "single" (the single-ping detector tracked), "mftd" or "strong"."""
+        if self.mftd is None:
+            return np.full(n, "single", dtype=object)
+        return np.concatenate([np.array(["mftd"] * m + ["strong"] * (len(d) - m), dtype=object)
+                               for d, m in zip(self.tracked, self.tracked_mftd_rows, strict=True)]
+                              or [np.zeros(0, object)])
 
     def _thresholds(self) -> dict:
         out = {"single": float(self.threshold)}
