@@ -32,6 +32,21 @@ LFM 1 crossing-b 3 rows -> 1, held 80 -> 90 %); merged duplicates and re-confirm
 -> 0); twins from one shared ping (sides.py MIN_TWIN_PINGS 1: CW 1 7 -> 6). Tried and left off: confirmation after
 3 scans in the gate (tracking confirm_min_hits 3: CW 1 6 rows, CW 2 10); rejoin_s 1200 s (CW 1 4 rows, but CW 2
 chains three targets' fragments into one row through merges at crossings).
+
+Measured (2026-12-07, h10-acthold2, same caches; ~80 s a run of all four at load ~13): the tracker's pd on CW pings
+(tracking ``pd_cw``, contact_tracker.py ``_cw_pd``; LFM unchanged, 4 clean rows each):
+    pd_cw (0.7 = pd)  CW 1: 6, 1, 1, 0, 1; 90/72/76/79     CW 2: 8, 1, 3, 1, 0; 78/85/76/79
+          0.5               5, 1, 1, 0, 1                        5, 0, 2, 0, 1
+          0.45              6, 1, 2, 0, 0; 93/74/78/77           5, 0, 2, 0, 0; 89/79/79/84
+          0.4 (default)     4, 1, 0, 0, 0; 93/73/78/86           5, 0, 2, 0, 0; 86/82/79/86
+          0.3               4, 1, 0, 0, 0; 95/72/78/93           4, 0, 1, 0, 0; 86/67/79/46
+Tried and left off (tracking ``merge_confirmed_scans`` 2, 3: two confirmed tracks merged only after 2-3 scans in a row
+passing the test): LFM 2 4 -> 3 rows (a ghost of crossing-b merged into maneuvering's ghost 2 scans later), CW 1 4, CW 2
+5-6; a merge of confirmed tracks recorded as one target only when they passed the test since (within 4-10 scans of)
+the younger's confirmation, else the better-informed kept: CW 1 5-8 rows, CW 2 7-9. What is left on CW: a track
+coasting through crossing-b's missed pings ~93-101 takes the approacher's contacts 1.4 km off (its gate ~400 m sd) on
+both seeds, and the merger then records the approacher's track as its duplicate: one row for two targets. Two seeds
+only: the rows are not monotone in pd_cw (0.45 gives 6 on CW 1), so 0.4 rests on the measured Pd as much as on them.
 """
 
 from __future__ import annotations

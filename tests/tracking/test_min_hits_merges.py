@@ -54,3 +54,25 @@ def test_duplicate_of_names_the_kept_track_and_the_merger_records_confirmed_dupl
                       np.ones(4, bool))
     assert T.track_id.tolist() == [0, 2]
     assert merger.merged == {1: 0}  # the tentative duplicate was never listed: not recorded
+
+
+def test_two_confirmed_tracks_are_merged_only_after_confirmed_scans_in_a_row():
+    # tracks 0 and 1 confirmed, 20 m apart (d^2 = 2, duplicates); track 2 tentative 10 m from track 0; with
+    # confirmed_scans 3 the tentative duplicate goes at once, the confirmed one after its third scan in a row
+    x = np.array([[0.0, 0, 2, 0], [20.0, 0, 2, 0], [0.0, 10, 2, 0]])
+    far = x.copy()
+    far[1, 0] = 500.0  # d^2 = 2500 > 13.3: not a duplicate on this scan
+    merger = DuplicateMerger(ExistenceDeleter(0.9, 0.01), GAMMA, confirmed_scans=3)
+
+    def scan(xs, n=2):
+        return merger.manage(_tracks([0.99] * n, [True] * n, [1] * n, xs[:n], [0.0, 60.0, 90.0][:n]),
+                             np.ones(n, bool)).track_id.tolist()
+
+    assert merger.manage(_tracks([0.99, 0.99, 0.5], [True, True, False], [1] * 3, x, [0.0, 60, 90]),
+                         np.ones(3, bool)).track_id.tolist() == [0, 1]  # scan 1 of the pair; the tentative one gone
+    assert scan(x) == [0, 1]  # scan 2
+    assert scan(far) == [0, 1]  # apart: the count starts again
+    assert scan(x) == [0, 1] and scan(x) == [0, 1]
+    assert merger.merged == {}
+    assert scan(x) == [0]  # the third scan in a row
+    assert merger.merged == {1: 0}

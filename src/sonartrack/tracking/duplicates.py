@@ -103,11 +103,20 @@ class DuplicateMerger:
         The tracker's own deleter (e.g. :class:`~sonartrack.tracking.deleters.ExistenceDeleter`).
     gamma : float
         Gate of the track-to-track test on the combined state (chi-square, state dimension degrees of freedom).
+    confirmed_scans : int
+        A confirmed track is deleted as the duplicate of another confirmed one only once the pair has passed the test
+        on this many consecutive scans (a tentative duplicate at once). Two crossing targets pass it on the scans
+        around their crossing, when their tracks' velocities are still uncertain, and a merge there joins two targets
+        into one row (measured on the active chain's default scene: LFM seed 2 at ping 57, CW seeds 1 and 2); two
+        tracks on one target keep passing it. 1: P4's merger, at once (the active chain's default: 2 and 3 measured
+        worse on benchmarks/bench_active_rows.py, the merges of two targets' tracks only came a scan or two later).
     """
 
     inner: object
     gamma: float
+    confirmed_scans: int = 1
     merged: dict = field(default_factory=dict)
+    streak: dict = field(default_factory=dict)  # (kept id, duplicate id) -> consecutive scans passing the test
 
     def new_track_attrs(self, k: int) -> dict:
         """The inner deleter's per-track counters of ``k`` new tracks (the deleter-part protocol:
@@ -119,9 +128,19 @@ class DuplicateMerger:
         returns the kept tracks."""
         T = self.inner.manage(T, hit)
         if len(T) < 2 or not T.confirmed.any():
+            self.streak.clear()
             return T
         snap = TrackSnapshot.of(0.0, T)
         into = duplicate_of(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma)
-        for k in np.nonzero((into >= 0) & T.confirmed)[0]:
-            self.merged[int(T.track_id[k])] = int(T.track_id[into[k]])
+        ids = T.track_id
+        both = np.nonzero((into >= 0) & T.confirmed)[0]
+        pairs = {(int(ids[into[k]]), int(ids[k])): self.streak.get((int(ids[into[k]]), int(ids[k])), 0) + 1
+                 for k in both}
+        self.streak.clear()
+        self.streak.update(pairs)
+        for k in both:
+            if pairs[(int(ids[into[k]]), int(ids[k]))] < self.confirmed_scans:
+                into[k] = -1  # not yet: the pair must keep passing the test
+            else:
+                self.merged[int(ids[k])] = int(ids[into[k]])
         return T.select(into < 0)

@@ -29,6 +29,10 @@ class PositionTrackerSettings(Settings):
         0.99, "mode transition matrix diagonal (the rest spread evenly); 0.99, not 0.95, keeps the small-q mode "
               "dominant on a straight target as P4's mode-probability plots show", unit="1", ge=0, le=1)
     pd: float = setting(0.8, "probability of detection of a target (P4)", unit="1", gt=0, le=1)
+    pd_cw: float | None = setting(
+        None, "probability of detection on the scans of a CW pulse (contacts carrying a measured range rate, the "
+              "active chain's systems/active/contact_tracker.py), whose echoes are reverberation-limited where an "
+              "LFM's are not (not set: pd)", unit="1", gt=0, le=1)
     gate_probability: float = setting(0.99, "chi-square(2) gate probability P_G (gamma = 9.21)", unit="1", gt=0, lt=1)
     clutter_density_per_m2: float = setting(1e-6, "clutter density the tracker assumes (P4: 40 points in 4e7 m^2)",
                                             unit="1/m^2", gt=0)
@@ -47,6 +51,10 @@ class PositionTrackerSettings(Settings):
     confirm_min_hits: int = setting(
         1, "fewest scans with a measurement in its gate (its initiating one counted) before a track may be confirmed, "
            "whatever its existence (tracking/deleters.py MinHits; 1: the existence alone, P4)", unit="1", ge=1, le=20)
+    merge_confirmed_scans: int = setting(
+        1, "consecutive scans on which two confirmed tracks must pass the track-to-track test before the younger is "
+           "merged into the older as its duplicate (tracking/duplicates.py DuplicateMerger; a tentative duplicate is "
+           "merged at once; 1: at once, P4)", unit="1", ge=1, le=20)
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "

@@ -56,6 +56,11 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; K 1 + "
                                 "blast + 6 still points: 2 in 2 h with the map's lobe images (36 before); 0.5/h "
                                 "confirmed as many false tracks there and one ping later)"),
+    "pd_cw": (0.4, "probability that a target gives a contact on a CW ping (contacts with a measured range rate): "
+                   "measured 0.30-0.64 per detectable ping of the default scene's strong targets as CW (MFTD, seed 1), "
+                   "as Swerling 1 at the single-ping threshold 16.3 gives, exp(-16.3 / (1 + EBR)) = 0.38 at the "
+                   "targets' median 12 dB echo-to-background (benchmarks/bench_active_rows.py, CW seeds 1 and 2: "
+                   "rows 6, 8 at 0.7 -> 5, 5 at 0.5 -> 4, 5 at 0.4)"),
     "transition_diagonal": (0.98, "mode transition matrix diagonal, the rest spread evenly over the other modes (P4's "
                                   "two CV modes and the turn modes, target_turn_rates_deg_s): 0.98, not P4's 0.99, "
                                   "lets a track enter a turn mode a ping sooner (tests/systems/active/"
