@@ -22,7 +22,7 @@ import sys
 import numpy as np
 
 INTERVALS_S = (2.0, 5.0, 10.0, 30.0, 60.0)
-THRESHOLDS = (9.0, 12.0, 15.0)
+THRESHOLDS = (9.0, 12.0, 15.0, 18.0)
 
 
 def cv_records(dt: float, hours: float, seed: int):

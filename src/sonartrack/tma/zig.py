@@ -289,6 +289,32 @@ def _window_fit(z, t, own, sig, x_init, thorough: bool = False):
     return best.x0, wrap_angle(z - h) / sig, H / sig[:, None]
 
 
+def cv_window_cost(time_s, bearing_rad, own_xy_m, sigma_rad, x_init=None) -> float:
+    """The constant-velocity ML's chi-square cost on a stretch of bearings, from every start the test's confirmation
+    uses (and ``x_init``, [x, y, vx, vy] at the first bearing, if given). On the noise-free bearings of a target
+    that changed velocity once in the stretch it is the GLR's noncentrality for a test at the true change time (the
+    two-leg model fits them exactly; Kay 1998, Fundamentals of Statistical Signal Processing II, sec. 6.5: the
+    noncentrality of the GLR is its value on noise-free data), which, unlike the linearised dv^T B^T P B dv, counts
+    what the constant-velocity model's nonlinear range freedom absorbs.
+
+    Parameters
+    ----------
+    time_s, bearing_rad, own_xy_m, sigma_rad
+        The stretch, as :func:`change_time_profile`.
+    x_init : array_like (4,) or None
+        An extra start.
+
+    Returns
+    -------
+    float
+        The lowest cost found.
+    """
+    t, z, own = (np.asarray(a, dtype=float) for a in (time_s, bearing_rad, own_xy_m))
+    sig = np.broadcast_to(np.asarray(sigma_rad, dtype=float), t.shape)
+    _, e, _ = _window_fit(z, t, own, sig, None if x_init is None else np.asarray(x_init, float), thorough=True)
+    return float(e @ e)
+
+
 def change_time_profile(time_s, bearing_rad, own_xy_m, sigma_rad, candidates_s, params_init=None) -> np.ndarray:
     """The two-leg ML cost C(c) (chi-square, module doc) at each candidate change time c: the profile over one
     change time that a zig's time interval is read from (tma/zig.py). theta is re-fitted at each candidate,
