@@ -16,13 +16,17 @@ On each record (:func:`run_trial`):
 * zigs (tma/zig.py :func:`~sonartrack.tma.zig.detect_zigs`, its stated false-alarm rate ``false_alarm_per_hour``):
   each true zig k is matched to the first detection whose crossing time lies in (c_k, c_k+1] (c_K+1 the record's
   end): its *latency* is the crossing time minus c_k, its *localisation* error the detected zig time minus c_k.
-  Every other detection is a false zig. Each true zig's *detectability*: the noncentrality
-  lambda = dv^T (B^T P B) dv of the GLR at the true change time (tma/zig.py's score form at the truth: B the
-  whitened change Jacobian, P the projector off the constant-velocity Jacobian, dv the true velocity change) on the
-  bearings the detector's window holds (since the previous change, at most ``window_s``) up to 120 s after the zig,
-  and up to the end of its leg; a zig is *detectable within 120 s* when a test at the known change time with the
-  detector's threshold h would cross it with probability >= ``detectable_power`` (P(chi2_2(lambda) > h)): no test
-  that must also find the time does better;
+  Every other detection is a false zig. Each true zig's *detectability*: the noncentrality lambda of the GLR at
+  the true change time on the bearings the detector's window holds (since the previous change, at most
+  ``window_s``) up to 120 s after the zig, and up to the end of its leg; a zig is *detectable within 120 s* when a
+  test at the known change time with the detector's threshold h would cross it with probability
+  >= ``detectable_power`` (P(chi2_2(lambda) > h)): no test that must also find the time does better. lambda is the
+  GLR on the window's noise-free bearings, the constant-velocity ML's cost there (:func:`noise_free_glr`; trial
+  version 9). Until trial version 8 it was linearised, dv^T (B^T P B) dv (:func:`noncentrality`, tma/zig.py's
+  score form at the truth: B the whitened change Jacobian, P the projector off the constant-velocity Jacobian, dv
+  the true velocity change), which misses what the constant-velocity model's nonlinear freedom in range absorbs:
+  of the four zigs trial version 8 found late, two had linearised noncentralities of 36 and 66 but noise-free GLRs
+  of 5.3 and 16.3 (83 and 94 deg turns at 17.6 and 6.8 km), below any threshold; both readings are reported;
 * the current leg: the joint leg fit's last leg (tma/legs.py :func:`~sonartrack.tma.legs.fit_legs`, change times
   refined) at the last bearing, determined when its range sd is below its range and the fit's own whiteness tests
   pass (tma/legs.py: a missed zig leaves a leg whose residuals reject it; its covariance holds a zig the test may
@@ -55,7 +59,7 @@ from sonartrack.sim.manoeuvre_scene import OWN_PATTERNS, ManoeuvreSceneSettings
 STUDY_ID = "manoeuvring-target"
 TITLE = "Targets that zig: zig detection, leg-wise TMA, the constant-velocity verdict and observer advice"
 PAPER = "sonartrack's own (issue 30): sequential GLR zigs, leg-wise ML with its CRB, Fisher-information advice"
-TRIAL_VERSION = 8
+TRIAL_VERSION = 9
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 100
