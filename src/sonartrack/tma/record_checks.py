@@ -419,6 +419,16 @@ def _difference_correlation(c, s) -> np.ndarray:
     return band
 
 
+def _satterthwaite_dof(band, keep) -> float:
+    """nu = (tr R)^2 / tr(R^2) of the kept differences' correlation R (a band, :func:`_difference_correlation`):
+    a pair counts only when both differences are kept."""
+    band = band.copy()
+    for lag in range(1, band.shape[1]):
+        band[:-lag, lag] *= keep[:-lag] & keep[lag:]
+    band[~keep] = 0.0
+    return int(keep.sum()) ** 2 / float(np.sum(band[:, 0] ** 2) + 2.0 * np.sum(band[:, 1:] ** 2))
+
+
 def difference_sd_estimate(time_s, bearing_rad, relative_sd=1.0, order: int = DIFFERENCE_ORDER,
                            level: float = 0.95) -> BearingSd:
     """The bearing noise sd of a record from the bearings alone, with no motion model: from their divided
@@ -471,12 +481,7 @@ def difference_sd_estimate(time_s, bearing_rad, relative_sd=1.0, order: int = DI
     d = np.sum(c * z[idx], axis=1) / np.sqrt(np.sum(c**2 * s[idx] ** 2, axis=1))
     robust = np.median(np.abs(d)) / MAD_NORMAL
     keep = np.abs(d) <= DIFFERENCE_CLIP * robust if robust > 0 else np.ones(len(d), bool)
-    band = _difference_correlation(c, s)
-    for lag in range(1, order + 1):  # a pair counts only when both differences are kept
-        band[:-lag, lag] *= keep[:-lag] & keep[lag:]
-    band[~keep] = 0.0
-    m = int(keep.sum())
-    nu = m**2 / float(np.sum(band[:, 0] ** 2) + 2.0 * np.sum(band[:, 1:] ** 2))
+    m, nu = int(keep.sum()), _satterthwaite_dof(_difference_correlation(c, s), keep)
     a = DIFFERENCE_CLIP
     f = 1.0 - 2.0 * a * np.exp(-0.5 * a * a) / np.sqrt(2.0 * np.pi) / (2.0 * ndtr(a) - 1.0)
     var = float(np.sum(d[keep] ** 2)) / (m * f)
