@@ -73,14 +73,14 @@ interval of the count:
 h holds over h = 9-18 to the counts' Poisson error (at 2 s K gives 100 / 40 / 14 / 4.5 against 103 / 38 / 13 / 4; at
 5 s 90 / 36 / 12.5 / 4.0 against 91 / 34 / 13 / 5). The table before (trial version 8; about 12.5 h per dt at h = 9,
 12, 15, measured before a crossing's CV refit from many starts) was 19.3, 16.6, 12.9, 4.83, 1.57: 2-12 % high at
-2-30 s (thresholds a little conservative, 0.05-0.23 in h) and 44 % low at 60 s, where its 7 events were too few (the
-second 12.5 h held 21 more at h = 9-18). K levels off below 10 s (the test's cadence) and falls beyond it (fewer
-tests per hour, and >= 2 bearings after tau is then more than 30 s). The old form, p = 0.0085 sqrt(dt) (h / 2)^2
-exp(-h / 2) per bearing fitted at 20-60 s, is K = 30.6 / sqrt(dt): 21.6 at 2 s, 9.7 at 10 s, 3.95 at 60 s. The
-operating point is h ~ 20, beyond the calibrated range: the tail there is the form's extrapolation (with 4-5 events
-at h = 18 it still holds), which the margin below is for (heavier tails where the bearings-only likelihood is far
-from quadratic: close, fast-crossing targets). The rate holds only with the right bearing sd: a sd stated too small
-inflates every GLR.
+2-30 s (thresholds a little conservative, 0.03-0.23 in h) and 44 % low at 60 s, where its 7 events were too few (26
+now, at h = 9-18 in 26 h). K levels off below 10 s (the test's cadence) and falls beyond it (fewer tests per hour,
+and >= 2 bearings after tau is then more than 30 s). The old form, p = 0.0085 sqrt(dt) (h / 2)^2 exp(-h / 2) per
+bearing fitted at 20-60 s, is K = 30.6 / sqrt(dt): 21.6 at 2 s, 9.7 at 10 s, 3.95 at 60 s. The operating point is h
+~ 20, beyond the calibrated range: the tail there is the form's extrapolation (with 4-5 events at h = 18 it still
+holds), which the margin below is for (heavier tails where the bearings-only likelihood is far from quadratic:
+close, fast-crossing targets). The rate holds only with the right bearing sd: a sd stated too small inflates every
+GLR.
 
 Operating point. The default stated rate is :data:`DEFAULT_FALSE_ALARM_PER_HOUR` = 0.05 per hour, half the
 requirement of at most 1 false zig per 10 h (issue 30). The threshold at 0.05 per hour is h = 21.1 with bearings
