@@ -83,6 +83,38 @@ def test_noncentrality_is_the_glr_of_the_true_change():
     assert study.noncentrality(t, own, sigma, params, c, 0, c[0] + 300.0, 1800.0) > lam / 2 > 0
 
 
+class _Scene:
+    """What noise_free_glr reads of a scene, from a two-leg record made here."""
+
+    def __init__(self, t, own, params, c, z):
+        self.time_s, self.own_xy_m, self.params, self.change_times_s, self.bearing_rad = t, own, params, c, z
+
+    def target_xy_m(self, times):
+        v = self.params[2:].reshape(-1, 2)
+        a = np.c_[np.minimum(times, self.change_times_s[0]), np.maximum(times - self.change_times_s[0], 0.0)]
+        return self.params[:2] + a @ v
+
+
+@pytest.mark.parametrize("course2_deg", [240.0, 200.0, 120.0])
+def test_noise_free_glr_is_the_cv_cost_of_noise_free_bearings(course2_deg):
+    """The nonlinear noncentrality is the CV ML's cost on the window's noise-free bearings: no more than an
+    independent CV fit started at the true first leg (it tries that start and others), within 10 % of the
+    linearised noncentrality on a 30 deg turn, and positive on every turn."""
+    from sonartrack.tma.batch_ml import ml_bearings_only
+
+    t, own, params, c, z = _two_legs(course2_deg)
+    sigma = np.radians(0.5)
+    for after in (120.0, 300.0):
+        nl = study.noise_free_glr(_Scene(t, own, params, c, z), sigma, 0, c[0] + after, 1800.0)
+        w = (t > c[0] - 1800.0) & (t <= c[0] + after)
+        cv = ml_bearings_only(z[w], t[w], own[w], sigma, x_init=np.r_[params[:2] + t[w][0] * params[2:4],
+                                                                      params[2:4]], check=False).objective
+        assert 0 < nl <= cv * (1 + 1e-6)
+        if course2_deg == 240.0:
+            lam = study.noncentrality(t, own, sigma, params, c, 0, c[0] + after, 1800.0)
+            assert nl == pytest.approx(lam, rel=0.1)
+
+
 def test_cv_test_rejects_a_zig_and_keeps_a_straight_leg():
     t, own, params, c, z = _two_legs()
     rng = np.random.default_rng(5)

@@ -15,7 +15,12 @@ its course and speed, so the record is first fitted by the bearings-only constan
   :func:`~sonartrack.tma.record_checks.residual_span`);
 * the noise: its sd measured from the residuals with its 95 % chi-square interval
   (:func:`~sonartrack.tma.record_checks.bearing_sd_estimate`); used as the methods' bearing sd when none is given
-  (``sigma_bearing_deg`` unset), and when one is given and lies outside the interval, reported;
+  (``sigma_bearing_deg`` unset), and when one is given and lies outside the interval, reported. A rejected fit's
+  residuals hold the manoeuvre's misfit as well as the noise (on turning records of 1 deg noise they measured
+  1.4-5.4 deg, up to 30), so there the sd is measured from the bearings alone, by their differences of order
+  :data:`~sonartrack.tma.record_checks.DIFFERENCE_ORDER` on the uneven times with a MAD screen and Satterthwaite's
+  interval (:func:`~sonartrack.tma.record_checks.difference_sd_estimate`): used when none is given, and a given sd
+  outside its interval reported;
 * the misfit against a given noise: with ``sigma_bearing_deg`` given, the residuals' chi-square
   S / sigma^2 ~ chi-square(n - 4) under the model (Bar-Shalom, Li & Kirubarajan 2001, sec. 3.7.4: the fit's
   normalised sum of squares) above its 1 - ``verdict.alpha`` point rejects the fit as well (reason ``residuals
@@ -45,11 +50,13 @@ from sonartrack.core.angles import wrap_angle
 from sonartrack.core.errors import InputError
 from sonartrack.core.gaussian import chi2_quantile
 from sonartrack.tma.record_checks import (
+    DIFFERENCE_ORDER,
     RESIDUAL_BLOCK_S,
     BearingSd,
     ResidualCheck,
     WhitenessCheck,
     bearing_sd_estimate,
+    difference_sd_estimate,
     residual_check,
     residual_span,
     whiteness_check,
@@ -84,6 +91,9 @@ class RecordJudgement:
     #: the record gave each bearing's sd: ``given_rad`` is their reference (tma/records.py
     #: :meth:`~sonartrack.tma.records.BearingRecord.reference_sd_rad`) and ``noise`` the residual scale in its units
     per_bearing: bool = False
+    #: the sd from the bearings' differences, no motion model (:func:`~sonartrack.tma.record_checks.
+    #: difference_sd_estimate`), measured where the record rejects the fit (None elsewhere or too few bearings)
+    differences: BearingSd | None = None
 
     @property
     def runs(self) -> bool:
@@ -147,6 +157,8 @@ class RecordJudgement:
         """
         if self.why_untested is not None:
             return (f"motion model not tested: {self.why_untested}",)
+        if self.rejected and self.differences is not None:
+            return self._difference_notes()
         if self.runs:
             return (f"bearing sd not estimated: the constant-velocity fit is rejected (its residual scale "
                     f"{np.rad2deg(self.noise.sd_rad):.3g} deg bounds it)",)
@@ -162,6 +174,26 @@ class RecordJudgement:
             return (f"the given bearing sd {np.rad2deg(self.given_rad):.3g} deg is contradicted by the record: its "
                     f"residuals measure {self.noise.text()}",)
         return ()
+
+    def _difference_notes(self) -> tuple[str, ...]:
+        """:meth:`notes` of a rejected record: the sd its bearings' differences measure, and a given sd they
+        contradict."""
+        d, scale = self.differences, np.rad2deg(self.noise.sd_rad)
+        what = (f"from the bearings' differences (order {DIFFERENCE_ORDER}, no motion model; the constant-velocity "
+                f"fit is rejected, its residual scale {scale:.3g} deg)")
+        if self.given_rad is None:
+            floored = np.rad2deg(d.sd_rad) < SIGMA_FLOOR_DEG
+            used = f"; used {SIGMA_FLOOR_DEG:g} deg, the bearings' resolution" if floored else ""
+            return (f"bearing sd estimated {what}: {d.text()}{used}",)
+        if self.per_bearing:
+            verdict = "which contradicts them" if d.excludes(self.given_rad) else "consistent with them"
+            return (f"bearing sds measured {what}: {d.sd_rad / self.given_rad:.3g} [{d.lo_rad / self.given_rad:.3g}, "
+                    f"{d.hi_rad / self.given_rad:.3g}] times the given ones, {verdict}",)
+        if d.excludes(self.given_rad):
+            return (f"the given bearing sd {np.rad2deg(self.given_rad):.3g} deg is contradicted by the record: "
+                    f"measured {what}: {d.text()}",)
+        return (f"bearing sd measured {what}: {d.text()}, consistent with the given "
+                f"{np.rad2deg(self.given_rad):.3g} deg",)
 
     def sigma_deg(self, settings: TmaSettings) -> float:
         """The bearing sd the methods use (deg): the given one, else the estimate within the bounds.
@@ -181,7 +213,8 @@ class RecordJudgement:
         if self.noise is None:
             raise InputError(f"the bearing sd cannot be estimated from this record ({self.why_untested}): give it "
                              "with --sigma-bearing-deg (sigma_bearing_deg)")
-        return float(np.clip(np.rad2deg(self.noise.sd_rad), SIGMA_FLOOR_DEG, SIGMA_CEILING_DEG))
+        sd = self.differences if self.rejected and self.differences is not None else self.noise
+        return float(np.clip(np.rad2deg(sd.sd_rad), SIGMA_FLOOR_DEG, SIGMA_CEILING_DEG))
 
 
 def cv_residuals(record: BearingRecord, ownship: OwnshipTrack) -> np.ndarray:
@@ -271,8 +304,15 @@ def judge_record(record: BearingRecord, ownship: OwnshipTrack, settings: TmaSett
         misfit = float(np.sum((np.asarray(e, float) / given) ** 2))
         judgement = replace(judgement, misfit=(misfit, float(chi2_quantile(1.0 - settings.verdict.alpha, e.size - 4))))
     if judgement.rejected:
-        judgement = replace(judgement, span=residual_span(t, e, sigma))
+        judgement = replace(judgement, span=residual_span(t, e, sigma), differences=_differences(record))
     return judgement
+
+
+def _differences(record: BearingRecord) -> BearingSd | None:
+    """The record's bearing sd from its differences (module doc), None when it has too few bearings for them."""
+    if len(record.time_s) < DIFFERENCE_ORDER + 8:
+        return None
+    return difference_sd_estimate(record.time_s, record.bearing_rad, record.relative_sd())
 
 
 def record_verdict(result, judgement: RecordJudgement):
