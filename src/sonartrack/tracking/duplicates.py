@@ -44,7 +44,7 @@ def duplicate_mask(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarr
     return duplicate_of(x, P, confirmed, born_s, existence, gamma) < 0
 
 
-def duplicate_of(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarray:
+def duplicate_of(x, P, confirmed, born_s, existence, gamma: float, coasting=None) -> np.ndarray:
     """The kept track each track duplicates (index, (n,) int; -1: kept) by the track-to-track test (module doc).
 
     Parameters
@@ -61,6 +61,9 @@ def duplicate_of(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarray
         Existence probabilities (tie-break: the higher is kept).
     gamma : float
         Gate on d^2 = Delta^T (P_i + P_j)^-1 Delta (chi-square with d degrees of freedom).
+    coasting : array (n,) bool, optional
+        Tracks coasting through missed scans (:class:`DuplicateMerger`): ranked below the confirmed tracks that are
+        not, so of a pair the track holding its target is kept (default: none).
 
     Returns
     -------
@@ -77,9 +80,11 @@ def duplicate_of(x, P, confirmed, born_s, existence, gamma: float) -> np.ndarray
     S = P[None, :, :, :] + P[conf, None, :, :]
     d2 = np.einsum("cni,cni->cn", nu, np.linalg.solve(S, nu[..., None])[..., 0])
     d2[np.arange(len(conf)), conf] = np.inf
-    # rank: confirmed first, then older, then more likely to exist; a track is dropped when a better-ranked kept
-    # track is its duplicate
-    order = np.lexsort((-np.asarray(existence, float), np.asarray(born_s, float), ~np.asarray(confirmed, bool)))
+    # rank: confirmed first, then not coasting, then older, then more likely to exist; a track is dropped when a
+    # better-ranked kept track is its duplicate
+    lost = np.zeros(n, bool) if coasting is None else np.asarray(coasting, bool)
+    order = np.lexsort((-np.asarray(existence, float), np.asarray(born_s, float), lost,
+                        ~np.asarray(confirmed, bool)))
     rank = np.empty(n, np.int64)
     rank[order] = np.arange(n)
     row = {int(c): k for k, c in enumerate(conf)}
@@ -97,6 +102,18 @@ class DuplicateMerger:
     deleted track that had been confirmed, the id of the track it duplicated (the same target: its listing joins
     them, systems/active/targets.py).
 
+    A confirmed track coasting through missed scans (its existence below ``lost_existence`` at this scan or the last)
+    has a covariance that grows with every miss, and the test, whose T = P_i + P_j then accepts almost any pair,
+    loses its power: on the active chain's default scene as CW (seeds 1 and 2, pings 93-103) crossing-b's track
+    coasted 8-9 pings (existence 1 -> 0.15, position sd 50 -> 840 m), reached the approacher's contacts 1.2 km away
+    and passed the test against the approacher's own track, which the merger then deleted as the older one's
+    duplicate: one row for two targets. So a coasting track ranks below one holding its target (the latter is
+    kept), and its deletion is recorded as the same target only when the pair also passes the test at the last
+    scan the coaster held its target (existence >= ``held_existence``, both states of that scan, when the kept
+    track existed then): track-to-track association over the pair's history (Bar-Shalom, Willett & Tian 2011,
+    track-to-track association with the tracks' histories), which separates two targets that were apart and
+    meet (crossing) from two tracks of one target. Otherwise the coaster is deleted as lost (not merged).
+
     Parameters
     ----------
     inner : deleter part
@@ -110,13 +127,24 @@ class DuplicateMerger:
         into one row (measured on the active chain's default scene: LFM seed 2 at ping 57, CW seeds 1 and 2); two
         tracks on one target keep passing it. 1: P4's merger, at once (the active chain's default: 2 and 3 measured
         worse on benchmarks/bench_active_rows.py, the merges of two targets' tracks only came a scan or two later).
+    lost_existence : float
+        A track whose existence is below this at this scan or the last is coasting (0.5: more likely gone than
+        there); None: no track is (P4's merger).
+    held_existence : float
+        A track holds its target at a scan when its existence is at least this (0.9: a track of existence ~1 falls
+        below it after two misses in a row at the CW pd 0.4, tracking/existence.py).
     """
 
     inner: object
     gamma: float
     confirmed_scans: int = 1
+    lost_existence: float | None = 0.5
+    held_existence: float = 0.9
     merged: dict = field(default_factory=dict)
     streak: dict = field(default_factory=dict)  # (kept id, duplicate id) -> consecutive scans passing the test
+    held: dict = field(default_factory=dict)  # track id -> its last scan with existence >= held_existence
+    states: dict = field(default_factory=dict)  # scan -> {confirmed track id: (x, P)} of the scans ``held`` names
+    last_existence: dict = field(default_factory=dict)  # track id -> existence at the last scan
 
     def new_track_attrs(self, k: int) -> dict:
         """The inner deleter's per-track counters of ``k`` new tracks (the deleter-part protocol:
@@ -127,11 +155,13 @@ class DuplicateMerger:
         """The inner deleter's confirmation and deletion (``hit`` passed to it), then the duplicates' deletion;
         returns the kept tracks."""
         T = self.inner.manage(T, hit)
+        scan = max(self.states, default=-1) + 1
         if len(T) < 2 or not T.confirmed.any():
             self.streak.clear()
-            return T
+            return self._remember(T, scan)
         snap = TrackSnapshot.of(0.0, T)
-        into = duplicate_of(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma)
+        coasting = self._coasting(T)
+        into = duplicate_of(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma, coasting)
         ids = T.track_id
         both = np.nonzero((into >= 0) & T.confirmed)[0]
         pairs = {(int(ids[into[k]]), int(ids[k])): self.streak.get((int(ids[into[k]]), int(ids[k])), 0) + 1
@@ -141,6 +171,39 @@ class DuplicateMerger:
         for k in both:
             if pairs[(int(ids[into[k]]), int(ids[k]))] < self.confirmed_scans:
                 into[k] = -1  # not yet: the pair must keep passing the test
-            else:
+            elif not coasting[k] or self._apart_when_held(int(ids[into[k]]), int(ids[k])) is not True:
                 self.merged[int(ids[k])] = int(ids[into[k]])
-        return T.select(into < 0)
+        return self._remember(T.select(into < 0), scan)
+
+    def _coasting(self, T: TrackArrays) -> np.ndarray:
+        """Which tracks coast (existence below ``lost_existence`` at this scan or the last; class doc)."""
+        if self.lost_existence is None:
+            return np.zeros(len(T), bool)
+        last = np.array([self.last_existence.get(int(i), 1.0) for i in T.track_id])
+        return np.minimum(np.asarray(T.existence, float), last) < self.lost_existence
+
+    def _apart_when_held(self, kept: int, lost: int) -> bool | None:
+        """Did the pair fail the test at the last scan ``lost`` held its target (None: no such scan with both)?"""
+        at = self.states.get(self.held.get(lost, -1), {})
+        if kept not in at or lost not in at:
+            return None
+        (xi, Pi), (xj, Pj) = at[kept], at[lost]
+        nu = xi - xj
+        return bool(nu @ np.linalg.solve(Pi + Pj, nu) >= self.gamma)
+
+    def _remember(self, T: TrackArrays, scan: int) -> TrackArrays:
+        """Record this scan's confirmed states and existences (for :meth:`_apart_when_held`); returns ``T``."""
+        snap = TrackSnapshot.of(0.0, T) if len(T) else None
+        self.states[scan] = {} if snap is None else {int(i): (snap.x[k], snap.P[k])
+                                                     for k, i in enumerate(T.track_id) if T.confirmed[k]}
+        for k, i in enumerate(T.track_id):
+            if T.existence[k] >= self.held_existence:
+                self.held[int(i)] = scan
+        self.last_existence.clear()
+        self.last_existence.update({int(i): float(e) for i, e in zip(T.track_id, T.existence, strict=True)})
+        for i in [i for i in self.held if i not in self.last_existence]:
+            del self.held[i]
+        keep = set(self.held.values()) | {scan}
+        for s in [s for s in self.states if s not in keep]:
+            del self.states[s]
+        return T

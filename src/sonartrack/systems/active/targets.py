@@ -178,7 +178,8 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
         decided = _decide(d, group) if d is not None else None
         if decided is not None:
             own, mirror, lr, when, side = decided
-            flip = own in twin_chain or mirror in first_chain
+            # (own and its mirror can land in one chain when joins link a ghost to a twin's segment: own decides)
+            flip = own in twin_chain or (mirror in first_chain and own not in first_chain)
             own_chain, mirror_chain = (twin_chain, first_chain) if flip else (first_chain, twin_chain)
             own, mirror = _latest(tracks, own_chain), _latest(tracks, mirror_chain)
         else:
