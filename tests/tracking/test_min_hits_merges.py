@@ -76,3 +76,36 @@ def test_two_confirmed_tracks_are_merged_only_after_confirmed_scans_in_a_row():
     assert merger.merged == {}
     assert scan(x) == [0]  # the third scan in a row
     assert merger.merged == {1: 0}
+
+
+def _two(x, existence, sd_m):
+    """Tracks 0 (born 0 s) and 1 (born 60 s), both confirmed, at states ``x`` with position sds ``sd_m``."""
+    P = np.stack([np.diag([s**2, s**2, 1.0, 1.0]) for s in sd_m])
+    return TrackArrays(np.asarray(x, float)[:, None], P[:, None], np.ones((2, 1)), np.asarray(existence, float),
+                       np.array([True, True]), np.arange(2, dtype=np.int64), np.array([0.0, 60.0]), P,
+                       {"hits": np.ones(2)})
+
+
+def test_a_coasting_track_that_reaches_another_target_is_dropped_as_lost_not_merged():
+    # two targets 3 km apart, velocities 3 m/s apart (d^2 >> 13.3 with 50 m sds: not duplicates); then the older
+    # track 0 coasts (existence 0.3, sd 900 m) and lies 1.2 km from track 1: d^2 = 1.2e6 / (8.1e5 + 2.5e3) + 9 / 2 + 0
+    # ~ 6 < 13.3, the test passes. The coaster ranks below the held track (track 1 kept) and, the pair having failed
+    # the test when track 0 last held its target, is not recorded as the same target.
+    merger = DuplicateMerger(ExistenceDeleter(0.9, 0.01), GAMMA)
+    apart = [[0.0, 0, -3, 0], [3000.0, 0, 0, -3]]
+    assert merger.manage(_two(apart, [1.0, 1.0], [50, 50]), np.ones(2, bool)).track_id.tolist() == [0, 1]
+    met = [[1800.0, 0, -3, 0], [3000.0, 0, 0, -3]]
+    assert merger.manage(_two(met, [0.3, 1.0], [900, 50]), np.ones(2, bool)).track_id.tolist() == [1]
+    assert merger.merged == {}
+    # the same pair when track 0 had held its target 20 m from track 1 (one target, two tracks; confirmed_scans 2
+    # so that the pair outlives that scan): recorded, track 1 (holding the target) kept
+    merger = DuplicateMerger(ExistenceDeleter(0.9, 0.01), GAMMA, confirmed_scans=2)
+    near = [[3020.0, 0, 0, -3], [3000.0, 0, 0, -3]]
+    assert merger.manage(_two(near, [0.95, 0.95], [50, 50]), np.ones(2, bool)).track_id.tolist() == [0, 1]
+    assert merger.manage(_two(met, [0.3, 1.0], [900, 50]), np.ones(2, bool)).track_id.tolist() == [1]
+    assert merger.merged == {0: 1}
+    # without the coasting rule (lost_existence None: P4's merger) the older coaster is kept and the merge recorded
+    merger = DuplicateMerger(ExistenceDeleter(0.9, 0.01), GAMMA, lost_existence=None)
+    merger.manage(_two(apart, [1.0, 1.0], [50, 50]), np.ones(2, bool))
+    assert merger.manage(_two(met, [0.3, 1.0], [900, 50]), np.ones(2, bool)).track_id.tolist() == [0]
+    assert merger.merged == {1: 0}

@@ -141,7 +141,7 @@ class DuplicateMerger:
     lost_existence: float | None = 0.5
     held_existence: float = 0.9
     merged: dict = field(default_factory=dict)
-    streak: dict = field(default_factory=dict)  # (kept id, duplicate id) -> consecutive scans passing the test
+    streak: dict = field(default_factory=dict)  # (lower id, higher id) -> consecutive scans passing the test
     held: dict = field(default_factory=dict)  # track id -> its last scan with existence >= held_existence
     states: dict = field(default_factory=dict)  # scan -> {confirmed track id: (x, P)} of the scans ``held`` names
     last_existence: dict = field(default_factory=dict)  # track id -> existence at the last scan
@@ -164,12 +164,12 @@ class DuplicateMerger:
         into = duplicate_of(snap.x, snap.P, T.confirmed, T.born_s, T.existence, self.gamma, coasting)
         ids = T.track_id
         both = np.nonzero((into >= 0) & T.confirmed)[0]
-        pairs = {(int(ids[into[k]]), int(ids[k])): self.streak.get((int(ids[into[k]]), int(ids[k])), 0) + 1
-                 for k in both}
+        key = {k: tuple(sorted((int(ids[into[k]]), int(ids[k])))) for k in both}  # the pair, whichever is kept
+        pairs = {key[k]: self.streak.get(key[k], 0) + 1 for k in both}
         self.streak.clear()
         self.streak.update(pairs)
         for k in both:
-            if pairs[(int(ids[into[k]]), int(ids[k]))] < self.confirmed_scans:
+            if pairs[key[k]] < self.confirmed_scans:
                 into[k] = -1  # not yet: the pair must keep passing the test
             elif not coasting[k] or self._apart_when_held(int(ids[into[k]]), int(ids[k])) is not True:
                 self.merged[int(ids[k])] = int(ids[into[k]])
