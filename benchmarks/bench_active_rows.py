@@ -216,6 +216,7 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
     held = truth_scores(res, targets, det, g)["held"]
     rows_of: dict[str, int] = {}
     false_rows = ghost_rows = short_rows = 0
+    mixed: list[str] = []
     for k in range(len(targets)):
         short_rows += _ping(c, targets.last_s[k]) - _ping(c, targets.first_s[k]) + 1 <= 2
         tid = int(targets.track_id[k]) if targets.track_id[k] >= 0 else int(targets.mirror_track_id[k])
@@ -223,6 +224,9 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
         rows_of[name] = rows_of.get(name, 0) + 1
         false_rows += name == "false"
         ghost_rows += bool(targets.decision[k] == "decided" and targets.track_id[k] < 0)
+        held_by = {labels[m][0] for m in targets.chains[k][0] + targets.chains[k][1] if m in labels} - {"false"}
+        if len(held_by) > 1:  # one row listing the tracks of two or more true targets (merged / re-joined)
+            mixed.append(f"row {k + 1}: {'+'.join(sorted(held_by))}")
     short, ends, lines = 0, {}, []
     for name in detectable + sorted({v[0] for v in labels.values()} - set(detectable)):
         segs = []
@@ -246,9 +250,11 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
     print(f"{label}: {len(targets)} rows for {len(detectable)} detectable targets; false rows {n_false}, duplicate/"
           f"extra rows {extra}, ghost-only rows {ghost_rows}, rows of <= 2 pings {short_rows}; confirmed tracks "
           f"{len(labels)}, of them confirmed on <= 2 pings {short}; ends {ends}; held % of detectable pings (mean) "
-          f"{100 * np.mean([held.get(n, 0) for n in detectable]):.0f}")
+          f"{100 * np.mean([held.get(n, 0) for n in detectable]):.0f}; rows holding 2+ true targets {len(mixed)}"
+          + (f" ({', '.join(mixed)})" if mixed else ""))
     print("\n".join(lines))
     return {"rows": len(targets), "false": n_false, "short_rows": short_rows, "extra": extra, "ghost_rows": ghost_rows,
+            "mixed": len(mixed),
             "short": short, "held": {n: held.get(n, 0.0) for n in detectable}}
 
 

@@ -133,6 +133,10 @@ class DuplicateMerger:
     held_existence : float
         A track holds its target at a scan when its existence is at least this (0.9: a track of existence ~1 falls
         below it after two misses in a row at the CW pd 0.4, tracking/existence.py).
+    history_scans : int
+        A confirmed duplicate of a confirmed track is recorded as the same target only when the pair also passed the
+        test on each of the last this many scans on which both were confirmed (a window of the pair's history); 0:
+        this scan's test only.
     """
 
     inner: object
@@ -140,6 +144,7 @@ class DuplicateMerger:
     confirmed_scans: int = 1
     lost_existence: float | None = 0.5
     held_existence: float = 0.9
+    history_scans: int = 0
     merged: dict = field(default_factory=dict)
     streak: dict = field(default_factory=dict)  # (lower id, higher id) -> consecutive scans passing the test
     held: dict = field(default_factory=dict)  # track id -> its last scan with existence >= held_existence
@@ -171,7 +176,7 @@ class DuplicateMerger:
         for k in both:
             if pairs[key[k]] < self.confirmed_scans:
                 into[k] = -1  # not yet: the pair must keep passing the test
-            elif not coasting[k] or self._apart_when_held(int(ids[into[k]]), int(ids[k])) is not True:
+            elif self._same_target(int(ids[into[k]]), int(ids[k]), bool(coasting[k]), scan):
                 self.merged[int(ids[k])] = int(ids[into[k]])
         return self._remember(T.select(into < 0), scan)
 
@@ -182,14 +187,27 @@ class DuplicateMerger:
         last = np.array([self.last_existence.get(int(i), 1.0) for i in T.track_id])
         return np.minimum(np.asarray(T.existence, float), last) < self.lost_existence
 
+    def _same_target(self, kept: int, gone: int, coasting: bool, scan: int) -> bool:
+        """Is the deleted confirmed duplicate ``gone`` recorded as ``kept``'s target (class doc)?"""
+        if coasting and self._apart_when_held(kept, gone) is True:
+            return False
+        for s in range(scan - self.history_scans, scan):
+            at = self.states.get(s, {})
+            if kept in at and gone in at and self._d2(at[kept], at[gone]) >= self.gamma:
+                return False
+        return True
+
+    @staticmethod
+    def _d2(a, b) -> float:
+        nu = a[0] - b[0]
+        return float(nu @ np.linalg.solve(a[1] + b[1], nu))
+
     def _apart_when_held(self, kept: int, lost: int) -> bool | None:
         """Did the pair fail the test at the last scan ``lost`` held its target (None: no such scan with both)?"""
         at = self.states.get(self.held.get(lost, -1), {})
         if kept not in at or lost not in at:
             return None
-        (xi, Pi), (xj, Pj) = at[kept], at[lost]
-        nu = xi - xj
-        return bool(nu @ np.linalg.solve(Pi + Pj, nu) >= self.gamma)
+        return self._d2(at[kept], at[lost]) >= self.gamma
 
     def _remember(self, T: TrackArrays, scan: int) -> TrackArrays:
         """Record this scan's confirmed states and existences (for :meth:`_apart_when_held`); returns ``T``."""
@@ -203,7 +221,7 @@ class DuplicateMerger:
         self.last_existence.update({int(i): float(e) for i, e in zip(T.track_id, T.existence, strict=True)})
         for i in [i for i in self.held if i not in self.last_existence]:
             del self.held[i]
-        keep = set(self.held.values()) | {scan}
+        keep = set(self.held.values()) | set(range(scan - self.history_scans, scan + 1))
         for s in [s for s in self.states if s not in keep]:
             del self.states[s]
         return T

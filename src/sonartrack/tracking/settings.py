@@ -55,6 +55,11 @@ class PositionTrackerSettings(Settings):
         1, "consecutive scans on which two confirmed tracks must pass the track-to-track test before the younger is "
            "merged into the older as its duplicate (tracking/duplicates.py DuplicateMerger; a tentative duplicate is "
            "merged at once; 1: at once, P4)", unit="1", ge=1, le=20)
+    merge_history_scans: int = setting(
+        0, "a confirmed track deleted as another confirmed track's duplicate is recorded as the same target only when "
+           "the pair also passed the track-to-track test on each of the last this many scans on which both were "
+           "confirmed (tracking/duplicates.py DuplicateMerger history_scans; 0: on this scan only, P4)",
+        unit="1", ge=0, le=100)
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "

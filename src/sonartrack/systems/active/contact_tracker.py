@@ -130,7 +130,8 @@ class ContactTracker:
                                                          gate_threshold(settings.gate_probability, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4),
-                                                   settings.merge_confirmed_scans)
+                                                   settings.merge_confirmed_scans,
+                                                   history_scans=settings.merge_history_scans)
         self.merger = self.tracker.deleter if merge_probability is not None else None
         self.rejoin_s, self.joins = rejoin_s, {}
         self.rejoin_gamma = gate_threshold(merge_probability or 0.99, 4)
