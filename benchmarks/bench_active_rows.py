@@ -224,7 +224,8 @@ def report(c: dict, res, reasons: dict, gate_m: float = 1000.0, label: str = "")
         rows_of[name] = rows_of.get(name, 0) + 1
         false_rows += name == "false"
         ghost_rows += bool(targets.decision[k] == "decided" and targets.track_id[k] < 0)
-        held_by = {labels[m][0] for m in targets.chains[k][0] + targets.chains[k][1] if m in labels} - {"false"}
+        held_by = {labels[m][0] for m in targets.chains[k][0] + targets.chains[k][1]
+                   if m in labels and labels[m][1] <= 0.5} - {"false"}  # (a ghost's label is ambiguous: left out)
         if len(held_by) > 1:  # one row listing the tracks of two or more true targets (merged / re-joined)
             mixed.append(f"row {k + 1}: {'+'.join(sorted(held_by))}")
     short, ends, lines = 0, {}, []

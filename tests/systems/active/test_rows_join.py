@@ -185,3 +185,31 @@ def test_a_ghost_whose_twin_joined_an_earlier_row_is_listed_in_that_row():
     assert m.chains[0] == ((37, 83), (38, 81)) and int(m.track_id[0]) == 83
     # without the join the twins make two targets (37/38 and 83/81), each one row
     assert len(mirror_targets(ActiveTracks(tracks, P, sides), geometry)) == 2
+
+
+def test_a_decided_track_keeps_its_row_when_joins_put_its_twin_on_its_side():
+    """By hand: track 34 (confirmed first, at x = -3000), 33 a later segment joined to it (at +3000, decided on its
+    target's side, twin 41), 41 (at -3000, 33's twin) also joined to 34. The joins put 33 and its twin 41 on one side
+    of the row; the decision names them: the row's target is 33's position, its mirror 41's (before, the row listed
+    no target track: a ghost-only row)."""
+    from sonartrack.systems.active.contact_tracker import ActiveTracks
+    from sonartrack.systems.active.sides import SideDecisions
+    from sonartrack.tracking.run import PositionTracks
+
+    rows = [(0.0, 34), (30.0, 34), (30.0, 33), (30.0, 41), (60.0, 33), (60.0, 41)]
+    t = np.array([r[0] for r in rows])
+    ids = np.array([r[1] for r in rows], np.int64)
+    x = np.zeros((len(rows), 4))
+    x[:, 0] = np.where(ids == 33, 3000.0, -3000.0)
+    x[:, 1] = 5000.0
+    n = len(rows)
+    tracks = PositionTracks(t, ids, np.ones(n, bool), np.full(n, 0.9), x, np.full(n, 50.0), np.full(n, 50.0),
+                            np.ones((n, 1)))
+    sides = SideDecisions(np.array([33, 34, 41]), np.array(["track", "undecided", "undecided"], object),
+                          np.array(["starboard", "", ""], object), np.array([9.0, 0.0, 0.0]),
+                          np.array([30.0, np.nan, np.nan]), np.full(3, 5), np.array([41, -1, 33]))
+    geometry = ActiveGeometry(np.array([-60.0, 120.0]), np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2))
+    m = mirror_targets(ActiveTracks(tracks, np.stack([np.eye(4)] * n), sides, {33: 34, 41: 34}), geometry)
+    assert len(m) == 1 and m.decision[0] == "decided"
+    assert int(m.track_id[0]) == 33 and int(m.mirror_track_id[0]) == 41
+    assert m.xy[0].tolist() == [3000.0, 5000.0]

@@ -178,10 +178,12 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
         decided = _decide(d, group) if d is not None else None
         if decided is not None:
             own, mirror, lr, when, side = decided
-            # (own and its mirror can land in one chain when joins link a ghost to a twin's segment: own decides)
-            flip = own in twin_chain or (mirror in first_chain and own not in first_chain)
+            flip = own in twin_chain or mirror in first_chain
             own_chain, mirror_chain = (twin_chain, first_chain) if flip else (first_chain, twin_chain)
-            own, mirror = _latest(tracks, own_chain), _latest(tracks, mirror_chain)
+            if any(own in c and mirror in c for c in (first_chain, twin_chain)):  # joins put a decided track and
+                own_chain, mirror_chain = first_chain, twin_chain  # its twin on one side: the decision names them
+            else:
+                own, mirror = _latest(tracks, own_chain), _latest(tracks, mirror_chain)
         else:
             own_chain, mirror_chain = first_chain, twin_chain
             own, mirror, when, side = _latest(tracks, first_chain), _latest(tracks, twin_chain), np.nan, ""
