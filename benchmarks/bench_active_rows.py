@@ -47,6 +47,32 @@ the younger's confirmation, else the better-informed kept: CW 1 5-8 rows, CW 2 7
 coasting through crossing-b's missed pings ~93-101 takes the approacher's contacts 1.4 km off (its gate ~400 m sd) on
 both seeds, and the merger then records the approacher's track as its duplicate: one row for two targets. Two seeds
 only: the rows are not monotone in pd_cw (0.45 gives 6 on CW 1), so 0.4 rests on the measured Pd as much as on them.
+
+Measured (2026-12-07, h10-acthold3; ~10-40 s a run of all four): the counts above hid rows that list two or more
+true targets (a merge or re-join of two targets' tracks; the row then counts for its latest track's target): now
+printed as "rows holding 2+ true targets" (a ghost's label left out: near a crossing the mirrors of two targets
+are close). Changes: a coasting confirmed track (existence < 0.5, tracking/duplicates.py DuplicateMerger) ranks
+below the track holding its target and is recorded as that target only if the pair passed the test at its last
+held scan; a decided track and its twin put on one side of a row by joins name the row (targets.py; was a
+ghost-only row). Per pulse/seed: rows, false, extra, ghost-only, <= 2-ping rows, rows holding 2+ targets; held %:
+    ACTHOLD2's caches (before ACTCW)  main                             h10-acthold3
+        CW 1                        4, 1, 0, 0, 0, 1 (appr.+cr-b)    5, 1, 0, 0, 0, 0; held 95/73/78/86 (was 93)
+        CW 2                        5, 0, 2, 0, 0, 1 (appr.+cr-b)    6, 0, 2, 0, 0, 0; held 86/82/79/86 (same)
+    the lead's caches on main (/tmp/lead/rows10: ACTCW's CW sigma_time, delay_guard 0)
+        LFM 1                       4, 0, 0, 0, 0, 0                 same; held 74/70/90/99
+        LFM 2                       4, 0, 0, 0, 0, 1 (cr-b+man.)     same; held 78/82/89/98
+        CW 1                        5, 1, 0, 1, 1, 2                 same; held 95/78/100/90
+        CW 2                        5, 0, 1, 0, 0, 1 (appr.+man.)    6, 0, 2, 0, 0, 1 (appr.+cr-b); held 90/80/100/85
+What is left: on the lead's caches the CW tracker confirms 26-29 tracks for 4 targets (LFM 7-8); the merger and the
+re-join glue them into 5-6 rows, and the glue cannot tell a young fragment from another target's new track: their
+test T = P_i + P_j is dominated by the young track's covariance (position sd 200-900 m at its first scans), and the
+merges' d^2 do not separate the right from the wrong (same target 1.6-12.9, two targets 3.7-13.2, gate 13.3).
+Without any recorded merge or re-join: CW 1 22 rows, CW 2 20, none holding two targets. Tried and left off: the
+record also requiring the test on each of the last 5 or 10 common scans (tracking merge_history_scans): CW 1 17
+rows, still 2 holding two targets (through re-joins); the CW contacts' R scaled by 1.5 and 2 (a stand-in for the
+CW cone error measured 2.0 deg vs 0.87 stated, ACTCW): 25-26 and 19 confirmed tracks, 5-7 rows, 1-2 holding two.
+A re-join (contact_tracker.py) tested against the lost track's last state with existence >= 0.9 instead of its
+last (coasted) one: lead's CW 1 a row holding three targets, CW 2 0 mixed (was 1); ACTHOLD2's CW 1 7 rows, 1 mixed.
 """
 
 from __future__ import annotations
