@@ -49,6 +49,7 @@ from sonartrack.core.errors import require
 from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, cfar_threshold, noise_estimate
+from sonartrack.detection.lobes import LobeBand, lobe_images
 
 
 class FrontEndSettings(Settings):
@@ -77,6 +78,12 @@ class FrontEndSettings(Settings):
                                      "(detection/normalise.py): thresholds set for exponential noise then keep their "
                                      "false-alarm rate in spiky reverberation (OS CFAR only)", unit="")
     cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
+    lobe_margin_db: float | None = setting(
+        None, "drop a single-ping detection that is a lobe image of a stronger one of the same ping "
+              "(detection/lobes.py: same travel time within 1 / B, power within the array's sidelobe envelope or "
+              "grating lobe of the stronger one's plus this margin); not set: every detection kept (the family's "
+              "false tracks measured on current code were not images: benchmarks/bench_active_family.py)",
+        unit="dB", ge=0, le=20)
 
 
 #: half-width in u = cos(cone) of the search for the beam of largest power around a detection: half the main lobe's
@@ -107,6 +114,7 @@ class PingCells:
     statistic: np.ndarray
     doppler_measured: bool
     level: np.ndarray | None = None
+    lobes: LobeBand | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -259,7 +267,18 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
             if waveform.measures_doppler else np.full(doppler.shape, np.nan))
     return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate, stat,
-                     waveform.measures_doppler, level)
+                     waveform.measures_doppler, level, lobe_band(waveform, array, settings))
+
+
+def lobe_band(waveform: Waveform, array: LineArray, settings: FrontEndSettings) -> LobeBand | None:
+    """The array and band whose lobes :func:`detect_ping` drops (detection/lobes.py), None when
+    ``lobe_margin_db`` is not set; an image's travel time within the delay resolution (1 / B, a CW's pulse)."""
+    if settings.lobe_margin_db is None:
+        return None
+    half = 0.5 * waveform.bandwidth_hz if waveform.kind == "lfm" else 0.0
+    tol = 1.0 / waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else waveform.duration_s
+    return LobeBand(array.elements, array.spacing_m, waveform.carrier_hz - half, waveform.carrier_hz + half,
+                    settings.sound_speed_mps, tol, float(settings.lobe_margin_db))
 
 
 def heavy_tail_statistic(stat: np.ndarray, settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray]:
@@ -435,5 +454,10 @@ def detect_ping(cells: PingCells, threshold: float, guard_cells: int = 4) -> Det
     doppler = _axis_value(cells.doppler_hz, j) if cells.doppler_measured else np.full(b.shape, np.nan)
     rate = _axis_value(cells.range_rate_mps, j) if cells.doppler_measured else np.full(b.shape, np.nan)
     n = b.size
-    return Detections(np.full(n, cells.ping), np.full(n, cells.time_s), cone,
-                      _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])
+    det = Detections(np.full(n, cells.ping), np.full(n, cells.time_s), cone,
+                     _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])
+    if cells.lobes is None or n < 2:
+        return det
+    power = s[idx] * (cells.level[idx] if cells.level is not None else 1.0)
+    image = lobe_images(det.cone_deg, det.travel_time_s, det.doppler_cell, power, cells.lobes)
+    return Detections(**{f: np.asarray(getattr(det, f))[~image] for f in Detections.__slots__})
