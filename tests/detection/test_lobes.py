@@ -52,3 +52,21 @@ def test_detect_ping_drops_the_grating_lobe_image_when_told_the_array():
     det = detect_ping(PingCells(*args, _band(0.5)), 20.0)
     assert det.beam.tolist() == [b0]
     assert len(detect_ping(PingCells(*args, _band(0.25)), 20.0)) == 2
+
+
+def test_mftd_detections_lose_their_lobe_images_by_the_pings_power():
+    from sonartrack.detection.cells import Detections
+    from sonartrack.detection.ping_mftd import drop_lobe_images
+
+    cone = cone_grid_deg(61)
+    u = np.cos(np.deg2rad(cone))
+    b0 = int(np.argmin(np.abs(u - 0.8)))
+    b1 = int(np.argmin(np.abs(u - (u[b0] - 1.25))))
+    stat = np.ones((61, 40, 1), np.float32)
+    stat[b0, 20, 0], stat[b1, 20, 0] = 400.0, 300.0
+    # the MFTD's statistic S ranks them the other way: the ping's power decides which is the image
+    det = Detections(np.ones(2, np.int64), np.zeros(2), cone[[b0, b1]], np.array([1.2, 1.2]), np.full(2, np.nan),
+                     np.full(2, np.nan), np.array([5.0, 9.0]), np.array([b0, b1]), np.array([20, 20]), np.zeros(2, int))
+    args = (1, 0.0, cone, 1.0 + 0.01 * np.arange(40), np.zeros(1), np.full(1, np.nan), stat, False, None)
+    assert drop_lobe_images(det, PingCells(*args, _band(0.5))).beam.tolist() == [b0]
+    assert len(drop_lobe_images(det, PingCells(*args))) == 2
