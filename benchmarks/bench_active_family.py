@@ -151,9 +151,47 @@ def _rate_of(geometry, t, x) -> float:
     return float((_bistatic_m(geometry, np.array([t + 1.0]), p0 + v) - _bistatic_m(geometry, np.array([t]), p0))[0])
 
 
+def mirror_pairs(result, gate_m: float = 500.0) -> int:
+    """How many of the confirmed tracks are one of a mirror pair: two confirmed tracks each within ``gate_m`` of the
+    other's mirror about the array axis (median over their common pings), i.e. one echo's two hypotheses (issue 34
+    item 4: one row)."""
+    tr, g = result.tracks.tracks, result.geometry
+    ids = np.unique(tr.track_id[tr.confirmed])
+    rows = {i: np.nonzero((tr.track_id == i) & tr.confirmed)[0] for i in ids}
+    paired = set()
+    for a in ids:
+        for b in ids:
+            if b <= a or a in paired or b in paired:
+                continue
+            ta, tb = tr.time_s[rows[a]], tr.time_s[rows[b]]
+            common, ia, ib = np.intersect1d(ta, tb, return_indices=True)
+            if len(common) < 2:
+                continue
+            xa, xb = tr.x[rows[a][ia], :2], tr.x[rows[b][ib], :2]
+            if np.median(np.hypot(*(_mirror(g, common, xb) - xa).T)) < gate_m:
+                paired.update((int(a), int(b)))
+    return len(paired)
+
+
 def verdict(row: dict) -> str:
     """Is the study right to call this track false? (quiet scene: no targets, so every track is false.)"""
     return "false (right)"
+
+
+def _patch_cw_lobes() -> None:
+    """cw_cells.cw_ping_cells with the cells' LobeBand attached (``--cw-lobes``: the change proposed to its owner)."""
+    import dataclasses
+
+    import sonartrack.detection.cw_cells as cw
+    from sonartrack.detection.cells import lobe_band
+
+    inner = cw.cw_ping_cells
+
+    def with_lobes(samples, fs_hz, waveform, array, front_end, settings, **kw):
+        return dataclasses.replace(inner(samples, fs_hz, waveform, array, front_end, settings, **kw),
+                                   lobes=lobe_band(waveform, array, front_end))
+
+    cw.cw_ping_cells = with_lobes
 
 
 def main() -> None:
@@ -164,21 +202,34 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2017, help="the study's master seed (sonartrack reproduce's default)")
     ap.add_argument("--minutes", type=float, default=None, help="length of the twin (not set: the scene's, 1 h)")
     ap.add_argument("--gate", type=float, default=1500.0, help="on a point / its mirror within this (m; study match)")
-    ap.add_argument("--range-tol", type=float, default=150.0, help="lobe image: bistatic range within this (m)")
+    ap.add_argument("--range-tol", type=float, default=None, help="lobe image: bistatic range within this (m; not "
+                    "set: c / B for an LFM, c tau / 2 for a CW)")
     ap.add_argument("--early", type=float, default=3.0, help="early delays: travel time below this (s)")
     ap.add_argument("--ridge", type=float, default=0.3, help="CW ridge: range rate within this of a still point's")
     ap.add_argument("--cache", type=Path, default=Path("/tmp/bench_active_family"))
     ap.add_argument("--lobe-margin-db", type=float, default=None, help="the front end's lobe-image margin (cells.py "
                     "lobe_margin_db; not set: the chain's default)")
+    ap.add_argument("--heavy-tail-cells", default=None, help="the front end's heavy_tail_cells ('none': one K "
+                    "shape for all beams, as before 10a6196; not set: the chain's default)")
+    ap.add_argument("--cw-lobes", action="store_true", help="measure the proposed cw_cells.py change (not ours: "
+                    "ACTCW's): the CW front end's cells carry cells.lobe_band, CW lobe images dropped too")
     args = ap.parse_args()
+    args._tol = args.range_tol
+    if args.cw_lobes:
+        _patch_cw_lobes()
     config = Config()
-    if args.lobe_margin_db is not None:
-        fe = config.chain.front_end.model_copy(update={"lobe_margin_db": args.lobe_margin_db})
-        config = config.model_copy(update={"chain": config.chain.model_copy(update={"front_end": fe})})
+    update = {} if args.lobe_margin_db is None else {"lobe_margin_db": args.lobe_margin_db}
+    if args.heavy_tail_cells is not None:
+        update["heavy_tail_cells"] = None if args.heavy_tail_cells == "none" else int(args.heavy_tail_cells)
+    fe = config.chain.front_end.model_copy(update=update)
+    config = config.model_copy(update={"chain": config.chain.model_copy(update={"front_end": fe})})
     total_false, total_h = 0, 0.0
     for i in args.trials:
         scene, values = trial_scene(config, args.seed, i, args.minutes)
         result, sec = run_quiet(config, scene, args.cache)
+        w = scene.waveform
+        args.range_tol = tol if (tol := getattr(args, "_tol", None)) is not None else (
+            scene.sound_speed_mps / w.bandwidth_hz if w.kind == "lfm" else 0.5 * scene.sound_speed_mps * w.duration_s)
         rows = classify(result, scene, args)
         hours = scene.duration_s / 3600.0
         total_false, total_h = total_false + len(rows), total_h + hours
@@ -192,7 +243,8 @@ def main() -> None:
             print(f"  track {r['track']:4d} pings {r['pings']:>7s} ({r['n']:3d}) {r['where']:7s} {r['share']:.0%} "
                   f"speed {r['speed_mps']:5.2f} m/s delay {r['delay_s']:5.1f} s cone {r['cone_deg']:5.1f}{extra} "
                   f"-> {verdict(r)}")
-        print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())))
+        print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
+              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
     print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
 
 
