@@ -42,6 +42,12 @@ cone 160-175 deg, 9 on a point's mirror. :func:`same_range` marks the contacts o
 known to a few hundred metres across the beam, and the stillness test does not pass in the map's 8 pings); the chain
 withholds them, and the mirror twins of the clutter contacts, as it withholds the point. The price: a target's echo
 within ``image_range_m`` in r_B of a stronger recurring echo is withheld at that ping from the tracks not confirmed.
+
+Memory. The recurrence test looks back ``span`` pings, the stillness fit ``fit_span`` (longer: the velocity's error
+falls as T n^1.5), and a position once shown still is a known point for ``keep_pings`` pings after its last contact: a
+contact in a known point's gate is clutter without a new fit, so a point whose contacts grow wide across the beam as
+the geometry changes (a short array, a point drifting towards endfire) stays clutter (class doc: measured). The price:
+a target passing within the gate of a known point is withheld from unconfirmed tracks while it is there.
 """
 
 from __future__ import annotations
