@@ -101,3 +101,48 @@ def test_same_range_marks_the_weaker_contacts_on_a_recurring_echos_ellipse():
     got = same_range(xy, [0.0, 0.0], [300.0, 0.0], anchor, stat, 15.0)
     assert got.tolist() == [False, True, False, False, False, False]
     assert not same_range(xy, [0.0, 0.0], [300.0, 0.0], np.zeros(6, bool), stat, 15.0).any()
+
+
+def _contacts(rng, xy0, v, R, t):
+    """One noisy contact of a point at xy0 + v t (m), its error drawn from R (m^2): the data the map sees."""
+    return (np.asarray(xy0, float) + np.asarray(v, float) * t + rng.multivariate_normal([0.0, 0.0], R))[None], R[None]
+
+
+def test_longer_fit_shows_a_point_still_whose_contacts_are_wide_across_the_beam():
+    # sigma 150 m across the beam, 30 s pings: 8 pings give sigma_v = 150 sqrt(12 / (8 * 63)) / 30 = 0.77 m/s, the
+    # bound |v| + sqrt(chi2_2(0.9) = 4.6) 0.77 = 1.65 m/s > 1 m/s: never still; 24 pings: sigma_v 0.15, still
+    R = np.diag([150.0**2, 30.0**2])
+    verdicts = {}
+    for fit_span in (None, 24):
+        rng = np.random.default_rng(3)
+        m = ClutterMap(8, 3, slow_mps=1.0, fit_span=fit_span, keep_pings=None)
+        verdicts[fit_span] = [bool(m.update(*_contacts(rng, [5000.0, 2000.0], [0.0, 0.0], R, 30.0 * k), 30.0 * k)[0])
+                              for k in range(40)]
+    assert not any(verdicts[None])
+    assert all(verdicts[24][30:])
+    # a target at 3 m/s along the wide axis is not shown still however long the fit
+    rng = np.random.default_rng(4)
+    m = ClutterMap(8, 3, slow_mps=1.0, fit_span=24, keep_pings=None)
+    assert not any(m.update(*_contacts(rng, [5000.0, 2000.0], [3.0, 0.0], R, 30.0 * k), 30.0 * k)[0]
+                   for k in range(40))
+
+
+def test_known_point_stays_clutter_until_it_is_not_seen():
+    R = np.diag([40.0**2, 40.0**2])
+    rng = np.random.default_rng(5)
+    m = ClutterMap(8, 3, slow_mps=1.0, fit_span=8, keep_pings=5)
+    got = [bool(m.update(*_contacts(rng, [0.0, 0.0], [0.0, 0.0], R, 30.0 * k), 30.0 * k)[0]) for k in range(12)]
+    assert got[-1] and len(m.known[0]) >= 1
+    # the same place seen with 20 times wider errors: no new fit passes, the known point still marks it
+    wide = R * 400.0
+    m2 = ClutterMap(8, 3, slow_mps=1.0, fit_span=8, keep_pings=None)
+    for k in range(12):
+        m2.update(*_contacts(rng, [0.0, 0.0], [0.0, 0.0], R, 30.0 * k), 30.0 * k)
+    later = [(bool(m.update(*_contacts(rng, [0.0, 0.0], [0.0, 0.0], wide, 30.0 * k), 30.0 * k)[0]),
+              bool(m2.update(*_contacts(rng, [0.0, 0.0], [0.0, 0.0], wide, 30.0 * k), 30.0 * k)[0]))
+             for k in range(12, 16)]
+    assert all(a for a, _ in later) and not all(b for _, b in later)
+    # pings without a contact there: forgotten after keep_pings of them
+    for k in range(16, 23):
+        m.update(np.array([[9000.0, 9000.0]]), R[None], 30.0 * k)
+    assert not (np.hypot(*m.known[0].T) < 1000.0).any()

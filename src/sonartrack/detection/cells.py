@@ -49,6 +49,7 @@ from sonartrack.core.errors import require
 from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, cfar_threshold, noise_estimate
+from sonartrack.detection.lobes import LobeBand, lobe_images
 
 
 class FrontEndSettings(Settings):
@@ -77,6 +78,16 @@ class FrontEndSettings(Settings):
                                      "(detection/normalise.py): thresholds set for exponential noise then keep their "
                                      "false-alarm rate in spiky reverberation (OS CFAR only)", unit="")
     cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
+    heavy_tail_cells: int | None = setting(
+        20000, "heavy_tail's K shape is fitted per group of adjacent beams holding at least this many cells (a narrow "
+               "beam's reverberation is spikier than a wide one's: cells.py heavy_tail_statistic); not set: one fit "
+               "over all beams", unit="1", ge=10000)
+    lobe_margin_db: float | None = setting(
+        None, "drop a single-ping detection that is a lobe image of a stronger one of the same ping "
+              "(detection/lobes.py: same travel time within 1 / B, power within the array's sidelobe envelope or "
+              "grating lobe of the stronger one's plus this margin); not set: every detection kept (the family's "
+              "false tracks measured on current code were not images: benchmarks/bench_active_family.py)",
+        unit="dB", ge=0, le=20)
 
 
 #: half-width in u = cos(cone) of the search for the beam of largest power around a detection: half the main lobe's
@@ -107,6 +118,7 @@ class PingCells:
     statistic: np.ndarray
     doppler_measured: bool
     level: np.ndarray | None = None
+    lobes: LobeBand | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -259,37 +271,68 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)
             if waveform.measures_doppler else np.full(doppler.shape, np.nan))
     return PingCells(int(ping), float(time_s), cone_grid_deg(settings.beams), delay[keep], doppler, rate, stat,
-                     waveform.measures_doppler, level)
+                     waveform.measures_doppler, level, lobe_band(waveform, array, settings))
+
+
+def lobe_band(waveform: Waveform, array: LineArray, settings: FrontEndSettings) -> LobeBand | None:
+    """The array and band whose lobes :func:`detect_ping` drops (detection/lobes.py), None when
+    ``lobe_margin_db`` is not set; an image's travel time within the delay resolution (1 / B, a CW's pulse)."""
+    if settings.lobe_margin_db is None:
+        return None
+    half = 0.5 * waveform.bandwidth_hz if waveform.kind == "lfm" else 0.0
+    tol = 1.0 / waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else waveform.duration_s
+    return LobeBand(array.elements, array.spacing_m, waveform.carrier_hz - half, waveform.carrier_hz + half,
+                    settings.sound_speed_mps, tol, float(settings.lobe_margin_db))
 
 
 def heavy_tail_statistic(stat: np.ndarray, settings: FrontEndSettings) -> tuple[np.ndarray, np.ndarray]:
-    """The OS-normalised statistic (B, J, D) mapped per Doppler cell through the K law of its fitted shape
-    (detection/normalise.py :func:`k_shape_from_exceedance`, :func:`k_to_exponential`), and the shapes (J,) (inf:
-    exponential, left as it is; all inf when ``heavy_tail`` is off or the CFAR is CA).
+    """The OS-normalised statistic (B, J, D) mapped per Doppler cell and group of adjacent beams through the K law
+    of its fitted shape (detection/normalise.py :func:`k_shape_from_exceedance`, :func:`k_to_exponential`), and the
+    shapes (B, J) (inf: exponential, left as it is; all inf when ``heavy_tail`` is off or the CFAR is CA).
+
+    The beams are fitted in groups of at least ``heavy_tail_cells`` cells (:func:`shape_groups`), not all together:
+    a narrow beam (broadside of a long array) holds fewer scatterers per cell than a wide one (near endfire), so its
+    reverberation is spikier, and one shape for all beams let it through. Measured on study active-chain's trial 2
+    (seed 2017; 32 elements x 0.5 m at 2.4 kHz, K reverberation +10 dB, 20 min reverberation-only,
+    benchmarks/bench_active_family.py): 115 single-ping detections a ping, 60 % of them at cone 80-100 deg, with one
+    shape for all beams.
 
     Parameters
     ----------
     stat : ndarray (B, J, D)
         s = y / mu of the searched cells.
     settings : FrontEndSettings
-        ``heavy_tail`` and the CFAR (N, k).
+        ``heavy_tail``, ``heavy_tail_cells`` and the CFAR (N, k).
 
     Returns
     -------
     tuple
-        (mapped statistic (B, J, D) float32, K shape per Doppler cell (J,)).
+        (mapped statistic (B, J, D) float32, K shape per beam and Doppler cell (B, J)).
     """
     from sonartrack.detection.normalise import k_shape_from_exceedance, k_to_exponential
 
-    shapes = np.full(stat.shape[1], np.inf)
+    shapes = np.full(stat.shape[:2], np.inf)
     if not settings.heavy_tail or settings.cfar.method != "os":
         return stat, shapes
     n, k = settings.cfar.n_reference, settings.cfar.rank
     out = np.array(stat, dtype=np.float32, copy=True)
-    for j in range(stat.shape[1]):
-        shapes[j] = k_shape_from_exceedance(stat[:, j], n, k)
-        out[:, j] = k_to_exponential(stat[:, j], shapes[j], n, k)
+    for group in shape_groups(stat.shape[0], stat.shape[2], settings.heavy_tail_cells):
+        for j in range(stat.shape[1]):
+            shapes[group, j] = k_shape_from_exceedance(stat[group, j], n, k)
+            out[group, j] = k_to_exponential(stat[group, j], shapes[group.start, j], n, k)
     return out, shapes
+
+
+def shape_groups(n_beams: int, n_delays: int, min_cells: int | None) -> list[slice]:
+    """Adjacent beams in groups of at least ``min_cells`` cells of ``n_delays`` delays each (the last group takes
+    the remainder; None or too few cells in all: one group)."""
+    if min_cells is None or n_beams * n_delays < 2 * min_cells:
+        return [slice(0, n_beams)]
+    size = max(1, int(np.ceil(min_cells / max(n_delays, 1))))
+    starts = list(range(0, n_beams, size))
+    if n_beams - starts[-1] < size and len(starts) > 1:
+        starts.pop()
+    return [slice(a, b) for a, b in zip(starts, starts[1:] + [n_beams], strict=True)]
 
 
 def blast_gate_s(settings: FrontEndSettings, waveform: Waveform, direct_arrival_s: float | None) -> float:
@@ -435,5 +478,10 @@ def detect_ping(cells: PingCells, threshold: float, guard_cells: int = 4) -> Det
     doppler = _axis_value(cells.doppler_hz, j) if cells.doppler_measured else np.full(b.shape, np.nan)
     rate = _axis_value(cells.range_rate_mps, j) if cells.doppler_measured else np.full(b.shape, np.nan)
     n = b.size
-    return Detections(np.full(n, cells.ping), np.full(n, cells.time_s), cone,
-                      _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])
+    det = Detections(np.full(n, cells.ping), np.full(n, cells.time_s), cone,
+                     _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])
+    if cells.lobes is None or n < 2:
+        return det
+    power = s[idx] * (cells.level[idx] if cells.level is not None else 1.0)
+    image = lobe_images(det.cone_deg, det.travel_time_s, det.doppler_cell, power, cells.lobes)
+    return Detections(**{f: np.asarray(getattr(det, f))[~image] for f in Detections.__slots__})

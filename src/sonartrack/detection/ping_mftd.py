@@ -311,7 +311,8 @@ class PingMftd:
         Detections
             As :meth:`push_array`.
         """
-        return self.push_array(cells.ping, cells.time_s, cells.statistic, level=cells.level)
+        det = self.push_array(cells.ping, cells.time_s, cells.statistic, level=cells.level)
+        return drop_lobe_images(det, cells)
 
     def push_array(self, ping: int, time_s: float, cells, level=None) -> Detections:
         """Add one ping's cells and return the detections decided at it.
@@ -371,6 +372,20 @@ class PingMftd:
         return Detections(np.full(n, ping, np.int64), np.full(n, float(time_s)), cone, delay,
                           np.asarray(a.doppler_hz, float)[j], np.asarray(a.range_rate_mps, float)[j],
                           np.asarray(st, float), b.astype(np.int64), d.astype(np.int64), j.astype(np.int64))
+
+
+def drop_lobe_images(det: Detections, cells: PingCells) -> Detections:
+    """``det`` without the lobe images of a stronger detection of the same ping (detection/lobes.py), their power
+    the ping's s mu at their cells; as they are when the cells carry no :class:`~sonartrack.detection.lobes.LobeBand`
+    (``lobe_margin_db`` not set)."""
+    from sonartrack.detection.lobes import lobe_images
+
+    if cells.lobes is None or len(det) < 2:
+        return det
+    idx = (det.beam, det.delay_cell, det.doppler_cell)
+    power = np.asarray(cells.statistic, float)[idx] * (cells.level[idx] if cells.level is not None else 1.0)
+    image = lobe_images(det.cone_deg, det.travel_time_s, det.doppler_cell, power, cells.lobes)
+    return Detections(**{f: np.asarray(getattr(det, f))[~image] for f in Detections.__slots__})
 
 
 def parabola_offset(log_y: np.ndarray, b, d, j, axis: int) -> np.ndarray:

@@ -1,0 +1,258 @@
+"""Where the active-chain study's false confirmed tracks come from, on the study's own family of scenes.
+
+Runs the reverberation-only twin of chosen trials of study ``active-chain`` at full size (the trial's scene drawn
+exactly as studies/active_chain.py ``run_trial`` draws it: ``trial_rng(seed, i)``, two seeds, then
+studies/active_chain_family.py ``draw_scene``; the twin keeps the clutter points and takes the second seed), through
+the chain of ``sonartrack active``, and prints per confirmed track (every one of them is a false track to the study):
+the trial's axes, its confirmed span (pings), where it sits, its speed, and whether the study is right to call it false.
+
+Where a track sits, tested in this order on its confirmed rows (the majority label is printed):
+
+* ``clutter`` within ``--gate`` of a persistent clutter point (a still point target: false, rightly);
+* ``mirror`` within ``--gate`` of a clutter point's mirror about the array axis (a ghost of clutter: false);
+* ``lobe`` at a clutter point's bistatic range (within ``--range-tol``) but elsewhere in cone (a grating- or
+  side-lobe image of its echo: false);
+* ``early`` travel time below ``--early`` s (the near, loud reverberation and the blanking edge);
+* ``ridge`` (CW only) the track's predicted bistatic range rate within ``--ridge`` m/s of a still point's at its
+  place (the reverberation ridge: zero Doppler in the world);
+* ``none`` nowhere in particular.
+
+Usage: ``python benchmarks/bench_active_family.py --trials 4 1 --minutes 20``; each trial's chain output is kept as
+a pickle under ``--cache`` (the same trial, seed, length and code are not re-run: delete the folder after a change).
+Minutes of CPU per trial-hour.
+
+Measured (2026-12-07, seed 2017, 1 h twins; false confirmed tracks, study at c9e14ab -> 19a2d3c -> h10-actfam):
+trial 1 (CW, 8 x 0.5 m, 1 kHz, Rayleigh +5 dB, 14 points) 41 -> 43 -> (20 min: 9 -> 9): 10 on points, 5 on their
+mirrors, 27 at a point's bistatic range elsewhere in cone (sidelobes), 38 of 43 in mirror pairs; trial 4 (LFM 16 x
+0.25 m, spiky K, 14 points) 54 -> 4 -> 0; trial 8 (LFM 32 x 0.25 m, K +10 dB, 14 points) 12 -> ? -> 2; trial 2
+(LFM 32 x 0.5 m, K +10 dB, no points) 13 -> (20 min: 6) -> 5, at broadside near delays moving with the ownship.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import time
+from pathlib import Path
+
+import numpy as np
+
+AXIS_NAMES = ("pulse", "model", "elements", "spacing", "carrier", "bandwidth", "tow", "level", "clutter")
+
+
+def trial_scene(config, seed: int, index: int, minutes: float | None):
+    """The trial's reverberation-only twin scene (module doc) and its axes' values."""
+    from sonartrack.core.random import trial_rng
+    from sonartrack.studies.active_chain import MANEUVERING
+    from sonartrack.studies.active_chain_claims import _labels
+    from sonartrack.studies.active_chain_family import draw_scene, is_clutter
+
+    rng = trial_rng(seed, index)
+    seeds = rng.integers(0, 2**31 - 1, size=2)
+    drawn, axes = draw_scene(config.scene, config.family, rng, MANEUVERING)
+    labels = list(_labels(config).values())
+    values = {n: labels[a][int(axes[a])] for a, n in enumerate(AXIS_NAMES)}
+    dur = drawn.duration_s if minutes is None else 60.0 * minutes
+    clutter = [t for t in drawn.targets if is_clutter(t.name)]
+    return drawn.model_copy(update={"seed": int(seeds[1]), "targets": clutter, "duration_s": dur}), values
+
+
+def run_quiet(config, scene, cache: Path):
+    """The chain's result on ``scene`` (cached by the scene's JSON)."""
+    import hashlib
+
+    from sonartrack.studies.active_chain import run_scene
+
+    key = hashlib.sha1((scene.model_dump_json() + config.chain.model_dump_json()).encode()).hexdigest()[:12]
+    path = cache / f"quiet-{key}.pkl"
+    if path.exists():
+        with path.open("rb") as f:
+            return pickle.load(f), 0.0
+    t0 = time.perf_counter()
+    result = run_scene(config.model_copy(update={"scene": scene}), scene)[0]
+    cache.mkdir(parents=True, exist_ok=True)
+    with path.open("wb") as f:
+        pickle.dump(result, f)
+    return result, time.perf_counter() - t0
+
+
+def _cone_deg(geometry, t, xy) -> np.ndarray:
+    rx, h = geometry.rx_at(t), geometry.heading_at(t)
+    d = xy - rx
+    a = np.stack([np.sin(h), np.cos(h)], -1)
+    return np.rad2deg(np.arccos(np.clip(np.einsum("ni,ni->n", d, a) / np.hypot(*d.T), -1, 1)))
+
+
+def _bistatic_m(geometry, t, xy) -> np.ndarray:
+    return np.hypot(*(xy - geometry.tx_at(t)).T) + np.hypot(*(xy - geometry.rx_at(t)).T)
+
+
+def _mirror(geometry, t, xy) -> np.ndarray:
+    rx, h = geometry.rx_at(t), geometry.heading_at(t)
+    a = np.stack([np.sin(h), np.cos(h)], -1)
+    d = xy - rx
+    return rx + 2.0 * np.einsum("ni,ni->n", d, a)[:, None] * a - d
+
+
+def _still_rate(geometry, t, xy) -> np.ndarray:
+    """Bistatic range rate (m/s) of a still point at ``xy``: the platforms' motion alone."""
+    dt = 1.0
+    return (_bistatic_m(geometry, t + dt, xy) - _bistatic_m(geometry, t, xy)) / dt
+
+
+def classify(result, scene, args) -> list[dict]:
+    """One row per confirmed track (module doc)."""
+    from sonartrack.studies.active_chain_family import is_clutter
+
+    tr, g = result.tracks.tracks, result.geometry
+    pts = np.array([[t.x_m, t.y_m] for t in scene.targets if is_clutter(t.name)], float).reshape(-1, 2)
+    ping_of = {float(t): k + 1 for k, t in enumerate(result.ping_time_s)}
+    c = scene.sound_speed_mps
+    out = []
+    for tid in np.unique(tr.track_id[tr.confirmed]):
+        rows = np.nonzero((tr.track_id == tid) & tr.confirmed)[0]
+        t, xy = tr.time_s[rows], tr.x[rows, :2]
+        labels, near_pt = [], []
+        for k in range(len(rows)):
+            tk = np.full(len(pts), t[k])
+            lab, j = "none", -1
+            if len(pts):
+                d = np.hypot(*(pts - xy[k]).T)
+                dm = np.hypot(*(_mirror(g, tk, pts) - xy[k]).T)
+                dr = np.abs(_bistatic_m(g, tk, pts) - _bistatic_m(g, t[k:k + 1], xy[k:k + 1]))
+                if d.min() < args.gate:
+                    lab, j = "clutter", int(d.argmin())
+                elif dm.min() < args.gate:
+                    lab, j = "mirror", int(dm.argmin())
+                elif dr.min() < args.range_tol:
+                    lab, j = "lobe", int(dr.argmin())
+            if lab == "none" and _bistatic_m(g, t[k:k + 1], xy[k:k + 1])[0] / c < args.early:
+                lab = "early"
+            if lab == "none" and scene.waveform.kind == "cw":
+                rr_track = _rate_of(g, t[k], tr.x[rows[k]])
+                if abs(rr_track - _still_rate(g, t[k:k + 1], xy[k:k + 1])[0]) < args.ridge:
+                    lab = "ridge"
+            labels.append(lab)
+            near_pt.append(j)
+        vals, counts = np.unique(labels, return_counts=True)
+        lab = str(vals[counts.argmax()])
+        js = [j for j, lb in zip(near_pt, labels, strict=True) if lb == lab and j >= 0]
+        j = int(np.bincount(js).argmax()) if js else -1
+        mid = len(rows) // 2
+        info = {"track": int(tid), "pings": f"{ping_of.get(float(t[0]), -1)}-{ping_of.get(float(t[-1]), -1)}",
+                "n": len(rows), "where": lab, "share": float(counts.max() / len(rows)),
+                "speed_mps": float(np.median(np.hypot(tr.x[rows, 2], tr.x[rows, 3]))),
+                "delay_s": float(_bistatic_m(g, t[mid:mid + 1], xy[mid:mid + 1])[0] / c),
+                "cone_deg": float(_cone_deg(g, t[mid:mid + 1], xy[mid:mid + 1])[0]), "point": j}
+        if j >= 0:
+            info["point_cone_deg"] = float(_cone_deg(g, t[mid:mid + 1], pts[j:j + 1])[0])
+            info["point_ts_db"] = float([x for x in scene.targets if is_clutter(x.name)][j].target_strength_db)
+        out.append(info)
+    return out
+
+
+def _rate_of(geometry, t, x) -> float:
+    """Predicted bistatic range rate (m/s) of the track state ``x`` [x, y, vx, vy] at time ``t``."""
+    p0, v = np.asarray(x[:2], float)[None], np.asarray(x[2:4], float)
+    return float((_bistatic_m(geometry, np.array([t + 1.0]), p0 + v) - _bistatic_m(geometry, np.array([t]), p0))[0])
+
+
+def mirror_pairs(result, gate_m: float = 500.0) -> int:
+    """How many of the confirmed tracks are one of a mirror pair: two confirmed tracks each within ``gate_m`` of the
+    other's mirror about the array axis (median over their common pings), i.e. one echo's two hypotheses (issue 34
+    item 4: one row)."""
+    tr, g = result.tracks.tracks, result.geometry
+    ids = np.unique(tr.track_id[tr.confirmed])
+    rows = {i: np.nonzero((tr.track_id == i) & tr.confirmed)[0] for i in ids}
+    paired = set()
+    for a in ids:
+        for b in ids:
+            if b <= a or a in paired or b in paired:
+                continue
+            ta, tb = tr.time_s[rows[a]], tr.time_s[rows[b]]
+            common, ia, ib = np.intersect1d(ta, tb, return_indices=True)
+            if len(common) < 2:
+                continue
+            xa, xb = tr.x[rows[a][ia], :2], tr.x[rows[b][ib], :2]
+            if np.median(np.hypot(*(_mirror(g, common, xb) - xa).T)) < gate_m:
+                paired.update((int(a), int(b)))
+    return len(paired)
+
+
+def verdict(row: dict) -> str:
+    """Is the study right to call this track false? (quiet scene: no targets, so every track is false.)"""
+    return "false (right)"
+
+
+def _patch_cw_lobes() -> None:
+    """cw_cells.cw_ping_cells with the cells' LobeBand attached (``--cw-lobes``: the change proposed to its owner)."""
+    import dataclasses
+
+    import sonartrack.detection.cw_cells as cw
+    from sonartrack.detection.cells import lobe_band
+
+    inner = cw.cw_ping_cells
+
+    def with_lobes(samples, fs_hz, waveform, array, front_end, settings, **kw):
+        return dataclasses.replace(inner(samples, fs_hz, waveform, array, front_end, settings, **kw),
+                                   lobes=lobe_band(waveform, array, front_end))
+
+    cw.cw_ping_cells = with_lobes
+
+
+def main() -> None:
+    from sonartrack.studies.active_chain import Config
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trials", type=int, nargs="+", default=[4, 1])
+    ap.add_argument("--seed", type=int, default=2017, help="the study's master seed (sonartrack reproduce's default)")
+    ap.add_argument("--minutes", type=float, default=None, help="length of the twin (not set: the scene's, 1 h)")
+    ap.add_argument("--gate", type=float, default=1500.0, help="on a point / its mirror within this (m; study match)")
+    ap.add_argument("--range-tol", type=float, default=None, help="lobe image: bistatic range within this (m; not "
+                    "set: c / B for an LFM, c tau / 2 for a CW)")
+    ap.add_argument("--early", type=float, default=3.0, help="early delays: travel time below this (s)")
+    ap.add_argument("--ridge", type=float, default=0.3, help="CW ridge: range rate within this of a still point's")
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/bench_active_family"))
+    ap.add_argument("--lobe-margin-db", type=float, default=None, help="the front end's lobe-image margin (cells.py "
+                    "lobe_margin_db; not set: the chain's default)")
+    ap.add_argument("--heavy-tail-cells", default=None, help="the front end's heavy_tail_cells ('none': one K "
+                    "shape for all beams, as before 10a6196; not set: the chain's default)")
+    ap.add_argument("--cw-lobes", action="store_true", help="measure the proposed cw_cells.py change (not ours: "
+                    "ACTCW's): the CW front end's cells carry cells.lobe_band, CW lobe images dropped too")
+    args = ap.parse_args()
+    args._tol = args.range_tol
+    if args.cw_lobes:
+        _patch_cw_lobes()
+    config = Config()
+    update = {} if args.lobe_margin_db is None else {"lobe_margin_db": args.lobe_margin_db}
+    if args.heavy_tail_cells is not None:
+        update["heavy_tail_cells"] = None if args.heavy_tail_cells == "none" else int(args.heavy_tail_cells)
+    fe = config.chain.front_end.model_copy(update=update)
+    config = config.model_copy(update={"chain": config.chain.model_copy(update={"front_end": fe})})
+    total_false, total_h = 0, 0.0
+    for i in args.trials:
+        scene, values = trial_scene(config, args.seed, i, args.minutes)
+        result, sec = run_quiet(config, scene, args.cache)
+        w = scene.waveform
+        args.range_tol = tol if (tol := getattr(args, "_tol", None)) is not None else (
+            scene.sound_speed_mps / w.bandwidth_hz if w.kind == "lfm" else 0.5 * scene.sound_speed_mps * w.duration_s)
+        rows = classify(result, scene, args)
+        hours = scene.duration_s / 3600.0
+        total_false, total_h = total_false + len(rows), total_h + hours
+        print(f"trial {i}: " + " ".join(f"{k}={v}" for k, v in values.items()) +
+              f" | {len(rows)} false confirmed in {hours:.2f} h ({len(rows) / hours:.1f}/h), run {sec:.0f} s")
+        by = {}
+        for r in rows:
+            by[r["where"]] = by.get(r["where"], 0) + 1
+            extra = (f" point {r['point']} (TS {r['point_ts_db']:.0f} dB, cone {r['point_cone_deg']:.0f})"
+                     if r["point"] >= 0 else "")
+            print(f"  track {r['track']:4d} pings {r['pings']:>7s} ({r['n']:3d}) {r['where']:7s} {r['share']:.0%} "
+                  f"speed {r['speed_mps']:5.2f} m/s delay {r['delay_s']:5.1f} s cone {r['cone_deg']:5.1f}{extra} "
+                  f"-> {verdict(r)}")
+        print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
+              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
+    print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
+
+
+if __name__ == "__main__":
+    main()
