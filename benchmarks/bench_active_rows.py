@@ -60,9 +60,10 @@ ghost-only row). Per pulse/seed: rows, false, extra, ghost-only, <= 2-ping rows,
         CW 2                        5, 0, 2, 0, 0, 1 (appr.+cr-b)    6, 0, 2, 0, 0, 0; held 86/82/79/86 (same)
     the lead's caches on main (/tmp/lead/rows10: ACTCW's CW sigma_time, delay_guard 0)
         LFM 1                       4, 0, 0, 0, 0, 0                 same; held 74/70/90/99
-        LFM 2                       4, 0, 0, 0, 0, 1 (cr-b+man.)     same; held 78/82/89/98
+        LFM 2                       4, 0, 0, 0, 0, 1 (cr-b+man.)     same; held 77/76/88/98 (main with ACTFAM)
         CW 1                        5, 1, 0, 1, 1, 2                 same; held 95/78/100/90
         CW 2                        5, 0, 1, 0, 0, 1 (appr.+man.)    6, 0, 2, 0, 0, 1 (appr.+cr-b); held 90/80/100/85
+Reverberation-only false confirmed tracks (bench_active_defaults.py --parts reverb, cached, 6 h): 0, as main.
 What is left: on the lead's caches the CW tracker confirms 26-29 tracks for 4 targets (LFM 7-8); the merger and the
 re-join glue them into 5-6 rows, and the glue cannot tell a young fragment from another target's new track: their
 test T = P_i + P_j is dominated by the young track's covariance (position sd 200-900 m at its first scans), and the
