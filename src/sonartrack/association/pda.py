@@ -112,7 +112,9 @@ def pda_pair_weights(lik: Likelihoods) -> AssociationWeights:
 
     n, r, m = lik.shape
     ratio = np.exp(np.minimum(lik.pair_log_ratio, 700.0))  # (G, r), as pda_weights
-    ratio_sum = dense_row_sums(lik.pair_track, lik.pair_meas, np.ascontiguousarray(ratio), n, m)
+    # C-contiguous int64 pairs (some callers pass column views): one compiled specialisation, not one per layout
+    pairs = (np.ascontiguousarray(lik.pair_track, dtype=np.int64), np.ascontiguousarray(lik.pair_meas, dtype=np.int64))
+    ratio_sum = dense_row_sums(*pairs, np.ascontiguousarray(ratio), n, m)
     scalar_pd = np.isscalar(lik.pd)
     lam = lik.miss + (lik.pd if scalar_pd else lik.pd[:, None]) * ratio_sum  # (n, r)
     beta_pair = (lik.pd if scalar_pd else lik.pd[lik.pair_track, None]) * ratio / lam[lik.pair_track]

@@ -373,7 +373,7 @@ def pda_mixture_update_pairs(x_pred, P_pred, lik: Likelihoods, beta0, beta_pair)
         As :func:`pda_mixture_update_fast`.
     """
     k = lik.nu.shape[-1]
-    ti = lik.pair_track
+    ti = np.ascontiguousarray(lik.pair_track, dtype=np.int64)  # one layout, one compiled specialisation
     if lik.gated.shape[1] == 0:
         return x_pred.copy(), P_pred.copy()
     if not len(ti):
