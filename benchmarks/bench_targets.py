@@ -8,9 +8,9 @@
   the 20 tests of most CPU time (setup + call + teardown, with their waited-for subprocesses; tests/conftest.py
   logs them when ``SONARTRACK_TEST_CPU_LOG`` is set). Whether numba's cache (``.numba-cache``) was warm matters: a
   fresh clone compiles every kernel once (2026-12-07: the 10 tests of most CPU time took 112 s CPU with an empty
-  cache, 73 s of it compiling, and 38 s with the cache warm); ``--cold`` empties the cache first. The tests compile
-  at LLVM -O2 (tests/conftest.py sets NUMBA_OPT=2 unless it is set): each kernel of the suite compiled once takes
-  54 s CPU there against 77 s at numba's default -O3;
+  cache, 73 s of it compiling, and 38 s with the cache warm); ``--cold`` empties the cache first. Each kernel of
+  the suite compiled once takes 77 s CPU at numba's default -O3 (54 s at NUMBA_OPT=2, measured and not used: the
+  kernels run ~10 % slower there, and over the whole suite the two cancelled within the noise);
 * the position tracker with 100 targets and 2000 clutter points a scan (benchmarks/bench_tracker_load.py's
   scenario): ms a scan (best of 3) against <= 20 ms.
 

@@ -7,12 +7,6 @@ import matplotlib
 matplotlib.use("Agg")
 # numba-compiled kernels cache into the package; keep test runs from fighting over it
 os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".numba-cache"))
-# LLVM -O2, not numba's default -O3, for the kernels the tests compile (and their CLI subprocesses): a fresh clone
-# compiles every kernel once, and -O2 compiles them in ~30 % less CPU (2026-12-07, each kernel of the suite compiled
-# once: 77 s at -O3, 54 s at -O2) for ~10 % slower kernels (tracker 100 targets x 2000 clutter: 7.9 -> 8.7 ms CPU a
-# scan). Without fast-math both levels only make IEEE-exact transformations: the numbers are the same to the bit
-# (the tracker's state after 20 scans is bit-identical). Set NUMBA_OPT yourself to test at another level.
-os.environ.setdefault("NUMBA_OPT", "2")
 
 
 def _cpu_s() -> float:
