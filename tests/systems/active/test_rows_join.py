@@ -213,3 +213,32 @@ def test_a_decided_track_keeps_its_row_when_joins_put_its_twin_on_its_side():
     assert len(m) == 1 and m.decision[0] == "decided"
     assert int(m.track_id[0]) == 33 and int(m.mirror_track_id[0]) == 41
     assert m.xy[0].tolist() == [3000.0, 5000.0]
+
+
+def test_a_track_confirmed_on_one_or_two_pings_then_lost_makes_no_row():
+    """targets.MIN_ROW_PINGS: a target row needs its tracks confirmed on >= 3 pings together, unless still confirmed
+    at the last ping (a target just acquired). Hand-built table: track 1 confirmed on pings 0-9 (a target), track 2
+    on ping 3 only and track 4 on pings 5-6 (fleeting fragments, then lost), track 3 on the last ping only (new)."""
+    from types import SimpleNamespace
+
+    from sonartrack.systems.active.targets import MIN_ROW_PINGS
+
+    assert MIN_ROW_PINGS == 3
+    times = PING_S * np.arange(10)
+    ids, tt = [1] * 10 + [2, 4, 4, 3], list(times) + [times[3], times[5], times[6], times[9]]
+    xy = np.array([[4000.0, 6000.0]] * 10 + [[-3000.0, 2000.0], [6000.0, 9000.0], [6000.0, 9000.0], [1000.0, 8000.0]])
+    order = np.argsort(tt, kind="stable")
+
+    class Rows(SimpleNamespace):
+        def __len__(self):
+            return len(self.track_id)
+
+    tracks = Rows(track_id=np.array(ids, np.int64)[order], time_s=np.array(tt)[order],
+                             confirmed=np.ones(len(ids), bool), x=np.hstack([xy, np.zeros_like(xy)])[order])
+    nav_t = np.arange(-60.0, 400.0, 10.0)
+    rx = np.stack([np.zeros_like(nav_t), SPEED_MPS * nav_t], -1)
+    geometry = ActiveGeometry(nav_t, rx, rx, np.zeros_like(nav_t))
+    rows = mirror_targets(SimpleNamespace(tracks=tracks, sides=None, joins=None), geometry)
+    assert rows.track_id.tolist() == [1, 3] and rows.target.tolist() == [1, 2]
+    target, _ = track_hypotheses(SimpleNamespace(tracks=tracks), rows, geometry)
+    assert set(target[np.isin(tracks.track_id, [2, 4])]) == {-1}  # kept in tracks.csv, with no target

@@ -24,6 +24,10 @@ import numpy as np
 
 #: hypothesis labels of a track row (tracks.csv ``hypothesis``)
 HYPOTHESES = ("starboard", "port", "decided", "mirror")
+#: pings a target's tracks must have been confirmed on (together) to make a row, unless still confirmed at the last
+#: ping: a track confirmed on one or two pings and then lost is a fleeting fragment, not a target to report (the
+#: default scene with LFM listed a 1-ping ghost as a fifth target); it stays in tracks.csv, with no target
+MIN_ROW_PINGS = 3
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,8 +175,13 @@ def mirror_targets(active_tracks, geometry) -> MirrorTargets:
     tracks, d = active_tracks.tracks, active_tracks.sides
     rows, chains = [], []
     groups = _groups(tracks, d, getattr(active_tracks, "joins", None))
-    for n, (first_chain, twin_chain) in enumerate(groups, start=1):
+    n, end_s = 0, float(np.max(tracks.time_s)) if len(tracks.time_s) else np.nan
+    for first_chain, twin_chain in groups:
         group = first_chain + twin_chain
+        pings = np.unique(tracks.time_s[np.isin(tracks.track_id, group) & tracks.confirmed])
+        if len(pings) < MIN_ROW_PINGS and pings[-1] < end_s:
+            continue
+        n += 1
         spans = [s for s in (_last(tracks, m) for m in group) if s is not None]
         first, last = min(s[2] for s in spans), max(s[0] for s in spans)
         decided = _decide(d, group) if d is not None else None
