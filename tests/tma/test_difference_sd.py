@@ -4,7 +4,9 @@ form for equal spacing, the estimate and its interval on synthetic bearings (kno
 numpy geometry, uneven times, outliers), and ``sonartrack tma``'s verdict on turning records, where it replaces the
 constant-velocity residual scale."""
 
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +19,10 @@ from sonartrack.tma.record_checks import (
     _difference_weights,
     difference_sd_estimate,
 )
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from worlds.leg_paths import leg_positions  # noqa: E402
 
 
 def test_equal_spacing_coefficients_and_correlations_by_hand():
@@ -109,17 +115,6 @@ def test_outliers_are_screened():
     assert np.sqrt(np.mean(d**2)) > 3 * sigma
 
 
-def _legs(t, start_xy, legs):
-    """Positions (n, 2) along piecewise-straight legs [(end time s, course deg, speed m/s), ...] from t = 0."""
-    pos, p, t0 = np.zeros((len(t), 2)), np.asarray(start_xy, float), 0.0
-    for k, (t1, course, speed) in enumerate(legs):
-        v = speed * np.array([np.sin(np.deg2rad(course)), np.cos(np.deg2rad(course))])
-        on = (t >= t0) & ((t < t1) | (k == len(legs) - 1))
-        pos[on] = p + v * (t[on] - t0)[:, None]
-        p, t0 = p + v * (t1 - t0), t1
-    return pos
-
-
 def _turning_record(seed: int, sigma_deg: float):
     """A target on three legs (turns of 60-110 deg) 6-12 km from an ownship on three legs, bearings every 5-40 s
     over an hour with white noise of ``sigma_deg``."""
@@ -132,9 +127,9 @@ def _turning_record(seed: int, sigma_deg: float):
     turns = rng.uniform(60, 110, 2) * rng.choice([-1, 1], 2)
     tgt_legs = [(1100.0, c0, 5.0), (2300.0, c0 + turns[0], 4.0), (3600.0, c0 + turns[0] + turns[1], 6.0)]
     b0, r0 = rng.uniform(0, 2 * np.pi), rng.uniform(6000, 12000)
-    d = _legs(t, (r0 * np.sin(b0), r0 * np.cos(b0)), tgt_legs) - _legs(t, (0, 0), own_legs)
+    d = leg_positions(t, (r0 * np.sin(b0), r0 * np.cos(b0)), tgt_legs) - leg_positions(t, (0, 0), own_legs)
     z = np.arctan2(d[:, 0], d[:, 1]) + np.radians(sigma_deg) * rng.standard_normal(len(t))
-    own = _legs(tn, (0, 0), own_legs)
+    own = leg_positions(tn, (0, 0), own_legs)
     return BearingRecord(time_s=t, bearing_rad=z), OwnshipTrack(time_s=tn, x_m=own[:, 0], y_m=own[:, 1])
 
 

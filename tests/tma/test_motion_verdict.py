@@ -2,7 +2,9 @@
 (not the project's simulator): a sensor on legs, a target on 2-4 legs (or one), bearings every 47-120 s, rounded
 to 0.01 deg or quantised to 0.1 deg."""
 
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,19 +14,12 @@ from sonartrack.tma import BearingRecord, OwnshipTrack, TmaSettings, solve_tma
 from sonartrack.tma.record_checks import bearing_sd_estimate, residual_span, whiteness_check
 from sonartrack.tma.verdict import MANOEUVRED
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from worlds.leg_paths import leg_positions  # noqa: E402
+
 METHODS = ("ekf", "mgekf", "imm-ekf", "imm-mgekf", "ml")
 DURATION_S = 3600.0
-
-
-def _legs(t, start_xy, legs):
-    """Positions (n, 2) along piecewise-straight legs [(end time s, course deg, speed m/s), ...] from t = 0."""
-    pos, p, t0 = np.zeros((len(t), 2)), np.asarray(start_xy, float), 0.0
-    for k, (t1, course, speed) in enumerate(legs):
-        v = speed * np.array([np.sin(np.deg2rad(course)), np.cos(np.deg2rad(course))])
-        on = (t >= t0) & ((t < t1) | (k == len(legs) - 1))
-        pos[on] = p + v * (t[on] - t0)[:, None]
-        p, t0 = p + v * (t1 - t0), t1
-    return pos
 
 
 def _world(seed: int, target_legs: int, step_deg: float):
@@ -41,11 +36,11 @@ def _world(seed: int, target_legs: int, step_deg: float):
     tb = tb[tb <= DURATION_S]
     tn = np.arange(0.0, DURATION_S + 1e-9, 10.0)  # fixes every 10 s, legs turning on a fix: exact interpolation
     own_legs = [(e, c, 3.0) for e, c in zip(own_ends, own_courses, strict=True)]
-    target = _legs(tb, (r0 * np.sin(b0), r0 * np.cos(b0)), list(zip(ends, courses, rng.uniform(3, 7, target_legs),
-                                                                   strict=True)))
-    d = target - _legs(tb, (0, 0), own_legs)
+    target_legs_list = list(zip(ends, courses, rng.uniform(3, 7, target_legs), strict=True))
+    target = leg_positions(tb, (r0 * np.sin(b0), r0 * np.cos(b0)), target_legs_list)
+    d = target - leg_positions(tb, (0, 0), own_legs)
     bearing_deg = np.round(np.rad2deg(np.arctan2(d[:, 0], d[:, 1])) / step_deg) * step_deg
-    own = _legs(tn, (0, 0), own_legs)
+    own = leg_positions(tn, (0, 0), own_legs)
     return (BearingRecord(time_s=tb, bearing_rad=np.deg2rad(bearing_deg)),
             OwnshipTrack(time_s=tn, x_m=own[:, 0], y_m=own[:, 1]), target[-1])
 
