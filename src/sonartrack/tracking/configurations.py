@@ -40,7 +40,10 @@ def position_motion(settings: PositionTrackerSettings, turns: TurnModes | None =
     counter-clockwise coordinated turn at each rate of ``turns`` (filters/coordinated_turn.py).
 
     The mode chain keeps each mode with probability ``transition_diagonal`` and spreads the rest evenly over the
-    other modes (P4's rule, applied to all r modes).
+    other modes (P4's rule, applied to all r modes). With the turns' mean course change set (``turns.turn_deg``), a
+    turn mode at rate w is kept over a scan interval T with probability exp(-T w / turn_deg) (its mean sojourn
+    turn_deg / w, tracking/motion.py ``sojourn_transition``) and left for the constant-velocity modes and the turn
+    modes of its own sense, evenly: a turn ends on a straight leg or tightens/eases, it does not reverse.
 
     Parameters
     ----------
@@ -58,10 +61,17 @@ def position_motion(settings: PositionTrackerSettings, turns: TurnModes | None =
         return ImmConstantVelocity(tuple(settings.q), dims=2, transition=settings.transition_matrix())
     w = (0.0,) * len(settings.q) + turns.signed_rates_rad_s()
     q = tuple(settings.q) + (turns.q,) * (len(w) - len(settings.q))
-    r = len(w)
+    r, n_cv = len(w), len(settings.q)
     Pi = np.full((r, r), (1.0 - settings.transition_diagonal) / (r - 1))
     np.fill_diagonal(Pi, settings.transition_diagonal)
-    return ImmConstantVelocity(q, dims=2, transition=Pi, turn_rate_rad_s=w)
+    sojourn = turns.sojourn_s()
+    if sojourn is not None:  # a turn's row: its sojourn (motion.py) decides the diagonal, the rest goes as above
+        for i in range(n_cv, r):
+            to = np.array([j != i and (j < n_cv or np.sign(w[j]) == np.sign(w[i])) for j in range(r)], float)
+            Pi[i] = (1.0 - settings.transition_diagonal) * to / to.sum()
+            Pi[i, i] = settings.transition_diagonal
+        sojourn = (None,) * n_cv + sojourn
+    return ImmConstantVelocity(q, dims=2, transition=Pi, turn_rate_rad_s=w, sojourn_s=sojourn)
 
 
 def position_tracker(settings: PositionTrackerSettings | None = None, *, associator=None,

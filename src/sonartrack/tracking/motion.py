@@ -30,16 +30,30 @@ from sonartrack.models.motion import cv_process_noise_stack, cv_transition
 @dataclass(frozen=True)
 class TurnModes:
     """Coordinated-turn modes to add to a position tracker's IMM: a pair (clockwise and counter-clockwise) at each
-    rate of ``rates_deg_s`` (deg/s, > 0), each with white-noise intensity ``q`` (m^2/s^3)."""
+    rate of ``rates_deg_s`` (deg/s, > 0), each with white-noise intensity ``q`` (m^2/s^3).
+
+    ``turn_deg`` (deg, > 0): the mean course change of one turn, so a mode at rate w lasts turn_deg / w seconds on
+    average (its expected sojourn time, :meth:`sojourn_s`; Bar-Shalom, Li, Kirubarajan 2001, sec. 11.6.6: p_jj =
+    1 - T / tau_j for a sojourn tau_j). Default 120 deg, the middle of the 60-180 deg turns of issue 34 item 5 and
+    the active-chain study's family (its ``turn_deg`` range). None: the turn modes keep the tracker's diagonal."""
 
     rates_deg_s: tuple[float, ...] = ()
     q: float = 1e-3
+    turn_deg: float | None = 120.0
 
     def __post_init__(self):
         rates = tuple(float(v) for v in self.rates_deg_s)
         if any(not 0.0 < v <= 30.0 for v in rates) or not self.q >= 0.0:
             raise ValueError(f"turn rates must be in (0, 30] deg/s and q >= 0 m^2/s^3, got {rates} and {self.q}")
+        if self.turn_deg is not None and not 0.0 < self.turn_deg <= 360.0:
+            raise ValueError(f"a turn's mean course change must be in (0, 360] deg, got {self.turn_deg}")
         object.__setattr__(self, "rates_deg_s", rates)
+
+    def sojourn_s(self) -> tuple[float, ...] | None:
+        """Mean time (s) in each turn mode, in :meth:`signed_rates_rad_s`'s order: turn_deg / rate (None: not set)."""
+        if self.turn_deg is None:
+            return None
+        return tuple(float(self.turn_deg) / w for w in self.rates_deg_s for _ in (1.0, -1.0))
 
     def signed_rates_rad_s(self) -> tuple[float, ...]:
         """The modes' turn rates (rad/s, counter-clockwise positive): +w, -w for each rate w."""
@@ -50,12 +64,20 @@ class TurnModes:
 class ImmConstantVelocity:
     """r motion modes (intensity ``q[r]``, position unit^2/s^3) on ``dims`` axes; mode chain ``transition``
     (r x r). ``turn_rate_rad_s[r]`` (2-D only; rad/s, counter-clockwise positive): mode r turns at that known
-    rate (0: constant velocity); None: every mode constant velocity (P4's IMM)."""
+    rate (0: constant velocity); None: every mode constant velocity (P4's IMM).
+
+    ``sojourn_s[r]`` (s, or None per mode): mode r lasts that long on average, so over a scan interval T it is kept
+    with probability exp(-T / sojourn) (the exponential sojourn of a continuous-time chain; 1 - T / sojourn for T
+    much shorter, Bar-Shalom, Li, Kirubarajan 2001, sec. 11.6.6) and left in the proportions of ``transition``'s
+    off-diagonal row; a None mode (or ``sojourn_s`` None) keeps ``transition``'s row whatever T. A turn lasts its
+    course change over its rate, whatever the ping interval: a fixed per-scan diagonal (0.98 at 30 s: 25 min) keeps
+    a track in a turn mode long after a 2-minute turn has ended."""
 
     q: tuple[float, ...]
     dims: int = 2
     transition: np.ndarray | None = None  # (r, r); None: the identity (one mode, or modes that never switch)
     turn_rate_rad_s: tuple[float, ...] | None = None
+    sojourn_s: tuple[float | None, ...] | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "q", tuple(float(v) for v in self.q))
@@ -68,7 +90,13 @@ class ImmConstantVelocity:
         object.__setattr__(self, "transition", validate_transition_matrix(Pi))
         if self.transition.shape[0] != len(self.q):
             raise ValueError(f"{len(self.q)} modes but a {self.transition.shape} transition matrix")
+        if self.sojourn_s is not None:
+            tau = tuple(None if v is None else float(v) for v in self.sojourn_s)
+            if len(tau) != len(self.q) or any(v is not None and not v > 0.0 for v in tau):
+                raise ValueError(f"need one sojourn time > 0 s (or None) per mode ({len(self.q)}), got {tau}")
+            object.__setattr__(self, "sojourn_s", tau if any(v is not None for v in tau) else None)
         object.__setattr__(self, "_FQ", {})  # dt -> (F, Q): scans usually come at one period
+        object.__setattr__(self, "_Pi", {})  # dt -> the transition matrix over dt (with sojourn times)
 
     @property
     def n_modes(self) -> int:
@@ -80,13 +108,38 @@ class ImmConstantVelocity:
         """State dimension d = 2 dims (positions, then velocities)."""
         return 2 * self.dims
 
-    def interact(self, mu, x, P):
+    def transition_at(self, dt_s: float | None = None) -> np.ndarray:
+        """The mode chain over a scan interval: ``transition``, with each row of a mode with a sojourn time kept
+        with probability exp(-dt / sojourn) and left in the proportions of that row's off-diagonal (class doc).
+
+        Parameters
+        ----------
+        dt_s : float, optional
+            Time since the last scan (s); None: ``transition`` as given.
+
+        Returns
+        -------
+        ndarray, shape (r, r)
+            Pi[i, j] = P(mode j at k | mode i at k-1), rows summing to 1.
+        """
+        if self.sojourn_s is None or dt_s is None:
+            return self.transition
+        Pi = self._Pi.get(dt_s)
+        if Pi is None:
+            if len(self._Pi) > 64:
+                self._Pi.clear()
+            Pi = self._Pi[dt_s] = sojourn_transition(self.transition, self.sojourn_s, dt_s)
+        return Pi
+
+    def interact(self, mu, x, P, dt_s: float | None = None):
         """IMM interaction: predicted mode probabilities and mixed initial conditions (filters/imm.py).
 
         Parameters
         ----------
         mu, x, P : ndarray, shapes (n, r), (n, r, d), (n, r, d, d)
             Mode probabilities of n tracks and r modes, the mode-conditioned states and their covariances.
+        dt_s : float, optional
+            Time since the last scan (s): the chain over it (:meth:`transition_at`); None: ``transition``.
 
         Returns
         -------
@@ -97,7 +150,7 @@ class ImmConstantVelocity:
             return mu, x, symmetrize(P)
         from sonartrack.filters.imm_kernel import mix  # numba: loaded on first use
 
-        c, w = imm_mixing(mu, self.transition)
+        c, w = imm_mixing(mu, self.transition_at(dt_s))
         x0, P0 = mix(x, P, w)  # filters/imm.py's imm_mix, compiled (identical results)
         return c, x0, P0
 
@@ -158,3 +211,37 @@ class ImmConstantVelocity:
         if self.n_modes == 1:
             return c, None if log_lambda is None else log_lambda[:, 0]
         return imm_mode_update(c, log_lambda)
+
+
+def sojourn_transition(Pi, sojourn_s, dt_s: float) -> np.ndarray:
+    """``Pi`` with each mode i of a sojourn time tau_i kept over ``dt_s`` with probability exp(-dt / tau_i) and left
+    in the proportions of Pi's off-diagonal row i (a mode whose row has no off-diagonal mass stays); modes with tau
+    None keep their row (:class:`ImmConstantVelocity` doc).
+
+    Parameters
+    ----------
+    Pi : ndarray, shape (r, r)
+        Markov transition matrix (rows sum to 1).
+    sojourn_s : sequence of float or None, length r
+        Mean time in each mode (s), None where the row stays as given.
+    dt_s : float
+        Scan interval (s), >= 0.
+
+    Returns
+    -------
+    ndarray, shape (r, r)
+        The transition matrix over dt_s.
+    """
+    out = np.array(Pi, float, copy=True)
+    for i, tau in enumerate(sojourn_s):
+        if tau is None:
+            continue
+        off = out[i].copy()
+        off[i] = 0.0
+        total = off.sum()
+        if total <= 0.0:
+            continue
+        stay = float(np.exp(-max(float(dt_s), 0.0) / tau))
+        out[i] = (1.0 - stay) * off / total
+        out[i, i] = stay
+    return out

@@ -130,7 +130,7 @@ class MultiTargetTracker:
 
     def _update(self, T: TrackArrays, scan: Scan, dt_s: float, turn_deg: float = 0.0):
         """Steps 1-4 of the module doc for the live tracks; returns them, hit (n,) and used (m,)."""
-        c, x0, P0 = self.motion.interact(T.mu, T.x, T.P)
+        c, x0, P0 = self.motion.interact(T.mu, T.x, T.P, dt_s)
         x_pred, P_pred = self.motion.predict(x0, P0, dt_s)
         x_still, P_still = x_pred, P_pred
         if self.own_motion is not None and turn_deg != 0.0:

@@ -1,0 +1,198 @@
+"""Benchmark: one target turning 60-180 deg at 0.3-1 deg/s through the active chain: held on one track through its
+turn, confirmed within 5 pings, covariances that cover the errors (issue 34 item 5).
+
+Each scene is the default active scene (sim/active_scene.py: its ownship, sonar, reverberation) with ONE target, the
+default's maneuvering one (8 kn on 330 deg from (8, 2) km, TS ``--ts`` dB), turning ``turn`` deg (to starboard on odd
+seeds, to port on even: the family study draws the sign) at ``rate`` deg/s from ``--lead-s`` s; the ownship makes its
+60 deg port turn from t = 0 (the sides get decided before the target turns); the scene lasts to ``--tail-s`` after the
+turn. The chain is run once per scene (front end, detectors, contacts cached under ``--cache`` by
+bench_active_rows.py's ``run_scene``); the tracker stage is re-run on the cached contacts with the code on the path
+and any ``--set`` changes. Printed per scene:
+
+* ``pd``: the share of its detectable pings with a contact within 3 of its stated sds (sqrt trace R) of it or its
+  mirror (the detector's part, not the tracker's);
+* ``seg``: confirmed track segments on the target (non-ghost; 1 wanted), ``rows``: target rows listed (1 wanted);
+* ``lost``: the target's detectable pings (echo SNR >= 15 dB, in the window, clear of the blast) in its turn and two
+  pings after, on which no confirmed row lies within ``--match-m`` of it;
+* ``acq``: pings from its first detectable ping to the first ping a confirmed row (either mirror hypothesis) holds
+  it, both counted (<= 5 wanted);
+* NEES of the position (2 dof: 2 wanted; the chi-square(2) 95 % band of a mean of n is printed by the summary) and
+  RMSE / stated sd (sqrt(mean |e|^2) / sqrt(mean trace P_pos): 1 wanted) of the row holding it, before, in and after
+  the turn (on the rows of the target's side within ``--match-m``).
+
+Usage: ``PYTHONPATH=src python benchmarks/bench_active_turns.py [--cache /tmp/turns] [--kinds lfm cw] [--seeds 1 2]
+[--turns 60 120 180] [--rates 0.3 0.6 1.0] [--set NAME=VALUE ...]``. Measures, not tests: nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def turn_scene(kind: str, seed: int, turn_deg: float, rate_deg_s: float, ts_db: float, lead_s: float, tail_s: float):
+    """The one-target turning scene (module doc)."""
+    from sonartrack.sim.active_scene import ActiveSceneSettings, TargetSettings
+
+    s = ActiveSceneSettings()
+    sign = 1.0 if seed % 2 else -1.0
+    target = TargetSettings(name="turner", x_m=8000.0, y_m=2000.0, course_deg=330.0, speed_kn=8.0,
+                            target_strength_db=ts_db, turn_start_s=lead_s, turn_deg=sign * turn_deg,
+                            turn_rate_deg_s=rate_deg_s)
+    duration = lead_s + turn_deg / rate_deg_s + tail_s
+    return s.model_copy(update={"seed": seed, "duration_s": duration, "targets": [target],
+                                "waveform": s.waveform.model_copy(update={"kind": kind}),
+                                "ownship": s.ownship.model_copy(update={"turn_start_s": 0.0})})
+
+
+def contacts_of(sc, cache: Path) -> dict:
+    """The chain's cached contacts of scene ``sc`` (bench_active_rows.py ``run_scene``, its scene swapped)."""
+    import bench_active_rows as rows
+
+    real = rows.scene
+    rows.scene = lambda kind, seed: sc
+    try:
+        return rows.run_scene(sc.waveform.kind, sc.seed, cache)
+    finally:
+        rows.scene = real
+
+
+def _held_rows(res, truth_xy, t_s, mirror_xy, match_m):
+    """Per truth ping: index of the nearest confirmed row within match_m of the target (-1: none), and whether any
+    confirmed row lies within match_m of the target or its mirror."""
+    t = res.tracks
+    near, either = np.full(len(t_s), -1), np.zeros(len(t_s), bool)
+    for k, tk in enumerate(t_s):
+        r = np.nonzero(np.isclose(t.time_s, tk) & t.confirmed)[0]
+        if not len(r):
+            continue
+        d = np.hypot(*(t.x[r, :2] - truth_xy[k]).T)
+        dm = np.hypot(*(t.x[r, :2] - mirror_xy[k]).T)
+        either[k] = bool(np.min(np.minimum(d, dm)) < match_m)
+        if d.min() < match_m:
+            near[k] = r[int(np.argmin(d))]
+    return near, either
+
+
+def _consistency(res, near, truth_xy, sel) -> tuple[float, float, int]:
+    """(mean position NEES, RMSE / rms stated sd, n) over the truth pings ``sel`` held by a row."""
+    k = np.nonzero(sel & (near >= 0))[0]
+    if not len(k):
+        return float("nan"), float("nan"), 0
+    r = near[k]
+    e = res.tracks.x[r, :2] - truth_xy[k]
+    P = res.P[r][:, :2, :2]
+    nees = np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])
+    ratio = np.sqrt(np.mean(np.sum(e**2, 1)) / np.mean(np.trace(P, axis1=1, axis2=2)))
+    return float(np.mean(nees)), float(ratio), len(k)
+
+
+def measure(c: dict, res, t0: float, t1: float, match_m: float) -> dict:
+    """The scene's numbers (module doc) from its cached truth and a tracker run."""
+    from bench_active_rows import _truth_arrays, track_labels
+    from sonartrack.systems.active.targets import mirror_targets
+
+    tt, _, xy, mirror = _truth_arrays(c["truth"], c["geometry"])
+    truth = c["truth"]
+    ok = (truth["snr_db"].to_numpy() >= 15.0) & truth["in_window"].to_numpy(bool) & ~truth["in_blast"].to_numpy(bool)
+    near, either = _held_rows(res, xy, tt, mirror, match_m)
+    step = float(np.median(np.diff(c["time_s"])))
+    in_turn = (tt >= t0) & (tt <= t1 + 2 * step)
+    labels = track_labels(res, truth, c["geometry"], match_m)
+    seg = sum(1 for lab, ghost in labels.values() if lab != "false" and ghost <= 0.5)
+    targets = mirror_targets(res, c["geometry"])
+    first = np.nonzero(ok)[0]
+    acq = -1
+    if len(first):
+        got = np.nonzero(either[first[0]:])[0]
+        acq = int(got[0]) + 1 if len(got) else -1
+    con = c["contacts"]
+    hit = np.array([bool(np.any(np.isclose(con.time_s, tk) & (np.minimum(np.hypot(*(con.xy - xy[k]).T), np.hypot(
+        *(con.xy - mirror[k]).T)) < 3.0 * np.sqrt(np.trace(con.R, axis1=1, axis2=2))))) for k, tk in enumerate(tt)])
+    out = {"pd": float(np.mean(hit[ok])) if ok.any() else float("nan"), "seg": seg, "rows": len(targets), "false_tracks": sum(v[0] == "false" for v in labels.values()),
+           "lost": int(np.sum(ok & in_turn & ~either)), "turn_pings": int(np.sum(ok & in_turn)), "acq": acq,
+           "held": float(np.mean(either[ok])) if ok.any() else float("nan")}
+    for name, sel in (("before", tt < t0), ("in", (tt >= t0) & (tt <= t1)), ("after", tt > t1)):
+        out[name] = _consistency(res, near, xy, sel & ok)
+    return out
+
+
+def _fmt(m: dict) -> str:
+    phases = " ".join(f"{n} {m[n][0]:5.1f}/{m[n][1]:4.2f}({m[n][2]})" for n in ("before", "in", "after"))
+    return (f"pd {m['pd']:.2f} seg {m['seg']} rows {m['rows']} false {m['false_tracks']} lost {m['lost']}/{m['turn_pings']} "
+            f"acq {m['acq']} held {100 * m['held']:.0f}%  NEES/ratio(n): {phases}")
+
+
+def summary(all_m: list[dict]) -> None:
+    """Pooled numbers over the scenes run."""
+    n = len(all_m)
+    print(f"\nscenes {n}: one segment {sum(m['seg'] == 1 for m in all_m)}, one row {sum(m['rows'] == 1 for m in all_m)}, "
+          f"pings lost in turns {sum(m['lost'] for m in all_m)} of {sum(m['turn_pings'] for m in all_m)}, "
+          f"confirmed within 5 pings {sum(0 < m['acq'] <= 5 for m in all_m)} (acq {[m['acq'] for m in all_m]}), "
+          f"false tracks {sum(m['false_tracks'] for m in all_m)}, mean pd {np.mean([m['pd'] for m in all_m]):.2f}")
+    for ph in ("before", "in", "after"):
+        w = np.array([m[ph][2] for m in all_m], float)
+        if w.sum() == 0:
+            continue
+        nees = np.nansum([m[ph][0] * m[ph][2] for m in all_m]) / w.sum()
+        ratio = np.sqrt(np.nansum([m[ph][1] ** 2 * m[ph][2] for m in all_m]) / w.sum())
+        print(f"  {ph}: mean NEES {nees:.2f} (2 wanted), RMSE/sd {ratio:.2f} over {int(w.sum())} held pings")
+
+
+def with_turn_deg(turn_deg) -> None:
+    """ActiveSettings.turn_modes with TurnModes.turn_deg = ``turn_deg`` (this process only)."""
+    from sonartrack.systems.active.settings import ActiveSettings
+    from sonartrack.tracking.motion import TurnModes
+
+    ActiveSettings.turn_modes = lambda s: TurnModes(tuple(s.target_turn_rates_deg_s), s.target_turn_q, turn_deg)
+
+
+def main() -> None:
+    from bench_active_rows import track, with_changes
+
+    p = argparse.ArgumentParser()
+    p.add_argument("--cache", default="/tmp/active_turns")
+    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"])
+    p.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
+    p.add_argument("--turns", nargs="+", type=float, default=[60.0, 120.0, 180.0])
+    p.add_argument("--rates", nargs="+", type=float, default=[0.3, 0.6, 1.0])
+    p.add_argument("--ts", type=float, default=10.0, help="target strength (dB re 1 m^2)")
+    p.add_argument("--lead-s", type=float, default=450.0)
+    p.add_argument("--tail-s", type=float, default=450.0)
+    p.add_argument("--match-m", type=float, default=1000.0)
+    p.add_argument("--simulate-only", action="store_true", help="fill the cache, track nothing")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--turn-deg", default=None, help="the turn modes' mean course change (tracking/motion.py "
+                                                    "TurnModes.turn_deg; 'none': the tracker's fixed diagonal)")
+    p.add_argument("--lfm-area", action="store_true", help="the LFM's clutter density from its contacts over the "
+                                                           "listening window's area, as the CW's (contact_tracker.py)")
+    a = p.parse_args()
+    if a.turn_deg is not None:
+        with_turn_deg(None if a.turn_deg == "none" else float(a.turn_deg))
+    all_m = []
+    for seed in a.seeds:  # (seed outermost: the tuning seed's scenes first)
+        for kind in a.kinds:
+            for turn, rate in [(t, r) for t in a.turns for r in a.rates]:
+                if True:
+                    sc = turn_scene(kind, seed, turn, rate, a.ts, a.lead_s, a.tail_s)
+                    c = contacts_of(sc, Path(a.cache) / f"{kind}_{turn:g}_{rate:g}_{seed}")
+                    if a.simulate_only:
+                        continue
+                    if a.lfm_area and c["kwargs"].get("clutter_area_m2") is None:
+                        c["kwargs"]["clutter_area_m2"] = float(np.pi * (1500.0 * np.median(np.diff(c["time_s"])) / 2)
+                                                               ** 2)
+                    res, _ = track(c, with_changes(c, a.set))
+                    m = measure(c, res, a.lead_s, a.lead_s + turn / rate, a.match_m)
+                    all_m.append(m)
+                    print(f"{kind.upper()} turn {turn:3g} deg at {rate:g} deg/s seed {seed}: {_fmt(m)}", flush=True)
+    if all_m:
+        summary(all_m)
+
+
+if __name__ == "__main__":
+    main()
