@@ -166,6 +166,7 @@ def main() -> None:
     p.add_argument("--tail-s", type=float, default=450.0)
     p.add_argument("--match-m", type=float, default=1000.0)
     p.add_argument("--simulate-only", action="store_true", help="fill the cache, track nothing")
+    p.add_argument("--cached-only", action="store_true", help="skip the scenes not in the cache")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--turn-deg", default=None, help="the turn modes' mean course change (tracking/motion.py "
                                                     "TurnModes.turn_deg; 'none': the tracker's fixed diagonal)")
@@ -180,7 +181,10 @@ def main() -> None:
             for turn, rate in [(t, r) for t in a.turns for r in a.rates]:
                 if True:
                     sc = turn_scene(kind, seed, turn, rate, a.ts, a.lead_s, a.tail_s)
-                    c = contacts_of(sc, Path(a.cache) / f"{kind}_{turn:g}_{rate:g}_{seed}")
+                    where = Path(a.cache) / f"{kind}_{turn:g}_{rate:g}_{seed}"
+                    if a.cached_only and not (where / f"{kind}_{seed}.pkl").exists():
+                        continue
+                    c = contacts_of(sc, where)
                     if a.simulate_only:
                         continue
                     if a.lfm_area and c["kwargs"].get("clutter_area_m2") is None:

@@ -34,12 +34,15 @@ class TurnModes:
 
     ``turn_deg`` (deg, > 0): the mean course change of one turn, so a mode at rate w lasts turn_deg / w seconds on
     average (its expected sojourn time, :meth:`sojourn_s`; Bar-Shalom, Li, Kirubarajan 2001, sec. 11.6.6: p_jj =
-    1 - T / tau_j for a sojourn tau_j). Default 120 deg, the middle of the 60-180 deg turns of issue 34 item 5 and
-    the active-chain study's family (its ``turn_deg`` range). None: the turn modes keep the tracker's diagonal."""
+    1 - T / tau_j for a sojourn tau_j); e.g. 120 deg, the middle of the 60-180 deg turns of issue 34 item 5. None
+    (default): the turn modes keep the tracker's per-scan diagonal. Not the default: measured on the independent
+    turning-target generator of tests/systems/active/test_turns_tracker.py (seeds 0-7) and the active chain
+    (benchmarks/bench_active_turns.py, bench_active_rows.py) it did not hold turns better (module doc of the
+    benchmark has the numbers)."""
 
     rates_deg_s: tuple[float, ...] = ()
     q: float = 1e-3
-    turn_deg: float | None = 120.0
+    turn_deg: float | None = None
 
     def __post_init__(self):
         rates = tuple(float(v) for v in self.rates_deg_s)
