@@ -114,7 +114,8 @@ def measure(c: dict, res, t0: float, t1: float, match_m: float) -> dict:
     con = c["contacts"]
     hit = np.array([bool(np.any(np.isclose(con.time_s, tk) & (np.minimum(np.hypot(*(con.xy - xy[k]).T), np.hypot(
         *(con.xy - mirror[k]).T)) < 3.0 * np.sqrt(np.trace(con.R, axis1=1, axis2=2))))) for k, tk in enumerate(tt)])
-    out = {"pd": float(np.mean(hit[ok])) if ok.any() else float("nan"), "seg": seg, "rows": len(targets), "false_tracks": sum(v[0] == "false" for v in labels.values()),
+    out = {"pd": float(np.mean(hit[ok])) if ok.any() else float("nan"), "seg": seg, "rows": len(targets),
+           "false_tracks": sum(v[0] == "false" for v in labels.values()),
            "lost": int(np.sum(ok & in_turn & ~either)), "turn_pings": int(np.sum(ok & in_turn)), "acq": acq,
            "held": float(np.mean(either[ok])) if ok.any() else float("nan")}
     for name, sel in (("before", tt < t0), ("in", (tt >= t0) & (tt <= t1)), ("after", tt > t1)):
@@ -124,14 +125,15 @@ def measure(c: dict, res, t0: float, t1: float, match_m: float) -> dict:
 
 def _fmt(m: dict) -> str:
     phases = " ".join(f"{n} {m[n][0]:5.1f}/{m[n][1]:4.2f}({m[n][2]})" for n in ("before", "in", "after"))
-    return (f"pd {m['pd']:.2f} seg {m['seg']} rows {m['rows']} false {m['false_tracks']} lost {m['lost']}/{m['turn_pings']} "
-            f"acq {m['acq']} held {100 * m['held']:.0f}%  NEES/ratio(n): {phases}")
+    return (f"pd {m['pd']:.2f} seg {m['seg']} rows {m['rows']} false {m['false_tracks']} "
+            f"lost {m['lost']}/{m['turn_pings']} acq {m['acq']} held {100 * m['held']:.0f}%  NEES/ratio(n): {phases}")
 
 
 def summary(all_m: list[dict]) -> None:
     """Pooled numbers over the scenes run."""
     n = len(all_m)
-    print(f"\nscenes {n}: one segment {sum(m['seg'] == 1 for m in all_m)}, one row {sum(m['rows'] == 1 for m in all_m)}, "
+    print(f"\nscenes {n}: one segment {sum(m['seg'] == 1 for m in all_m)}, "
+          f"one row {sum(m['rows'] == 1 for m in all_m)}, "
           f"pings lost in turns {sum(m['lost'] for m in all_m)} of {sum(m['turn_pings'] for m in all_m)}, "
           f"confirmed within 5 pings {sum(0 < m['acq'] <= 5 for m in all_m)} (acq {[m['acq'] for m in all_m]}), "
           f"false tracks {sum(m['false_tracks'] for m in all_m)}, mean pd {np.mean([m['pd'] for m in all_m]):.2f}")
