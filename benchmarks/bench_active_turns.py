@@ -14,6 +14,7 @@ and any ``--set`` changes. Printed per scene:
 * ``seg``: confirmed track segments on the target (non-ghost; 1 wanted), ``rows``: target rows listed (1 wanted);
 * ``lost``: the target's detectable pings (echo SNR >= 15 dB, in the window, clear of the blast) in its turn and two
   pings after, on which no confirmed row lies within ``--match-m`` of it;
+  (``once held``: of those after the first ping a confirmed row held it, the turn's own losses);
 * ``acq``: pings from its first detectable ping to the first ping a confirmed row (either mirror hypothesis) holds
   it, both counted (<= 5 wanted);
 * NEES of the position (2 dof: 2 wanted; the chi-square(2) 95 % band of a mean of n is printed by the summary) and
@@ -21,7 +22,31 @@ and any ``--set`` changes. Printed per scene:
   the turn (on the rows of the target's side within ``--match-m``).
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_active_turns.py [--cache /tmp/turns] [--kinds lfm cw] [--seeds 1 2]
-[--turns 60 120 180] [--rates 0.3 0.6 1.0] [--set NAME=VALUE ...]``. Measures, not tests: nothing is asserted.
+[--turns 60 120 180] [--rates 0.3 0.6 1.0] [--set NAME=VALUE ...] [--turn-deg 120|none] [--lfm-area]
+[--cached-only]``. Measures, not tests: nothing is asserted. The scenes of one seed share their first 15 pings (the
+turn starts at ping 15), so acquisition is one number per pulse and seed.
+
+Measured (2026-12-07, h11-turnacq, main's code at 0e2e8dd; 31 of the 36 scenes cached, ~45 s CPU each to simulate
+and run the chain, ~10 s each to re-track; the target's echo SNR 14-23 dB):
+* acquisition: LFM 18 pings (seed 1) / 32-36 or never (seed 2); CW 17-25 (seed 1) / 5 (seed 2): 8 of 31 scenes within
+  5 pings (all CW seed 2). Pd (contact within 3 sds on a detectable ping) LFM 0.53-0.74, CW 0.21-0.45. The LFM's cause:
+  the tracker's clutter density 1e-6 /m^2 is ~100x its contacts' mean density (15-17 contacts a ping over the 1.5e9
+  m^2 window, 1e-8), so a hit raises the existence odds by ~1.5-5 and a miss (pd 0.7) cuts them by 0.3, while the
+  stated 1 false track/h with 7.9-8.4 tracks started a ping needs a likelihood ratio of ~950-1000 (threshold
+  0.980-0.982): ~17 pings at Pd 0.6. With the contacts' own density (``--lfm-area``): acquisition 10 pings but
+  19-23 false confirmed tracks in each 40-min scene (the MFTD's false detections come in streaks, not Poisson).
+* turns: of the detectable pings in the turns after the target was first held, LFM lost 3 of 57, CW 55 of 110
+  (58 of 167 all); of all the turns' detectable pings 212 of 321 (the rest before confirmation). Every CW seed-2
+  scene loses its target's first track (confirmed at ping 4) as a "ghost" at ping 16 when its side is decided
+  (480 s; sides.py; in 4 of 6 scenes both it and its mirror twin were decided "on their side", ln LR 9.9 and 12.1):
+  the target is then unheld 6-12 pings through its turn. That is side resolution, not the IMM.
+* covariances on the held pings (position NEES, 2 wanted; RMSE / rms stated sd): before the turn 1.08 / 0.49,
+  in it 0.94 / 0.46, after it 2.38 / 1.08 (216 pings); single CW scenes after their turn up to 5.6-8.0 / 1.5-1.95.
+* tried: the turn modes kept for their mean sojourn (``--turn-deg 120``, tracking/motion.py TurnModes.turn_deg):
+  one segment 13 -> 12 scenes, lost after the first hold 58/167 -> 64/176, NEES after 2.38 -> 2.12; on
+  bench_active_rows.py CW rows 4/6 -> 5/8, confirmed tracks 29/26 -> 35/31: left off (default None). A velocity
+  prior of 3 m/s per axis (tracker.init_velocity_std_mps, 5 now): seed 1 (tuned on) every LFM scene acquired
+  (17 pings), seed 2 (not tuned on) 3 of 4 LFM scenes never confirmed (before: 1 of 4): not adopted.
 """
 
 from __future__ import annotations
@@ -111,12 +136,15 @@ def measure(c: dict, res, t0: float, t1: float, match_m: float) -> dict:
     if len(first):
         got = np.nonzero(either[first[0]:])[0]
         acq = int(got[0]) + 1 if len(got) else -1
+    held_since = np.arange(len(tt)) >= (np.argmax(either) if either.any() else len(tt))  # from its first hold on
     con = c["contacts"]
     hit = np.array([bool(np.any(np.isclose(con.time_s, tk) & (np.minimum(np.hypot(*(con.xy - xy[k]).T), np.hypot(
         *(con.xy - mirror[k]).T)) < 3.0 * np.sqrt(np.trace(con.R, axis1=1, axis2=2))))) for k, tk in enumerate(tt)])
     out = {"pd": float(np.mean(hit[ok])) if ok.any() else float("nan"), "seg": seg, "rows": len(targets),
            "false_tracks": sum(v[0] == "false" for v in labels.values()),
            "lost": int(np.sum(ok & in_turn & ~either)), "turn_pings": int(np.sum(ok & in_turn)), "acq": acq,
+           "lost_held": int(np.sum(ok & in_turn & ~either & held_since)),
+           "turn_held": int(np.sum(ok & in_turn & held_since)),
            "held": float(np.mean(either[ok])) if ok.any() else float("nan")}
     for name, sel in (("before", tt < t0), ("in", (tt >= t0) & (tt <= t1)), ("after", tt > t1)):
         out[name] = _consistency(res, near, xy, sel & ok)
@@ -126,7 +154,8 @@ def measure(c: dict, res, t0: float, t1: float, match_m: float) -> dict:
 def _fmt(m: dict) -> str:
     phases = " ".join(f"{n} {m[n][0]:5.1f}/{m[n][1]:4.2f}({m[n][2]})" for n in ("before", "in", "after"))
     return (f"pd {m['pd']:.2f} seg {m['seg']} rows {m['rows']} false {m['false_tracks']} "
-            f"lost {m['lost']}/{m['turn_pings']} acq {m['acq']} held {100 * m['held']:.0f}%  NEES/ratio(n): {phases}")
+            f"lost {m['lost']}/{m['turn_pings']} (once held {m['lost_held']}/{m['turn_held']}) acq {m['acq']} "
+            f"held {100 * m['held']:.0f}%  NEES/ratio(n): {phases}")
 
 
 def summary(all_m: list[dict]) -> None:
@@ -134,7 +163,8 @@ def summary(all_m: list[dict]) -> None:
     n = len(all_m)
     print(f"\nscenes {n}: one segment {sum(m['seg'] == 1 for m in all_m)}, "
           f"one row {sum(m['rows'] == 1 for m in all_m)}, "
-          f"pings lost in turns {sum(m['lost'] for m in all_m)} of {sum(m['turn_pings'] for m in all_m)}, "
+          f"pings lost in turns {sum(m['lost'] for m in all_m)} of {sum(m['turn_pings'] for m in all_m)} (after the "
+          f"first hold {sum(m['lost_held'] for m in all_m)} of {sum(m['turn_held'] for m in all_m)}), "
           f"confirmed within 5 pings {sum(0 < m['acq'] <= 5 for m in all_m)} (acq {[m['acq'] for m in all_m]}), "
           f"false tracks {sum(m['false_tracks'] for m in all_m)}, mean pd {np.mean([m['pd'] for m in all_m]):.2f}")
     for ph in ("before", "in", "after"):
