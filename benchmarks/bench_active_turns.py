@@ -35,7 +35,7 @@ and run the chain, ~10 s each to re-track; the target's echo SNR 14-23 dB):
   stated 1 false track/h with 7.9-8.4 tracks started a ping needs a likelihood ratio of ~950-1000 (threshold
   0.980-0.982): ~17 pings at Pd 0.6. With the contacts' own density (``--lfm-area``): acquisition 10 pings but
   19-23 false confirmed tracks in each 40-min scene (the MFTD's false detections come in streaks, not Poisson).
-* turns: of the detectable pings in the turns after the target was first held, LFM lost 3 of 57, CW 55 of 110
+* turns: of the detectable pings in the turns after the target was first held, LFM lost 3 of 39, CW 55 of 128
   (58 of 167 all); of all the turns' detectable pings 212 of 321 (the rest before confirmation). Every CW seed-2
   scene loses its target's first track (confirmed at ping 4) as a "ghost" at ping 16 when its side is decided
   (480 s; sides.py; in 4 of 6 scenes both it and its mirror twin were decided "on their side", ln LR 9.9 and 12.1):
