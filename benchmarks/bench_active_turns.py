@@ -26,28 +26,35 @@ Usage: ``PYTHONPATH=src python benchmarks/bench_active_turns.py [--cache /tmp/tu
 [--cached-only]``. Measures, not tests: nothing is asserted. The scenes of one seed share their first 15 pings (the
 turn starts at ping 15), so acquisition is one number per pulse and seed.
 
-Measured (2026-12-07, h11-turnacq, main's code at 0e2e8dd; 31 of the 36 scenes cached, ~45 s CPU each to simulate
-and run the chain, ~10 s each to re-track; the target's echo SNR 14-23 dB):
-* acquisition: LFM seed 1 18 pings at 0.3 deg/s, never at 0.6-1 (it falls after the turn's start at ping 15),
-  seed 2 32-36 or never; CW 17-25 (seed 1) / 5 (seed 2): 8 of 31 scenes within 5 pings (all CW seed 2). Pd (a
-  contact within 3 sds on a detectable ping) LFM 0.53-0.74, CW 0.21-0.45. The LFM's cause: the tracker's clutter
-  density 1e-6 /m^2 is ~100x its contacts' mean density (15-17 contacts a ping over the 1.5e9 m^2 window, 1e-8), so
-  a hit raises the existence odds by ~1.5-5 and a miss (pd 0.7) cuts them by 0.3, while the stated 1 false track/h
-  with 7.9-8.4 tracks started a ping needs a likelihood ratio of ~950-1000 (threshold 0.980-0.982): ~17 pings at
-  Pd 0.6. With the contacts' own density (``--lfm-area``): acquisition 10 pings but 19-23 false confirmed tracks in
-  each 16-22 min scene (LFM seed 1, 60 and 120 deg): the MFTD's false detections come in streaks, not Poisson.
-* turns: of the detectable pings in the turns after the target was first held, LFM lost 3 of 39, CW 55 of 128
-  (58 of 167 all); of all the turns' detectable pings 212 of 321 (the rest before confirmation). Each of the 9 CW
-  seed-2 scenes loses its target's first track (confirmed at ping 4) as a "ghost" at ping 16 when its side is decided
-  (480 s; sides.py; in 6 of 9 both it and its mirror twin were decided "on their side", e.g. ln LR 9.9 and 12.1):
-  the target is then unheld 6-12 pings through its turn. That is side resolution, not the IMM.
-* covariances on the held pings (position NEES, 2 wanted; RMSE / rms stated sd): before the turn 1.08 / 0.49,
-  in it 0.94 / 0.46, after it 2.38 / 1.08 (216 pings); single CW scenes after their turn up to 5.6-8.0 / 1.5-1.95.
-* tried: the turn modes kept for their mean sojourn (``--turn-deg 120``, tracking/motion.py TurnModes.turn_deg):
-  one segment 13 -> 12 scenes, lost after the first hold 58/167 -> 64/176, NEES after 2.38 -> 2.12; on
-  bench_active_rows.py CW rows 4/6 -> 5/8, confirmed tracks 29/26 -> 35/31: left off (default None). A velocity
-  prior of 3 m/s per axis (tracker.init_velocity_std_mps, 5 now): seed 1 (tuned on) every LFM scene acquired
-  (17 pings), seed 2 (not tuned on) 3 of 4 LFM scenes never confirmed (before: 1 of 4): not adopted.
+Measured (2026-12-07, h11-turnacq, main's code at 0e2e8dd, all 36 scenes; ~45 s CPU each to simulate and run the
+chain at load ~10, ~10 s each to re-track; the target's echo SNR 14-23 dB):
+* acquisition: 9 of 36 within 5 pings (all CW seed 2, 5 pings); LFM seed 1 18 pings at 0.3 deg/s, never at 0.6-1
+  (it falls after the turn's start at ping 15), seed 2 32-41 or never; CW seed 1 20-25. Pd (a contact within 3 sds
+  on a detectable ping) LFM 0.53-0.74, CW 0.21-0.45. The LFM's cause: the tracker's clutter density 1e-6 /m^2 is
+  ~100x its contacts' mean density (15-17 contacts a ping over the 1.5e9 m^2 window, 1e-8), so a hit raises the
+  existence odds by ~1.5-5 and a miss (pd 0.7) cuts them by 0.3, while the stated 1 false track/h with 7.9-8.4
+  tracks started a ping needs a likelihood ratio of ~950-1000 (threshold 0.980-0.982): ~17 pings at Pd 0.6. With
+  the contacts' own density (``--lfm-area``): acquisition 10 pings but 19-23 false confirmed tracks in each 16-22 min
+  scene (LFM seed 1, 60 and 120 deg): the MFTD's false detections come in streaks, not Poisson.
+* turns: of the turns' detectable pings after the target was first held, LFM lost 3 of 39, CW seed 1 0 of 40, CW
+  seed 2 62 of 97 (271 of 382 of all the turns' detectable pings: the rest before confirmation). Each of the 9 CW
+  seed-2 scenes loses its target's first track (confirmed at ping 4) as a "ghost" at ping 16 when its side is
+  decided (480 s; in 6 of 9 both it and its mirror twin were decided "on their side", e.g. ln LR 9.9 and 12.1, and
+  sides.py GhostDeleter deletes a track whose twin is decided, so both went): the target is then unheld 6-12 pings
+  through its turn. That is side resolution, not the IMM. With both twins' "on their side" read as undecided
+  (sides.py ``SideTracker.decision``; a diff in the h11-turnacq report): CW seed 2 lost 21 of 97, held % of its
+  detectable pings per scene 73/74/72/68/76/47/68/57/53 -> 89/74/88/91/76/68/88/57/72; CW seed 1, LFM and
+  bench_active_rows.py (both pulses, seeds 1-2) unchanged.
+* covariances on the held pings (position NEES, 2 wanted; RMSE / rms stated sd): before the turn 1.08 / 0.49 (99
+  pings), in it 0.93 / 0.46 (88), after it 2.30 / 1.06 (229); single CW scenes after their turn up to 5.6-8.0 /
+  1.5-1.95 on 3-11 pings.
+* tried (31 scenes): the turn modes kept for their mean sojourn (``--turn-deg 120``, tracking/motion.py
+  TurnModes.turn_deg): one segment 13 -> 12 scenes, lost after the first hold 58/167 -> 64/176, NEES after 2.38 ->
+  2.12; on bench_active_rows.py CW rows 4/6 -> 5/8, confirmed tracks 29/26 -> 35/31; on the independent generator of
+  tests/systems/active/test_turns_tracker.py (seeds 0-7) the largest error in 180 deg at 1 deg/s 323 -> 354 m mean,
+  one run 540 m: left off (default None). A velocity prior of 3 m/s per axis (tracker.init_velocity_std_mps, 5 now):
+  seed 1 (tuned on) every LFM scene acquired (17 pings), seed 2 (not tuned on) 3 of 4 LFM scenes never confirmed
+  (before: 1 of 4): not adopted.
 """
 
 from __future__ import annotations
