@@ -271,6 +271,8 @@ def _mftd_claim(summary: dict, config: Config) -> Claim:
     hold = {v: _num(summary["hold"][v][w][0]) for v in ("mftd_imm", "single_imm")}
     fr = {v: summary["reverb_false_per_hour"][v] + summary["scene_false_per_hour"][v] for v in ("mftd_imm",
                                                                                                  "single_imm")}
+    ft = {v: summary["reverb_false_tracks"][v] / summary["hours"] + summary["scene_false_tracks_per_hour"][v]
+          for v in fr}
     eq = summary["equal_false"]
     gain = eq["gain_db"]
     holds = ttc["mftd_imm"] < ttc["single_imm"] and hold["mftd_imm"] > hold["single_imm"] and \
@@ -287,7 +289,8 @@ def _mftd_claim(summary: dict, config: Config) -> Claim:
                  ours=f"time to confirm {_fmt(summary['ttc_or_end_s']['mftd_imm'][w], ' s')} vs "
                       f"{_fmt(summary['ttc_or_end_s']['single_imm'][w], ' s')}; held "
                       f"{_fmt(summary['hold']['mftd_imm'][w])} vs {_fmt(summary['hold']['single_imm'][w])}; false "
-                      f"rows/h {fr['mftd_imm']:.2f} vs {fr['single_imm']:.2f}; SNR gain at equal false-row rate "
+                      f"rows/h {fr['mftd_imm']:.2f} vs {fr['single_imm']:.2f} (tracks {ft['mftd_imm']:.2f} vs "
+                      f"{ft['single_imm']:.2f}); SNR gain at equal false-row rate "
                       f"{_fmt(gain, ' dB')} (single at x{SINGLE_FACTORS[eq['level']['single']]:g} its threshold, "
                       f"{eq['false_per_hour']['single'][eq['level']['single']]:.2f} false rows/h; MFTD at "
                       f"+{MFTD_OFFSETS[eq['level']['mftd']]:g}, {eq['false_per_hour']['mftd'][eq['level']['mftd']]:.2f}"
