@@ -87,8 +87,14 @@ import numpy as np
 
 
 def scene(kind: str, seed: int):
-    """The default active scene with pulse ``kind`` (lfm | cw, the other waveform fields the default's)."""
+    """The default active scene with pulse ``kind`` (lfm | cw, the other waveform fields the default's); ``cwb``:
+    bench_cw_held.py's second CW scene (32 elements 0.3 m apart, 2.4 kHz, an hour), a scene no one tuned on."""
     from sonartrack.sim.active_scene import ActiveSceneSettings
+
+    if kind == "cwb":
+        from bench_cw_held import scene_settings
+
+        return scene_settings("b", seed, 3600.0)
 
     s = ActiveSceneSettings()
     return s.model_copy(update={"seed": seed, "waveform": s.waveform.model_copy(update={"kind": kind})})
@@ -187,7 +193,9 @@ def track(c: dict, settings=None):
     trk = ContactTracker(s.tracker_settings(), c["geometry"], s.range_rate_gate_sigma, c["rate_sd"],
                          s.side_turn_deg, s.merge_probability, s.max_range_rate_mps, turns=s.turn_modes(),
                          clutter_map=clutter_map_of(s), **c["kwargs"],
-                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}))  # (an older chain: none)
+                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
+                         **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
+                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -306,7 +314,7 @@ def with_changes(c: dict, changes: list[str]):
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--cache", default="/tmp/active_rows")
-    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"])
+    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"], help="lfm, cw, cwb (bench_cw_held.py's scene b)")
     p.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
     p.add_argument("--gate-m", type=float, default=1000.0)
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
