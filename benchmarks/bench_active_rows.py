@@ -74,6 +74,24 @@ rows, still 2 holding two targets (through re-joins); the CW contacts' R scaled 
 CW cone error measured 2.0 deg vs 0.87 stated, ACTCW): 25-26 and 19 confirmed tracks, 5-7 rows, 1-2 holding two.
 A re-join (contact_tracker.py) tested against the lost track's last state with existence >= 0.9 instead of its
 last (coasted) one: lead's CW 1 a row holding three targets, CW 2 0 mixed (was 1); ACTHOLD2's CW 1 7 rows, 1 mixed.
+
+Measured (2026-12-07 session 11, h11-cwfrag; the lead's caches /tmp/lead/rows10b copied; ~1-2 min a run of all
+four at load ~12). Per pulse/seed: rows, false, extra, rows holding 2+ targets, confirmed tracks; held % (mean):
+                              LFM 1        LFM 2          CW 1                          CW 2
+    main (0e2e8dd)            4,0,0,0, 8   4,0,0,1, 8     4,1,0,2, 29; 95/78/100/90     6,0,2,1, 26; 90/80/100/85
+    + join links as pairs     same         same           3,1,0,2, 29 (a row of 3)      3,0,0,1, 26
+    + contacts shared by rank 4,0,0,0, 8   4,0,0,0, 6     3,1,0,1, 21 (a row of all 4)  4,0,0,1, 21; held 91/90
+    + told-apart pairs kept   4,0,0,0, 8   4,0,0,0, 6     7,1,2,0, 13; 95/73/100/90     7,1,2,0, 17; 92/83/100/85
+      (the defaults now: contact_claims 'all', merge_keep_apart)
+Tried and left off: the CW peak contacts (ActiveSettings cw_peak_contacts, ACTCW's run.py change; contacts rebuilt):
+with the shared contacts CW 1 5,2,0,1, 12 tracks, held 85; CW 2 4,0,0,1, 19, held 88 (approacher 95 -> 81 on CW 1);
+with the told-apart pairs too 5,2,0,1 / 7,2,1,0. On the peak contacts: claims 'confirmed' (confirmed tracks claim
+from tentative ones only) with the told-apart pairs 8 and 11 CW rows; 'lm' (LMIPDA's symmetric odds) 5 and 4 rows
+with 1 and 2 holding two targets, 13/11 with the told-apart pairs. Told-apart pairs merged after 5 or 10 scans together (not listed as one): 8,1,3,1 / 7,2,1,1
+and 8,1,3,0 / 6,1,1,1. Told-apart pairs' merges not recorded (but deleted): 7,1,2,1 / 9,0,5,1.
+What is left on CW: 2 extra rows a seed (seed 2: three confirmed tracks on crossing-b to the end, one of them the
+approacher's until the crossing at ping ~52; seed 1: crossing-b's and maneuvering's second tracks) and one false
+row (seed 1: pings 101-119 at the fore endfire, as on main; seed 2: a track of pings 60-76).
 """
 
 from __future__ import annotations
