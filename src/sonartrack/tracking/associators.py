@@ -126,11 +126,8 @@ class ClaimedPDA(PDA):
         if self.linear_multitarget:
             return pda_pair_weights(replace(lik, pair_log_ratio=lik.pair_log_ratio + self._lm_log_factor(lik)[:, None],
                                             dense_log_ratio=None))
-        claim = np.zeros((n, m))  # chi_s beta_sm, claimers only
-        claim[t, j] = (self.existence * self.claims)[t] * np.sum(own.beta_pair * self.mu[t], axis=1)
-        above = self.rank[None, :] > self.rank[:, None]  # above[t, s]: s ranked above t
-        taken = (above.astype(float) @ claim)[t, j]  # (G,) the claims of the tracks above each pair's track
-        keep = 1.0 - np.minimum(taken, 1.0 - self.eps)
+        claim = (self.existence * self.claims)[t] * np.sum(own.beta_pair * self.mu[t], axis=1)  # (G,) chi_s beta_sm
+        keep = 1.0 - np.minimum(_claimed_above(j, self.rank[t], claim), 1.0 - self.eps)
         return pda_pair_weights(replace(lik, pair_log_ratio=lik.pair_log_ratio + np.log(keep)[:, None],
                                         dense_log_ratio=None))
 
@@ -148,3 +145,19 @@ class ClaimedPDA(PDA):
         odds = p / (1.0 - p)
         others = np.bincount(j, weights=odds, minlength=m)[j] - odds
         return -np.log1p(others)
+
+
+def _claimed_above(meas, rank, claim) -> np.ndarray:
+    """For each gated pair (track, measurement ``meas``) with its track's ``rank``, the sum of ``claim`` over the
+    pairs of the same measurement whose tracks rank strictly higher (O(G log G) in the gated pairs G)."""
+    order = np.lexsort((-rank, meas))
+    j, r, c = meas[order], rank[order], claim[order]
+    before = np.cumsum(c) - c  # exclusive running sum over the sorted pairs
+    new_j = np.r_[True, j[1:] != j[:-1]]
+    new_run = new_j | np.r_[True, r[1:] != r[:-1]]  # a run: one measurement's pairs of one rank (ties claim not)
+    idx = np.arange(len(j))
+    j_start = np.maximum.accumulate(np.where(new_j, idx, 0))
+    run_start = np.maximum.accumulate(np.where(new_run, idx, 0))
+    out = np.empty(len(j))
+    out[order] = before[run_start] - before[j_start]
+    return out

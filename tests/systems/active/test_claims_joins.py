@@ -104,3 +104,14 @@ def test_two_tracks_told_apart_are_not_merged_when_they_meet():
     m = DuplicateMerger(ExistenceDeleter(0.9, 0.01), gamma, keep_apart=True)
     assert m.manage(_two([0, 0, 3, 0], [10, 5, 3, 0]), hit).track_id.tolist() == [1]
     assert m.merged == {2: 1}
+
+
+def test_claims_above_match_a_dense_sum():
+    """The sorted running sums of associators._claimed_above against the dense sum over every pair of the same
+    measurement whose track ranks strictly higher (ties claim nothing from each other)."""
+    from sonartrack.tracking.associators import _claimed_above
+
+    rng = np.random.default_rng(4)
+    meas, rank, claim = rng.integers(0, 6, 60), rng.integers(0, 4, 60).astype(float), rng.random(60)
+    want = [(claim * (meas == meas[g]) * (rank > rank[g])).sum() for g in range(60)]
+    assert np.allclose(_claimed_above(meas, rank, claim), want)
