@@ -87,8 +87,9 @@ Tried and left off: the CW peak contacts (ActiveSettings cw_peak_contacts, ACTCW
 with the shared contacts CW 1 5,2,0,1, 12 tracks, held 85; CW 2 4,0,0,1, 19, held 88 (approacher 95 -> 81 on CW 1);
 with the told-apart pairs too 5,2,0,1 / 7,2,1,0. On the peak contacts: claims 'confirmed' (confirmed tracks claim
 from tentative ones only) with the told-apart pairs 8 and 11 CW rows; 'lm' (LMIPDA's symmetric odds) 5 and 4 rows
-with 1 and 2 holding two targets, 13/11 with the told-apart pairs. Told-apart pairs merged after 5 or 10 scans together (not listed as one): 8,1,3,1 / 7,2,1,1
-and 8,1,3,0 / 6,1,1,1. Told-apart pairs' merges not recorded (but deleted): 7,1,2,1 / 9,0,5,1.
+with 1 and 2 holding two targets, 13/11 with the told-apart pairs. Told-apart pairs merged after 5 or 10 scans
+together (not listed as one): 8,1,3,1 / 7,2,1,1 and 8,1,3,0 / 6,1,1,1. Told-apart pairs' merges not recorded (but
+deleted): 7,1,2,1 / 9,0,5,1.
 What is left on CW: 2 extra rows a seed (seed 2: three confirmed tracks on crossing-b to the end, one of them the
 approacher's until the crossing at ping ~52; seed 1: crossing-b's and maneuvering's second tracks) and one false
 row (seed 1: pings 101-119 at the fore endfire, as on main; seed 2: a track of pings 60-76).
