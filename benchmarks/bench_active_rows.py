@@ -90,6 +90,15 @@ from tentative ones only) with the told-apart pairs 8 and 11 CW rows; 'lm' (LMIP
 with 1 and 2 holding two targets, 13/11 with the told-apart pairs. Told-apart pairs merged after 5 or 10 scans
 together (not listed as one): 8,1,3,1 / 7,2,1,1 and 8,1,3,0 / 6,1,1,1. Told-apart pairs' merges not recorded (but
 deleted): 7,1,2,1 / 9,0,5,1.
+A scene no one tuned on (``--kinds cwb``: bench_cw_held.py's scene b, 32 x 0.3 m, 2.4 kHz, 5 detectable targets;
+chain ~10 min a seed here, then ~1 min): rows, false, extra, holding 2+, confirmed tracks; held % (mean)
+    main                       seed 3: 6,0,1,1, 30; 82     seed 4: 6,0,1,2 (a row of 4), 36; 86
+    shared contacts            5,1,0,2, 27; 85             6,0,1,1 (a row of 3), 27; 90
+    + told-apart pairs kept    9,0,4,0, 20; 84             9,1,3,1, 19; 89
+(telling a pair apart only after 3 or 6 held scans failing the test: 10,0,5,0 / 9,1,3,1 and 10,1,4,0 / 9,1,3,1.)
+So the told-apart rule trades rows joining targets (main 6 in these 4 CW runs, shared contacts alone 5, both 1) for
+extra rows (4, 1, 11): two confirmed tracks on one target that were apart once (a track that swapped targets at a
+crossing, or a second track started off its target) are kept, and listed, both.
 What is left on CW: 2 extra rows a seed (seed 2: three confirmed tracks on crossing-b to the end, one of them the
 approacher's until the crossing at ping ~52; seed 1: crossing-b's and maneuvering's second tracks) and one false
 row (seed 1: pings 101-119 at the fore endfire, as on main; seed 2: a track of pings 60-76).

@@ -157,7 +157,9 @@ class ActiveSettings(Settings):
               "(tracking/duplicates.py keep_apart). Measured (benchmarks/bench_active_rows.py, default scene, cached "
               "contacts, contact_claims 'all'): CW seeds 1/2 rows holding two or more targets 1/1 -> 0/0 (seed 1's "
               "row held all four through merges at crossings), at 3 -> 7 and 4 -> 8 rows for 4 targets, held % "
-              "91/90 -> 89/89; LFM 4 clean rows each either way (not set: P4's merger)", unit="1")
+              "91/90 -> 89/89; LFM 4 clean rows each either way; on bench_cw_held.py's scene b (seeds 3, 4) 2/1 "
+              "-> 0/1 rows holding two or more, 5/6 -> 9/9 rows for 5 targets: extra rows for fewer joined targets "
+              "(False: P4's merger)", unit="1")
     clutter_map_pings: int | None = setting(
         8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
            "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "
