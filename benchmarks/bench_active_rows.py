@@ -74,6 +74,34 @@ rows, still 2 holding two targets (through re-joins); the CW contacts' R scaled 
 CW cone error measured 2.0 deg vs 0.87 stated, ACTCW): 25-26 and 19 confirmed tracks, 5-7 rows, 1-2 holding two.
 A re-join (contact_tracker.py) tested against the lost track's last state with existence >= 0.9 instead of its
 last (coasted) one: lead's CW 1 a row holding three targets, CW 2 0 mixed (was 1); ACTHOLD2's CW 1 7 rows, 1 mixed.
+
+Measured (2026-12-07 session 11, h11-cwfrag; the lead's caches /tmp/lead/rows10b copied; ~1-2 min a run of all
+four at load ~12). Per pulse/seed: rows, false, extra, rows holding 2+ targets, confirmed tracks; held % (mean):
+                              LFM 1        LFM 2          CW 1                          CW 2
+    main (0e2e8dd)            4,0,0,0, 8   4,0,0,1, 8     4,1,0,2, 29; 95/78/100/90     6,0,2,1, 26; 90/80/100/85
+    + join links as pairs     same         same           3,1,0,2, 29 (a row of 3)      3,0,0,1, 26
+    + contacts shared by rank 4,0,0,0, 8   4,0,0,0, 6     3,1,0,1, 21 (a row of all 4)  4,0,0,1, 21; held 91/90
+    + told-apart pairs kept   4,0,0,0, 8   4,0,0,0, 6     7,1,2,0, 13; 95/73/100/90     7,1,2,0, 17; 92/83/100/85
+      (the defaults now: contact_claims 'all', merge_keep_apart)
+Tried and left off: the CW peak contacts (ActiveSettings cw_peak_contacts, ACTCW's run.py change; contacts rebuilt):
+with the shared contacts CW 1 5,2,0,1, 12 tracks, held 85; CW 2 4,0,0,1, 19, held 88 (approacher 95 -> 81 on CW 1);
+with the told-apart pairs too 5,2,0,1 / 7,2,1,0. On the peak contacts: claims 'confirmed' (confirmed tracks claim
+from tentative ones only) with the told-apart pairs 8 and 11 CW rows; 'lm' (LMIPDA's symmetric odds) 5 and 4 rows
+with 1 and 2 holding two targets, 13/11 with the told-apart pairs. Told-apart pairs merged after 5 or 10 scans
+together (not listed as one): 8,1,3,1 / 7,2,1,1 and 8,1,3,0 / 6,1,1,1. Told-apart pairs' merges not recorded (but
+deleted): 7,1,2,1 / 9,0,5,1.
+A scene no one tuned on (``--kinds cwb``: bench_cw_held.py's scene b, 32 x 0.3 m, 2.4 kHz, 5 detectable targets;
+chain ~10 min a seed here, then ~1 min): rows, false, extra, holding 2+, confirmed tracks; held % (mean)
+    main                       seed 3: 6,0,1,1, 30; 82     seed 4: 6,0,1,2 (a row of 4), 36; 86
+    shared contacts            5,1,0,2, 27; 85             6,0,1,1 (a row of 3), 27; 90
+    + told-apart pairs kept    9,0,4,0, 20; 84             9,1,3,1, 19; 89
+(telling a pair apart only after 3 or 6 held scans failing the test: 10,0,5,0 / 9,1,3,1 and 10,1,4,0 / 9,1,3,1.)
+So the told-apart rule trades rows joining targets (main 6 in these 4 CW runs, shared contacts alone 5, both 1) for
+extra rows (4, 1, 11): two confirmed tracks on one target that were apart once (a track that swapped targets at a
+crossing, or a second track started off its target) are kept, and listed, both.
+What is left on CW: 2 extra rows a seed (seed 2: three confirmed tracks on crossing-b to the end, one of them the
+approacher's until the crossing at ping ~52; seed 1: crossing-b's and maneuvering's second tracks) and one false
+row (seed 1: pings 101-119 at the fore endfire, as on main; seed 2: a track of pings 60-76).
 """
 
 from __future__ import annotations
@@ -87,8 +115,14 @@ import numpy as np
 
 
 def scene(kind: str, seed: int):
-    """The default active scene with pulse ``kind`` (lfm | cw, the other waveform fields the default's)."""
+    """The default active scene with pulse ``kind`` (lfm | cw, the other waveform fields the default's); ``cwb``:
+    bench_cw_held.py's second CW scene (32 elements 0.3 m apart, 2.4 kHz, an hour), a scene no one tuned on."""
     from sonartrack.sim.active_scene import ActiveSceneSettings
+
+    if kind == "cwb":
+        from bench_cw_held import scene_settings
+
+        return scene_settings("b", seed, 3600.0)
 
     s = ActiveSceneSettings()
     return s.model_copy(update={"seed": seed, "waveform": s.waveform.model_copy(update={"kind": kind})})
@@ -187,7 +221,9 @@ def track(c: dict, settings=None):
     trk = ContactTracker(s.tracker_settings(), c["geometry"], s.range_rate_gate_sigma, c["rate_sd"],
                          s.side_turn_deg, s.merge_probability, s.max_range_rate_mps, turns=s.turn_modes(),
                          clutter_map=clutter_map_of(s), **c["kwargs"],
-                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}))  # (an older chain: none)
+                         **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
+                         **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
+                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -306,7 +342,7 @@ def with_changes(c: dict, changes: list[str]):
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--cache", default="/tmp/active_rows")
-    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"])
+    p.add_argument("--kinds", nargs="+", default=["lfm", "cw"], help="lfm, cw, cwb (bench_cw_held.py's scene b)")
     p.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
     p.add_argument("--gate-m", type=float, default=1000.0)
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",

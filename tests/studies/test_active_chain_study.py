@@ -55,10 +55,12 @@ def test_snr50_recovers_a_logistic_curve():
 
 @pytest.fixture(scope="module")
 def quick_trial():
-    """The quick scene with the family pinned to its base (LFM, 16 x 0.5 m, 1500 Hz, no added clutter): the chain's
-    behaviour there is known; the family's draws are tested on their own below."""
+    """The quick scene with the family pinned to its base (LFM, 16 x 0.5 m, 1500 Hz, no added clutter, the
+    maneuvering target's 90 deg turn at 0.8 deg/s): the chain's behaviour there is known; the family's draws are
+    tested on their own below."""
     base = FamilySettings(pulses=["lfm"], reverb_models=["k"], elements=[16], spacings_m=[0.5], carriers_hz=[1500.0],
-                          bandwidths_hz=[100.0], tows_m=[[300.0, 450.0]], reverb_levels_db=[0.0], clutter_points=[0])
+                          bandwidths_hz=[100.0], tows_m=[[300.0, 450.0]], reverb_levels_db=[0.0], clutter_points=[0],
+                          turn_deg=[90.0, 90.0], turn_rate_deg_s=[0.8, 0.8])
     config = ac.Config.quick().model_copy(update={"family": base})
     return config, ac.run_trial(config, np.random.default_rng(3))
 
@@ -72,7 +74,14 @@ def test_quick_trial_fills_the_contract(quick_trial):
     summary = ac.summarize(stacked, config)
     claims = ac.claims(summary, config)
     assert [c.id for c in claims] == ["mftd-earlier-longer", "imm-beats-ipda", "side-resolved", "false-tracks",
-                                      "rmse-bound", "held-detectable"]
+                                      "rmse-bound", "held-detectable", "acquisition", "turn-one-row"]
+    # targets as listed: a false row holds only false tracks, a row at least one confirmed track
+    assert np.all(trial["false_rows"] <= trial["false_tracks"]) and np.all(trial["false_rows"] <= trial["rows"])
+    assert np.all(trial["reverb_false_rows"] <= trial["reverb_false_tracks"])
+    # the maneuvering target's turn is judged (it turns in the scene); the others do not turn
+    i_man = target_names(config.scene).index(ac.MANEUVERING)
+    assert np.isfinite(trial["turn_held"][:, i_man]).all() and np.isnan(np.delete(trial["turn_held"], i_man, 1)).all()
+    assert summary["acquisition"]["judged"] >= 1
     # the strong target is held by the chain for most of the scene, within a few hundred metres
     assert summary["hold"]["mftd_imm"]["strong"][0] > 0.5
     assert summary["rmse_after_m"]["mftd_imm"]["strong"] < 500.0

@@ -137,6 +137,14 @@ class DuplicateMerger:
         A confirmed duplicate of a confirmed track is recorded as the same target only when the pair also passed the
         test on each of the last this many scans on which both were confirmed (a window of the pair's history); 0:
         this scan's test only.
+    keep_apart : bool
+        Two confirmed tracks that failed the test at any scan on which both held their targets (existence >=
+        ``held_existence``) are two targets: neither is deleted as the other's duplicate later (when they cross),
+        the whole common history as the track-to-track association over the pairs' histories (Bar-Shalom, Willett
+        & Tian 2011) in its simplest form, a pair once told apart stays apart. False: P4's merger. Measured on the
+        active chain's default scene as CW (benchmarks/bench_active_rows.py, seeds 1 and 2, with contacts shared
+        by rank, systems/active/contact_tracker.py ``claims``): the merges that joined two targets' tracks were all
+        of pairs held apart before (the approacher's 16-ping track deleted as crossing-b's duplicate at ping 52).
     """
 
     inner: object
@@ -145,7 +153,9 @@ class DuplicateMerger:
     lost_existence: float | None = 0.5
     held_existence: float = 0.9
     history_scans: int = 0
+    keep_apart: bool = False
     merged: dict = field(default_factory=dict)
+    apart: set = field(default_factory=set)  # (lower id, higher id) of confirmed pairs told apart while both held
     streak: dict = field(default_factory=dict)  # (lower id, higher id) -> consecutive scans passing the test
     held: dict = field(default_factory=dict)  # track id -> its last scan with existence >= held_existence
     states: dict = field(default_factory=dict)  # scan -> {confirmed track id: (x, P)} of the scans ``held`` names
@@ -174,7 +184,9 @@ class DuplicateMerger:
         self.streak.clear()
         self.streak.update(pairs)
         for k in both:
-            if pairs[key[k]] < self.confirmed_scans:
+            if key[k] in self.apart:
+                into[k] = -1  # two targets told apart before (keep_apart): not a duplicate
+            elif pairs[key[k]] < self.confirmed_scans:
                 into[k] = -1  # not yet: the pair must keep passing the test
             elif self._same_target(int(ids[into[k]]), int(ids[k]), bool(coasting[k]), scan):
                 self.merged[int(ids[k])] = int(ids[into[k]])
@@ -209,6 +221,20 @@ class DuplicateMerger:
             return None
         return self._d2(at[kept], at[lost]) >= self.gamma
 
+    def _tell_apart(self, T: TrackArrays, snap) -> None:
+        """Add to ``apart`` the confirmed pairs holding their targets that fail the test now (``keep_apart``); forget
+        the pairs of deleted tracks."""
+        alive = {int(i) for i in T.track_id}
+        self.apart.intersection_update({p for p in self.apart if p[0] in alive and p[1] in alive})
+        h = np.nonzero(T.confirmed & (np.asarray(T.existence, float) >= self.held_existence))[0]
+        if len(h) < 2:
+            return
+        x, P, ids = snap.x[h], snap.P[h], T.track_id[h]
+        nu = x[:, None, :] - x[None, :, :]
+        d2 = np.einsum("abi,abi->ab", nu, np.linalg.solve(P[:, None] + P[None, :], nu[..., None])[..., 0])
+        for a, b in zip(*np.nonzero(np.triu(d2 >= self.gamma, 1)), strict=True):
+            self.apart.add(tuple(sorted((int(ids[a]), int(ids[b])))))
+
     def _remember(self, T: TrackArrays, scan: int) -> TrackArrays:
         """Record this scan's confirmed states and existences (for :meth:`_apart_when_held`); returns ``T``."""
         snap = TrackSnapshot.of(0.0, T) if len(T) else None
@@ -217,6 +243,8 @@ class DuplicateMerger:
         for k, i in enumerate(T.track_id):
             if T.existence[k] >= self.held_existence:
                 self.held[int(i)] = scan
+        if self.keep_apart and snap is not None:
+            self._tell_apart(T, snap)
         self.last_existence.clear()
         self.last_existence.update({int(i): float(e) for i, e in zip(T.track_id, T.existence, strict=True)})
         for i in [i for i in self.held if i not in self.last_existence]:

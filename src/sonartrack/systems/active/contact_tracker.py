@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sonartrack.core.errors import require
 from sonartrack.detection.cells import Detections
 from sonartrack.systems.active.contacts import (
     ActiveGeometry,
@@ -29,7 +30,7 @@ from sonartrack.tracking.settings import PositionTrackerSettings
 class ActiveTracks:
     """The tracker's output, one row per live track per ping: ``tracks`` (tracking/run.py :class:`PositionTracks`)
     and ``P (n, 4, 4)`` the combined covariances (m^2, m^2/s, m^2/s^2) of the same rows (ellipses, sds);
-    ``sides`` the side decision of each confirmed track (sides.py); ``joins`` {track id: earlier track id}: a
+    ``sides`` the side decision of each confirmed track (sides.py); ``joins`` (track id, earlier track id) pairs: a
     confirmed track deleted as the duplicate of another (tracking/duplicates.py), or confirmed soon after a confirmed
     track was lost and passing the track-to-track test against that track's prediction (:class:`ContactTracker`
     ``rejoin_s``), is a later segment of the same target (targets.py lists them as one)."""
@@ -37,7 +38,7 @@ class ActiveTracks:
     tracks: PositionTracks
     P: np.ndarray
     sides: SideDecisions | None = None
-    joins: dict | None = None  # track id -> an earlier confirmed track of the same target (merged into / re-joined)
+    joins: tuple | dict | None = None  # (later track, earlier track) pairs of one target (merged into / re-joined)
 
     def __len__(self) -> int:
         return len(self.tracks)
@@ -93,12 +94,22 @@ class ContactTracker:
         recorded as the same target's next segment (``ActiveTracks.joins``; the nearest such lost track, each once);
         None: no re-joining. (A re-join onto the reflection of a lost track, the other hypothesis, was tried: with
         the duplicate merges it chained two crossing targets into one row on the default scene as CW, seed 1.)
+    claims : {"confirmed", "all"} or None
+        Contacts shared by rank (tracking/associators.py :class:`ClaimedPDA`): a track is given a contact only as
+        far as no track ranked above it claims it; "confirmed": the confirmed tracks claim from the tentative ones
+        (a new track in a confirmed track's gate gains no existence on the contacts that track takes), "all": every
+        track claims from those ranked below it (confirmed first, then by existence); None: each track on its own
+        (IPDA).
+    keep_apart : bool
+        Two confirmed tracks once told apart by the track-to-track test while both held their targets are never
+        merged as duplicates (tracking/duplicates.py ``keep_apart``).
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
-                 clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None):
+                 clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
+                 claims: str | None = None, keep_apart: bool = False):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -107,7 +118,14 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
-        self.tracker = position_tracker(settings, turns=turns)
+        self.claims = claims
+        if claims is not None:
+            from sonartrack.tracking.associators import ClaimedPDA
+
+            require(claims in ("confirmed", "all", "lm"), f"claims must be 'confirmed', 'all', 'lm' or None, not "
+                                                           f"{claims!r}")
+        self.tracker = position_tracker(settings, turns=turns, associator=None if claims is None else ClaimedPDA(
+            linear_multitarget=claims == "lm"))
         if max_range_rate_mps is not None:
             m = self.tracker.measurements
             self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
@@ -131,7 +149,8 @@ class ContactTracker:
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4),
                                                    settings.merge_confirmed_scans,
-                                                   history_scans=settings.merge_history_scans)
+                                                   history_scans=settings.merge_history_scans,
+                                                   keep_apart=keep_apart)
         self.merger = self.tracker.deleter if merge_probability is not None else None
         self.rejoin_s, self.joins = rejoin_s, {}
         self.rejoin_gamma = gate_threshold(merge_probability or 0.99, 4)
@@ -264,6 +283,13 @@ class ContactTracker:
                 contacts.range_rate_mps[keep], lam)
         if self.ghosts is not None:  # the axis a ghost is reflected about at this scan (sides.py GhostDeleter)
             self.ghosts.axis = (np.asarray(self.geometry.rx_at(t_s), float), float(self.geometry.heading_at(t_s)))
+        if self.claims is not None:  # the ranks and claimers before the scan (tracking/associators.py ClaimedPDA)
+            T = self.tracker.tracks
+            if self.claims == "confirmed":  # confirmed over tentative only (confirmed tracks not ranked among them)
+                self.tracker.associator.set_tracks(T.existence, T.confirmed.astype(float), T.mu, T.confirmed)
+            else:
+                self.tracker.associator.set_tracks(T.existence, 2.0 * T.confirmed + T.existence, T.mu,
+                                                   np.ones(len(T), bool))
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
@@ -323,8 +349,15 @@ class ContactTracker:
                                 cat("confirmed", np.zeros(0, bool)), cat("existence", np.zeros(0)),
                                 cat("x", np.zeros((0, 4))), np.sqrt(P[:, 0, 0]), np.sqrt(P[:, 1, 1]),
                                 cat("mu", np.zeros((0, n_modes))))
-        joins = {**(self.merger.merged if self.merger is not None else {}), **self.joins}
-        return ActiveTracks(tracks, P, self.sides.result(), joins)
+        return ActiveTracks(tracks, P, self.sides.result(), self.join_links())
+
+    def join_links(self) -> tuple[tuple[int, int], ...]:
+        """Every (later track, earlier track) link of one target so far: the merges (a confirmed track deleted as
+        the duplicate of another) and the re-joins (``rejoin_s``). A track can have both (re-joined onto a lost
+        track, then merged into a third: seen on the default scene as CW, seed 2), so they are pairs, not a dict
+        keyed by the later track, where one link would overwrite the other."""
+        merged = self.merger.merged if self.merger is not None else {}
+        return tuple(sorted({(int(a), int(b)) for a, b in (*merged.items(), *self.joins.items())}))
 
     def drop_scans(self, n: int) -> None:
         """Forget the rows of the oldest ``n`` scans (the live chain's bounded history, systems/live/active.py):
@@ -393,7 +426,8 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
                          clutter_area_m2=cw_clutter_area(detections, settings.sound_speed_mps),
                          clutter_map=clutter_map_of(settings),
                          scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None,
-                         rejoin_s=settings.rejoin_s)
+                         rejoin_s=settings.rejoin_s, claims=settings.contact_claims,
+                         keep_apart=settings.merge_keep_apart)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)

@@ -49,7 +49,17 @@ from sonartrack.systems.active.contacts import (
     Contacts,
     form_contacts,
 )
-from sonartrack.systems.active.cw_tracking import cw_clutter_area, cw_contact_errors, cw_rate_sd_mps
+from sonartrack.systems.active.cw_tracking import (
+    cw_clutter_area,
+    cw_contact_errors,
+    cw_echo_window,
+    cw_form_contacts,
+    cw_merge_echoes,
+    cw_peaked,
+    cw_rate_sd_mps,
+    cw_unpeaked_errors,
+    detection_rows,
+)
 from sonartrack.systems.active.settings import ActiveSettings
 
 #: the stages timed in :attr:`ActiveResult.stage_seconds`
@@ -240,8 +250,12 @@ class _Chain:
         from sonartrack.detection.ping_mftd import CellAxes, PingMftd
 
         s = self.settings
-        if self.cw:  # a CW's delay is known to its cells (a quarter pulse, the MFTD's pooled pair), not to P4's 10 ms
+        if self.cw:  # a CW's delay is known to its pulse length, not to P4's 10 ms; an unpeaked MFTD cell to its lobe
             s = self.settings = s.model_copy(update={"contacts": cw_contact_errors(s, cells.delay_s)})
+        if self.cw and s.cw_peak_contacts:
+            self.unpeaked = cw_unpeaked_errors(s.contacts, waveform.duration_s, int(s.elements), float(s.spacing_m),
+                                               waveform.carrier_hz, s.sound_speed_mps)
+            self.echo = cw_echo_window(s, waveform)
         self.axes = CellAxes.of(cells)
         if s.detector == "mftd":
             pfa = s.mftd_pfa if s.mftd_pfa is not None else s.pfa
@@ -255,7 +269,8 @@ class _Chain:
                                       s.side_turn_deg, s.merge_probability, s.max_range_rate_mps,
                                       turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
                                       clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval,
-                                      rejoin_s=s.rejoin_s)
+                                      rejoin_s=s.rejoin_s, claims=s.contact_claims,
+                                      keep_apart=s.merge_keep_apart)
 
     def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
@@ -285,18 +300,28 @@ class _Chain:
         if self.axes is None:
             self._start(cells, waveform, fs_hz)
         single = tm.run("single-ping detection", detect_ping, cells, self.threshold)
+        peak = self.cw and s.cw_peak_contacts
+        if peak:  # one detection per echo (cw_tracking.py)
+            single = detection_rows(single, cw_merge_echoes(single, cells.cone_deg, *self.echo))
         self.single.append(single)
-        det = single
+        det, peaked, n_mftd = single, None, 0
         if self.mftd is not None:
             det = tm.run("mftd", self.mftd.push, cells)
             self.multi.append(det)
-            if self.strong is not None:
+            n_mftd = len(det)
+            if peak:
+                det, peaked, n_mftd = self._cw_tracked(det, single, cells)
+            elif self.strong is not None:
                 det = with_strong(det, single, self.strong, float(np.median(np.diff(self.axes.travel_time_s))))
         self.tracked.append(det)
-        self.tracked_mftd_rows.append(len(self.multi[-1]) if self.mftd is not None else 0)
+        self.tracked_mftd_rows.append(n_mftd)
         self.bscan.append(tm.run("b-scan", _bscan_row, cells.statistic, s.bscan_bins))
-        c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
-                   self.beam_step, [number])
+        if peaked is None:
+            c = tm.run("contacts", form_contacts, det, [time_s], self.geometry, s.sound_speed_mps, s.contacts,
+                       self.beam_step, [number])
+        else:
+            c = tm.run("contacts", cw_form_contacts, det, peaked, [time_s], self.geometry, s.sound_speed_mps,
+                       s.contacts, self.unpeaked, self.beam_step, [number])
         c = replace(c, detection=c.detection + self.n_detections)  # rows of the whole record's detections
         self.n_detections += len(det)
         self.contacts.append(c)
@@ -306,6 +331,20 @@ class _Chain:
         if self.history_s is not None:
             self._forget(float(time_s) - self.history_s)
         return cells
+
+    def _cw_tracked(self, mftd: Detections, single: Detections, cells: PingCells):
+        """A CW ping's tracked detections (cw_tracking.py): each MFTD detection measured by the ping's own echo peak
+        where there is one, the strong single-ping ones joined, one per echo (the MFTD's preferred); which were
+        measured by a peak of this ping (the strong ones are); how many of the rows kept are the MFTD's (first)."""
+        m = self.settings.mftd_settings()
+        det, peaked = cw_peaked(mftd, single, m.pool_beams, 2 * m.pool_cells, self.front_end.doppler_pad)
+        n = len(det)
+        if self.strong is not None:
+            det = with_strong(det, single, self.strong, float(np.median(np.diff(self.axes.travel_time_s))))
+        peaked = np.concatenate([peaked, np.ones(len(det) - n, bool)])
+        group = np.concatenate([np.zeros(n), np.ones(len(det) - n)])
+        keep = cw_merge_echoes(det, cells.cone_deg, *self.echo, group)
+        return detection_rows(det, keep), peaked[keep], int(keep[:n].sum())
 
     def _forget(self, before_s: float) -> None:
         """Drop the rows of the pings sent before ``before_s`` (s): the bounded history of a live run."""

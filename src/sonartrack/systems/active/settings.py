@@ -134,6 +134,32 @@ class ActiveSettings(Settings):
                "passes the track-to-track test (merge_probability) against that track's prediction, is listed as the "
                "same target's next segment (one row, systems/active/targets.py), as is a confirmed track merged into "
                "another as its duplicate (not set: no re-joining)", unit="s", gt=0)
+    cw_peak_contacts: bool = setting(
+        False, "CW pings: each MFTD detection measured by its ping's own echo peak where there is one, the others "
+               "given the errors of a cell anywhere in the echo's response (travel time 2 tau / sqrt(12), cone the "
+               "main lobe / sqrt(12)), one detection per echo (systems/active/cw_tracking.py cw_peaked, "
+               "cw_unpeaked_errors, cw_merge_echoes). Measured (benchmarks/bench_active_rows.py, default scene as "
+               "CW, seeds 1 and 2, contact_claims 'all'): confirmed tracks 21/21 -> 12/19, but held % of detectable "
+               "pings 91/90 -> 85/88 (seed 1's approacher 95 -> 81) and rows not cleaner: off", unit="1")
+    contact_claims: Literal["confirmed", "all", "lm"] | None = setting(
+        "all", "contacts shared by rank (tracking/associators.py ClaimedPDA, a one-pass stand-in for JIPDA): a track "
+              "is given a contact only as far as no track ranked above it claims it, so a young track beside a "
+              "confirmed one gains no existence on that one's echoes; 'all': every track claims from those ranked "
+              "below it (confirmed first, then by existence), 'confirmed': the confirmed from the tentative only, "
+              "'lm': LMIPDA's symmetric odds form (not set: each track on its own, IPDA). Measured "
+              "(benchmarks/bench_active_rows.py, default scene, cached contacts): confirmed tracks LFM 8/8 -> 8/6, "
+              "CW 29/26 -> 21/21; LFM seed 2's row joining crossing-b and maneuvering gone; 'confirmed' and 'lm' "
+              "left more CW rows (8-13 for 4 targets)",
+        unit="1")
+    merge_keep_apart: bool = setting(
+        True, "two confirmed tracks once told apart by the track-to-track test (merge_probability) while both held "
+              "their targets are two targets: never merged as duplicates when they later cross "
+              "(tracking/duplicates.py keep_apart). Measured (benchmarks/bench_active_rows.py, default scene, cached "
+              "contacts, contact_claims 'all'): CW seeds 1/2 rows holding two or more targets 1/1 -> 0/0 (seed 1's "
+              "row held all four through merges at crossings), at 3 -> 7 and 4 -> 8 rows for 4 targets, held % "
+              "91/90 -> 89/89; LFM 4 clean rows each either way; on bench_cw_held.py's scene b (seeds 3, 4) 2/1 "
+              "-> 0/1 rows holding two or more, 5/6 -> 9/9 rows for 5 targets: extra rows for fewer joined targets "
+              "(False: P4's merger)", unit="1")
     clutter_map_pings: int | None = setting(
         8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
            "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "

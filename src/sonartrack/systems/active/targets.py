@@ -112,12 +112,12 @@ def _decide(d, members: list[int]) -> tuple[int, int, float, float, str] | None:
     return best
 
 
-def _groups(tracks, d, joins: dict | None = None) -> list[tuple[list, list]]:
+def _groups(tracks, d, joins: tuple | dict | None = None) -> list[tuple[list, list]]:
     """Confirmed tracks grouped into targets, in order of first confirmation: (the segments on the side of the
-    group's first track, the segments on the other side). Tracks are linked on the same side by ``joins`` (a later
-    segment -> an earlier one) and across by their mirror twins (sides.py); a group is a connected set of links,
-    each track's side its parity along them from the first (a breadth-first walk; a track reached twice keeps its
-    first side)."""
+    group's first track, the segments on the other side). Tracks are linked on the same side by ``joins`` ((a later
+    segment, an earlier one) pairs, or a dict later -> earlier) and across by their mirror twins (sides.py); a group
+    is a connected set of links, each track's side its parity along them from the first (a breadth-first walk; a
+    track reached twice keeps its first side)."""
     order = list(dict.fromkeys(tracks.track_id[tracks.confirmed].tolist()))
     live = set(order)
     links: dict[int, list[tuple[int, int]]] = {t: [] for t in order}
@@ -127,7 +127,7 @@ def _groups(tracks, d, joins: dict | None = None) -> list[tuple[list, list]]:
             links[a].append((b, parity))
             links[b].append((a, parity))
 
-    for a, b in (joins or {}).items():
+    for a, b in (joins.items() if isinstance(joins, dict) else joins or ()):
         link(int(a), int(b), 0)
     for m in order:
         k = d.of(m) if d is not None else None

@@ -1,0 +1,224 @@
+"""Study active-chain's scoring as the user sees the targets: false rows, acquisition latency, turns held on one row.
+
+``sonartrack active`` lists one row per target (systems/active/targets.py :func:`mirror_targets`): an undecided mirror
+pair is ONE target with two hypotheses, and segments of one target joined by the chain (``ActiveTracks.joins``) are
+one row (issue 34 item 4). The study counts what the user sees:
+
+* a **false row** is a row none of whose confirmed tracks ever came within the gate of a true target or of its
+  mirror (a ghost is a hypothesis of a real target, not a false one); the confirmed false tracks are counted beside
+  it (a false undecided pair: 1 row, 2 tracks);
+* **acquisition latency** (issue 34 item 5): a target *enters* the listening window on its first detectable ping
+  (the study's truth grid: echo SNR >= ``detectable_snr_db``, in the window, clear of the blast); its latency is the
+  number of pings from that ping (counted as 1) to the first ping on which a confirmed track holds it; it is *at
+  15 dB* when the median echo SNR of its first ``acquire_pings`` pings from entering is >= the level (pings out of
+  reach count as below);
+* **a turn held on one row** (issue 34 item 5): the pings from the last at or before the turn's start to the first at
+  or after its end; judged when the target is detectable at both of those end pings; held on one row when a confirmed
+  track holds it at both ends and every track holding it in between belongs to the same row (a track of no row, a
+  fleeting fragment the chain does not list, is a row of its own).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def row_of_tracks(targets) -> dict[int, int]:
+    """Track id -> row index (0-based) of every track of every row (both hypotheses, all joined segments).
+
+    Parameters
+    ----------
+    targets : MirrorTargets
+        The rows (systems/active/targets.py :func:`mirror_targets`).
+
+    Returns
+    -------
+    dict
+        {track id: row index}.
+    """
+    out: dict[int, int] = {}
+    for k in range(len(targets)):
+        own, other = targets.chains[k] if targets.chains is not None else ((targets.track_id[k],),
+                                                                            (targets.mirror_track_id[k],))
+        for tid in (*own, *other):
+            if int(tid) >= 0:
+                out.setdefault(int(tid), k)
+    return out
+
+
+def near_track_ids(tracks, t_truth, xy_truth, xy_mirror, gate_m: float) -> set[int]:
+    """Ids of the confirmed tracks that came within ``gate_m`` of a target or of its mirror at the same time.
+
+    Parameters
+    ----------
+    tracks : PositionTracks
+        The per-ping track table (``time_s``, ``track_id``, ``confirmed``, ``x``).
+    t_truth : array (m,)
+        Truth times (s).
+    xy_truth, xy_mirror : arrays (m, 2)
+        True positions and their mirrors about the array's axis (m).
+    gate_m : float
+        The gate (m).
+
+    Returns
+    -------
+    set of int
+        The track ids.
+    """
+    t_truth = np.asarray(t_truth, float)
+    if not len(t_truth):
+        return set()
+    order = np.argsort(t_truth, kind="stable")
+    ts = t_truth[order]
+    points = np.asarray(xy_truth, float)[order], np.asarray(xy_mirror, float)[order]
+    tol = 1e-6 * max(1.0, float(np.max(np.abs(ts))))
+    near: set[int] = set()
+    for r in np.nonzero(tracks.confirmed)[0]:
+        tid = int(tracks.track_id[r])
+        if tid in near:
+            continue
+        lo, hi = np.searchsorted(ts, tracks.time_s[r] - tol), np.searchsorted(ts, tracks.time_s[r] + tol, "right")
+        if hi > lo and min(np.hypot(*(p[lo:hi] - tracks.x[r, :2]).T).min() for p in points) < gate_m:
+            near.add(tid)
+    return near
+
+
+def false_rows(active_tracks, geometry, t_truth, xy_truth, xy_mirror, gate_m: float) -> tuple[int, int, int]:
+    """(false rows, rows, false confirmed tracks) of one tracking (module doc); no truth: every row is false.
+
+    Parameters
+    ----------
+    active_tracks : ActiveTracks
+        The chain's tracks (with their side decisions and joins).
+    geometry : ActiveGeometry
+        The receiver and array heading (the rows' mirror hypotheses).
+    t_truth, xy_truth, xy_mirror : arrays (m,), (m, 2), (m, 2)
+        Truth times (s), positions and mirrors (m); empty on a reverberation-only scene.
+    gate_m : float
+        A track within this of a target or its mirror is not false (m).
+
+    Returns
+    -------
+    tuple of int
+        False rows, all rows, false confirmed tracks.
+    """
+    from sonartrack.systems.active.targets import mirror_targets
+
+    tr = active_tracks.tracks
+    near = near_track_ids(tr, t_truth, xy_truth, xy_mirror, gate_m)
+    targets = mirror_targets(active_tracks, geometry)
+    rows: dict[int, list[int]] = {}
+    for tid, k in row_of_tracks(targets).items():
+        rows.setdefault(k, []).append(tid)
+    n_false = sum(not any(t in near for t in ids) for ids in rows.values())
+    tracks_false = sum(int(t) not in near for t in np.unique(tr.track_id[tr.confirmed]))
+    return n_false, len(targets), tracks_false
+
+
+def acquisition_pings(detectable, held) -> np.ndarray:
+    """Pings from entering (the first detectable ping, counted as 1) to the first ping at or after it on which the
+    target is held (module doc).
+
+    Parameters
+    ----------
+    detectable, held : bool arrays (..., pings)
+        Per target (and run) and ping.
+
+    Returns
+    -------
+    numpy.ndarray
+        (...,) latency in pings: 1 held on its entering ping; inf never held from then; NaN never detectable.
+    """
+    det, held = np.asarray(detectable, bool), np.asarray(held, bool)
+    k = np.arange(det.shape[-1])
+    first = np.argmax(det, axis=-1)
+    after = held & (k >= first[..., None])
+    lat = np.where(after.any(axis=-1), np.argmax(after, axis=-1) - first + 1.0, np.inf)
+    return np.where(det.any(axis=-1), lat, np.nan)
+
+
+def entering_level_db(snr_db, detectable, pings: int) -> np.ndarray:
+    """Median echo SNR (dB) of the ``pings`` pings from a target's entering ping (module doc; NaN, out of reach,
+    counts as below); NaN where the target never enters or the scene ends before its ``pings`` pings.
+
+    Parameters
+    ----------
+    snr_db : array (..., P)
+        Echo SNR per ping (NaN where out of reach).
+    detectable : bool array (..., P)
+        The truth grid's detectable pings.
+    pings : int
+        The acquisition window (pings).
+
+    Returns
+    -------
+    numpy.ndarray
+        (...,) dB.
+    """
+    snr, det = np.asarray(snr_db, float), np.asarray(detectable, bool)
+    n_p = snr.shape[-1]
+    first = np.argmax(det, axis=-1)
+    idx = np.clip(first[..., None] + np.arange(max(pings, 1)), 0, n_p - 1)
+    window = np.take_along_axis(np.where(np.isfinite(snr), snr, -np.inf), idx, axis=-1)
+    med = np.median(window, axis=-1)
+    return np.where(det.any(axis=-1) & (first + pings <= n_p), med, np.nan)
+
+
+def turn_window(ping_time_s, start_s: float | None, turn_deg: float, rate_deg_s: float) -> np.ndarray:
+    """(P,) bool: the pings from the last at or before a turn's start to the first at or after its end (all False
+    for a target that does not turn or whose turn starts after the last ping).
+
+    Parameters
+    ----------
+    ping_time_s : array (P,)
+        Ping times (s), increasing.
+    start_s : float or None
+        The turn's start (s); None: no turn.
+    turn_deg, rate_deg_s : float
+        Course change (deg, either sign) and its rate (deg/s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The window.
+    """
+    t = np.asarray(ping_time_s, float)
+    out = np.zeros(len(t), bool)
+    if start_s is None or turn_deg == 0 or not len(t) or start_s > t[-1]:
+        return out
+    end_s = start_s + abs(turn_deg) / rate_deg_s
+    a = max(int(np.searchsorted(t, start_s, "right")) - 1, 0)
+    b = min(int(np.searchsorted(t, end_s, "left")), len(t) - 1)
+    out[a:b + 1] = True
+    return out
+
+
+def one_row_through(track_of, window, detectable, row_of: dict[int, int]) -> tuple[float, float]:
+    """(verdict, held fraction of the window) of one target's turn (module doc): 1 held on one row, 0 not, NaN not
+    judged.
+
+    Parameters
+    ----------
+    track_of : int array (P,)
+        The confirmed track holding the target at each ping (-1: none).
+    window, detectable : bool arrays (P,)
+        The turn's pings (:func:`turn_window`) and the detectable pings.
+    row_of : dict
+        Track id -> row (:func:`row_of_tracks`).
+
+    Returns
+    -------
+    tuple of float
+        Verdict and held fraction (NaN, NaN when the target does not turn).
+    """
+    k = np.nonzero(np.asarray(window, bool))[0]
+    if not len(k):
+        return float("nan"), float("nan")
+    tid = np.asarray(track_of, np.int64)[k]
+    held = tid >= 0
+    frac = float(held.mean())
+    det = np.asarray(detectable, bool)
+    if not (det[k[0]] and det[k[-1]]):
+        return float("nan"), frac
+    rows = {row_of.get(int(t), ("track", int(t))) for t in tid[held]}
+    return float(bool(held[0] and held[-1] and len(rows) == 1)), frac
