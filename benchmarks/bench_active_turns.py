@@ -44,7 +44,8 @@ chain at load ~10, ~10 s each to re-track; the target's echo SNR 14-23 dB):
   through its turn. That is side resolution, not the IMM. With both twins' "on their side" read as undecided
   (sides.py ``SideTracker.decision``; a diff in the h11-turnacq report): CW seed 2 lost 21 of 97, held % of its
   detectable pings per scene 73/74/72/68/76/47/68/57/53 -> 89/74/88/91/76/68/88/57/72; CW seed 1, LFM and
-  bench_active_rows.py (both pulses, seeds 1-2) unchanged.
+  bench_active_rows.py (both pulses, seeds 1-2) unchanged. Again on main at e030350 (h11-cwfrag merged): CW seed 2
+  lost 61 -> 21 of 97, bench_active_rows.py identical with and without it (LFM 4/4 rows, CW 7/7).
 * covariances on the held pings (position NEES, 2 wanted; RMSE / rms stated sd): before the turn 1.08 / 0.49 (99
   pings), in it 0.93 / 0.46 (88), after it 2.30 / 1.06 (229); single CW scenes after their turn up to 5.6-8.0 /
   1.5-1.95 on 3-11 pings.
