@@ -184,20 +184,13 @@ def verdict(row: dict) -> str:
     return "false (right)"
 
 
-def _patch_cw_lobes() -> None:
-    """cw_cells.cw_ping_cells with the cells' LobeBand attached (``--cw-lobes``: the change proposed to its owner)."""
-    import dataclasses
+def _patch_mftd_lobes() -> None:
+    """ping_mftd's lobe filter replaced by detection/lobes.py's cell test (``--mftd-cell-lobes``: the change proposed
+    to its owner; ping_mftd.drop_lobe_images tests MFTD detections against each other only)."""
+    import sonartrack.detection.ping_mftd as pm
+    from sonartrack.detection.lobes import drop_cell_images
 
-    import sonartrack.detection.cw_cells as cw
-    from sonartrack.detection.cells import lobe_band
-
-    inner = cw.cw_ping_cells
-
-    def with_lobes(samples, fs_hz, waveform, array, front_end, settings, **kw):
-        return dataclasses.replace(inner(samples, fs_hz, waveform, array, front_end, settings, **kw),
-                                   lobes=lobe_band(waveform, array, front_end))
-
-    cw.cw_ping_cells = with_lobes
+    pm.drop_lobe_images = drop_cell_images
 
 
 def main() -> None:
@@ -217,12 +210,12 @@ def main() -> None:
                     "lobe_margin_db; not set: the chain's default)")
     ap.add_argument("--heavy-tail-cells", default=None, help="the front end's heavy_tail_cells ('none': one K "
                     "shape for all beams, as before 10a6196; not set: the chain's default)")
-    ap.add_argument("--cw-lobes", action="store_true", help="measure the proposed cw_cells.py change (not ours: "
-                    "ACTCW's): the CW front end's cells carry cells.lobe_band, CW lobe images dropped too")
+    ap.add_argument("--mftd-cell-lobes", action="store_true", help="measure the proposed ping_mftd.py change (not "
+                    "ours: MFTDGAIN's): its detections' lobe images found by detection/lobes.py cell_images")
     args = ap.parse_args()
     args._tol = args.range_tol
-    if args.cw_lobes:
-        _patch_cw_lobes()
+    if args.mftd_cell_lobes:
+        _patch_mftd_lobes()
     config = Config()
     update = {} if args.lobe_margin_db is None else {"lobe_margin_db": args.lobe_margin_db}
     if args.heavy_tail_cells is not None:

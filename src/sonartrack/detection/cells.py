@@ -49,7 +49,7 @@ from sonartrack.core.errors import require
 from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, cfar_threshold, noise_estimate
-from sonartrack.detection.lobes import LobeBand, lobe_images
+from sonartrack.detection.lobes import LobeBand, drop_cell_images
 
 
 class FrontEndSettings(Settings):
@@ -107,7 +107,9 @@ class PingCells:
     from transmission to the array centre (s); ``doppler_hz`` (J,) Doppler cells (Hz; [0.] for an LFM) and
     ``range_rate_mps`` (J,) the bistatic range rates they stand for (m/s; NaN for an LFM, which measures none);
     ``time_s`` the transmit time (s); ``ping`` the ping's number; ``level`` (B, D, J) float32 the CFAR's noise
-    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s)."""
+    estimate mu of each cell (so the power is s mu; None: not kept, cone angles then come from s); ``lobes`` the array
+    and band whose sidelobe and grating-lobe images :func:`detect_ping` drops (None: none dropped); ``power``
+    (B, D, J) float32 the matched-filter power before any notch (a CW's, kept for the lobe test only; None: s mu)."""
 
     ping: int
     time_s: float
@@ -119,6 +121,7 @@ class PingCells:
     doppler_measured: bool
     level: np.ndarray | None = None
     lobes: LobeBand | None = None
+    power: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -480,8 +483,4 @@ def detect_ping(cells: PingCells, threshold: float, guard_cells: int = 4) -> Det
     n = b.size
     det = Detections(np.full(n, cells.ping), np.full(n, cells.time_s), cone,
                      _axis_value(cells.delay_s, d), doppler, rate, s[idx].astype(float), idx[0], idx[1], idx[2])
-    if cells.lobes is None or n < 2:
-        return det
-    power = s[idx] * (cells.level[idx] if cells.level is not None else 1.0)
-    image = lobe_images(det.cone_deg, det.travel_time_s, det.doppler_cell, power, cells.lobes)
-    return Detections(**{f: np.asarray(getattr(det, f))[~image] for f in Detections.__slots__})
+    return drop_cell_images(det, cells)
