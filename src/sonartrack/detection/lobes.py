@@ -134,7 +134,8 @@ def cell_images(cells, beam, delay_cell, doppler_cell, cone_deg=None, band: Lobe
     """The detections at cells (beam, delay_cell, doppler_cell) of ONE ping's ``cells`` (a
     :class:`~sonartrack.detection.cells.PingCells`) that are sidelobe or grating-lobe images: True where a beam
     outside the detection's main lobe holds, within half the delay resolution and +-1 Doppler cell, power P' above
-    the detection's echo's P (the largest power of the beams within half a main lobe of its ``cone_deg``, same cells:
+    the detection's echo's P (the largest power of the beams within half a main lobe of its ``cone_deg``, same cells,
+    the pattern taken at that beam:
     its cone is taken from the beams' power, so a detection on the shoulder of its echo's main lobe is that echo;
     half, so that another echo's main lobe is not taken for it; not given: its beam's cone) with P <= P' G 10^(margin_db / 10) (:func:`beam_gain_matrix`; module doc). The power is the
     cells' matched-filter power before any notch (``cells.power``; else s mu): a CW clutter point on its own beam's
@@ -153,8 +154,8 @@ def cell_images(cells, beam, delay_cell, doppler_cell, cone_deg=None, band: Lobe
     u = np.cos(np.deg2rad(np.asarray(cells.cone_deg, float)))
     u_det = u[b] if cone_deg is None else np.cos(np.deg2rad(np.asarray(cone_deg, float)))
     near = np.abs(u[:, None] - u_det[None, :]) <= 0.5 * main_lobe_u(band)  # (B, n): half the detection's main lobe
-    own = np.where(near, source, 0.0).max(axis=0)  # the echo's strength: the peak near its cone
-    at = np.abs(u[:, None] - u_det[None, :]).argmin(axis=0)  # the beam nearest its cone
+    at = np.where(near, source, -1.0).argmax(axis=0)  # the beam of the echo's peak near its cone
+    own = source[at, np.arange(len(b))]  # the echo's strength, compared with what its sources put in that beam
     gain = beam_gain_matrix(band, tuple(u.tolist()))[at].T  # (B, n)
     explained = np.where(source > own[None, :], source * gain, 0.0).max(axis=0)
     return own <= explained * 10.0 ** (band.margin_db / 10.0)
