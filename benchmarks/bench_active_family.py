@@ -205,6 +205,25 @@ def _patch_still_hold(probability: float) -> None:
                                                     moving_gamma=float(gate_threshold(probability, 2)))
 
 
+LOBE_CPU = {"s": 0.0, "calls": 0}
+
+
+def _time_lobes() -> None:
+    """Count the CPU seconds spent in detection/lobes.py ``cell_images`` (the lobe test's cost)."""
+    import sonartrack.detection.lobes as lobes
+
+    inner = lobes.cell_images
+
+    def timed(*a, **k):
+        t0 = time.process_time()
+        out = inner(*a, **k)
+        LOBE_CPU["s"] += time.process_time() - t0
+        LOBE_CPU["calls"] += 1
+        return out
+
+    lobes.cell_images = timed
+
+
 def main() -> None:
     from sonartrack.studies.active_chain import Config
 
@@ -228,6 +247,7 @@ def main() -> None:
                     "(tracking/deleters.py moving_gamma; not set: the speed estimate alone)")
     args = ap.parse_args()
     args._tol = args.range_tol
+    _time_lobes()
     if args.still_moving_p is not None:
         _patch_still_hold(args.still_moving_p)
     if args.mftd_cell_lobes:
@@ -261,6 +281,8 @@ def main() -> None:
         print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
               f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
     print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
+    if LOBE_CPU["calls"]:
+        print(f"lobe test: {LOBE_CPU['s']:.2f} s CPU in {LOBE_CPU['calls']} calls (runs not cached only)")
 
 
 if __name__ == "__main__":

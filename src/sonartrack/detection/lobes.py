@@ -1,23 +1,30 @@
-"""Lobe images: a weaker detection at a stronger one's travel time, where the array's beam pattern puts its echo.
+"""Lobe images: a weaker detection at a stronger echo's travel time, where the array's beam pattern puts that echo.
 
 A uniform line of N elements d apart, steered to u_b = cos(cone_b), answers a plane wave from u_e = cos(cone_e) at
-frequency f with the amplitude |sin(N x) / (N sin x)|, x = pi f d (u_b - u_e) / c (acoustics/active_beams.py
-``beam_pattern``). Where sin x = 0 away from u_b = u_e (u_b = u_e +- k c / (f d), k >= 1: a grating lobe, in the
-visible region |u| <= 1 once d > c / (2 f) for the echoes near endfire, and everywhere at d >= c / f) the gain is 1:
-the echo is heard at full strength in a second beam; elsewhere the sidelobes are bounded by the envelope
-1 / (N |sin x|) (-13 dB for the first one). Every beam that hears it places the echo's travel time at its own cone,
-so one strong echo (a clutter point, a target) gives detections at several cones, each a pair of mirror contacts in
-its own place, and the tracker confirms the ones that recur (issue 34: an 8-element array at 0.8 lambda).
+frequency f with the amplitude |sin(N x) / (N sin x)|, x = pi f d (u_b - u_e) / c (Van Trees, Optimum Array
+Processing, 2002, eq. 2.96; acoustics/active_beams.py ``beam_pattern``). Where sin x = 0 away from u_b = u_e
+(u_b = u_e +- k c / (f d), k >= 1: a grating lobe, in the visible region |u| <= 1 once d > c / (2 f) for the echoes
+near endfire, and everywhere at d >= c / f) the gain is 1: the echo is heard at full strength in a second beam;
+elsewhere the sidelobes are bounded by the envelope 1 / (N |sin x|) (-13 dB for the first one). Every beam that hears
+it places the echo's travel time at its own cone, so one strong echo (a clutter point, a target) gives detections
+at several cones, each a pair of mirror contacts in its own place, and the tracker confirms the ones that recur
+(issue 34: an 8-element array at 0.33 lambda, 1 kHz, clutter points of TS 29-30 dB; study active-chain trial 1).
 
-The chain knows its array and band, so it knows where an echo's images fall and how strong they can be: a detection
-j of a ping is an image of a stronger detection i of the same ping when
+The chain knows its array and band, so it knows where an echo's images fall and how strong they can be.
+:func:`cell_images` (the test the front end uses) asks, for a detection of a ping at travel time t and Doppler
+cell j, whether its echo's power P (the largest beam power within half a main lobe of its cone) is explained by the
+power P' of some beam b' outside its main lobe at the same t (within half the delay resolution) and j (+-1):
 
-    |t_j - t_i| <= delay_tol_s,   |Doppler cell j - Doppler cell i| <= 1,   P_j <= P_i G(u_j, u_i) 10^(margin_db / 10),
+    P' > P   and   P <= P' G(b, b') 10^(margin_db / 10),
 
-P the matched-filter power at the detection's cell (s mu: the CFAR's mu differs between beams), G the largest
-power gain over the band [f_lo, f_hi] of the envelope min(1, 1 / (N sin x)^2) (the envelope rather than the exact
-pattern: the nulls move with the cone's error and the band). The image is dropped. The price: a real echo at
-the same travel time as a stronger one, no stronger than its lobe there allows, is lost on that ping.
+G the conventional beamformer's power pattern (:func:`pattern_power`, element weights ``weights``, uniform by
+default as the front end's) from b''s direction into the detection's beam, its largest over the band [f_lo, f_hi]
+and over b''s own width (:func:`beam_gain_matrix`). P' is read from the cells, not from the other detections: the
+source need not be detected (a CW clutter point sits on its own beam's reverberation ridge, which the front end
+notches, so its power is read before the notch, ``PingCells.power``). :func:`lobe_images` is the older test between
+detections (the sidelobe envelope between a pair of detections of the same ping). The price of either: a real echo
+at the same travel time as a stronger one, no stronger than that one's pattern there allows, is lost on that ping
+(tests/detection/test_lobe_cells.py shows both sides).
 """
 
 from __future__ import annotations
@@ -105,6 +112,7 @@ def pattern_power(band: LobeBand, du: np.ndarray, n_freq: int = 9) -> np.ndarray
     return np.abs(amp) ** 2
 
 
+@lru_cache(maxsize=16)
 def main_lobe_u(band: LobeBand) -> float:
     """Half-width of the main lobe in direction cosine: the first null (first local minimum) of the pattern at the
     band's top frequency (c / (N d f_hi) for uniform weights; wider for a shaded array)."""
@@ -116,10 +124,10 @@ def main_lobe_u(band: LobeBand) -> float:
 
 @lru_cache(maxsize=16)
 def beam_gain_matrix(band: LobeBand, u_beams: tuple) -> np.ndarray:
-    """(B, B) power gain G[b, b'] (beams at direction cosines ``u_beams``) with which beam b hears an echo arriving from beam b''s direction: the pattern's
-    largest value over the band and over the directions beam b' answers for (u_b' +- half its step to its
-    neighbours in u: the echo's direction is known only to a beam), 0 inside beam b's own main lobe
-    (:func:`main_lobe_u`: a stronger beam there is the same echo's main lobe, not an image's source)."""
+    """(B, B) power gain G[b, b'] (beams at direction cosines ``u_beams``) with which beam b hears an echo from
+    beam b''s direction: the pattern's largest value over the band and over the directions beam b' answers for
+    (u_b' +- half its step to its neighbours in u: the echo's direction is known only to a beam), 0 inside beam b's
+    own main lobe (:func:`main_lobe_u`: a stronger beam there is the same echo's main lobe, not an image's source)."""
     u = np.asarray(u_beams, float)
     step = np.abs(np.diff(u))
     half = 0.5 * np.maximum(np.r_[step, step[-1:]], np.r_[step[:1], step]) if len(u) > 1 else np.zeros(1)
@@ -131,15 +139,27 @@ def beam_gain_matrix(band: LobeBand, u_beams: tuple) -> np.ndarray:
 
 
 def cell_images(cells, beam, delay_cell, doppler_cell, cone_deg=None, band: LobeBand | None = None) -> np.ndarray:
-    """The detections at cells (beam, delay_cell, doppler_cell) of ONE ping's ``cells`` (a
-    :class:`~sonartrack.detection.cells.PingCells`) that are sidelobe or grating-lobe images: True where a beam
-    outside the detection's main lobe holds, within half the delay resolution and +-1 Doppler cell, power P' above
-    the detection's echo's P (the largest power of the beams within half a main lobe of its ``cone_deg``, same cells,
-    the pattern taken at that beam:
-    its cone is taken from the beams' power, so a detection on the shoulder of its echo's main lobe is that echo;
-    half, so that another echo's main lobe is not taken for it; not given: its beam's cone) with P <= P' G 10^(margin_db / 10) (:func:`beam_gain_matrix`; module doc). The power is the
-    cells' matched-filter power before any notch (``cells.power``; else s mu): a CW clutter point on its own beam's
-    reverberation ridge is notched there, yet its sidelobes place it off the ridge of other beams."""
+    """The detections of ONE ping's ``cells`` (a :class:`~sonartrack.detection.cells.PingCells`) that are sidelobe
+    or grating-lobe images of a stronger echo (module doc), as a bool mask.
+
+    Parameters
+    ----------
+    cells : PingCells
+        The ping's cells: ``power`` (the matched-filter power before any notch) or ``statistic`` x ``level``.
+    beam, delay_cell, doppler_cell : int arrays (n,)
+        The detections' cells.
+    cone_deg : array (n,), optional
+        Their cone angles (deg; from the beams' power): the echo's strength P is the largest power of the beams
+        within half a main lobe of it (a detection on the shoulder of its echo's main lobe is that echo; half, so
+        that another echo's main lobe is not taken for it), the pattern taken at that beam. Not given: the beams'.
+    band : LobeBand, optional
+        The array and band (not given: ``cells.lobes``; neither: no image).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool: True for an image.
+    """
     band = cells.lobes if band is None else band
     b, d, j = (np.asarray(i, np.int64) for i in (beam, delay_cell, doppler_cell))
     if band is None or not len(b):
