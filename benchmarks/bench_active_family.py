@@ -193,18 +193,6 @@ def _patch_mftd_lobes() -> None:
     pm.drop_lobe_images = drop_cell_images
 
 
-def _patch_still_hold(probability: float) -> None:
-    """tracking/deleters.py StillHold built with ``moving_gamma`` (``--still-moving-p``: the chi-square(2) quantile at
-    this probability; contact_tracker.py builds it, not ours: the change proposed to its owner)."""
-    import functools
-
-    import sonartrack.tracking.deleters as dl
-    from sonartrack.association.gating import gate_threshold
-
-    dl.StillHold.__init__ = functools.partialmethod(dl.StillHold.__init__,
-                                                    moving_gamma=float(gate_threshold(probability, 2)))
-
-
 LOBE_CPU = {"s": 0.0, "calls": 0}
 
 
@@ -243,13 +231,9 @@ def main() -> None:
                     "shape for all beams, as before 10a6196; not set: the chain's default)")
     ap.add_argument("--mftd-cell-lobes", action="store_true", help="measure the proposed ping_mftd.py change (not "
                     "ours: MFTDGAIN's): its detections' lobe images found by detection/lobes.py cell_images")
-    ap.add_argument("--still-moving-p", type=float, default=None, help="StillHold's moving test at this confidence "
-                    "(tracking/deleters.py moving_gamma; not set: the speed estimate alone)")
     args = ap.parse_args()
     args._tol = args.range_tol
     _time_lobes()
-    if args.still_moving_p is not None:
-        _patch_still_hold(args.still_moving_p)
     if args.mftd_cell_lobes:
         _patch_mftd_lobes()
     config = Config()
