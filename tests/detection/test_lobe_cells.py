@@ -6,7 +6,14 @@ import pytest
 
 from sonartrack.acoustics.active_beams import LineArray, cone_grid_deg
 from sonartrack.acoustics.matched_filter import Waveform
-from sonartrack.detection.cells import FrontEndSettings, PingCells, detect_ping, detection_threshold, ping_front_end
+from sonartrack.detection.cells import (
+    FrontEndSettings,
+    PingCells,
+    detect_ping,
+    detect_ping_flagged,
+    detection_threshold,
+    ping_front_end,
+)
 from sonartrack.detection.lobes import LobeBand, beam_gain_matrix, cell_images, main_lobe_u, pattern_power
 
 C = 1500.0
@@ -75,7 +82,6 @@ def test_a_sidelobe_is_an_image_even_when_its_source_is_notched(notched):
     d, j = np.array([20]), np.array([1])
     assert cell_images(cells, np.array([b1]), d, j).tolist() == [True]
     # ten times stronger than the sidelobe allows (10 dB over the pattern, 3 dB margin): a real echo, kept
-    cells.power[b1, 20, 1] if cells.power is not None else None
     loud = cells.power.copy() if cells.power is not None else cells.statistic.copy()
     loud[b1, 20, 1] *= 10.0
     kw = {"power": loud} if cells.power is not None else {"statistic": loud, "level": np.ones_like(loud)}
@@ -121,7 +127,10 @@ def test_generated_ping_loses_its_sidelobe_detections_and_keeps_a_real_second_ec
     on = off.model_copy(update={"lobe_margin_db": 3.0})
     thr = detection_threshold(off)
     raw = detect_ping(ping_front_end(x, fs, w, arr, off), thr)
-    kept = detect_ping(ping_front_end(x, fs, w, arr, on), thr)
+    cells = ping_front_end(x, fs, w, arr, on)
+    kept = detect_ping(cells, thr)
+    every, image = detect_ping_flagged(cells, thr)  # the table keeps every detection, the images flagged
+    assert len(every) == len(raw) and image.sum() >= 2 and np.array_equal(every.cone_deg[~image], kept.cone_deg)
     lobe_u = C / (8 * 0.5 * (w.carrier_hz + 0.5 * w.bandwidth_hz))  # the main lobe's half-width at the top
     u_raw, u_kept = (np.cos(np.deg2rad(d.cone_deg[_near(d, 3.0)])) for d in (raw, kept))
 
