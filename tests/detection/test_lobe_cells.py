@@ -1,6 +1,8 @@
 """The cell lobe-image test (detection/lobes.py cell_images) against the closed-form pattern of a uniform line array
 and pings from a small plane-wave generator written here (not the package's simulator)."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -66,12 +68,12 @@ def _source_and_sidelobe_cells(notched: bool):
     b0 = int(np.argmin(np.abs(u - 0.9)))
     b1 = int(np.argmin(np.abs(u - (u[b0] - 4.5 / 8.0))))
     gain = float(pattern_power(_band(), np.array(u[b1] - u[b0]))[0])
-    power = np.ones((61, 40, 3), np.float32)
+    power = np.ones((61, 40, 6), np.float32)
     power[b0, 20, 1], power[b1, 20, 1] = 1e6, 1e6 * gain
     stat = power.copy()
     if notched:
         stat[b0] = 0.0
-    cells = PingCells(1, 0.0, cone, 1.0 + 0.01 * np.arange(40), np.zeros(3), np.zeros(3), stat, True,
+    cells = PingCells(1, 0.0, cone, 1.0 + 0.01 * np.arange(40), np.zeros(6), np.zeros(6), stat, True,
                       np.ones_like(stat), _band(), power if notched else None)
     return cells, b0, b1
 
@@ -85,12 +87,15 @@ def test_a_sidelobe_is_an_image_even_when_its_source_is_notched(notched):
     loud = cells.power.copy() if cells.power is not None else cells.statistic.copy()
     loud[b1, 20, 1] *= 10.0
     kw = {"power": loud} if cells.power is not None else {"statistic": loud, "level": np.ones_like(loud)}
-    from dataclasses import replace
-
     assert cell_images(replace(cells, **kw), np.array([b1]), d, j).tolist() == [False]
     # the source itself is no image, nor is the sidelobe at another delay or Doppler
     assert not cell_images(cells, np.array([b0]), d, j).any()
-    assert not cell_images(cells, np.array([b1, b1]), np.array([30, 20]), np.array([1, 1]) * [1, 1]).all()
+    # the same power at another delay (out of half the 10 ms resolution) or 3 Doppler cells away: no source there
+    for d_other, j_other in ((30, 1), (20, 4)):
+        moved = cells.power.copy() if cells.power is not None else cells.statistic.copy()
+        moved[b1, 20, 1], moved[b1, d_other, j_other] = 1.0, 1e6 * 0.05  # the sidelobe level, moved
+        kw = {"power": moved} if cells.power is not None else {"statistic": moved}
+        assert not cell_images(replace(cells, **kw), np.array([b1]), np.array([d_other]), np.array([j_other]))[0]
 
 
 # --- a small plane-wave ping generator (the physics, not sonartrack.sim) ---
