@@ -26,6 +26,14 @@ trial 1 (CW, 8 x 0.5 m, 1 kHz, Rayleigh +5 dB, 14 points) 41 -> 43 -> (20 min: 9
 mirrors, 27 at a point's bistatic range elsewhere in cone (sidelobes), 38 of 43 in mirror pairs; trial 4 (LFM 16 x
 0.25 m, spiky K, 14 points) 54 -> 4 -> 0; trial 8 (LFM 32 x 0.25 m, K +10 dB, 14 points) 12 -> ? -> 2; trial 2
 (LFM 32 x 0.5 m, K +10 dB, no points) 13 -> (20 min: 6) -> 5, at broadside near delays moving with the ownship.
+
+Measured (2026-12-07, h11-fam2, main at 0e2e8dd; ``--lobe-margin-db 3 --mftd-cell-lobes``: detection/lobes.py
+``cell_images`` on the single-ping and the MFTD detections, the CW cells carrying the power before the ridge notch):
+trial 1, 1 h: 37 -> 15 false confirmed (at a point's range elsewhere in cone 21 -> 3; on points 7 -> 8, on mirrors
+4 -> 2, nowhere 4 -> 2, early 1 -> 0); 20 min: 9 -> 4. What is left on trial 1 is the clutter map: replayed on the
+chain's contacts (point 13, TS 30 dB), the point gives a contact on ~35 of 120 pings (a still point is on its own
+beam's reverberation ridge, which the CW front end notches), 400-900 m from it with sds 220-570 m, recurring on
+some pings but never shown still in the map's 24-ping fit.
 """
 
 from __future__ import annotations

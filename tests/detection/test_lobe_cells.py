@@ -156,3 +156,22 @@ def test_generated_ping_loses_a_real_echo_hidden_under_a_sidelobe():
     kept = detect_ping(ping_front_end(x, fs, w, arr, on), detection_threshold(on))
     u = np.cos(np.deg2rad(kept.cone_deg[_near(kept, 3.0)]))
     assert not (np.abs(u + 0.5) < C / (8 * 0.5 * 2200.0)).any()
+
+
+def test_the_skirt_of_a_notched_echo_is_withheld_with_it():
+    # a still point on its own beam's reverberation ridge: notched (s = 0) in beam b0, heard at -3..-10 dB on the
+    # skirt of the main lobe in beam b2 (0.15 in u away, inside half the 0.375 main lobe), off that beam's ridge
+    cone = cone_grid_deg(61)
+    u = np.cos(np.deg2rad(cone))
+    b0 = int(np.argmin(np.abs(u - 0.2)))
+    b2 = int(np.argmin(np.abs(u - (u[b0] - 0.15))))
+    skirt = float(pattern_power(_band(), np.array(u[b2] - u[b0]))[0])
+    power = np.ones((61, 40, 3), np.float32)
+    power[b0, 20, 1], power[b2, 20, 1] = 1e6, 1e6 * skirt
+    stat = power.copy()
+    args = (1, 0.0, cone, 1.0 + 0.01 * np.arange(40), np.zeros(3), np.zeros(3))
+    det = (np.array([b2]), np.array([20]), np.array([1]), np.array([cone[b2]]))
+    # not notched: the detection is the echo in b0 seen from its shoulder (the echo itself): kept
+    assert not cell_images(PingCells(*args, stat, True, np.ones_like(stat), _band()), *det)[0]
+    stat[b0] = 0.0
+    assert cell_images(PingCells(*args, stat, True, np.ones_like(stat), _band(), power), *det)[0]

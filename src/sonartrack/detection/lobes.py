@@ -21,10 +21,11 @@ G the conventional beamformer's power pattern (:func:`pattern_power`, element we
 default as the front end's) from b''s direction into the detection's beam, its largest over the band [f_lo, f_hi]
 and over b''s own width (:func:`beam_gain_matrix`). P' is read from the cells, not from the other detections: the
 source need not be detected (a CW clutter point sits on its own beam's reverberation ridge, which the front end
-notches, so its power is read before the notch, ``PingCells.power``). :func:`lobe_images` is the older test between
-detections (the sidelobe envelope between a pair of detections of the same ping). The price of either: a real echo
-at the same travel time as a stronger one, no stronger than that one's pattern there allows, is lost on that ping
-(tests/detection/test_lobe_cells.py shows both sides).
+notches, so its power is read before the notch, ``PingCells.power``; a detection whose echo peaks in a notched cell
+of another beam within half its main lobe is that echo's skirt, and is withheld with it). :func:`lobe_images` is the
+older test between detections (the sidelobe envelope between a pair of detections of the same ping). The price of
+either: a real echo at the same travel time as a stronger one, no stronger than that one's pattern there allows, is
+lost on that ping (tests/detection/test_lobe_cells.py shows both sides).
 """
 
 from __future__ import annotations
@@ -178,7 +179,10 @@ def cell_images(cells, beam, delay_cell, doppler_cell, cone_deg=None, band: Lobe
     own = source[at, np.arange(len(b))]  # the echo's strength, compared with what its sources put in that beam
     gain = beam_gain_matrix(band, tuple(u.tolist()))[at].T  # (B, n)
     explained = np.where(source > own[None, :], source * gain, 0.0).max(axis=0)
-    return own <= explained * 10.0 ** (band.margin_db / 10.0)
+    image = own <= explained * 10.0 ** (band.margin_db / 10.0)
+    if cells.power is not None:  # the skirt of an echo the front end notched (s = 0 at its peak): withheld with it
+        image |= (at != b) & (cells.statistic[at, d, j] <= 0.0)
+    return image
 
 
 def drop_cell_images(det, cells):
