@@ -206,6 +206,7 @@ LOBE_CPU = {"s": 0.0, "calls": 0}
 
 def _time_lobes() -> None:
     """Count the CPU seconds spent in detection/lobes.py ``cell_images`` (the lobe test's cost)."""
+    import sonartrack.detection.cells as cells
     import sonartrack.detection.lobes as lobes
 
     inner = lobes.cell_images
@@ -217,7 +218,7 @@ def _time_lobes() -> None:
         LOBE_CPU["calls"] += 1
         return out
 
-    lobes.cell_images = timed
+    lobes.cell_images = cells.cell_images = timed
 
 
 def main() -> None:
