@@ -138,10 +138,12 @@ class StillHold:
         When set, a track's speed "shows it moving" only when its velocity's confidence ellipse (chi-square(2)
         quantile ``moving_gamma``, the track's own velocity covariance P_vv) lies outside the disc of radius
         ``slow_mps``: |v| - sqrt(moving_gamma lambda_max(P_vv)) > slow_mps (the clutter map's stillness test turned
-        round). None: the speed estimate alone, |v| >= slow_mps. Why: a still point near endfire, its contacts
-        hundreds of metres wide across the beam and ~200 m along it (a CW's 1 s pulse), gives a track whose velocity
-        swings by +-4 m/s from ping to ping (study active-chain trial 1, benchmarks/bench_active_family.py: a TS
-        30 dB point at cone 7 deg confirmed at a median 2.3 m/s for 26 pings).
+        round). None: the speed estimate alone, |v| >= slow_mps. Why: a young track's speed is noise; on study
+        active-chain trial 8 (LFM 32 x 0.25 m, K +10 dB, 14 points; benchmarks/bench_active_family.py) a track on a
+        TS 24 dB point was confirmed at ping 7, before the clutter map's verdict at ping 9, and held 25 pings at
+        0.18 m/s: at chi2_2 0.9 (4.61) the reverberation-only twin's 20 min went 2 -> 0 false confirmed tracks; on
+        the default scene (bench_active_rows.py, cached contacts) LFM seed 1's held % 74/73/85/99 -> 70/69/84/98
+        (confirmations later), seed 2 unchanged and its row holding two targets gone, CW rows 4 -> 5 and 6 -> 6.
     """
 
     def __init__(self, inner, slow_mps: float, gamma: float, moving_gamma: float | None = None):
