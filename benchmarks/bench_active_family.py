@@ -31,7 +31,8 @@ Measured (2026-12-07, h11-fam2, main at 0e2e8dd; ``--lobe-margin-db 3 --mftd-cel
 ``cell_images`` on the single-ping and the MFTD detections, the CW cells carrying the power before the ridge notch,
 a detection on the skirt of a notched echo withheld with it): trial 1, 1 h: 37 -> 6 false confirmed (at a point's
 range elsewhere in cone 21 -> 0, on points 7 -> 4, on mirrors 4 -> 2, nowhere 4 -> 0, early 1 -> 0; 15 before the
-skirt rule); 20 min: trial 1 9 -> 2, trial 2 4 -> 2, trial 4 0 -> 0, trial 8 2 -> 2 (1 h: 2). The lobe test costs
+skirt rule); 20 min: trial 1 9 -> 2, trial 2 4 -> 2, trial 4 0 -> 0, trial 8 2 -> 2; 1 h with it: trial 2 2 (both
+early, one mirror pair), trial 8 2 (one pair on a point). The lobe test costs
 ~1.3 s CPU per hour of LFM pings (trials 2, 4, 8), 0.1 s per CW hour. Left on trial 1: the clutter map on one TS
 30 dB point: replayed on the chain's contacts it gives a contact on ~35 of 120 pings (a still point is on its own
 beam's reverberation ridge, which the CW front end notches), 400-900 m from it with sds 220-570 m, recurring on some
