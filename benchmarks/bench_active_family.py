@@ -26,6 +26,19 @@ trial 1 (CW, 8 x 0.5 m, 1 kHz, Rayleigh +5 dB, 14 points) 41 -> 43 -> (20 min: 9
 mirrors, 27 at a point's bistatic range elsewhere in cone (sidelobes), 38 of 43 in mirror pairs; trial 4 (LFM 16 x
 0.25 m, spiky K, 14 points) 54 -> 4 -> 0; trial 8 (LFM 32 x 0.25 m, K +10 dB, 14 points) 12 -> ? -> 2; trial 2
 (LFM 32 x 0.5 m, K +10 dB, no points) 13 -> (20 min: 6) -> 5, at broadside near delays moving with the ownship.
+
+Measured (2026-12-07, h11-fam2, main at 0e2e8dd; ``--lobe-margin-db 3 --mftd-cell-lobes``: detection/lobes.py
+``cell_images`` on the single-ping and the MFTD detections, the CW cells carrying the power before the ridge notch,
+a detection on the skirt of a notched echo withheld with it): trial 1, 1 h: 37 -> 6 false confirmed (at a point's
+range elsewhere in cone 21 -> 0, on points 7 -> 4, on mirrors 4 -> 2, nowhere 4 -> 0, early 1 -> 0; 15 before the
+skirt rule); 20 min: trial 1 9 -> 2, trial 2 4 -> 2, trial 4 0 -> 0, trial 8 2 -> 2; 1 h with it: trial 2 2 (both
+early, one mirror pair), trial 8 2 (one pair on a point). The lobe test costs
+~1.3 s CPU per hour of LFM pings (trials 2, 4, 8), 0.1 s per CW hour. Left on trial 1: the clutter map on one TS
+30 dB point: replayed on the chain's contacts it gives a contact on ~35 of 120 pings (a still point is on its own
+beam's reverberation ridge, which the CW front end notches), 400-900 m from it with sds 220-570 m, recurring on some
+pings but never shown still in the map's 24-ping fit. On trial 8 a track at 0.18 m/s on a TS 24 dB point was
+confirmed at ping 7, the map's verdict came at ping 9: with StillHold's ``moving_gamma`` (tracking/deleters.py,
+chi2_2 at 0.9, ``--still-moving-p 0.9``; built by contact_tracker.py, not ours) 2 -> 0 in 20 min.
 """
 
 from __future__ import annotations
@@ -184,20 +197,45 @@ def verdict(row: dict) -> str:
     return "false (right)"
 
 
-def _patch_cw_lobes() -> None:
-    """cw_cells.cw_ping_cells with the cells' LobeBand attached (``--cw-lobes``: the change proposed to its owner)."""
-    import dataclasses
+def _patch_mftd_lobes() -> None:
+    """ping_mftd's lobe filter replaced by detection/lobes.py's cell test (``--mftd-cell-lobes``: the change proposed
+    to its owner; ping_mftd.drop_lobe_images tests MFTD detections against each other only)."""
+    import sonartrack.detection.ping_mftd as pm
+    from sonartrack.detection.lobes import drop_cell_images
 
-    import sonartrack.detection.cw_cells as cw
-    from sonartrack.detection.cells import lobe_band
+    pm.drop_lobe_images = drop_cell_images
 
-    inner = cw.cw_ping_cells
 
-    def with_lobes(samples, fs_hz, waveform, array, front_end, settings, **kw):
-        return dataclasses.replace(inner(samples, fs_hz, waveform, array, front_end, settings, **kw),
-                                   lobes=lobe_band(waveform, array, front_end))
+def _patch_still_hold(probability: float) -> None:
+    """tracking/deleters.py StillHold built with ``moving_gamma`` (``--still-moving-p``: the chi-square(2) quantile at
+    this probability; contact_tracker.py builds it, not ours: the change proposed to its owner)."""
+    import functools
 
-    cw.cw_ping_cells = with_lobes
+    import sonartrack.tracking.deleters as dl
+    from sonartrack.association.gating import gate_threshold
+
+    dl.StillHold.__init__ = functools.partialmethod(dl.StillHold.__init__,
+                                                    moving_gamma=float(gate_threshold(probability, 2)))
+
+
+LOBE_CPU = {"s": 0.0, "calls": 0}
+
+
+def _time_lobes() -> None:
+    """Count the CPU seconds spent in detection/lobes.py ``cell_images`` (the lobe test's cost)."""
+    import sonartrack.detection.cells as cells
+    import sonartrack.detection.lobes as lobes
+
+    inner = lobes.cell_images
+
+    def timed(*a, **k):
+        t0 = time.process_time()
+        out = inner(*a, **k)
+        LOBE_CPU["s"] += time.process_time() - t0
+        LOBE_CPU["calls"] += 1
+        return out
+
+    lobes.cell_images = cells.cell_images = timed
 
 
 def main() -> None:
@@ -217,12 +255,17 @@ def main() -> None:
                     "lobe_margin_db; not set: the chain's default)")
     ap.add_argument("--heavy-tail-cells", default=None, help="the front end's heavy_tail_cells ('none': one K "
                     "shape for all beams, as before 10a6196; not set: the chain's default)")
-    ap.add_argument("--cw-lobes", action="store_true", help="measure the proposed cw_cells.py change (not ours: "
-                    "ACTCW's): the CW front end's cells carry cells.lobe_band, CW lobe images dropped too")
+    ap.add_argument("--mftd-cell-lobes", action="store_true", help="measure the proposed ping_mftd.py change (not "
+                    "ours: MFTDGAIN's): its detections' lobe images found by detection/lobes.py cell_images")
+    ap.add_argument("--still-moving-p", type=float, default=None, help="StillHold's moving test at this confidence "
+                    "(tracking/deleters.py moving_gamma; not set: the speed estimate alone)")
     args = ap.parse_args()
     args._tol = args.range_tol
-    if args.cw_lobes:
-        _patch_cw_lobes()
+    if args.still_moving_p is not None:
+        _patch_still_hold(args.still_moving_p)
+    _time_lobes()
+    if args.mftd_cell_lobes:
+        _patch_mftd_lobes()
     config = Config()
     update = {} if args.lobe_margin_db is None else {"lobe_margin_db": args.lobe_margin_db}
     if args.heavy_tail_cells is not None:
@@ -252,6 +295,8 @@ def main() -> None:
         print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
               f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
     print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
+    if LOBE_CPU["calls"]:
+        print(f"lobe test: {LOBE_CPU['s']:.2f} s CPU in {LOBE_CPU['calls']} calls (runs not cached only)")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,7 @@
 """Single-ping detections of the active front end: the cone angle from the beams' power, not the normalised s."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -35,7 +37,7 @@ def test_cone_comes_from_the_power_when_the_cfar_level_differs_across_beams(true
     det = detect_ping(cells, 2.0)
     assert np.min(np.abs(det.cone_deg - true_cone)) <= 1.5
     # the same cells without the level: the cone of s's peak (what the chain reported before)
-    no_level = PingCells(*[getattr(cells, f) for f in PingCells.__slots__[:-2]])
+    no_level = replace(cells, level=None)
     assert power_cone_deg(no_level, [b_s], [10], [0])[0] == pytest.approx(s_peak, abs=1.5)
 
 

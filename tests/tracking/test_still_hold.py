@@ -65,3 +65,29 @@ def test_a_hold_is_forgotten_with_its_track():
     hold.recurring(np.zeros((0, 2)), np.zeros((0, 2, 2)))
     assert hold.manage(T, np.ones(1, bool)).confirmed.tolist() == [True]
     assert hold.held.tolist() == []
+
+
+def _with_velocity_sd(T, sd_mps):
+    P = T.P.copy()
+    P[..., 2, 2] = P[..., 3, 3] = np.asarray(sd_mps, float).reshape(-1, 1) ** 2
+    return replace(T, P=P)
+
+
+def test_with_a_moving_test_an_uncertain_speed_does_not_show_a_track_moving():
+    # gamma 4.61 (chi2_2 at 0.9): sqrt(4.61) = 2.147 velocity sd. A 2.3 m/s track with sd 1.5 m/s: 2.3 - 3.22 < 1,
+    # held; with sd 0.5 m/s: 2.3 - 1.07 = 1.23 > 1, confirmed; at sd 0.7 m/s: 2.3 - 1.50 = 0.80, held
+    states = [[10.0, 0.0, 2.3, 0.0]] * 3
+    T = _with_velocity_sd(tracks(states, [False] * 3), [1.5, 0.5, 0.7])
+    hold = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21, moving_gamma=4.61)
+    hold.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    assert hold.manage(T, np.ones(3, bool)).confirmed.tolist() == [False, True, False]
+    # the speed estimate alone (no moving test): all three shown moving
+    plain = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21)
+    plain.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    assert plain.manage(T, np.ones(3, bool)).confirmed.tolist() == [True, True, True]
+    # the largest eigenvalue counts: sd 0.3 along x but 1.5 along y is uncertain
+    P = T.P.copy()
+    P[0, :, 2, 2], P[0, :, 3, 3] = 0.3**2, 1.5**2
+    hold2 = StillHold(ConfirmAll(), slow_mps=1.0, gamma=9.21, moving_gamma=4.61)
+    hold2.recurring(np.array([[0.0, 0.0]]), np.diag([50.0**2, 50.0**2])[None])
+    assert not hold2.manage(replace(T, P=P), np.ones(3, bool)).confirmed[0]

@@ -383,11 +383,12 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
     Returns
     -------
     PingCells
-        As detection/cells.py's, the statistic s = y / max(mu_f, sqrt(mu_e mu_l)), 0 in the notch.
+        As detection/cells.py's, the statistic s = y / max(mu_f, sqrt(mu_e mu_l)), 0 in the notch; with the array's
+        lobe band and the power before the notch when ``front_end.lobe_margin_db`` is set (detection/lobes.py).
     """
     from sonartrack.acoustics.active_beams import cone_grid_deg
     from sonartrack.acoustics.matched_filter import doppler_to_range_rate
-    from sonartrack.detection.cells import PingCells
+    from sonartrack.detection.cells import PingCells, lobe_band
     from sonartrack.detection.cw_ridge import beam_ridge_notch
 
     require(waveform.kind == "cw", "the CW front end takes a CW pulse")
@@ -401,6 +402,8 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
         notch = beam_ridge_notch(rate, cone, *motion, array, waveform.carrier_hz, front_end.sound_speed_mps,
                                  settings.ridge_beam_level_db, margin)
         stat[np.broadcast_to(notch[:, None, :], stat.shape)] = 0.0
+    lobes = lobe_band(waveform, array, front_end)  # the power before the notch: a notched clutter point's sidelobes
+    raw = np.ascontiguousarray(power[:, keep]) if lobes is not None else None
     return PingCells(int(ping), float(time_s), cone, delay[keep], doppler, rate, stat, True,
-                     np.ascontiguousarray(mu[:, keep]))
+                     np.ascontiguousarray(mu[:, keep]), lobes, raw)
 

@@ -134,10 +134,21 @@ class StillHold:
         A track slower than this (combined state's speed, m/s) is not confirmed on a recurring position.
     gamma : float
         Gate (chi-square(2)) on a recurring contact's position against a track's: d^2 with P_pos + R.
+    moving_gamma : float or None
+        When set, a track's speed "shows it moving" only when its velocity's confidence ellipse (chi-square(2)
+        quantile ``moving_gamma``, the track's own velocity covariance P_vv) lies outside the disc of radius
+        ``slow_mps``: |v| - sqrt(moving_gamma lambda_max(P_vv)) > slow_mps (the clutter map's stillness test turned
+        round). None: the speed estimate alone, |v| >= slow_mps. Why: a young track's speed is noise; on study
+        active-chain trial 8 (LFM 32 x 0.25 m, K +10 dB, 14 points; benchmarks/bench_active_family.py) a track on a
+        TS 24 dB point was confirmed at ping 7, before the clutter map's verdict at ping 9, and held 25 pings at
+        0.18 m/s: at chi2_2 0.9 (4.61) the reverberation-only twin's 20 min went 2 -> 0 false confirmed tracks; on
+        the default scene (bench_active_rows.py, cached contacts) LFM seed 1's held % 74/73/85/99 -> 70/69/84/98
+        (confirmations later), seed 2 unchanged and its row holding two targets gone, CW rows 4 -> 5 and 6 -> 6.
     """
 
-    def __init__(self, inner, slow_mps: float, gamma: float):
+    def __init__(self, inner, slow_mps: float, gamma: float, moving_gamma: float | None = None):
         self.inner, self.slow_mps, self.gamma = inner, float(slow_mps), float(gamma)
+        self.moving_gamma = None if moving_gamma is None else float(moving_gamma)
         self.xy, self.R = np.zeros((0, 2)), np.zeros((0, 2, 2))
         self.held = np.zeros(0, np.int64)  # ids of the tracks whose confirmation has been taken back
 
@@ -173,7 +184,7 @@ class StillHold:
         if not new.any() or not (len(self.xy) or len(self.held)):
             return T
         snap = TrackSnapshot.of(0.0, T.select(new))
-        slow = np.hypot(snap.x[:, 2], snap.x[:, 3]) < self.slow_mps
+        slow = self._slow(snap)
         near = np.isin(snap.track_id, self.held)
         if len(self.xy):
             d = snap.x[:, None, :2] - self.xy[None]
@@ -183,6 +194,14 @@ class StillHold:
         confirmed[np.nonzero(new)[0][slow & near]] = False
         self.held = np.union1d(self.held, snap.track_id[slow & near])
         return replace(T, confirmed=confirmed)
+
+    def _slow(self, snap) -> np.ndarray:
+        """The tracks whose speed does not show them moving (``moving_gamma``, class doc)."""
+        speed = np.hypot(snap.x[:, 2], snap.x[:, 3])
+        if self.moving_gamma is None:
+            return speed < self.slow_mps
+        spread = np.sqrt(self.moving_gamma * np.linalg.eigvalsh(snap.P[:, 2:4, 2:4])[:, -1])
+        return speed - spread <= self.slow_mps
 
 
 class MinHits:
