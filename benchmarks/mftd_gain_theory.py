@@ -1,0 +1,142 @@
+"""Measurement: what the ping MFTD (paper P1 run sliding, detection/ping_mftd.py) can gain over single-ping detection
+on the active chain's scene numbers, on synthetic cells written here (not our simulator or front end).
+
+World: one beam pair (pooled to one beam), ``CELLS`` travel-time cells of 1/f_s = 5 ms (7.5 m of bistatic range, the
+default scene's LFM at f_s 200 Hz), noise cells exponential of mean 1 (the CFAR-normalised statistic), ``PINGS``
+pings ``T`` = 30 s apart. One target, its bistatic range moving at a constant rate drawn uniformly in
++-``--true-rate`` m/s (the default scene's targets: |rdot_B| <= 5.5 m/s, median 2.6), its echo in one cell per ping,
+Swerling 1 from ping to ping (exponential of mean 1 + SNR). Per ping from the K-th on (a full window) a detector
+finds the echo when it reports a cell within 12 cells (the study's ``hit_delay_s`` 0.06 s) of it.
+
+Detectors at a per-cell false-alarm rate pfa: single-ping, s > -ln pfa; the MFTD with its range-rate span
++-``span`` m/s (an LFM measures no Doppler: one range-rate cell of that width, detection/ping_mftd.py), its threshold
+calibrated by the chain's own code for the same pfa. Closed forms (P1's checks, DIGEST P1): single-ping Swerling 1,
+Pd = pfa^(1 / (1 + rho)), SNR50 = -ln pfa / ln 2 - 1; the clairvoyant K-frame detector (the target's cells known,
+Swerling 2 across pings): sum of K exponentials, Pd = Q(K, lambda_K / (1 + rho)), lambda_K the Gamma(K) quantile at
+pfa (an upper bound on any MFTD). SNR50 of a detector: the logistic fit of its hits against SNR
+(studies/active_chain_claims.py ``snr50_db``); gain = SNR50(single at pfa_single) - SNR50(MFTD at pfa_mftd), 95 %
+bootstrap interval over worlds.
+
+    PYTHONPATH=src python benchmarks/mftd_gain_theory.py [--worlds 12] [--spans 15,5,2] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from scipy import special, stats
+
+from sonartrack.detection.ping_mftd import CellAxes, PingMftd, PingMftdSettings
+from sonartrack.studies.active_chain_claims import snr50_db
+
+FS_HZ, C_MPS, T_S = 200.0, 1500.0, 30.0
+CELLS, PINGS, HIT_CELLS = 1536, 10, 12
+SNR_DB = np.arange(4.0, 20.1, 2.0)
+
+
+def motion_hypotheses(span: float, frames: int, pool: int = 2) -> float:
+    """M: straight tracks through K frames that end in one cell and differ by a pooled cell at their start, for
+    range rates in +-span (2 span (K - 1) T / dr; sigma_a 0.02 m/s^2 moves a track < 10 m in 30 s, under a cell)."""
+    return max(2.0 * span * (frames - 1) * T_S / (pool * C_MPS / FS_HZ), 1.0)
+
+
+def closed_forms(pfa_single: float, pfa_mftd: float, frames: int, spans) -> dict[str, float]:
+    """SNR50 (dB) of the single-ping detector at both rates, of the clairvoyant K-frame sum, and of a K-frame sum
+    whose threshold pays for M motion hypotheses (union bound: pfa / M; module doc)."""
+    s50 = {f"single pfa {p:g}": 10 * np.log10(-np.log(p) / np.log(2.0) - 1.0) for p in (pfa_single, pfa_mftd)}
+    med = stats.gamma.median(frames)
+    s50[f"clairvoyant K={frames} pfa {pfa_mftd:g}"] = 10 * np.log10(stats.gamma.isf(pfa_mftd, frames) / med - 1.0)
+    for span in spans:
+        m = motion_hypotheses(span, frames)
+        s50[f"K={frames} sum over M={m:.0f} (span {span:g})"] = 10 * np.log10(
+            stats.gamma.isf(pfa_mftd / m, frames) / med - 1.0)
+    return s50
+
+
+def world(rng: np.random.Generator, snr_db: float, true_rate: float):
+    """(pings, 2, CELLS, 1) cells and the target's cell per ping (module doc)."""
+    rate = rng.uniform(-true_rate, true_rate)
+    r0 = rng.uniform(0.4, 0.6) * CELLS
+    cell = np.round(r0 + rate * T_S * np.arange(PINGS) / (C_MPS / FS_HZ)).astype(int)
+    y = rng.exponential(1.0, (PINGS, 2, CELLS, 1))
+    y[np.arange(PINGS), rng.integers(0, 2, PINGS), cell, 0] = rng.exponential(1.0 + 10 ** (snr_db / 10), PINGS)
+    return y, cell
+
+
+def mftd_detector(span: float, pfa: float, frames: int, n_tracks: int = 10) -> PingMftd:
+    axes = CellAxes(np.array([80.0, 83.0]), np.arange(CELLS) / FS_HZ, np.zeros(1), np.full(1, np.nan))
+    s = PingMftdSettings(frames=frames, max_range_rate_mps=span, merge_beams=True, n_tracks=n_tracks)
+    return PingMftd(axes, T_S, pfa, C_MPS, s)
+
+
+def hits(y, cell, det: PingMftd | None, pfa: float, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """(pings from K on,) single-ping hits at pfa and the MFTD's hits (det None: none)."""
+    single, mftd = [], []
+    thr = -np.log(pfa)
+    for k in range(PINGS):
+        near = slice(cell[k] - HIT_CELLS, cell[k] + HIT_CELLS + 1)
+        s = bool((y[k, :, near, 0] > thr).any())
+        m = False
+        if det is not None:
+            d = det.push_array(k + 1, k * T_S, y[k])
+            m = bool((np.abs(d.delay_cell - cell[k]) <= HIT_CELLS).any())
+        if k >= frames - 1:
+            single.append(s)
+            mftd.append(m)
+    return np.array(single, float), np.array(mftd, float)
+
+
+def bootstrap_gain(snr, ref, det, rng, n=200) -> tuple[float, float, float]:
+    """SNR50(ref) - SNR50(det) and its 95 % interval, worlds resampled (arrays (worlds, pings))."""
+    g0 = snr50_db(snr, ref) - snr50_db(snr, det)
+    w = len(snr)
+    boot = [snr50_db(snr[i], ref[i]) - snr50_db(snr[i], det[i]) for i in (rng.integers(0, w, w) for _ in range(n))]
+    boot = np.asarray(boot)
+    boot = boot[np.isfinite(boot)]
+    return float(g0), *(float(v) for v in np.percentile(boot, [2.5, 97.5]))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--worlds", type=int, default=12, help="worlds per SNR level")
+    ap.add_argument("--spans", default="15,5,2", help="MFTD range-rate spans +-m/s")
+    ap.add_argument("--true-rate", type=float, default=5.0, help="targets' bistatic range rates uniform in +- (m/s)")
+    ap.add_argument("--pfa-single", type=float, default=1e-5)
+    ap.add_argument("--pfa-mftd", default="1e-9,1e-5")
+    ap.add_argument("--frames", type=int, default=4)
+    ap.add_argument("--n-tracks", default="10", help="P1's kept tracks N (comma list)")
+    ap.add_argument("--seed", type=int, default=0)
+    a = ap.parse_args()
+    spans = [float(v) for v in a.spans.split(",")]
+    for p in (float(v) for v in a.pfa_mftd.split(",")):
+        print("closed form SNR50 (dB):", {k: round(float(v), 2) for k, v in
+                                          closed_forms(a.pfa_single, p, a.frames, spans).items()})
+    grid = [(span, p, int(n)) for span in spans for p in (float(v) for v in a.pfa_mftd.split(","))
+            for n in a.n_tracks.split(",")]
+    for span, p, n_tracks in grid:
+        if True:
+            t0 = time.perf_counter()
+            det_seed = np.random.default_rng([a.seed, 1])
+            snr, hs, hm = [], [], []
+            for e in SNR_DB:
+                for w in range(a.worlds):
+                    rng = np.random.default_rng([a.seed, int(e * 10), w])
+                    y, cell = world(rng, e, a.true_rate)
+                    s, m = hits(y, cell, mftd_detector(span, p, a.frames, n_tracks), a.pfa_single, a.frames)
+                    snr.append(np.full(len(s), e))
+                    hs.append(s)
+                    hm.append(m)
+            snr, hs, hm = (np.array(v) for v in (snr, hs, hm))
+            g = bootstrap_gain(snr, hs, hm, det_seed)
+            print(f"span +-{span:g} m/s, K={a.frames}, N={n_tracks}, MFTD pfa {p:g} vs single {a.pfa_single:g}: SNR50 single "
+                  f"{snr50_db(snr, hs):.2f} MFTD {snr50_db(snr, hm):.2f} dB, gain {g[0]:.2f} [{g[1]:.2f}, {g[2]:.2f}] "
+                  f"dB; Pd by SNR single {np.round(hs.reshape(len(SNR_DB), -1).mean(1), 2).tolist()} MFTD "
+                  f"{np.round(hm.reshape(len(SNR_DB), -1).mean(1), 2).tolist()} ({time.perf_counter() - t0:.0f} s)",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    special.seterr(all="ignore")
+    main()
