@@ -36,18 +36,19 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_active_clutter as bac  # noqa: E402
-from _active_cache import cached, detect_world, track_cached  # noqa: E402
+from _active_cache import cached, track_cached  # noqa: E402
 from worlds.active_pings import Target, ping  # noqa: E402
 
 EBR_DB = (6.0, 10.0, 14.0, 18.0)
 HELD_M = 500.0
 
 
-def gain_world(ebr_db: float, run: int):
+def gain_world(ebr_db: float, run: int, swerling: bool = False):
     seed = 3600 + run
     rng = np.random.default_rng(seed)
     ang, rad = rng.uniform(0, 2 * np.pi), rng.uniform(2500.0, 4500.0)
-    tgt = Target(rad * np.sin(ang), rad * np.cos(ang), *(2.5 * rng.standard_normal(2)), ebr_db=ebr_db)
+    tgt = Target(rad * np.sin(ang), rad * np.cos(ang), *(2.5 * rng.standard_normal(2)), ebr_db=ebr_db,
+                 swerling=swerling)
     return replace(bac.base_world(0.1, seed * 10 + int(ebr_db), **bac.MODELS["K nu=1"]), pings=12, window_s=8.0,
                    targets=(tgt,))
 
@@ -166,6 +167,8 @@ def main() -> None:
     ap.add_argument("--false-models", default="", help="reverberation-only models to count false tracks on "
                                                      "(bench_active_clutter.MODELS names, comma list) instead")
     ap.add_argument("--false-hours", type=float, default=0.5)
+    ap.add_argument("--swerling", action="store_true", help="the target's echo Swerling 1 from ping to ping (else "
+                                                              "steady)")
     a = ap.parse_args()
     ns = [int(v) for v in a.n_tracks.split(",")]
     if a.false_models:
@@ -177,8 +180,8 @@ def main() -> None:
     snr, held, hits = {}, {d: {} for d in dets}, {d: {} for d in ["single", "mftd"] + [f"mftd_n{n}" for n in ns]}
     for r in range(a.runs):
         for e in EBR_DB:
-            w = gain_world(e, r)
-            tag = "_".join(str(n) for n in ns)
+            w = gain_world(e, r, a.swerling)
+            tag = "_".join(str(n) for n in ns) + ("_sw1" if a.swerling else "")
             c = cached(a.cache / f"gainN{tag}_{e:g}_{r}.pkl", lambda w=w: detect_variants(w, ns))
             snr[(e, r)] = np.full(w.pings, e)
             held["single"][(e, r)] = held_by_ping(track_cached(c, s, "single"), c["truth"])
