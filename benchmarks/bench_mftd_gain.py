@@ -13,7 +13,15 @@ at a ping. SNR50: the EBR at which a logistic fit of held against EBR over every
 worlds (resampled within each level, 200 resamples). Detectors: ``single`` (pfa 1e-5), ``mftd`` (P1 across pings
 alone, mftd_pfa 1e-9), ``chain`` (the MFTD with strong single-ping detections joined, mftd_strong_pfa).
 
-    PYTHONPATH=src python benchmarks/bench_mftd_gain.py --cache /tmp/clutter_cache [--runs 3]
+    PYTHONPATH=src python benchmarks/bench_mftd_gain.py --cache DIR [--runs 3] [--n-tracks 30] [--swerling]
+        [--model "K nu=1"]
+    PYTHONPATH=src python benchmarks/bench_mftd_gain.py --cache DIR --n-tracks 30 --false-models "rayleigh" \
+        [--false-hours 0.5]
+
+Besides the chain's MFTD (P1's N = 10 kept tracks) a second ping MFTD with each ``--n-tracks`` N is fed the same
+cells (one front end for all: ``detect_variants``), and per ping each detector's echo hits are counted (a detection
+within 0.15 s and 7 deg of the echo: the per-ping detection probability at the chain's rates, mftd_pfa 1e-9 against
+pfa 1e-5); ``--false-models`` instead counts the confirmed tracks of reverberation-only worlds (seeds 4400 + j).
 
 Measured (2026-12-07, h9-clutter defaults, 3 worlds per level, 12 pings; front ends ~40-250 s a world on the shared
 machine, the tracking seconds): held fraction at 6 / 10 / 14 / 18 dB: single 0 / 0 / 36 / 67 %, MFTD 0 / 8 / 58 /
@@ -43,13 +51,13 @@ EBR_DB = (6.0, 10.0, 14.0, 18.0)
 HELD_M = 500.0
 
 
-def gain_world(ebr_db: float, run: int, swerling: bool = False):
+def gain_world(ebr_db: float, run: int, swerling: bool = False, model: str = "K nu=1"):
     seed = 3600 + run
     rng = np.random.default_rng(seed)
     ang, rad = rng.uniform(0, 2 * np.pi), rng.uniform(2500.0, 4500.0)
     tgt = Target(rad * np.sin(ang), rad * np.cos(ang), *(2.5 * rng.standard_normal(2)), ebr_db=ebr_db,
                  swerling=swerling)
-    return replace(bac.base_world(0.1, seed * 10 + int(ebr_db), **bac.MODELS["K nu=1"]), pings=12, window_s=8.0,
+    return replace(bac.base_world(0.1, seed * 10 + int(ebr_db), **bac.MODELS[model]), pings=12, window_s=8.0,
                    targets=(tgt,))
 
 
@@ -167,6 +175,7 @@ def main() -> None:
     ap.add_argument("--false-models", default="", help="reverberation-only models to count false tracks on "
                                                      "(bench_active_clutter.MODELS names, comma list) instead")
     ap.add_argument("--false-hours", type=float, default=0.5)
+    ap.add_argument("--model", default="K nu=1", help="reverberation model of the worlds (bench_active_clutter.MODELS)")
     ap.add_argument("--swerling", action="store_true", help="the target's echo Swerling 1 from ping to ping (else "
                                                               "steady)")
     a = ap.parse_args()
@@ -180,8 +189,8 @@ def main() -> None:
     snr, held, hits = {}, {d: {} for d in dets}, {d: {} for d in ["single", "mftd"] + [f"mftd_n{n}" for n in ns]}
     for r in range(a.runs):
         for e in EBR_DB:
-            w = gain_world(e, r, a.swerling)
-            tag = "_".join(str(n) for n in ns) + ("_sw1" if a.swerling else "")
+            w = gain_world(e, r, a.swerling, a.model)
+            tag = "_".join(str(n) for n in ns) + ("_sw1" if a.swerling else "") + f"_{a.model}"
             c = cached(a.cache / f"gainN{tag}_{e:g}_{r}.pkl", lambda w=w: detect_variants(w, ns))
             snr[(e, r)] = np.full(w.pings, e)
             held["single"][(e, r)] = held_by_ping(track_cached(c, s, "single"), c["truth"])
