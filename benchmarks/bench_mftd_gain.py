@@ -30,6 +30,19 @@ single-ping: MFTD 1.17 dB [0.08, 2.05], chain (MFTD + strong single-ping) 1.58 d
 (1/h) for both; measured on the 0.5-h reverberation-only recordings of bench_active_defaults.py: Rayleigh 2 h,
 spiky K 0.5 2 h: 0 confirmed for single, MFTD and chain alike; K 1 + blast + 6 still points (2 h): single 25,
 MFTD alone 35, chain 36 (the rate is not kept there by any detector: see bench_active_defaults.py).
+
+Measured (2026-12-07, h11-mftdgain at main 0e2e8dd; N 10 is the chain's MFTD, N 30 a second one on the same cells; 3
+worlds per level; front ends ~3-5 min for the 12 worlds at load ~11). Gains over single-ping, dB [95 %]:
+    worlds                       held (MFTD alone)          held (chain)              echo hits per ping (MFTD)
+                                 N 10          N 30         N 10        N 30          N 10           N 30
+    steady echo, K 1             1.26 [0.06, 2.55]  1.39 [0.08, 2.67]  1.58 [0.53, 2.53] same  0.01 [-0.70, 0.57] -0.11
+    Swerling 1, K 1              1.61 [0.08, 4.98]  1.79 [0.15, 5.35]  1.82 [0.15, 5.42] same -0.36 [-0.80, 0.10] -0.13
+    Swerling 1, Rayleigh         1.38 [0.08, 2.94]  2.22 [0.50, 3.90]  3.12 [2.20, 4.06] 3.26  -0.23 [-1.50, 0.83] 0.22
+  per-ping echo hits at the chain's rates (mftd_pfa 1e-9, pfa 1e-5), Swerling 1 on K 1 at 6/10/14/18 dB: single
+  0/31/39/81 %, MFTD 0/19/19/97 %: the curves cross (the MFTD's threshold is 4 decades of pfa higher, worth 2.7 dB
+  at Pd 1/2 for one ping; its integration pays above ~15 dB and loses below). Reverberation only, 0.5 h each (seeds
+  4400, 4401): K 1 + blast + 6 points: single 2, MFTD 0 and chain 0 confirmed at N 10 and at N 30 (MFTD detections a
+  ping 7.55 / 7.56, single 10.4); Rayleigh: 0 for every detector.
 """
 
 from __future__ import annotations
