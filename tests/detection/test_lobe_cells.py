@@ -128,7 +128,7 @@ def test_generated_ping_loses_its_sidelobe_detections_and_keeps_a_real_second_ec
     # cone 120 (u -0.5) 6 dB weaker at the same travel time: the main echo's pattern there is -16.8 dB
     x, w, fs = _plane_wave_ping([(60.0, 3.0, 30.0), (120.0, 3.0, 15.0)])
     arr = LineArray(8, 0.5)
-    off = FrontEndSettings(blast_guard_s=None)
+    off = FrontEndSettings(blast_guard_s=None, lobe_margin_db=None)
     on = off.model_copy(update={"lobe_margin_db": 3.0})
     thr = detection_threshold(off)
     raw = detect_ping(ping_front_end(x, fs, w, arr, off), thr)

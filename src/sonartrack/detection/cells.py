@@ -83,12 +83,13 @@ class FrontEndSettings(Settings):
                "beam's reverberation is spikier than a wide one's: cells.py heavy_tail_statistic); not set: one fit "
                "over all beams", unit="1", ge=10000)
     lobe_margin_db: float | None = setting(
-        None, "drop a single-ping detection that is a sidelobe or grating-lobe image of a stronger echo of the same "
+        3.0, "drop a single-ping detection that is a sidelobe or grating-lobe image of a stronger echo of the same "
               "ping (detection/lobes.py cell_images: a beam outside its main lobe holds, at its travel time and "
               "Doppler, a stronger echo whose power times the array's beam pattern there, plus this margin, explains "
-              "its own); not set: every detection kept. Measured (study active-chain trial 1, CW 8 x 0.5 m at 1 kHz, "
+              "its own); None: every detection kept. Measured (study active-chain trial 1, CW 8 x 0.5 m at 1 kHz, "
               "14 clutter points, 1 h reverberation-only, benchmarks/bench_active_family.py): false confirmed tracks "
-              "37 -> 15 at 3 dB (at a point's range elsewhere in cone 21 -> 3)",
+              "37 -> 6 at 3 dB (at a point's range elsewhere in cone 21 -> 0); the price: a second echo within "
+              "the pattern's sidelobe level + margin of a stronger one at the same travel time is lost",
         unit="dB", ge=0, le=20)
 
 

@@ -381,17 +381,12 @@ class PingMftd:
 
 
 def drop_lobe_images(det: Detections, cells: PingCells) -> Detections:
-    """``det`` without the lobe images of a stronger detection of the same ping (detection/lobes.py), their power
-    the ping's s mu at their cells; as they are when the cells carry no :class:`~sonartrack.detection.lobes.LobeBand`
-    (``lobe_margin_db`` not set)."""
-    from sonartrack.detection.lobes import lobe_images
+    """``det`` without the side- and grating-lobe images of a stronger echo of the same ping (detection/lobes.py
+    :func:`~sonartrack.detection.lobes.drop_cell_images`: the array's beam pattern against the ping's cells); as
+    they are when the cells carry no :class:`~sonartrack.detection.lobes.LobeBand` (``lobe_margin_db`` not set)."""
+    from sonartrack.detection.lobes import drop_cell_images
 
-    if cells.lobes is None or len(det) < 2:
-        return det
-    idx = (det.beam, det.delay_cell, det.doppler_cell)
-    power = np.asarray(cells.statistic, float)[idx] * (cells.level[idx] if cells.level is not None else 1.0)
-    image = lobe_images(det.cone_deg, det.travel_time_s, det.doppler_cell, power, cells.lobes)
-    return Detections(**{f: np.asarray(getattr(det, f))[~image] for f in Detections.__slots__})
+    return drop_cell_images(det, cells)
 
 
 def parabola_offset(log_y: np.ndarray, b, d, j, axis: int) -> np.ndarray:

@@ -101,24 +101,29 @@ def _snr_gain(trials) -> list[float]:
 
 def _equal_false_gain(trials, hours: float) -> dict:
     """SNR gain (dB) at an equal rate of false targets (rows): for each detector the most sensitive threshold of
-    the sweep whose reverberation-only rate is <= FALSE_PER_HOUR (none: the least sensitive), its SNR50 (logistic
-    fit of the echo hits, all targets and runs), gain = SNR50(single) - SNR50(MFTD), bootstrap over runs."""
+    the sweep whose reverberation-only rate is <= FALSE_PER_HOUR (none: the least sensitive, and
+    no gain is given: the rates are not equal there), its SNR50 (logistic fit of the echo hits, all targets and
+    runs), gain = SNR50(single) - SNR50(MFTD), bootstrap over runs."""
     counts = np.asarray(trials["reverb_false_lv"], float).sum(axis=0)  # (2, levels)
     rate = counts / hours
-    pick = [int(np.argmax(r <= FALSE_PER_HOUR)) if (r <= FALSE_PER_HOUR).any() else len(r) - 1 for r in rate]
+    reached = [bool((r <= FALSE_PER_HOUR).any()) for r in rate]
+    pick = [int(np.argmax(r <= FALSE_PER_HOUR)) if ok else len(r) - 1 for r, ok in zip(rate, reached, strict=True)]
     snr = np.asarray(trials["snr_db"], float)
     hs = np.asarray(trials["hit_single_lv"], float)[:, pick[0]]
     hm = np.asarray(trials["hit_mftd_lv"], float)[:, pick[1]]
     s50 = {"single": [snr50_db(snr, np.asarray(trials["hit_single_lv"], float)[:, k]) for k in range(rate.shape[1])],
            "mftd": [snr50_db(snr, np.asarray(trials["hit_mftd_lv"], float)[:, k]) for k in range(rate.shape[1])]}
     gain = [s50["single"][pick[0]] - s50["mftd"][pick[1]], float("nan"), float("nan")]
-    if len(snr) >= 3:
+    if not all(reached):  # no threshold of one detector reaches the stated rate: no equal rate to compare at
+        gain = [float("nan")] * 3
+    elif len(snr) >= 3:
         rng = np.random.default_rng(0)
         boot = [snr50_db(snr[i], hs[i]) - snr50_db(snr[i], hm[i])
                 for i in (rng.integers(0, len(snr), len(snr)) for _ in range(200))]
         gain[1:] = [float(x) for x in np.nanpercentile(boot, [2.5, 97.5])]
     return {"false_per_hour": {"single": rate[0].tolist(), "mftd": rate[1].tolist()}, "snr50_db": s50,
             "level": {"single": pick[0], "mftd": pick[1]}, "gain_db": gain,
+            "rate_reached": dict(zip(("single", "mftd"), reached, strict=True)),
             "levels": {"single_factor": list(SINGLE_FACTORS), "mftd_offset": list(MFTD_OFFSETS)}}
 
 
@@ -275,6 +280,9 @@ def _mftd_claim(summary: dict, config: Config) -> Claim:
           for v in fr}
     eq = summary["equal_false"]
     gain = eq["gain_db"]
+    short = [k for k, ok in eq.get("rate_reached", {}).items() if not ok]
+    unequal = f" (no threshold of the sweep brings {' and '.join(short)} to <= {FALSE_PER_HOUR:g}/h: no equal rate)" \
+        if short else ""
     holds = ttc["mftd_imm"] < ttc["single_imm"] and hold["mftd_imm"] > hold["single_imm"] and \
         fr["mftd_imm"] <= fr["single_imm"] and _num(gain[1]) > 0  # the gain's interval clear of 0 dB
     return Claim(id="mftd-earlier-longer", paper="ours / paper P1 at system level: MFTD in front of IMM-IPDA confirms "
@@ -291,7 +299,8 @@ def _mftd_claim(summary: dict, config: Config) -> Claim:
                       f"{_fmt(summary['hold']['mftd_imm'][w])} vs {_fmt(summary['hold']['single_imm'][w])}; false "
                       f"rows/h {fr['mftd_imm']:.2f} vs {fr['single_imm']:.2f} (tracks {ft['mftd_imm']:.2f} vs "
                       f"{ft['single_imm']:.2f}); SNR gain at equal false-row rate "
-                      f"{_fmt(gain, ' dB')} (single at x{SINGLE_FACTORS[eq['level']['single']]:g} its threshold, "
+                      f"{_fmt(gain, ' dB')}{unequal} "
+                      f"(single at x{SINGLE_FACTORS[eq['level']['single']]:g} its threshold, "
                       f"{eq['false_per_hour']['single'][eq['level']['single']]:.2f} false rows/h; MFTD at "
                       f"+{MFTD_OFFSETS[eq['level']['mftd']]:g}, {eq['false_per_hour']['mftd'][eq['level']['mftd']]:.2f}"
                       f"/h); at the chain's thresholds {_fmt(summary['snr_gain_db'], ' dB')}",
