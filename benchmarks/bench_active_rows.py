@@ -211,6 +211,13 @@ REASONS = {"RateConfirmation": "coasted out", "ExistenceDeleter": "coasted out",
            "GhostDeleter": "ghost", "StillHold": "held"}
 
 
+def _alias(s, c: dict):
+    """The chain's endfire alias for the cached scene (its pulse from the scene's settings: the cache keeps none)."""
+    from sonartrack.systems.active.contact_tracker import endfire_alias_of
+
+    return endfire_alias_of(s, scene(c["kind"], c["seed"]).waveform.waveform())
+
+
 def track(c: dict, settings=None):
     """The chain's tracker stage over the cached contacts with ``settings`` (default: ActiveSettings() on the path,
     the CW contacts' errors as cached); returns (ActiveTracks, {track: reason it ended})."""
@@ -223,7 +230,8 @@ def track(c: dict, settings=None):
                          clutter_map=clutter_map_of(s), **c["kwargs"],
                          **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
                          **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
-                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}))
+                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}),
+                         **({"endfire_alias": _alias(s, c)} if hasattr(s, "endfire_alias") else {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -350,7 +358,7 @@ def main() -> None:
     a = p.parse_args()
     for kind in a.kinds:
         for seed in a.seeds:
-            c = run_scene(kind, seed, Path(a.cache))
+            c = {**run_scene(kind, seed, Path(a.cache)), "kind": kind, "seed": seed}
             res, reasons = track(c, with_changes(c, a.set))
             report(c, res, reasons, a.gate_m, f"{kind.upper()} seed {seed}")
 
