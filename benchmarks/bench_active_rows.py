@@ -102,6 +102,22 @@ crossing, or a second track started off its target) are kept, and listed, both.
 What is left on CW: 2 extra rows a seed (seed 2: three confirmed tracks on crossing-b to the end, one of them the
 approacher's until the crossing at ping ~52; seed 1: crossing-b's and maneuvering's second tracks) and one false
 row (seed 1: pings 101-119 at the fore endfire, as on main; seed 2: a track of pings 60-76).
+
+Measured (2026-12-07 session 11, h11-cwfrag2; same caches, plus LFM seeds 3-4 and cwb seeds 1-2 simulated here;
+~35 s for CW 1-2, ~1 min a cwb seed): the false row of CW seed 1 was crossing-b's grating-lobe alias: crossing-b at
+cone 160-195 deg (aft endfire), held by track 27, was heard on the fore endfire beam at the same travel time (r_B 2-97 m
+apart, the CW's delay known to ~430 m) at 0.8-2.9 times its statistic, so the image test (weaker, within 15 m) passed
+it; it started track 84 at ping 97, confirmed at 101, fed to ping 108, coasting to 119. Now a contact in the alias
+lobe (|u - u_held -+ lambda/d| <= lambda/(N d), u = cos cone) of a held contact, within c/(B sqrt 12) in r_B, goes to
+no unconfirmed track (contact_tracker.py EndfireAlias, setting ``endfire_alias``). rows, false, extra, holding 2+,
+confirmed tracks; held % (mean):
+                      CW 1             CW 2             LFM 1-4            cwb 1 / 2 / 3 / 4
+    endfire_alias off 7,1,2,0, 13; 89  7,1,2,0, 17; 90  4/4/5/4 rows, 0 f  11,1,5,1 / 10,0,5,0 / 9,0,4,0 / 9,1,3,1
+    endfire_alias on  6,0,2,0, 12; 89  7,1,2,0, 16; 90  same               same
+CW seed 2's false row is the approacher's mirror during the ownship's turn (heading -5 -> -24 deg, pings 55-66): the
+approacher's own track 43 was 0.9-1.7 km off at pings 58-64, its twin 44 (a ghost, 54-65) and a second mirror track
+50 (confirmed at 60, no twin: sides.py pairs each track with one twin, and 43's is 44) coasted away (2-2.5 km from
+anything by ping 66) and is listed as a row of its own.
 """
 
 from __future__ import annotations
@@ -211,6 +227,13 @@ REASONS = {"RateConfirmation": "coasted out", "ExistenceDeleter": "coasted out",
            "GhostDeleter": "ghost", "StillHold": "held"}
 
 
+def _alias(s, c: dict):
+    """The chain's endfire alias for the cached scene (its pulse from the scene's settings: the cache keeps none)."""
+    from sonartrack.systems.active.contact_tracker import endfire_alias_of
+
+    return endfire_alias_of(s, scene(c["kind"], c["seed"]).waveform.waveform())
+
+
 def track(c: dict, settings=None):
     """The chain's tracker stage over the cached contacts with ``settings`` (default: ActiveSettings() on the path,
     the CW contacts' errors as cached); returns (ActiveTracks, {track: reason it ended})."""
@@ -223,7 +246,8 @@ def track(c: dict, settings=None):
                          clutter_map=clutter_map_of(s), **c["kwargs"],
                          **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
                          **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
-                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}))
+                         **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}),
+                         **({"endfire_alias": _alias(s, c)} if hasattr(s, "endfire_alias") else {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -350,7 +374,7 @@ def main() -> None:
     a = p.parse_args()
     for kind in a.kinds:
         for seed in a.seeds:
-            c = run_scene(kind, seed, Path(a.cache))
+            c = {**run_scene(kind, seed, Path(a.cache)), "kind": kind, "seed": seed}
             res, reasons = track(c, with_changes(c, a.set))
             report(c, res, reasons, a.gate_m, f"{kind.upper()} seed {seed}")
 

@@ -44,6 +44,44 @@ class ActiveTracks:
         return len(self.tracks)
 
 
+@dataclass(frozen=True, slots=True)
+class EndfireAlias:
+    """A line array's grating-lobe alias of an echo: a plane wave at u = cos(cone) is also passed by the beams at
+    u +- lambda / d (the array factor sum_n exp(i 2 pi n d u / lambda) is periodic in u with period lambda / d, Van
+    Trees, Optimum Array Processing, 2002, sec. 2.4, eq. 2.98), and a beam steered to u_b hears u within its main
+    lobe |u - u_b| <= lambda / (N d) (the first null, eq. 2.96). At d = lambda / 2 the period is 2: an echo near
+    one endfire (u ~ -1) is heard at the other (u ~ +1) at the same travel time, as strong as in its own beam (both
+    endfire beams are the widest). A contact is an alias of an anchor when |u - u_a -+ lambda / d| <= lambda / (N d)
+    and their bistatic ranges differ by at most ``range_m``.
+
+    ``period_u`` lambda / d; ``lobe_u`` lambda / (N d); ``range_m`` the r_B window (m): the delay's resolution,
+    c / (B sqrt(12)) with B the pulse's band (1 / tau for a CW), and not below the clutter map's image window."""
+
+    period_u: float
+    lobe_u: float
+    range_m: float
+
+    @classmethod
+    def of(cls, wavelength_m: float, spacing_m: float, elements: int, resolution_m: float) -> EndfireAlias:
+        """From the carrier's wavelength (m), the element spacing (m), their number and the r_B window (m)."""
+        require(wavelength_m > 0 and spacing_m > 0 and elements >= 2 and resolution_m >= 0,
+                "endfire alias: wavelength, spacing > 0, elements >= 2 and a window >= 0 are needed")
+        return cls(wavelength_m / spacing_m, wavelength_m / (elements * spacing_m), float(resolution_m))
+
+    def of_contacts(self, xy, tx_xy, rx_xy, heading_rad, anchor) -> np.ndarray:
+        """(m,) bool: the contacts within the alias lobe and r_B window of an ``anchor`` contact (class doc)."""
+        xy, anchor = np.asarray(xy, float).reshape(-1, 2), np.asarray(anchor, bool)
+        if not anchor.any():
+            return np.zeros(len(xy), bool)
+        d = xy - np.asarray(rx_xy, float)
+        h = float(heading_rad)  # bearings clockwise from north: the array axis (sin h, cos h)
+        u = (d[:, 0] * np.sin(h) + d[:, 1] * np.cos(h)) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+        r_b = np.linalg.norm(xy - np.asarray(tx_xy, float), axis=1) + np.hypot(d[:, 0], d[:, 1])
+        du = np.abs(np.abs(u[:, None] - u[None, anchor]) - self.period_u)
+        near = np.abs(r_b[:, None] - r_b[None, anchor]) <= self.range_m
+        return ((du <= self.lobe_u) & near).any(axis=1)
+
+
 class ContactTracker:
     """P4's IMM-IPDA over the pings' contacts, with the range-rate gate in front (stages 4-5 of the module doc).
 
@@ -103,13 +141,15 @@ class ContactTracker:
     keep_apart : bool
         Two confirmed tracks once told apart by the track-to-track test while both held their targets are never
         merged as duplicates (tracking/duplicates.py ``keep_apart``).
+    endfire_alias : EndfireAlias or None
+        The line array's grating-lobe alias of a held echo withheld (:meth:`_not_images`); None: not.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
                  clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
-                 claims: str | None = None, keep_apart: bool = False):
+                 claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -118,6 +158,7 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
+        self.endfire_alias = endfire_alias
         self.claims = claims
         if claims is not None:
             from sonartrack.tracking.associators import ClaimedPDA
@@ -222,15 +263,19 @@ class ContactTracker:
         return keep
 
     def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
-        """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact of the ping weaker
-        than one in a confirmed track's gate, within the clutter map's ``image_range_m`` of its bistatic range
-        (clutter_map.py :func:`same_range`: a strong echo's images share its travel time), and in no confirmed
-        track's gate, starts and feeds no track. As the map does for recurring still echoes; measured on the default
-        scene (LFM, seeds 1 and 2): crossing-b at 44 dB echo SNR near the aft endfire gave a false track of 16
-        pings at the fore endfire, at its bistatic range within 8 m."""
+        """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact in no confirmed
+        track's gate that starts and feeds no track when (a) it is weaker than a contact in a confirmed track's gate
+        and within the clutter map's ``image_range_m`` of its bistatic range (clutter_map.py :func:`same_range`: a
+        strong echo's images share its travel time), as the map does for recurring still echoes; measured on the
+        default scene (LFM, seeds 1 and 2): crossing-b at 44 dB echo SNR near the aft endfire gave a false track of
+        16 pings at the fore endfire, at its bistatic range within 8 m; or (b) it is the array's grating-lobe alias of
+        such a held contact (:class:`EndfireAlias`), whatever its strength: on the default scene as CW (seed 1)
+        crossing-b near the aft endfire (cone 160-195 deg) was heard at the fore endfire at 0.8-2.9 times its
+        statistic and 2-97 m of its r_B (a 1 s CW's delay known to ~430 m), and the images made a false row of
+        pings 100-119 that (a) did not withhold."""
         keep = np.ones(len(contacts), bool)
         tol = None if self.clutter_map is None else self.clutter_map.image_range_m
-        if tol is None or not len(contacts):
+        if (tol is None and self.endfire_alias is None) or not len(contacts):
             return keep
         x, P, _ = self._predicted_confirmed(t_s)
         if not len(x):
@@ -239,7 +284,12 @@ class ContactTracker:
 
         held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0)
         g = self.geometry
-        return ~(same_range(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), held, contacts.statistic, tol) & ~held)
+        image = np.zeros(len(contacts), bool)
+        if tol is not None:
+            image |= same_range(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), held, contacts.statistic, tol)
+        if self.endfire_alias is not None:
+            image |= self.endfire_alias.of_contacts(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), g.heading_at(t_s), held)
+        return ~(image & ~held)
 
     def _cw_pd(self, contacts: Contacts) -> None:
         """From the first scan whose contacts carry a measured range rate (a CW pulse's Doppler), the tracker's
@@ -432,6 +482,18 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
     return contacts, keep, trk.result()
+
+
+def endfire_alias_of(settings: ActiveSettings, waveform) -> EndfireAlias | None:
+    """The chain's :class:`EndfireAlias` for ``waveform`` (carrier, and band: an LFM's swept band, a CW's 1 / tau)
+    on ``settings``'s array, or None when ``endfire_alias`` is off; its r_B window c / (B sqrt(12)), not below the
+    clutter map's ``clutter_map_image_m``."""
+    if not settings.endfire_alias:
+        return None
+    c = float(settings.sound_speed_mps)
+    band = waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else 1.0 / waveform.duration_s
+    window = max(c / (band * np.sqrt(12.0)), settings.clutter_map_image_m or 0.0)
+    return EndfireAlias.of(c / waveform.carrier_hz, float(settings.spacing_m), int(settings.elements), window)
 
 
 def clutter_map_of(settings: ActiveSettings):

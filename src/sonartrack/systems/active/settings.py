@@ -160,6 +160,12 @@ class ActiveSettings(Settings):
               "91/90 -> 89/89; LFM 4 clean rows each either way; on bench_cw_held.py's scene b (seeds 3, 4) 2/1 "
               "-> 0/1 rows holding two or more, 5/6 -> 9/9 rows for 5 targets: extra rows for fewer joined targets "
               "(False: P4's merger)", unit="1")
+    endfire_alias: bool = setting(
+        True, "a contact in the line array's grating-lobe alias of a contact a confirmed track holds (u = cos cone "
+              "shifted by wavelength / spacing, within a main lobe; at half-wavelength spacing one endfire hears the "
+              "other) and at its bistatic range within the delay's resolution goes to no unconfirmed track "
+              "(contact_tracker.py EndfireAlias). Measured (benchmarks/bench_active_rows.py): CW seed 1's false row "
+              "at the fore endfire, crossing-b's alias, gone (False: off)", unit="1")
     clutter_map_pings: int | None = setting(
         8, "clutter map (detection/clutter_map.py): a contact whose world position recurs in clutter_map_hits of "
            "the last this many pings, and whose recurrences fit a still point (clutter_map_still_probability), is "
