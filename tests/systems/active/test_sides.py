@@ -122,3 +122,19 @@ def test_two_strays_cost_the_cap_each():
             rest.add(t[k], z[k], R)
     strays = 0.5 * (2 * cap + 2 * np.log(np.linalg.det(2 * np.pi * R)))
     assert abs(fit.log_likelihood() - (rest.log_likelihood() - strays)) < 1e-6
+
+
+def test_twins_both_decided_on_their_side_are_neither_decided_nor_rejected():
+    # a track and its mirror twin each with ln LR above the threshold "on its side": one target cannot be on both
+    # sides, so neither is decided and neither is rejected (GhostDeleter deleted both before: bench_active_turns)
+    st = SideTracker()
+    thr = st.min_log_lr
+    st._history = {1: [(0.0, thr + 1.0)], 2: [(0.0, thr + 3.0)], 3: [(0.0, -(thr + 1.0))], 4: [(0.0, thr + 1.0)]}
+    st._twins = {1: 2, 2: 1, 3: 4, 4: 3}
+    assert st.decision(1) == 0 and st.decision(2) == 0
+    assert not st.rejected(1) and not st.rejected(2)
+    # a consistent pair: 4 on its side, 3 a ghost
+    assert st.decision(4) == 1 and st.decision(3) == -1 and st.rejected(3) and not st.rejected(4)
+    # below the threshold the twin does not contradict
+    st._history[2] = [(0.0, thr - 0.5)]
+    assert st.decision(1) == 1 and st.rejected(2)

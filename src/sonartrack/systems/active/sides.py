@@ -347,11 +347,17 @@ class SideTracker:
     def decision(self, track_id: int) -> int:
         """+1 the track ``track_id`` is on its target's side, -1 a ghost, 0 undecided so far: the sign of the
         track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also for a track with no
-        history)."""
+        history); 0 too when the track and its mirror twin are BOTH decided on their side: one target cannot be on
+        both, and deciding both made GhostDeleter delete both (benchmarks/bench_active_turns.py, CW seed 2: 6 of 9
+        turn scenes lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair)."""
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0
-        return 1 if h[-1][1] > 0 else -1
+        if h[-1][1] < 0:
+            return -1
+        twin = self._twins.get(int(track_id))
+        t = self._history.get(twin) if twin is not None else None
+        return 0 if t and t[-1][1] >= self.min_log_lr else 1
 
     def twins(self) -> dict[int, int]:
         """Mirror twins: track -> the confirmed track that took the other contact of the same detection on the most
