@@ -88,8 +88,8 @@ def test_acquisition_latency_on_a_hand_made_track_table():
     config = ac.Config(scene=scene)
     snr = np.where(np.arange(pings) >= 2, 20.0, 5.0)
     truth = {"ping": np.arange(1, pings + 1), "time_s": t, "target": np.array(["a"] * pings, object),
-             "x_m": np.zeros(pings), "y_m": np.full(pings, 5000.0), "snr_db": snr, "in_window": np.ones(pings, bool),
-             "in_blast": np.zeros(pings, bool)}
+             "x_m": np.zeros(pings), "y_m": np.full(pings, 5000.0), "ebr_db": snr, "snr_db": snr + 12.0,
+             "in_window": np.ones(pings, bool), "in_blast": np.zeros(pings, bool)}  # snr: detectable from ping 1
     tr_t = np.concatenate([t[3:], t[2:3]])
     tr_id = np.concatenate([np.full(pings - 3, 8), [9]])
     tr_xy = np.concatenate([np.tile([50.0, 5050.0], (pings - 3, 1)), [[4000.0, 5000.0]]])
@@ -133,11 +133,13 @@ def test_acquisition_summary_counts_judged_targets():
     det[0, 3, p - 2:] = True   # D: enters two pings before the end: not judged
     det[0, 4, :] = True        # E: never held: judged, never
     held[0, 1:, :, :] = True   # other trackings' holds are not the chain's
-    config = ac.Config(acquire_pings=5, detectable_snr_db=15.0)
-    a = acquisition_summary({"detectable": det.astype(float), "held_pings": held.astype(float), "snr_db": snr},
-                            config)
+    config = ac.Config(acquire_pings=5, detectable_ebr_db=15.0)
+    # judged by the echo-to-background ratio: the echo-to-noise SNR (25 dB everywhere) would judge C too
+    a = acquisition_summary({"detectable": det.astype(float), "held_pings": held.astype(float), "ebr_db": snr,
+                             "snr_db": np.full_like(snr, 25.0)}, config)
     assert (a["judged"], a["within"], a["never"], a["not_judged"]) == (3, 1, 1, 2)
     assert a["latencies_pings"] == [5.0, 7.0] and a["fraction"][0] == pytest.approx(1 / 3)
+    assert (a["entering_ebr_db"], a["entering_snr_db"]) == (20.0, 25.0)
 
 
 def test_turn_window_spans_the_pings_around_the_turn():

@@ -80,8 +80,9 @@ PAPER = "sonartrack's own: papers P1 (MFTD across pings) and P4 (bistatic contac
 #: its maneuver after the ownship's turn; 4: a family of scenes (studies/active_chain_family.py), held fraction of
 #: the detectable pings, CW range-rate sd in the re-trackings, hits of echoes out of the window or in the blast left
 #: out of the SNR50 fits; 5: false targets counted as the rows the user sees (an undecided mirror pair once, the
-#: tracks beside), each target's turn held on one row (issue 34 items 4-5)
-TRIAL_VERSION = 5
+#: tracks beside), each target's turn held on one row (issue 34 items 4-5); 6: "detectable" by the echo-to-background
+#: ratio (truth ebr_db: noise + mean reverberation in the echo's cell, sim/active_background.py), not echo-to-noise
+TRIAL_VERSION = 6
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it
 RUNS = 10
@@ -126,11 +127,13 @@ class Config(Settings):
       the maneuvering target's turn 60-180 deg either way at 0.3-1 deg/s. The pulse length, ping interval, scene
       length, source level, noise, targets' tracks and strengths stay the base scene's. The direct blast is not an
       axis: the simulator does not synthesise it (sim/active_signals.py).
-    * "Detectable ping": the echo's SNR against the ambient noise (truth.csv ``snr_db``, the matched filter on the
-      beam; the reverberation is not in it, so on loud reverberation some "detectable" echoes are masked: the
-      held fraction is reported per reverberation level) >= 15 dB (item 5's acquisition level), the echo starting
-      in the window and clear of the blast. A target's first 5 detectable pings are its acquisition (item 5) and
-      not counted. Held: a confirmed track within ``match_m`` of the target at that ping.
+    * "Detectable ping": the echo's expected echo-to-background ratio (``ebr_db``, sim/active_background.py: its
+      matched-filter power on its beam over the ambient noise plus the mean reverberation in its cell, for a CW at
+      its own Doppler; issue 34 speaks of echo-to-background) >= 15 dB (item 5's acquisition level), the echo
+      starting in the window and clear of the blast. Up to version 5 the echo-to-noise ``snr_db`` (no
+      reverberation) was used: on the reverberation-limited scenes many such "detectable" echoes were masked; the
+      held fraction of those pings is printed beside. A target's first 5 detectable pings are its acquisition
+      (item 5) and not counted. Held: a confirmed track within ``match_m`` of the target at that ping.
     * Intervals: held fraction and GOSPA, mean over runs with a 95 % normal interval; sides, acquisition and
       turns, Wilson 95 %; false rows, Poisson one-sided 95 % bounds per model; the MFTD gain, a bootstrap over runs
       (200 resamples). Each claim holds on its point estimate except the MFTD gain, whose interval must clear 0 dB,
@@ -157,8 +160,9 @@ class Config(Settings):
                                              unit="s", gt=0)
     family: FamilySettings = setting(default_factory=FamilySettings, doc="the family's axes (each trial's scene "
                                      "drawn from them, studies/active_chain_family.py)")
-    detectable_snr_db: float = setting(15.0, "a target's echo is detectable on a ping when its SNR (truth.csv "
-                                             "snr_db) reaches this, it starts in the window and clears the blast",
+    detectable_ebr_db: float = setting(15.0, "a target's echo is detectable on a ping when its expected "
+                                             "echo-to-background ratio (ebr_db: noise + mean reverberation in its "
+                                             "cell) reaches this, it starts in the window and clears the blast",
                                        unit="dB")
     acquire_pings: int = setting(5, "the first detectable pings of each target not counted in its held fraction "
                                     "(issue 34 item 5: confirmed within 5 pings)", unit="1", ge=0)
@@ -213,7 +217,20 @@ def simulate(scene: ActiveSceneSettings):
                                                                                     trial_rng(scene.seed, k))
 
     truth = target_truth(scene, tl, plat) if scene.targets else None
+    if truth is not None:
+        truth["ebr_db"] = _ebr_of_real(scene, tl, plat, truth)
     return pings, table, nav, truth
+
+
+def _ebr_of_real(scene: ActiveSceneSettings, tl, plat, truth: dict) -> np.ndarray:
+    """ebr_db of the real targets' truth rows (sim/active_background.py), NaN on the clutter points' (not scored)."""
+    from sonartrack.sim.active_background import echo_background_db
+
+    real = np.array([not is_clutter(str(t)) for t in truth["target"]], bool)
+    out = np.full(real.shape, np.nan)
+    out[real] = echo_background_db(scene, tl, plat, {k: np.asarray(truth[k])[real] for k in
+                                                     ("ping", "travel_time_s", "cone_deg", "doppler_hz", "snr_db")})
+    return out
 
 
 def run_scene(config: Config, scene: ActiveSceneSettings):
@@ -480,11 +497,12 @@ def in_reach(config: Config, truth: dict) -> np.ndarray:
     return (win > 0.5) & ~(blast > 0.5)
 
 
-def detectable_grid(config: Config, truth: dict) -> np.ndarray:
-    """(targets, pings) 1 where the echo is detectable (``detectable_snr_db``, in the window, clear of the blast)."""
-    snr = truth_grid(config, truth, "snr_db")
+def detectable_grid(config: Config, truth: dict, column: str = "ebr_db") -> np.ndarray:
+    """(targets, pings) 1 where the echo is detectable (its ``column``, ebr_db or the older snr_db, reaches
+    ``detectable_ebr_db``, in the window, clear of the blast)."""
+    level = truth_grid(config, truth, column)
     with np.errstate(invalid="ignore"):
-        return ((snr >= config.detectable_snr_db) & in_reach(config, truth)).astype(float)
+        return ((level >= config.detectable_ebr_db) & in_reach(config, truth)).astype(float)
 
 
 def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -498,6 +516,8 @@ def run_trial(config: Config, rng: np.random.Generator) -> dict[str, np.ndarray]
     scores = {v: score_tracks(config, t, result, truth) for v, t in variant_tracks(config, result).items()}
     out = {key: np.stack([scores[v][key] for v in VARIANTS]) for key in scores[VARIANTS[0]]}
     out["detectable"] = detectable_grid(config, truth)
+    out["detectable_snr"] = detectable_grid(config, truth, "snr_db")  # version 5's, printed beside
+    out["ebr_db"] = np.where(in_reach(config, truth), truth_grid(config, truth, "ebr_db"), np.nan)
     # the MFTD gain's SNR50 fits take only echoes that start in the window and clear the blast (an echo the chain
     # gates can be neither hit nor missed); helper CW2 was to change this claim's computation too: the lead merges
     out["snr_db"] = np.where(in_reach(config, truth), truth_grid(config, truth, "snr_db"), np.nan)

@@ -8,10 +8,10 @@ one row (issue 34 item 4). The study counts what the user sees:
   mirror (a ghost is a hypothesis of a real target, not a false one); the confirmed false tracks are counted beside
   it (a false undecided pair: 1 row, 2 tracks);
 * **acquisition latency** (issue 34 item 5): a target *enters* the listening window on its first detectable ping
-  (the study's truth grid: echo SNR >= ``detectable_snr_db``, in the window, clear of the blast); its latency is the
-  number of pings from that ping (counted as 1) to the first ping on which a confirmed track holds it; it is *at
-  15 dB* when the median echo SNR of its first ``acquire_pings`` pings from entering is >= the level (pings out of
-  reach count as below);
+  (the study's truth grid: expected echo-to-background ratio >= ``detectable_ebr_db``, in the window, clear of
+  the blast); its latency is the number of pings from that ping (counted as 1) to the first ping on which a
+  confirmed track holds it; it is *at 15 dB* when the median echo-to-background ratio of its first
+  ``acquire_pings`` pings from entering is >= the level (pings out of reach count as below);
 * **a turn held on one row** (issue 34 item 5): the pings from the last at or before the turn's start to the first at
   or after its end; judged when the target is detectable at both of those end pings; held on one row when a confirmed
   track holds it at both ends and every track holding it in between belongs to the same row (a track of no row, a
@@ -138,13 +138,14 @@ def acquisition_pings(detectable, held) -> np.ndarray:
 
 
 def entering_level_db(snr_db, detectable, pings: int) -> np.ndarray:
-    """Median echo SNR (dB) of the ``pings`` pings from a target's entering ping (module doc; NaN, out of reach,
-    counts as below); NaN where the target never enters or the scene ends before its ``pings`` pings.
+    """Median echo level (dB: the study's echo-to-background ebr_db, or the echo-to-noise snr_db) of the ``pings``
+    pings from a target's entering ping (module doc; NaN, out of reach, counts as below); NaN where the target
+    never enters or the scene ends before its ``pings`` pings.
 
     Parameters
     ----------
     snr_db : array (..., P)
-        Echo SNR per ping (NaN where out of reach).
+        Echo level per ping, EBR or SNR (NaN where out of reach).
     detectable : bool array (..., P)
         The truth grid's detectable pings.
     pings : int
