@@ -54,6 +54,7 @@ def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str |
             prof.disable()
         cpu = time.process_time() - c0
         truth = pd.read_csv(Path(tmp) / "truth.csv")
+    truth["ebr_db"] = truth_ebr_db(scene, truth)
     if dump:
         import pickle
 
@@ -61,10 +62,13 @@ def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str |
     targets = mirror_targets(res.tracks, res.geometry)
     scores = truth_scores(res.tracks, targets, truth, res.geometry)
     on_det = truth_scores(res.tracks, targets, detectable_rows(truth), res.geometry)["held"]
+    on_snr = truth_scores(res.tracks, targets, detectable_rows(truth, column="snr_db"), res.geometry)["held"]
     stages = ", ".join(f"{k} {v:.1f}" for k, v in sorted(res.stage_seconds.items(), key=lambda kv: -kv[1]))
-    held = " / ".join(f"{k} {100 * v:.0f}/{100 * on_det.get(k, float('nan')):.0f}" for k, v in scores["held"].items())
+    nan = float("nan")
+    held = " / ".join(f"{k} {100 * v:.0f}/{100 * on_det.get(k, nan):.0f}/{100 * on_snr.get(k, nan):.0f}"
+                      for k, v in scores["held"].items())
     print(f"CW scene {which}, seed {seed}, {duration_s:.0f} s: CPU {cpu:.1f} s = {duration_s / cpu:.0f}x real time; "
-          f"held % all/detectable {held}; false targets {scores['false_targets']} "
+          f"held % all/detectable by ebr/by snr {held}; false targets {scores['false_targets']} "
           f"({scores['false_targets'] * 3600 / duration_s:.1f}/h)")
     print(f"   stage wall s: {stages}")
     print("   " + detected_summary(res, truth))
@@ -73,19 +77,31 @@ def measure(which: str, seed: int, duration_s: float, profile: bool, dump: str |
         pstats.Stats(prof).sort_stats("tottime").print_stats(25)
 
 
-def detectable_rows(truth, snr_db: float = 15.0, acquire_pings: int = 5):
+def truth_ebr_db(scene, truth):
+    """The truth rows' expected echo-to-background ratio (dB, sim/active_background.py; the study's ``ebr_db``)."""
+    from sonartrack.sim.active_background import echo_background_db
+    from sonartrack.sim.active_scene import ping_geometry, transmission_loss_model
+
+    cols = {k: truth[k].to_numpy() for k in ("ping", "travel_time_s", "cone_deg", "doppler_hz", "snr_db")}
+    return echo_background_db(scene, transmission_loss_model(scene), ping_geometry(scene), cols)
+
+
+def detectable_rows(truth, level_db: float = 15.0, acquire_pings: int = 5, column: str | None = None):
     """The truth rows of detectable pings as the active-chain study counts them (studies/active_chain.py
-    ``detectable_grid``, ``acquire_pings``): echo SNR >= ``snr_db``, in the listening window, clear of the blast,
-    each target's first ``acquire_pings`` of them (its acquisition) left out."""
-    ok = (truth["snr_db"] >= snr_db) & truth["in_window"].astype(bool) & ~truth["in_blast"].astype(bool)
+    ``detectable_grid``, ``acquire_pings``): the echo's ``column`` (ebr_db, echo-to-background; snr_db,
+    echo-to-noise as before the study's version 6; not given: ebr_db where the table has it (:func:`truth_ebr_db`),
+    else snr_db) >= ``level_db``, in the listening window, clear of the blast, each target's first
+    ``acquire_pings`` of them (its acquisition) left out."""
+    column = column or ("ebr_db" if "ebr_db" in truth else "snr_db")
+    ok = (truth[column] >= level_db) & truth["in_window"].astype(bool) & ~truth["in_blast"].astype(bool)
     t = truth[ok].sort_values("time_s")
     return t[t.groupby("target").cumcount() >= acquire_pings]
 
 
 def detected_summary(res, truth, delay_s: float = 0.6, cone_deg: float = 8.0, rate_mps: float = 1.0) -> str:
     """Per target: the share of its pings in the listening window (after the blast) with an MFTD / a single-ping
-    detection within ``delay_s``, ``cone_deg`` and ``rate_mps`` of its echo, and its median echo SNR (dB, the
-    simulator's echo-to-noise in one cell)."""
+    detection within ``delay_s``, ``cone_deg`` and ``rate_mps`` of its echo, its median echo SNR (dB, the
+    simulator's echo-to-noise in one cell) and, where the truth has it, its median echo-to-background ratio."""
     import numpy as np
 
     out = []
@@ -98,8 +114,9 @@ def detected_summary(res, truth, delay_s: float = 0.6, cone_deg: float = 8.0, ra
                                & (np.abs(det.cone_deg - r.cone_deg) < cone_deg)
                                & (np.abs(det.range_rate_mps - r.range_rate_mps) < rate_mps))) for r in t.itertuples()]
             found.append(100 * np.mean(hit) if hit else float("nan"))
+        ebr = f", ebr {np.nanmedian(t['ebr_db']):.1f} dB" if "ebr_db" in t else ""
         out.append(f"{name}: mftd {found[0]:.0f} %, single {found[1]:.0f} % of {len(t)} pings, snr "
-                   f"{np.median(t['snr_db']):.1f} dB")
+                   f"{np.median(t['snr_db']):.1f} dB{ebr}")
     return "detected: " + "; ".join(out)
 
 
