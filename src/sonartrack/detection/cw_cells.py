@@ -77,7 +77,11 @@ hold the sea's Doppler are an LFM's), and persistent clutter points, which sit o
 Measured (as above): the detections off the targets fell from 164 to 90 (40 pings), the echoes found 56 -> 54.
 A notched point's echo still spreads past the notch through the pulse's ambiguity function (at half a pulse off in
 delay its Doppler main lobe is twice as wide): those skirt cells are not searched either (``skirt_margin_db``,
-:func:`notch_skirts`; study active-chain trial 1's reverberation-only hour: 6 -> 0 false confirmed tracks).
+:func:`notch_skirts`; study active-chain trial 1's reverberation-only hour: 6 -> 0 false confirmed tracks). Off
+by default: a target on or near the ridge (crossing, zero world Doppler) is notched too, and its skirt had kept its
+track alive; measured on the default scene as CW (benchmarks/bench_active_rows.py, 1 h; rows, false, extra; held %
+approacher/crossing-a/crossing-b/maneuvering), off -> 3 dB: seed 1 7, 1, 2; 95/75/100/91 -> 8, 1, 3; 95/79/100/65;
+seed 2 5, 0, 1; 90/76/100/85 -> 7, 1, 2; 92/74/100/82. Sources of 15 dB (s >= 30) instead of 10 dB: trial 1 6 -> 4.
 """
 
 from __future__ import annotations
@@ -120,9 +124,10 @@ class CwNormaliserSettings(Settings):
              "are not searched (not set: no notch)", unit="1", ge=0, le=20)
 
     skirt_margin_db: float | None = setting(
-        3.0, "a cell off the notch is the delay-Doppler skirt of a notched echo (its own beam; the echo's statistic "
+        None, "a cell off the notch is the delay-Doppler skirt of a notched echo (its own beam; the echo's statistic "
              "before the notch >= SKIRT_SOURCE_STAT) when its power is at most the CW ambiguity's prediction from that "
-             "echo plus this margin, and is not searched (:func:`notch_skirts`; not set: no skirt test)", unit="dB",
+             "echo plus this margin, and is not searched (:func:`notch_skirts`; not set: no skirt test, the "
+             "default: at 3 dB it costs targets near the ridge, module doc)", unit="dB",
         ge=0, le=20)
 
     early_search: Literal["off", "late", "trend"] = setting(
@@ -491,8 +496,7 @@ def notch_skirts(power: np.ndarray, stat: np.ndarray, notch: np.ndarray, delay_s
         (B, D, J) bool, False in the notch.
     """
     B, D, J = stat.shape
-    out = np.zeros((B, D, J), bool)
-    step = float(np.median(np.diff(delay_s))) if D > 1 else tau_s
+    out, step = np.zeros((B, D, J), bool), (float(np.median(np.diff(delay_s))) if D > 1 else tau_s)
     w = int(np.ceil(tau_s / step))
     lag = np.arange(-w, w + 1)
     scale = 10.0 ** (margin_db / 10.0)
