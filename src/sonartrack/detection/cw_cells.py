@@ -75,6 +75,13 @@ near endfire it holds both ends of the band. Cells within ``ridge_margin_cells``
 (c / (f_c tau) m/s each) of it are set to s = 0: a CW cannot tell an echo there from the sea's (targets that
 hold the sea's Doppler are an LFM's), and persistent clutter points, which sit on the ridge, go with it.
 Measured (as above): the detections off the targets fell from 164 to 90 (40 pings), the echoes found 56 -> 54.
+A notched point's echo still spreads past the notch through the pulse's ambiguity function (at half a pulse off in
+delay its Doppler main lobe is twice as wide): those skirt cells are not searched either (``skirt_margin_db``,
+:func:`notch_skirts`; study active-chain trial 1's reverberation-only hour: 6 -> 0 false confirmed tracks). Off
+by default: a target on or near the ridge (crossing, zero world Doppler) is notched too, and its skirt had kept its
+track alive; measured on the default scene as CW (benchmarks/bench_active_rows.py, 1 h; rows, false, extra; held %
+approacher/crossing-a/crossing-b/maneuvering), off -> 3 dB: seed 1 7, 1, 2; 95/75/100/91 -> 8, 1, 3; 95/79/100/65;
+seed 2 5, 0, 1; 90/76/100/85 -> 7, 1, 2; 92/74/100/82. Sources of 15 dB (s >= 30) instead of 10 dB: trial 1 6 -> 4.
 """
 
 from __future__ import annotations
@@ -89,7 +96,8 @@ from sonartrack.detection.cfar import CfarSettings, noise_estimate, os_mean_fact
 from sonartrack.detection.cw_law import CwEstimate, equal_tail_map, os_cdf, os_draws
 
 __all__ = ["CwEstimate", "CwNormaliserSettings", "cw_noise_estimate", "cw_ping_cells", "cw_statistic", "cw_threshold",
-           "doppler_stride", "equal_tail_map", "first_searched_delay_s", "one_sided_os", "os_cdf", "os_draws"]
+           "doppler_stride", "equal_tail_map", "first_searched_delay_s", "notch_skirts", "one_sided_os", "os_cdf",
+           "os_draws", "skirt_gain"]
 
 
 class CwNormaliserSettings(Settings):
@@ -114,6 +122,13 @@ class CwNormaliserSettings(Settings):
     ridge_margin_cells: float | None = setting(
         1.0, "cells within this many Doppler resolution cells (c / (f_c tau) m/s each) of a beam's reverberation ridge "
              "are not searched (not set: no notch)", unit="1", ge=0, le=20)
+
+    skirt_margin_db: float | None = setting(
+        None, "a cell off the notch is the delay-Doppler skirt of a notched echo (its own beam; the echo's statistic "
+             "before the notch >= SKIRT_SOURCE_STAT) when its power is at most the CW ambiguity's prediction from that "
+             "echo plus this margin, and is not searched (:func:`notch_skirts`; not set: no skirt test, the "
+             "default: at 3 dB it costs targets near the ridge, module doc)", unit="dB",
+        ge=0, le=20)
 
     early_search: Literal["off", "late", "trend"] = setting(
         "off", "the delays from blank_s to the first two-sided delay: off (not searched), late (searched with the "
@@ -401,9 +416,105 @@ def cw_ping_cells(samples: np.ndarray, fs_hz: float, waveform, array, front_end,
         margin = settings.ridge_margin_cells * front_end.sound_speed_mps / (waveform.carrier_hz * waveform.duration_s)
         notch = beam_ridge_notch(rate, cone, *motion, array, waveform.carrier_hz, front_end.sound_speed_mps,
                                  settings.ridge_beam_level_db, margin)
+        if settings.skirt_margin_db is not None:  # a notched echo's delay-Doppler skirt goes with it
+            skirt = notch_skirts(power[:, keep], stat, notch, delay[keep], doppler, waveform.duration_s,
+                                 settings.skirt_margin_db)
+            stat[skirt] = 0.0
         stat[np.broadcast_to(notch[:, None, :], stat.shape)] = 0.0
     lobes = lobe_band(waveform, array, front_end)  # the power before the notch: a notched clutter point's sidelobes
     raw = np.ascontiguousarray(power[:, keep]) if lobes is not None else None
     return PingCells(int(ping), float(time_s), cone, delay[keep], doppler, rate, stat, True,
                      np.ascontiguousarray(mu[:, keep]), lobes, raw)
+
+
+
+#: a notched cell is an echo whose skirt is sought when its statistic before the notch is at least this (10 dB over
+#: its own background: a point on the ridge, not the ridge's reverberation, whose skirt the normaliser already sees)
+SKIRT_SOURCE_STAT = 10.0
+
+
+def skirt_gain(dt_s, df_hz, tau_s: float) -> np.ndarray:
+    """Power of a rectangular CW's ambiguity function at delay offset dt and Doppler offset df, bounded by its
+    sidelobe envelope: |chi(dt, df)|^2 = (1 - |dt| / tau)^2 sinc^2(df (tau - |dt|)) (the ambiguity function of a
+    constant-frequency rectangular pulse: Levanon & Mozeson, Radar Signals, 2004, ch. 2), sinc^2(x) =
+    (sin pi x / pi x)^2 replaced by its envelope min(1, 1 / (pi x)^2) so that the nulls (which a cell grid does not
+    sample exactly) hold no gap; 0 for |dt| >= tau.
+
+    Parameters
+    ----------
+    dt_s, df_hz : array
+        Delay (s) and Doppler (Hz) offsets from the echo's peak (broadcast).
+    tau_s : float
+        Pulse length (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        Power gain (1 at the peak).
+    """
+    rest = np.clip(1.0 - np.abs(np.asarray(dt_s, float)) / tau_s, 0.0, 1.0)
+    x = np.pi * np.abs(np.asarray(df_hz, float)) * tau_s * rest
+    return rest**2 * np.minimum(1.0, 1.0 / np.maximum(x, 1e-12) ** 2)
+
+
+def notch_skirts(power: np.ndarray, stat: np.ndarray, notch: np.ndarray, delay_s: np.ndarray, doppler_hz: np.ndarray,
+                 tau_s: float, margin_db: float) -> np.ndarray:
+    """(B, D, J) bool: the cells off the ridge notch that a notched echo of their own beam explains.
+
+    A still clutter point sits at zero world Doppler, on its own beam's reverberation ridge, which the front end
+    notches; its echo's peak is then not searched, but the CW's matched filter spreads it over delay and Doppler by
+    the ambiguity function (:func:`skirt_gain`: at half a pulse off in delay the Doppler main lobe is twice as wide),
+    and the skirt's cells beyond the notch were detected (measured on study active-chain trial 1, CW 8 x 0.5 m,
+    1 kHz, a TS 30 dB point: contacts 600-1000 m off in bistatic range and 1.5-2.4 m/s off the point's range rate,
+    on ~10 of 120 pings, enough for 6 false confirmed tracks an hour; benchmarks/bench_active_family.py). A cell is a
+    skirt when some notched cell of its beam with statistic before the notch >= :data:`SKIRT_SOURCE_STAT` (an echo
+    above the ridge) within a pulse length has power P' with P <= P' |chi(dt, df)|^2 10^(margin_db / 10), any
+    notched cell above the source level, not only the echo's peak: its skirt's own notched cells then reach up to
+    two pulse lengths from the peak (measured: with the peak alone as source, the largest notched power within one
+    or half a pulse length, trial 1 kept 2 of the 6 false tracks, a mirror pair on the TS 30 dB point at ping 76;
+    with every notched cell above the level, none). The price: an echo near the ridge within two pulse lengths of a
+    stronger notched echo, no stronger than that echo's skirt, is lost on that ping.
+
+    Parameters
+    ----------
+    power : ndarray (B, D, J)
+        Matched-filter power.
+    stat : ndarray (B, D, J)
+        The normalised statistic before the notch.
+    notch : ndarray (B, J) bool
+        The notched Doppler cells of each beam.
+    delay_s, doppler_hz : ndarray (D,), (J,)
+        The cells' delays (s) and Doppler shifts (Hz).
+    tau_s : float
+        Pulse length (s).
+    margin_db : float
+        Allowed above the ambiguity's prediction (dB).
+
+    Returns
+    -------
+    numpy.ndarray
+        (B, D, J) bool, False in the notch.
+    """
+    B, D, J = stat.shape
+    out, step = np.zeros((B, D, J), bool), (float(np.median(np.diff(delay_s))) if D > 1 else tau_s)
+    w = int(np.ceil(tau_s / step))
+    lag = np.arange(-w, w + 1)
+    scale = 10.0 ** (margin_db / 10.0)
+    for b in range(B):
+        js = np.nonzero(notch[b])[0]
+        if not len(js):
+            continue
+        src = np.where(stat[b][:, js] >= SKIRT_SOURCE_STAT, power[b][:, js], 0.0)  # (D, n)
+        if not src.any():
+            continue
+        gain = skirt_gain(lag[:, None, None] * step, doppler_hz[None, None, :] - doppler_hz[js][None, :, None],
+                          tau_s)  # (L, n, J)
+        explained = np.zeros((D, J))
+        for k, s in enumerate(lag):  # explained[d] = max over lag, notched j' of P'(d - s, j') gain(s, j', j)
+            shifted = np.zeros_like(src)
+            lo, hi = max(s, 0), D + min(s, 0)
+            shifted[lo:hi] = src[lo - s:hi - s]
+            explained = np.maximum(explained, (shifted[:, :, None] * gain[k][None]).max(axis=1))
+        out[b] = (power[b] <= explained * scale) & (explained > 0) & ~notch[b][None, :]
+    return out
 
