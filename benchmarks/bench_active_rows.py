@@ -234,7 +234,7 @@ def _alias(s, c: dict):
     return endfire_alias_of(s, scene(c["kind"], c["seed"]).waveform.waveform())
 
 
-def track(c: dict, settings=None):
+def track(c: dict, settings=None, extra: dict | None = None):
     """The chain's tracker stage over the cached contacts with ``settings`` (default: ActiveSettings() on the path,
     the CW contacts' errors as cached); returns (ActiveTracks, {track: reason it ended})."""
     from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of
@@ -247,7 +247,7 @@ def track(c: dict, settings=None):
                          **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
                          **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
                          **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}),
-                         **({"endfire_alias": _alias(s, c)} if hasattr(s, "endfire_alias") else {}))
+                         **({"endfire_alias": _alias(s, c)} if hasattr(s, "endfire_alias") else {}), **(extra or {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
     con = c["contacts"]
@@ -371,11 +371,13 @@ def main() -> None:
     p.add_argument("--gate-m", type=float, default=1000.0)
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="an ActiveSettings field (tracker.NAME for the tracker's), the value read as JSON; repeatable")
+    p.add_argument("--reunite", type=int, default=None, help="ContactTracker reunite_scans (default: its own)")
     a = p.parse_args()
     for kind in a.kinds:
         for seed in a.seeds:
             c = {**run_scene(kind, seed, Path(a.cache)), "kind": kind, "seed": seed}
-            res, reasons = track(c, with_changes(c, a.set))
+            extra = {} if a.reunite is None else {"reunite_scans": a.reunite}
+            res, reasons = track(c, with_changes(c, a.set), extra)
             report(c, res, reasons, a.gate_m, f"{kind.upper()} seed {seed}")
 
 

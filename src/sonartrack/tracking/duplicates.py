@@ -145,6 +145,14 @@ class DuplicateMerger:
         active chain's default scene as CW (benchmarks/bench_active_rows.py, seeds 1 and 2, with contacts shared
         by rank, systems/active/contact_tracker.py ``claims``): the merges that joined two targets' tracks were all
         of pairs held apart before (the approacher's 16-ping track deleted as crossing-b's duplicate at ping 52).
+    reunite_scans : int
+        A told-apart pair (``keep_apart``) is merged after all when, on this many scans in a row, it passes the test
+        on the whole state, on the velocity alone (``velocity_gamma``) and both tracks' nearest contact of the scan
+        (``contacts``, set in place before each scan) is one and the same, within both gates: two tracks fed by the same
+        echoes at the same velocity follow one target; two crossing targets share contacts only for the scan or
+        two of their crossing, at different velocities. 0: never (told apart stays apart).
+    velocity_gamma : float
+        Gate of the velocity-only test and of a contact in a track's gate (chi-square, 2 degrees of freedom).
     """
 
     inner: object
@@ -154,6 +162,10 @@ class DuplicateMerger:
     held_existence: float = 0.9
     history_scans: int = 0
     keep_apart: bool = False
+    reunite_scans: int = 0
+    velocity_gamma: float = 9.21
+    contacts: list = field(default_factory=list)  # this scan's [xy (m, 2) m, R (m, 2, 2) m^2], for ``reunite_scans``
+    together: dict = field(default_factory=dict)  # told-apart pair -> consecutive scans reunited (class doc)
     merged: dict = field(default_factory=dict)
     apart: set = field(default_factory=set)  # (lower id, higher id) of confirmed pairs told apart while both held
     streak: dict = field(default_factory=dict)  # (lower id, higher id) -> consecutive scans passing the test
@@ -183,14 +195,38 @@ class DuplicateMerger:
         pairs = {key[k]: self.streak.get(key[k], 0) + 1 for k in both}
         self.streak.clear()
         self.streak.update(pairs)
+        together = self._reunited(snap, [(into[k], k, key[k]) for k in both if key[k] in self.apart])
         for k in both:
-            if key[k] in self.apart:
+            if key[k] in self.apart and together.get(key[k], 0) < max(self.reunite_scans, 1):
                 into[k] = -1  # two targets told apart before (keep_apart): not a duplicate
             elif pairs[key[k]] < self.confirmed_scans:
                 into[k] = -1  # not yet: the pair must keep passing the test
             elif self._same_target(int(ids[into[k]]), int(ids[k]), bool(coasting[k]), scan):
                 self.merged[int(ids[k])] = int(ids[into[k]])
         return self._remember(T.select(into < 0), scan)
+
+    def _reunited(self, snap, candidates) -> dict:
+        """Update and return ``together``: the told-apart pairs (kept index, other index, key) that pass the velocity
+        test and share their nearest contact at this scan (``reunite_scans``), with their streaks."""
+        now = {}
+        if self.reunite_scans > 0 and self.contacts and len(self.contacts[0]):
+            z, R = (np.asarray(a, float) for a in self.contacts)
+            for i, j, key in candidates:
+                dv = snap.x[i, 2:] - snap.x[j, 2:]
+                near = [self._nearest(z, R, snap.x[t, :2], snap.P[t, :2, :2]) for t in (i, j)]
+                if dv @ np.linalg.solve(snap.P[i, 2:, 2:] + snap.P[j, 2:, 2:], dv) < self.velocity_gamma and \
+                        near[0] >= 0 and near[0] == near[1]:
+                    now[key] = self.together.get(key, 0) + 1
+        self.together.clear()
+        self.together.update(now)
+        return now
+
+    def _nearest(self, z, R, xy, P_xy) -> int:
+        """Index of the contact nearest a track's position in its gate (Mahalanobis, ``velocity_gamma``); -1: none."""
+        nu = z - xy
+        d2 = np.einsum("mi,mi->m", nu, np.linalg.solve(R + P_xy, nu[..., None])[..., 0])
+        k = int(np.argmin(d2))
+        return k if d2[k] < self.velocity_gamma else -1
 
     def _coasting(self, T: TrackArrays) -> np.ndarray:
         """Which tracks coast (existence below ``lost_existence`` at this scan or the last; class doc)."""

@@ -25,6 +25,10 @@ from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTra
 from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
+# scans in a row a told-apart pair must pass the velocity test and share its nearest contact to be merged after all
+# (tracking/duplicates.py DuplicateMerger ``reunite_scans``; the proposed ActiveSettings ``merge_reunite_scans``)
+REUNITE_SCANS = 3
+
 
 @dataclass(frozen=True, slots=True)
 class ActiveTracks:
@@ -140,7 +144,10 @@ class ContactTracker:
         (IPDA).
     keep_apart : bool
         Two confirmed tracks once told apart by the track-to-track test while both held their targets are never
-        merged as duplicates (tracking/duplicates.py ``keep_apart``).
+        merged as duplicates (tracking/duplicates.py ``keep_apart``), unless reunited: ``reunite_scans``.
+    reunite_scans : int
+        Scans in a row on which a told-apart pair passes the test on position and velocity and shares its nearest
+        contact before it is merged after all (tracking/duplicates.py ``reunite_scans``; 0: never).
     endfire_alias : EndfireAlias or None
         The line array's grating-lobe alias of a held echo withheld (:meth:`_not_images`); None: not.
     """
@@ -149,7 +156,8 @@ class ContactTracker:
                  rate_sd_mps: float, side_turn_deg: float | None = None, merge_probability: float | None = None,
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
                  clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
-                 claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None):
+                 claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None,
+                 reunite_scans: int = REUNITE_SCANS):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -191,7 +199,8 @@ class ContactTracker:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4),
                                                    settings.merge_confirmed_scans,
                                                    history_scans=settings.merge_history_scans,
-                                                   keep_apart=keep_apart)
+                                                   keep_apart=keep_apart, reunite_scans=reunite_scans,
+                                                   velocity_gamma=gate_threshold(merge_probability, 2))
         self.merger = self.tracker.deleter if merge_probability is not None else None
         self.rejoin_s, self.joins = rejoin_s, {}
         self.rejoin_gamma = gate_threshold(merge_probability or 0.99, 4)
@@ -340,6 +349,8 @@ class ContactTracker:
             else:
                 self.tracker.associator.set_tracks(T.existence, 2.0 * T.confirmed + T.existence, T.mu,
                                                    np.ones(len(T), bool))
+        if self.merger is not None:  # the scan's contacts, for a told-apart pair's reunion (duplicates.py)
+            self.merger.contacts[:] = [contacts.xy[keep], contacts.R[keep]]
         snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
         self._last_t = float(t_s)
         c = snap.confirmed
