@@ -118,6 +118,20 @@ CW seed 2's false row is the approacher's mirror during the ownship's turn (head
 approacher's own track 43 was 0.9-1.7 km off at pings 58-64, its twin 44 (a ghost, 54-65) and a second mirror track
 50 (confirmed at 60, no twin: sides.py pairs each track with one twin, and 43's is 44) coasted away (2-2.5 km from
 anything by ping 66) and is listed as a row of its own.
+
+Measured (2026-12-07 session 11, h11-dup2; the lead's caches /tmp/lead11/rows11 plus CW seed 5 built here (~3 min),
+cwfrag2's cwb 3-4 caches; ~1-2 min a run): a told-apart pair merged after all when it passes the test on the whole
+state and on the velocity and shares its nearest contact on k scans in a row (tracking/duplicates.py
+``reunite_scans``, ``--reunite k``; the lead's user check, CW seed 5: tracks 19 and 40 both alive to the end on one
+target). Rows for the detectable targets, rows holding 2+ targets; held % per target:
+    k   CW 1          CW 2          CW 5                    cwb 3           cwb 4
+    0   7, 0          5, 0          6, 0; 100/67/100/88     9, 0            8, 2
+    3   6, 0          4, 0          6, 1 (appr.+cr-b)       8, 2            7, 2
+    5   6, 0          4, 0          5, 0; 100/75/100/88     10, 1           7, 2
+    8   6, 0          4, 0          5, 0 (19+40 at ping     7, 0            8, 2 (a side twin's, not a
+                                    107); 100/75/100/88                     reunion: all 3 same-target)
+Held % at k = 8 equal to k = 0 or higher on every target (CW 1 95/75/100/91, CW 2 90/76/100/85); LFM 1-2 unchanged
+(4 clean rows each). The default 8 (contact_tracker.py REUNITE_SCANS).
 """
 
 from __future__ import annotations

@@ -43,7 +43,8 @@ def test_a_told_apart_pair_on_one_contact_and_velocity_is_merged_after_k_scans()
 def test_a_crossing_pair_with_different_velocities_stays_apart():
     # equal positions, velocities 2.3 m/s apart against var 0.25 + 0.25: d^2 = 2.3^2 / 0.5 = 10.6, inside the whole
     # state's gate (13.28, so the test alone would merge them) but outside the velocity gate (9.21)
-    assert 2.3**2 / 0.5 < GAMMA4 and 2.3**2 / 0.5 > GAMMA2
+    d2 = 2.3**2 / 0.5
+    assert GAMMA2 < d2 < GAMMA4
     m = _merger(1)
     for k in range(5):
         assert _scan(m, [300 + 90 * k, 0, 3, 0], [300 + 90 * k, 0, 3, 2.3], [[300 + 90 * k, 0]]) == [1, 2]
@@ -54,7 +55,8 @@ def test_two_tracks_on_their_own_contacts_stay_apart():
     # 150 m apart (sd 30 each: position d^2 = 150^2 / 1800 = 12.5 < 13.28, the pair passes the test), each on its
     # own contact: contact 0 is 0 m from track 1 and 150 m from track 2 (d^2 = 150^2 / (900 + 1600) = 9.0 < 9.21,
     # in its gate) but track 2's nearest is contact 1
-    assert 150.0**2 / 1800 < GAMMA4
+    d2 = 150.0**2 / 1800
+    assert d2 < GAMMA4
     m = _merger(1)
     for k in range(4):
         x0 = 300 + 90 * k

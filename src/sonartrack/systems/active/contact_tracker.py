@@ -26,8 +26,9 @@ from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
 # scans in a row a told-apart pair must pass the velocity test and share its nearest contact to be merged after all
-# (tracking/duplicates.py DuplicateMerger ``reunite_scans``; the proposed ActiveSettings ``merge_reunite_scans``)
-REUNITE_SCANS = 3
+# (tracking/duplicates.py DuplicateMerger ``reunite_scans``, measured there: 3 and 5 joined two targets on
+# benchmarks/bench_active_rows.py, 8 none; the proposed ActiveSettings ``merge_reunite_scans``)
+REUNITE_SCANS = 8
 
 
 @dataclass(frozen=True, slots=True)
