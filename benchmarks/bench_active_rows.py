@@ -131,7 +131,11 @@ target). Rows for the detectable targets, rows holding 2+ targets; held % per ta
     8   6, 0          4, 0          5, 0 (19+40 at ping     7, 0            8, 2 (a side twin's, not a
                                     107); 100/75/100/88                     reunion: all 3 same-target)
 Held % at k = 8 equal to k = 0 or higher on every target (CW 1 95/75/100/91, CW 2 90/76/100/85); LFM 1-2 unchanged
-(4 clean rows each). The default 8 (contact_tracker.py REUNITE_SCANS).
+(4 clean rows each). The default 8 (contact_tracker.py REUNITE_SCANS). The lead's user check (``sonartrack active`` on
+/tmp/lead11/user/sc_cw, ~25 s): 6 -> 5 rows (track 40 merged into 19 at 3210 s); left: target 1 (track 23) still
+decided starboard, but at 2370 s with ln LR 7.4 (mirror 24) instead of 1950 s with 226.5 (mirror 32): track 32, ~900 m
+off 23 until 2700 s, jumped onto 23's contacts at 2730 s and was reunited with it at ping 94, so its side evidence is
+no longer the row's. Tried and left off: no reunion of pairs sides.py counted as mirrors (the user check unchanged).
 """
 
 from __future__ import annotations
