@@ -131,7 +131,7 @@ target). Rows for the detectable targets, rows holding 2+ targets; held % per ta
     8   6, 0          4, 0          5, 0 (19+40 at ping     7, 0            8, 2 (a side twin's, not a
                                     107); 100/75/100/88                     reunion: all 3 same-target)
 Held % at k = 8 equal to k = 0 or higher on every target (CW 1 95/75/100/91, CW 2 90/76/100/85); LFM 1-2 unchanged
-(4 clean rows each). The default 8 (contact_tracker.py REUNITE_SCANS). The lead's user check (``sonartrack active`` on
+(4 clean rows each). Default 8 (ActiveSettings merge_reunite_scans). The lead's user check (``sonartrack active`` on
 /tmp/lead11/user/sc_cw, ~25 s): 6 -> 5 rows (track 40 merged into 19 at 3210 s); left: target 1 (track 23) still
 decided starboard, but at 2370 s with ln LR 7.4 (mirror 24) instead of 1950 s with 226.5 (mirror 32): track 32, ~900 m
 off 23 until 2700 s, jumped onto 23's contacts at 2730 s and was reunited with it at ping 94, so its side evidence is
@@ -265,6 +265,7 @@ def track(c: dict, settings=None, extra: dict | None = None):
                          **({"rejoin_s": s.rejoin_s} if hasattr(s, "rejoin_s") else {}),  # (an older chain: none)
                          **({"claims": s.contact_claims} if hasattr(s, "contact_claims") else {}),
                          **({"keep_apart": s.merge_keep_apart} if hasattr(s, "merge_keep_apart") else {}),
+                         **({"reunite_scans": s.merge_reunite_scans} if hasattr(s, "merge_reunite_scans") else {}),
                          **({"endfire_alias": _alias(s, c)} if hasattr(s, "endfire_alias") else {}), **(extra or {}))
     log: dict = {}
     _spy_deleters(trk.tracker, log)
@@ -389,7 +390,8 @@ def main() -> None:
     p.add_argument("--gate-m", type=float, default=1000.0)
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="an ActiveSettings field (tracker.NAME for the tracker's), the value read as JSON; repeatable")
-    p.add_argument("--reunite", type=int, default=None, help="ContactTracker reunite_scans (default: its own)")
+    p.add_argument("--reunite", type=int, default=None,
+                   help="ContactTracker reunite_scans (default: the settings' merge_reunite_scans)")
     a = p.parse_args()
     for kind in a.kinds:
         for seed in a.seeds:

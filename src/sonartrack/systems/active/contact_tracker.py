@@ -25,11 +25,6 @@ from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTra
 from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
-# scans in a row a told-apart pair must pass the velocity test and share its nearest contact to be merged after all
-# (tracking/duplicates.py DuplicateMerger ``reunite_scans``, measured there: 3 and 5 joined two targets on
-# benchmarks/bench_active_rows.py, 8 none; the proposed ActiveSettings ``merge_reunite_scans``)
-REUNITE_SCANS = 8
-
 
 @dataclass(frozen=True, slots=True)
 class ActiveTracks:
@@ -158,7 +153,7 @@ class ContactTracker:
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
                  clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
                  claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None,
-                 reunite_scans: int = REUNITE_SCANS):
+                 reunite_scans: int = 0):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -489,7 +484,7 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
                          clutter_map=clutter_map_of(settings),
                          scan_interval_s=float(np.median(np.diff(t))) if len(t) > 1 else None,
                          rejoin_s=settings.rejoin_s, claims=settings.contact_claims,
-                         keep_apart=settings.merge_keep_apart)
+                         keep_apart=settings.merge_keep_apart, reunite_scans=settings.merge_reunite_scans)
     bounds = np.searchsorted(contacts.ping, np.append(numbers, numbers[-1] + 1 if len(numbers) else 0))
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)

@@ -271,7 +271,7 @@ class _Chain:
                                       turns=s.turn_modes(), clutter_area_m2=cw_clutter_area(cells, s.sound_speed_mps),
                                       clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval,
                                       rejoin_s=s.rejoin_s, claims=s.contact_claims,
-                                      keep_apart=s.merge_keep_apart,
+                                      keep_apart=s.merge_keep_apart, reunite_scans=s.merge_reunite_scans,
                                       endfire_alias=endfire_alias_of(s, waveform))
 
     def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:

@@ -160,6 +160,13 @@ class ActiveSettings(Settings):
               "91/90 -> 89/89; LFM 4 clean rows each either way; on bench_cw_held.py's scene b (seeds 3, 4) 2/1 "
               "-> 0/1 rows holding two or more, 5/6 -> 9/9 rows for 5 targets: extra rows for fewer joined targets "
               "(False: P4's merger)", unit="1")
+    merge_reunite_scans: int = setting(
+        8, "a told-apart pair (merge_keep_apart) merged after all after this many scans in a row passing the "
+           "track-to-track test on the whole state AND on the velocity and sharing its nearest contact "
+           "(tracking/duplicates.py reunite_scans; 0: never). Measured (benchmarks/bench_active_rows.py, CW seeds "
+           "1/2/5 and bench_cw_held's scene b seeds 3/4): rows 7/5/6/9/8 -> 6/4/5/7/8, rows holding two targets "
+           "0/0/0/0/2 -> 0/0/0/0/2 at 8; 3 and 5 scans joined two targets on seed 5 or scene b", unit="1", ge=0,
+        le=100)
     endfire_alias: bool = setting(
         True, "a contact in the line array's grating-lobe alias of a contact a confirmed track holds (u = cos cone "
               "shifted by wavelength / spacing, within a main lobe; at half-wavelength spacing one endfire hears the "

@@ -77,7 +77,7 @@ def read_checkpoint(cls, path):
 
 #: the active chain's checkpoint format and version (systems/live/active.py)
 ACTIVE_CHECKPOINT_FORMAT = "sonartrack-live-active"
-ACTIVE_CHECKPOINT_VERSION = 4  # 4: the endfire alias test; 3: contacts shared by rank, told-apart pairs, join links
+ACTIVE_CHECKPOINT_VERSION = 5  # 5: the merger reunites told-apart pairs; 4: endfire alias test; 3: contact claims
 #: LiveActive's attributes a checkpoint keeps as they are (the chain: its tracker, MFTD stack, clutter map, sides,
 #: B-scan rows and the per-ping rows of its history)
 _ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets", "newest")
