@@ -10,23 +10,49 @@ The same declaration serves every face: studies nest it in their config, TOML fi
 table (``[tracker]``), command-line options take their help text from it (``cli/_settings.py``), and
 ``--print-config`` prints the resolved values with their units and docs (:func:`to_commented_toml`).
 Settings are frozen pydantic models with unknown keys refused, so a misspelt TOML key is an error, not
-a silently ignored value.
+a silently ignored value. TOML has no null: a field that may be None ("off") while its default is a value is
+switched off in a file by the string ``"off"`` (:data:`OFF`), and ``--print-config`` writes it so.
 """
 
 from __future__ import annotations
 
 import math
 import sys
+import types
+import typing
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 from pydantic.fields import FieldInfo
 
+#: the TOML spelling of None for a field that may be switched off (TOML has no null)
+OFF = "off"
+
+
+def may_be_off(annotation) -> bool:
+    """Whether a field of this annotation takes None and not also the string "off" as a value of its own."""
+    args = typing.get_args(annotation)
+    if typing.get_origin(annotation) not in (typing.Union, types.UnionType) or type(None) not in args:
+        return False
+    literals = [typing.get_args(a) for a in args if typing.get_origin(a) is typing.Literal]
+    return str not in args and not any(OFF in values for values in literals)
+
 
 class Settings(BaseModel):
-    """Base of every settings group: frozen, unknown keys refused, NaN refused."""
+    """Base of every settings group: frozen, unknown keys refused, NaN refused; ``"off"`` means None where None
+    is allowed."""
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _off_means_none(cls, data):
+        # TOML cannot write None, so a file says "off" (any case) for a field that can be switched off
+        if not isinstance(data, dict):
+            return data
+        fields = cls.model_fields
+        return {k: None if (isinstance(v, str) and v.strip().lower() == OFF and k in fields
+                            and may_be_off(fields[k].annotation)) else v for k, v in data.items()}
 
 
 def setting(default: Any = ..., doc: str = "", *, unit: str = "", default_factory=None, **constraints) -> Any:
@@ -261,4 +287,19 @@ def to_commented_toml(settings: BaseModel) -> str:
     str
         TOML text.
     """
-    return render_toml(settings.model_dump(mode="json"), _field_comments(settings))
+    return render_toml(_dump_with_off(settings), _field_comments(settings))
+
+
+def _dump_with_off(settings: BaseModel) -> dict:
+    """``model_dump(mode="json")`` with a None written ``"off"`` where the field's default is not None (so the
+    TOML reads back to None, not to the default); a None whose default is None stays unset."""
+    cls, out = type(settings), settings.model_dump(mode="json")
+    for name, field in cls.model_fields.items():
+        value = getattr(settings, name)
+        if isinstance(value, BaseModel):
+            out[name] = _dump_with_off(value)
+        elif isinstance(value, list | tuple) and value and all(isinstance(v, BaseModel) for v in value):
+            out[name] = [_dump_with_off(v) for v in value]
+        elif value is None and field.get_default(call_default_factory=True) is not None:
+            out[name] = OFF
+    return out

@@ -11,7 +11,7 @@ import tomllib
 from pathlib import Path
 
 from sonartrack.core.errors import InputError
-from sonartrack.core.settings import render_toml
+from sonartrack.core.settings import may_be_off, render_toml
 
 
 def dumps(data: dict) -> str:
@@ -98,7 +98,9 @@ def validate(model_cls, data: dict, source: str = "config", given: frozenset[str
             raise InputError(f"{origin}: {range_message(model_cls, loc, err)}") from None
         if not loc:  # a check across fields (a model validator): its own message says which keys and the fix
             raise InputError(f"{origin}: {str(err.get('msg')).removeprefix('Value error, ')}") from None
-        raise InputError(f"{origin}: '{where}': {str(err.get('msg')).removeprefix('Value error, ')}") from None
+        info = _field_at(model_cls, loc)
+        off = ' (or "off" to switch it off)' if info is not None and may_be_off(info.annotation) else ""
+        raise InputError(f"{origin}: '{where}': {str(err.get('msg')).removeprefix('Value error, ')}{off}") from None
 
 
 #: pydantic's error types of a numeric bound
