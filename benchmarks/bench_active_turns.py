@@ -185,6 +185,51 @@ def summary(all_m: list[dict]) -> None:
         print(f"  {ph}: mean NEES {nees:.2f} (2 wanted), RMSE/sd {ratio:.2f} over {int(w.sum())} held pings")
 
 
+def use_amplitude() -> None:
+    """The chain's ContactTracker (as bench_active_rows.py ``track`` imports it) made amplitude-aided when its
+    tracker settings' ``amplitude_aided`` is set (tracking/amplitude_parts.py ``with_amplitude``), each scan given its
+    kept contacts' statistic (this process only). It is the wiring of the report's contact_tracker.py diff, done from
+    outside: the three verdicts of ``step`` are recorded and the tracker's ``step`` given ``statistic[keep]``."""
+    import sonartrack.systems.active.contact_tracker as ct
+    from sonartrack.tracking.amplitude_parts import with_amplitude
+
+    base = getattr(ct.ContactTracker, "_amplitude_base", ct.ContactTracker)
+
+    class AmplitudeContactTracker(base):
+        _amplitude_base = base
+
+        def __init__(self, settings, *args, **kwargs):
+            super().__init__(settings, *args, **kwargs)
+            with_amplitude(self.tracker, settings)
+            inner, self._verdicts = self.tracker.step, {}
+
+            def step(t_s, z, R=None, amplitude=None, array_turn_deg=0.0):
+                if "amplitude" in self.tracker.measurements.scan_needs:
+                    v = self._verdicts
+                    amplitude = v["contacts"].statistic[v["_gates"] & v["_not_clutter"] & v["_not_images"]]
+                return inner(t_s, z, R, amplitude, array_turn_deg)
+
+            self.tracker.step = step
+
+        def step(self, t_s, contacts):
+            self._verdicts = {"contacts": contacts}
+            return super().step(t_s, contacts)
+
+        def _gates(self, t_s, contacts):
+            self._verdicts["_gates"] = out = super()._gates(t_s, contacts)
+            return out
+
+        def _not_clutter(self, t_s, contacts):
+            self._verdicts["_not_clutter"] = out = super()._not_clutter(t_s, contacts)
+            return out
+
+        def _not_images(self, t_s, contacts):
+            self._verdicts["_not_images"] = out = super()._not_images(t_s, contacts)
+            return out
+
+    ct.ContactTracker = AmplitudeContactTracker
+
+
 def with_turn_deg(turn_deg) -> None:
     """ActiveSettings.turn_modes with TurnModes.turn_deg = ``turn_deg`` (this process only)."""
     from sonartrack.systems.active.settings import ActiveSettings
@@ -214,6 +259,7 @@ def main() -> None:
     p.add_argument("--lfm-area", action="store_true", help="the LFM's clutter density from its contacts over the "
                                                            "listening window's area, as the CW's (contact_tracker.py)")
     a = p.parse_args()
+    use_amplitude()  # inert unless tracker.amplitude_aided is set (--set tracker.amplitude_aided=true)
     if a.turn_deg is not None:
         with_turn_deg(None if a.turn_deg == "none" else float(a.turn_deg))
     all_m = []
@@ -225,7 +271,7 @@ def main() -> None:
                     where = Path(a.cache) / f"{kind}_{turn:g}_{rate:g}_{seed}"
                     if a.cached_only and not (where / f"{kind}_{seed}.pkl").exists():
                         continue
-                    c = contacts_of(sc, where)
+                    c = {**contacts_of(sc, where), "kind": kind, "seed": seed}  # (kind, seed: its endfire alias)
                     if a.simulate_only:
                         continue
                     if a.lfm_area and c["kwargs"].get("clutter_area_m2") is None:
