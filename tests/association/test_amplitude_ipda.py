@@ -40,7 +40,8 @@ def test_densities_against_scipy():
 def test_lomax_is_the_exponential_mixed_over_the_inverse_gamma_posterior():
     a, b = 3.5, 20.0
     for y in (0.5, 5.0, 30.0):
-        mixed, _ = integrate.quad(lambda m, y=y: stats.expon.pdf(y, scale=m) * stats.invgamma.pdf(m, a, scale=b), 0, np.inf)
+        mixed, _ = integrate.quad(lambda m, y=y: stats.expon.pdf(y, scale=m) * stats.invgamma.pdf(m, a, scale=b), 0,
+                                  np.inf)
         assert np.exp(lomax_log_pdf(y, a, b)) == pytest.approx(mixed, rel=1e-6)
 
 

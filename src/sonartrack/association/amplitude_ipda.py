@@ -20,8 +20,8 @@ single-ping one), so here (:class:`AmplitudeModel`):
   weighted moments (Hosking & Wallis 1987, Technometrics 29(3), sec. 3) to the amplitudes of the last
   ``clutter_scans`` scans' contacts, with ``clutter_prior_n`` pseudo-contacts of an exponential law of mean excess
   ``clutter_prior_mean``; xi is clipped to [0, 0.45] (never lighter than exponential; a finite variance).
-  DEVIATION: every contact of a scan enters the sample, targets' too (the measurement part does not know which are confirmed tracks'):
-  the fitted law is then the mixture (1 - eps) p0 + eps p1, heavier than the clutter's, so the ratio is smaller
+  DEVIATION: every contact of a scan enters the sample, targets' too (the measurement part does not know which
+  are confirmed tracks'): the fitted law is then the mixture (1 - eps) p0 + eps p1, heavier than the clutter's, so the ratio is smaller
   than the true one (capped near 1 / eps): conservative for the false-track rate (Ville's bound on the existence
   odds needs E_clutter[r] <= 1, tracking/existence.py).
 * target: the track's mean excess m1 is unknown; with an inverse-gamma prior IG(alpha0, beta0) on it and the
