@@ -21,9 +21,9 @@ single-ping one), so here (:class:`AmplitudeModel`):
   ``clutter_scans`` scans' contacts, with ``clutter_prior_n`` pseudo-contacts of an exponential law of mean excess
   ``clutter_prior_mean``; xi is clipped to [0, 0.45] (never lighter than exponential; a finite variance).
   DEVIATION: every contact of a scan enters the sample, targets' too (the measurement part does not know which
-  are confirmed tracks'): the fitted law is then the mixture (1 - eps) p0 + eps p1, heavier than the clutter's, so the ratio is smaller
-  than the true one (capped near 1 / eps): conservative for the false-track rate (Ville's bound on the existence
-  odds needs E_clutter[r] <= 1, tracking/existence.py).
+  are confirmed tracks'): the fitted law is then the mixture (1 - eps) p0 + eps p1 and the ratio r / (1 - eps +
+  eps r), a concave function of r, whose mean on clutter is <= f(E r) = f(1) = 1 (Jensen): conservative for the
+  false-track rate (Ville's bound on the existence odds needs E_clutter[r] <= 1, tracking/existence.py).
 * target: the track's mean excess m1 is unknown; with an inverse-gamma prior IG(alpha0, beta0) on it and the
   track's amplitudes (weighted by their association probabilities, forgotten by ``target_memory`` per scan) the
   predictive law of the next excess is Lomax: p(y) = alpha beta^alpha / (beta + y)^(alpha + 1), alpha =
