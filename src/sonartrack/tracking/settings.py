@@ -81,8 +81,11 @@ class PositionTrackerSettings(Settings):
         0.9, "factor on a track's own amplitude weights per scan (its echo level drifts with range and aspect)",
         unit="1", gt=0, le=1)
     amplitude_target_prior_ratio: float = setting(
-        2.0, "a new track's prior mean amplitude excess as a multiple of the clutter's", unit="1", ge=1)
-    amplitude_target_prior_n: float = setting(2.0, "weight of that prior (inverse-gamma alpha0 - 1) in contacts",
+        1.0, "a new track's prior mean amplitude excess as a multiple of the clutter's: 1, a track is as strong as "
+             "clutter until its echoes say otherwise (benchmarks/bench_active_turns.py, default scene rows: at 2 with "
+             "weight 2 young tracks beside strong targets confirmed sooner, LFM rows 4/4 -> 6/5, CW seed 2 4 -> 6; at "
+             "1 with weight 5: 5/5 and CW 6/4 as without amplitude, acquisition the same)", unit="1", ge=1)
+    amplitude_target_prior_n: float = setting(5.0, "weight of that prior (inverse-gamma alpha0 - 1) in contacts",
                                               unit="1", gt=0)
     amplitude_max_ratio: float = setting(30.0, "cap on a contact's amplitude likelihood ratio", unit="1", gt=1)
     amplitude_start: bool = setting(
