@@ -64,8 +64,9 @@ def retrack(c: dict, changes: list[str]):
     for item in changes:
         name, value = item.split("=", 1)
         settings = settings.model_copy(update={name: json.loads(value)})
-    trk = ct.ContactTracker(settings, *c["args"][1:], **c["kwargs"])
     res = c["result"]
+    kwargs = {**c["kwargs"], "clutter_map": ct.clutter_map_of(res.settings)}  # a fresh map: the cached one has run
+    trk = ct.ContactTracker(settings, *c["args"][1:], **kwargs)
     con = res.contacts
     for t in res.ping_time_s:
         trk.step(float(t), con.rows(np.nonzero(np.isclose(con.time_s, t))[0]))
