@@ -9,6 +9,16 @@ confirmed tracks are all false (no target in the twin) and are classified as ben
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_active_amplitude.py --trials 14 15 6 [--minutes 60]
 [--variant "amplitude_aided=true" --variant "amplitude_aided=true amplitude_start=true"]``. Measures, not tests.
+The amplitude fields of the cached tracker settings are dropped, so the defaults on the path apply.
+
+Measured (2026-12-07 session 12, h12-amp, main at e4c2ec6; chain 524 / 249 / 222 s per 1 h twin at load ~10, then
+~8 s a re-track; false confirmed tracks in 1 h, by place as bench_active_family.py):
+    trial 14 (LFM, K, 6 points)         without 4 (early 4)   amplitude 2 (early 2)
+    trial 15 (CW, K, 14 points)         without 9 (points 4, mirrors 4, lobe 1)   amplitude 9 (the same)
+    trial 6 (LFM, Rayleigh, 6 points)   without 0             amplitude 0
+With the ratio capped at 30 instead of 5: 3/9/0 (trial 14: a track on a TS 18 dB still point confirmed before the
+clutter map's verdict); with the first contact's ratio on the initial existence (``amplitude_start``): 4/9/0 (a
+point and its mirror); with the target's prior mean excess 2x the clutter's (weight 2) and cap 30: trial 14 5.
 """
 
 from __future__ import annotations
@@ -60,7 +70,8 @@ def retrack(c: dict, changes: list[str]):
 
     import sonartrack.systems.active.contact_tracker as ct
 
-    settings = c["args"][0]
+    cached = c["args"][0]  # the chain's tracker settings; the amplitude fields the defaults on the path
+    settings = type(cached)(**{k: v for k, v in cached.model_dump().items() if not k.startswith("amplitude_")})
     for item in changes:
         name, value = item.split("=", 1)
         settings = settings.model_copy(update={name: json.loads(value)})

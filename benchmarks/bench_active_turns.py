@@ -59,8 +59,8 @@ chain at load ~10, ~10 s each to re-track; the target's echo SNR 14-23 dB):
 
 Measured (2026-12-07 session 12, h12-amp, main's code at e4c2ec6 plus amplitude-aided IPDA, ``--set
 tracker.amplitude_aided=true``: tracking/amplitude_parts.py, wired here by :func:`use_amplitude`; 36 cached scenes,
-~1-2 min a run at load ~10): acquisition LFM seed 1 18 / never / never (60 deg at 0.3 / 0.6 / 1 deg/s) -> 12 pings in
-all 9 scenes; LFM seed 2 32-41 or never (4 of 9) -> 32-38, never in 2 of 9; CW seed 1 20-25 and seed 2 5 unchanged
+~1-2 min a run at load ~10): acquisition LFM seed 1 18 / never / never (60 deg at 0.3 / 0.6 / 1 deg/s) -> 13 pings in
+all 9 scenes (12 with the ratio capped at 30 instead of 5); LFM seed 2 32-41 or never (4 of 9) -> 32-38, never in 2 of 9; CW seed 1 20-25 and seed 2 5 unchanged
 (CW seed 1's target gives a contact on 3 of its first 20 detectable pings: the detector's part); within 5 pings 9 of
 36 either way; false confirmed tracks 39 -> 39 over the 36 scenes; one segment 18 -> 25 scenes, lost in turns 230 ->
 177 of 382 pings (24 -> 33 of 176 -> 238 after the first hold). Why not 5 pings: the amplitude's information is

@@ -88,10 +88,9 @@ class PositionTrackerSettings(Settings):
     amplitude_target_prior_n: float = setting(5.0, "weight of that prior (inverse-gamma alpha0 - 1) in contacts",
                                               unit="1", gt=0)
     amplitude_max_ratio: float = setting(
-        5.0, "cap on a contact's amplitude likelihood ratio (benchmarks/bench_active_amplitude.py, the study's trial 14"
-             " twin, 1 h: at 30 still points' strong echoes confirmed 2 tracks on TS 18-20 dB points and 1 on a mirror "
-             "before the clutter map's verdict, 5 false in all against 4 without amplitude; at 5: 1 and 1, 4 in all)",
-        unit="1", gt=1)
+        5.0, "cap on a contact's amplitude likelihood ratio (benchmarks/bench_active_amplitude.py, the study's twins of "
+             "trials 14, 15, 6, 1 h each: false confirmed 4/9/0 without amplitude, 2/9/0 at 5, 3/9/0 at 30, where a "
+             "still point's strong echoes confirmed a track before the clutter map's verdict)", unit="1", gt=1)
     amplitude_start: bool = setting(
         False, "a new track's initial existence odds times its first contact's amplitude ratio under the prior target "
                "law (tracking/initiators.py AmplitudeOnePointInitiator)", unit="")
