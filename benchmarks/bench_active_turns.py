@@ -60,19 +60,23 @@ chain at load ~10, ~10 s each to re-track; the target's echo SNR 14-23 dB):
 Measured (2026-12-07 session 12, h12-amp, main's code at e4c2ec6 plus amplitude-aided IPDA, ``--set
 tracker.amplitude_aided=true``: tracking/amplitude_parts.py, wired here by :func:`use_amplitude`; 36 cached scenes,
 ~1-2 min a run at load ~10): acquisition LFM seed 1 18 / never / never (60 deg at 0.3 / 0.6 / 1 deg/s) -> 13 pings in
-all 9 scenes (12 with the ratio capped at 30 instead of 5); LFM seed 2 32-41 or never (4 of 9) -> 32-38, never in 2 of 9; CW seed 1 20-25 and seed 2 5 unchanged
-(CW seed 1's target gives a contact on 3 of its first 20 detectable pings: the detector's part); within 5 pings 9 of
-36 either way; false confirmed tracks 39 -> 39 over the 36 scenes; one segment 18 -> 25 scenes, lost in turns 230 ->
-177 of 382 pings (24 -> 33 of 176 -> 238 after the first hold). Why not 5 pings: the amplitude's information is
-bounded by the KL divergence of the target's amplitude law from the clutter's: on these scenes' contacts (MFTD's
-statistic over its lowest value) the target's mean excess is 2.3-2.4 times the clutter's on LFM (27-30 against
-12-13), 1.8 and 4.6 on CW, so at most log(1/2.4) + 2.4 - 1 = 0.5 nats a hit on LFM, against the ~6.9 nats (odds
-1/19 -> ~50, threshold 0.98) needed in 5 pings at Pd 0.6 where a miss costs 1.2; the default scene's strong targets
-(6.8-8.4 times, 3.9-5.3 nats a hit) are confirmed sooner (maneuvering at ping 7 -> 5, crossing-b 13 -> 9-12).
-Tried: the target's prior mean excess 2x the clutter's with weight 2 (default scene LFM rows 4/4 -> 6/5, CW seed 2 4
--> 6: young tracks beside strong targets confirmed sooner), the cap on the ratio 5/10/30/100 (no change), the track's
-amplitude memory 0.95 (none), the first contact's ratio on the initial existence (``amplitude_start``: CW seed 1
-20 -> 17 pings at 1 deg/s, LFM unchanged, false 39 -> 41; with the 2x prior LFM seed 1 12 -> 11, false 42).
+all 9 scenes (12 with the ratio capped at 30 instead of 5); LFM seed 2 32-41 or never (4 of 9) -> 32-38, never in 2 of
+9; CW seed 1 20-25 and seed 2 5 unchanged (CW seed 1's target gives a contact on 3 of its first 20 detectable pings:
+the detector's part); within 5 pings 9 of 36 either way; false confirmed tracks 39 -> 39 over the 36 scenes; one
+segment 18 -> 25 scenes, lost in turns 230 -> 177 of 382 pings (24 -> 33 of 176 -> 238 after the first hold). Why not
+5 pings: the amplitude's information is bounded by the KL divergence of the target's amplitude law from the clutter's:
+on these scenes' contacts (MFTD's statistic over its lowest value) the target's mean excess is 2.3-2.4 times the
+clutter's on LFM (27-30 against 12-13), 1.8 and 4.6 on CW, so at most log(1/2.4) + 2.4 - 1 = 0.5 nats a hit on LFM,
+against the ~6.9 nats (odds 1/19 -> ~50, threshold 0.98) needed in 5 pings at Pd 0.6 where a miss costs 1.2; the
+default scene's strong targets (6.8-8.4 times, 3.9-5.3 nats a hit) are confirmed sooner (bench_active_rows.py, cached
+contacts /tmp/lead11/rows11: LFM seeds 1/2 the maneuvering target first held at ping 8/8 against 12/14, seed 2's
+crossing-b confirmed after 9 pings against 12; held 83/87 -> 87/88 %; rows 4/4 -> 5/5: the maneuvering target's mirror
+twin confirmed again for 10 pings, 62-72, after the first twin coasted out; CW seeds 1/2 rows 6/4 and false rows 1/0
+unchanged, held 90/88 -> 90/89 %). Tried: the target's prior mean excess 2x the clutter's with weight 2 (default scene
+LFM rows 4/4 -> 6/5, CW seed 2 4 -> 6: young tracks beside strong targets confirmed sooner), the cap on the ratio
+5/10/30/100 (no change here), the track's amplitude memory 0.95 (none), the first contact's ratio on the initial
+existence (``amplitude_start``: CW seed 1 20 -> 17 pings at 1 deg/s, LFM unchanged, false 39 -> 41; with the 2x prior
+LFM seed 1 12 -> 11, false 42).
 """
 
 from __future__ import annotations

@@ -88,8 +88,8 @@ class PositionTrackerSettings(Settings):
     amplitude_target_prior_n: float = setting(5.0, "weight of that prior (inverse-gamma alpha0 - 1) in contacts",
                                               unit="1", gt=0)
     amplitude_max_ratio: float = setting(
-        5.0, "cap on a contact's amplitude likelihood ratio (benchmarks/bench_active_amplitude.py, the study's twins of "
-             "trials 14, 15, 6, 1 h each: false confirmed 4/9/0 without amplitude, 2/9/0 at 5, 3/9/0 at 30, where a "
+        5.0, "cap on a contact's amplitude likelihood ratio (benchmarks/bench_active_amplitude.py, the study's twins "
+             "of trials 14, 15, 6, 1 h each: false confirmed 4/9/0 without amplitude, 2/9/0 at 5, 3/9/0 at 30, where a "
              "still point's strong echoes confirmed a track before the clutter map's verdict)", unit="1", gt=1)
     amplitude_start: bool = setting(
         False, "a new track's initial existence odds times its first contact's amplitude ratio under the prior target "
