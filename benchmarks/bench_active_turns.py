@@ -211,9 +211,13 @@ def use_amplitude() -> None:
     tracker settings' ``amplitude_aided`` is set (tracking/amplitude_parts.py ``with_amplitude``), each scan given its
     kept contacts' statistic (this process only). It is the wiring of the report's contact_tracker.py diff, done from
     outside: the three verdicts of ``step`` are recorded and the tracker's ``step`` given ``statistic[keep]``."""
+    import inspect
+
     import sonartrack.systems.active.contact_tracker as ct
     from sonartrack.tracking.amplitude_parts import with_amplitude
 
+    if "amplitude_parts" in inspect.getsource(ct):  # the chain wires it itself (the report's diff merged)
+        return
     base = getattr(ct.ContactTracker, "_amplitude_base", ct.ContactTracker)
 
     class AmplitudeContactTracker(base):
