@@ -129,3 +129,34 @@ def test_confirmed_sooner_with_amplitudes_and_no_more_false_tracks():
     # clutter only, 2 h: at 5 false tracks an hour stated, the count stays within its Poisson 99.9 % point
     n_false = sum(run(seed, True, 120, False, per_h=5.0)[0] for seed in (20, 21))
     assert n_false <= stats.poisson.ppf(0.999, 5.0 * 2)
+
+
+def test_a_new_tracks_odds_times_its_first_contacts_ratio():
+    # amplitude_start: O = O_0 r, r = Lomax(y; alpha0, beta0) / GPD(y) under the prior target law (scipy's densities)
+    s = PositionTrackerSettings(amplitude_aided=True, amplitude_start=True, initial_existence=0.05)
+    trk = with_amplitude(position_tracker(s), s)
+    trk.step(0.0, np.array([[0.0, 0.0]]), R, amplitude=np.array([30.0]))  # the clutter sample's first scan
+    model = trk.measurements.model
+    z, a = np.array([[5000.0, 5000.0], [9000.0, 1000.0]]), np.array([31.0, 90.0])
+    scale, shape = model.clutter_law()  # the law before this scan (the initiator adds the scan after starting)
+    snap = trk.step(30.0, z, np.repeat(R[None], 2, 0), amplitude=a)
+    alpha = 1.0 + s.amplitude_target_prior_n
+    beta = s.amplitude_target_prior_n * s.amplitude_target_prior_ratio * scale / (1 - shape)
+    y = a - 30.0
+    r = np.minimum(stats.lomax.pdf(y, alpha, scale=beta) / stats.genpareto.pdf(y, shape, scale=scale),
+                   s.amplitude_max_ratio)
+    new = snap.existence[-2:]
+    np.testing.assert_allclose(new / (1 - new), 0.05 / 0.95 * r, rtol=1e-9)
+    assert new[1] > new[0]  # the stronger contact starts the likelier track
+
+
+def test_a_tracks_amplitude_sums_follow_its_association_weights():
+    s = PositionTrackerSettings(q=[1e-4], amplitude_aided=True, amplitude_target_memory=0.5)
+    trk = with_amplitude(position_tracker(s), s)
+    trk.step(0.0, np.array([[0.0, 0.0]]), R, amplitude=np.array([40.0]))
+    trk.step(30.0, np.array([[30.0, 20.0]]), R, amplitude=np.array([80.0]))  # one contact in the gate
+    w, total = trk.tracks.attrs["amp_w"][0], trk.tracks.attrs["amp_sum"][0]
+    # w = 0.5 x 1 + beta, sum = 0.5 x 40 + beta x 80, with beta in (0, 1): the same beta in both
+    beta = w - 0.5
+    assert 0.0 < beta < 1.0
+    assert total == pytest.approx(20.0 + 80.0 * beta)
