@@ -13,7 +13,7 @@ Both keep the covariance at initiation (``P_init``, the CTT test of P4 eq. 23) a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -86,6 +86,35 @@ class OnePointInitiator:
         x = np.zeros((len(new), 2 * dims))
         x[:, :dims] = z
         return _new_tracks(x, P, n_modes, first_id, scan.time_s, self.initial_existence, {})
+
+
+@dataclass(frozen=True)
+class AmplitudeOnePointInitiator(OnePointInitiator):
+    """:class:`OnePointInitiator` for amplitude-aided IPDA (tracking/measurements.py
+    :class:`AmplitudeRangeRateMeasurements`): each new track carries its first contact's amplitude in ``amp_w`` (1)
+    and ``amp_sum`` (a); with ``amplitude_start`` its initial existence odds are multiplied by that contact's
+    amplitude ratio under the prior target law (association/amplitude_ipda.py ``AmplitudeModel.log_ratio`` at
+    zero weight), the first update of a track that IPDA's one-point initiation otherwise gives the prior
+    P(E) for: the odds stay a mean-one multiple of the prior's on clutter (E_clutter[r] = 1), so Ville's bound on
+    the false confirmed tracks (tracking/existence.py ``confirm_threshold_for_rate``) holds as before. After
+    starting the tracks, the scan's amplitudes are added to the model's clutter sample (``add_scan``): the next
+    scan's ratios use the scans before it."""
+
+    model: object = None
+    amplitude_start: bool = False
+
+    def initiate(self, scan: Scan, used, n_live: int, n_modes: int, first_id: int) -> TrackArrays:
+        """Tentative tracks as :meth:`OnePointInitiator.initiate`, with the amplitude attrs (class doc)."""
+        new = np.nonzero(~used)[0][: max(0, self.max_tracks - n_live)]
+        base = super().initiate(scan, used, n_live, n_modes, first_id)
+        a = np.zeros(len(new)) if scan.amplitude is None else np.asarray(scan.amplitude, float)[new]
+        existence = base.existence
+        if self.amplitude_start and self.model is not None and len(new):
+            r, p0 = np.exp(self.model.log_ratio(a, np.zeros(len(a)), np.zeros(len(a)))), self.initial_existence
+            existence = p0 * r / (1.0 - p0 + p0 * r)  # odds O_0 r (exactly P_0 at r = 1)
+        if self.model is not None and scan.amplitude is not None:
+            self.model.add_scan(scan.amplitude)
+        return replace(base, existence=existence, attrs={"amp_w": np.ones(len(new)), "amp_sum": a})
 
 
 @dataclass(frozen=True)

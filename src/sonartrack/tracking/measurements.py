@@ -216,6 +216,55 @@ class RangeRatePositionMeasurements(PositionMeasurements):
         return replace(lik, pair_log_ratio=lik.pair_log_ratio + add, dense_log_ratio=dense)
 
 
+@dataclass(frozen=True)
+class AmplitudeRangeRateMeasurements(RangeRatePositionMeasurements):
+    """:class:`RangeRatePositionMeasurements` whose contacts' amplitudes (their detector's statistic) weigh each pair
+    by the amplitude likelihood ratio p1(a | target) / p0(a | clutter) above the threshold (Lerro & Bar-Shalom 1993,
+    eq. 12; association/amplitude_ipda.py), in the PDA weights and, through Lambda, in IPDA's existence update.
+
+    ``model`` (:class:`~sonartrack.association.amplitude_ipda.AmplitudeModel`) holds the clutter law, fed each scan
+    by the initiator (tracking/initiators.py :class:`AmplitudeOnePointInitiator`); each track carries ``amp_w`` (sum
+    of its association weights, forgotten by ``target_memory`` a scan) and ``amp_sum`` (the same sum of w a) in its
+    attrs, updated after each scan (:meth:`after_update`). DEVIATION: the weights are the pairs' PDA weights averaged
+    over the modes with equal weight (the mode probabilities are not the measurement part's)."""
+
+    model: object = None
+    target_memory: float = 0.9
+
+    scan_needs = ("R", "amplitude")
+
+    def likelihoods(self, x_pred, P_pred, scan: Scan, attrs: dict) -> Likelihoods:
+        """The range-rate position likelihoods with each gated pair's log ratio plus its amplitude's (class doc)."""
+        lik = super().likelihoods(x_pred, P_pred, scan, attrs)
+        if self.model is None or scan.amplitude is None or not len(lik.pair_track):
+            return lik
+        t, j = lik.pair_track, lik.pair_meas
+        add = self.model.log_ratio(scan.amplitude[j], _attr(attrs, "amp_w", len(x_pred))[t],
+                                   _attr(attrs, "amp_sum", len(x_pred))[t])[:, None]
+        dense = None
+        if lik.dense_log_ratio is not None:
+            dense = lik.dense_log_ratio.copy()
+            dense[t, :, j] += add
+        return replace(lik, pair_log_ratio=lik.pair_log_ratio + add, dense_log_ratio=dense)
+
+    def after_update(self, attrs: dict, lik: Likelihoods, scan: Scan, beta_pair=None) -> dict:
+        """Each track's amplitude sums forgotten by ``target_memory`` and the scan's pairs added with their weights
+        (mode-averaged ``beta_pair`` (G, r)); the other attrs unchanged."""
+        n = lik.gated.shape[0]
+        w, s = _attr(attrs, "amp_w", n) * self.target_memory, _attr(attrs, "amp_sum", n) * self.target_memory
+        if beta_pair is not None and scan.amplitude is not None and len(lik.pair_track):
+            b = np.asarray(beta_pair, float).reshape(len(lik.pair_track), -1).mean(axis=1)
+            w = w + np.bincount(lik.pair_track, weights=b, minlength=n)
+            s = s + np.bincount(lik.pair_track, weights=b * scan.amplitude[lik.pair_meas], minlength=n)
+        return {**attrs, "amp_w": w, "amp_sum": s}
+
+
+def _attr(attrs: dict, name: str, n: int) -> np.ndarray:
+    """A per-track attr as floats, zeros when the tracks do not carry it."""
+    v = attrs.get(name)
+    return np.zeros(n) if v is None else np.asarray(v, float)
+
+
 def fold_cone_deg(phi_deg) -> tuple[np.ndarray, np.ndarray]:
     """The cone angle theta in [0, 180] deg of an unfolded angle phi, and the fold's slope d theta / d phi (+1 or -1).
 

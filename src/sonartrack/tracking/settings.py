@@ -66,6 +66,35 @@ class PositionTrackerSettings(Settings):
                                                 "per axis", unit="m/s", gt=0)
     max_tracks: int = setting(2000, "most live tracks; measurements beyond it start no track", unit="1", ge=1)
 
+    amplitude_aided: bool = setting(
+        False, "each contact's amplitude (its detector's statistic) weighs its association and existence update by "
+               "the ratio of its target law to its clutter law above the threshold (Lerro & Bar-Shalom 1993 eq. 12; "
+               "association/amplitude_ipda.py, tracking/amplitude_parts.py); off: positions (and range rates) only",
+        unit="")
+    amplitude_clutter_prior_mean: float = setting(
+        10.0, "prior mean excess of a clutter contact's amplitude over the lowest seen (the statistic's unit: the "
+              "default scene's LFM clutter contacts measured 12-15 over the MFTD's ~19)", unit="1", gt=0)
+    amplitude_clutter_prior_n: float = setting(20.0, "weight of that prior in contacts", unit="1", gt=0)
+    amplitude_clutter_scans: int = setting(30, "scans whose contacts' amplitudes make the clutter amplitude sample "
+                                                "(the last ones)", unit="1", ge=1, le=10_000)
+    amplitude_target_memory: float = setting(
+        0.9, "factor on a track's own amplitude weights per scan (its echo level drifts with range and aspect)",
+        unit="1", gt=0, le=1)
+    amplitude_target_prior_ratio: float = setting(
+        1.0, "a new track's prior mean amplitude excess as a multiple of the clutter's: 1, a track is as strong as "
+             "clutter until its echoes say otherwise (benchmarks/bench_active_turns.py, default scene rows: at 2 with "
+             "weight 2 young tracks beside strong targets confirmed sooner, LFM rows 4/4 -> 6/5, CW seed 2 4 -> 6; at "
+             "1 with weight 5: 5/5 and CW 6/4 as without amplitude, acquisition the same)", unit="1", ge=1)
+    amplitude_target_prior_n: float = setting(5.0, "weight of that prior (inverse-gamma alpha0 - 1) in contacts",
+                                              unit="1", gt=0)
+    amplitude_max_ratio: float = setting(
+        5.0, "cap on a contact's amplitude likelihood ratio (benchmarks/bench_active_amplitude.py, the study's twins "
+             "of trials 14, 15, 6, 1 h each: false confirmed 4/9/0 without amplitude, 2/9/0 at 5, 3/9/0 at 30, where a "
+             "still point's strong echoes confirmed a track before the clutter map's verdict)", unit="1", gt=1)
+    amplitude_start: bool = setting(
+        False, "a new track's initial existence odds times its first contact's amplitude ratio under the prior target "
+               "law (tracking/initiators.py AmplitudeOnePointInitiator)", unit="")
+
     @model_validator(mode="after")
     def _consistent(self):
         if any(q < 0 for q in self.q):
