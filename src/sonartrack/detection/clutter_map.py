@@ -300,3 +300,43 @@ def in_gate(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray
         (a, b) bool.
     """
     return mahalanobis2(xy_a, R_a, xy_b, R_b) <= gamma
+
+
+def echo_images(xy: np.ndarray, range_rate_mps: np.ndarray, tx_xy, rx_xy, echo_xy: np.ndarray,
+                echo_rate_mps: np.ndarray, range_m: float, rate_mps: float) -> np.ndarray:
+    """The contacts of one ping within ``range_m`` in bistatic range r_B = |z - Tx| + |z - Rx| AND ``rate_mps`` in
+    bistatic range rate of an echo (a CW still point's, found under the ridge notch: detection/cw_cells.py
+    ``ridge_echoes``): that echo's delay-Doppler skirt past the notch (a CW's ambiguity reaches one pulse length tau
+    off in delay, its Doppler main lobe widening to 2 / tau half a pulse off: Levanon & Mozeson, Radar Signals,
+    2004, ch. 2) and its sidelobe images in other beams (its own delay and Doppler), wherever in cone they fall.
+
+    Parameters
+    ----------
+    xy : ndarray (m, 2)
+        The ping's contact positions (m).
+    range_rate_mps : ndarray (m,)
+        Their measured bistatic range rates (m/s; NaN: none measured, never an image).
+    tx_xy, rx_xy : array (2,)
+        Source and receiver at the ping (m).
+    echo_xy : ndarray (k, 2)
+        The echoes' positions (m; either mirror: r_B is the same).
+    echo_rate_mps : ndarray (k,)
+        Their measured range rates (m/s).
+    range_m, rate_mps : float
+        Half-widths of the r_B (m) and range-rate (m/s) windows.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool.
+    """
+    xy, e = np.asarray(xy, float).reshape(-1, 2), np.asarray(echo_xy, float).reshape(-1, 2)
+    if not len(xy) or not len(e):
+        return np.zeros(len(xy), bool)
+    tx, rx = np.asarray(tx_xy, float), np.asarray(rx_xy, float)
+    r_b = np.linalg.norm(xy - tx, axis=1) + np.linalg.norm(xy - rx, axis=1)
+    r_e = np.linalg.norm(e - tx, axis=1) + np.linalg.norm(e - rx, axis=1)
+    with np.errstate(invalid="ignore"):
+        near = (np.abs(r_b[:, None] - r_e[None, :]) <= range_m) & (
+            np.abs(np.asarray(range_rate_mps, float)[:, None] - np.asarray(echo_rate_mps, float)[None, :]) <= rate_mps)
+    return near.any(axis=1)

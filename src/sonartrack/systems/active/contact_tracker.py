@@ -146,6 +146,10 @@ class ContactTracker:
         contact before it is merged after all (tracking/duplicates.py ``reunite_scans``; 0: never).
     endfire_alias : EndfireAlias or None
         The line array's grating-lobe alias of a held echo withheld (:meth:`_not_images`); None: not.
+    ridge_window : tuple of float or None
+        (bistatic range m, range rate m/s): a contact within both of a ridge echo the clutter map shows still is
+        that echo's skirt or sidelobe image (clutter_map.py :func:`echo_images`; systems/active/cw_tracking.py
+        ``cw_ridge_window``); None: the ridge echoes, when given to :meth:`step`, only feed the map.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -153,7 +157,7 @@ class ContactTracker:
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
                  clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
                  claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None,
-                 reunite_scans: int = 0):
+                 reunite_scans: int = 0, ridge_window: tuple[float, float] | None = None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -186,6 +190,7 @@ class ContactTracker:
 
                 self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
         self.clutter_map, self.hold = clutter_map, None
+        self.ridge_window, self.ridge_clutter = ridge_window, 0
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
@@ -243,23 +248,34 @@ class ContactTracker:
                 keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
         return keep
 
-    def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
+    def _not_clutter(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
         ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
         clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
-        withheld)."""
+        withheld). ``ridge``: a CW ping's echoes hidden by the ridge notch (detection/cw_cells.py ``ridge_echoes``),
+        fed to the map with the contacts but not to the tracker; the contacts within ``ridge_window`` of one the map
+        shows still (clutter_map.py :func:`echo_images`: its skirt past the notch and its sidelobe images) are clutter
+        too."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
-        cm = self.clutter_map
-        clutter = cm.update(contacts.xy, contacts.R, float(t_s))
-        r = cm.recurring
+        cm, n = self.clutter_map, len(contacts)
+        both = contacts if ridge is None or not len(ridge) else Contacts.concat([contacts, ridge])
+        verdict = cm.update(both.xy, both.R, float(t_s))
+        clutter, r = verdict[:n], cm.recurring[:n]
+        g = self.geometry
         if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
             from sonartrack.detection.clutter_map import same_range
 
-            g = self.geometry
             clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
                 contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+        if len(both) > n and self.ridge_window is not None and verdict[n:].any():
+            from sonartrack.detection.clutter_map import echo_images
+
+            still = both.rows(np.nonzero(verdict[n:])[0] + n)
+            clutter = clutter | echo_images(contacts.xy, contacts.range_rate_mps, g.tx_at(t_s), g.rx_at(t_s),
+                                            still.xy, still.range_rate_mps, *self.ridge_window)
+        self.ridge_clutter = int(verdict[n:].sum())
         self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
@@ -310,7 +326,7 @@ class ContactTracker:
 
         self.tracker.measurements = replace(m, pd=float(pd))
 
-    def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
+    def step(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
 
@@ -320,13 +336,17 @@ class ContactTracker:
             The scan time (s), the ping's transmit time.
         contacts : Contacts
             The ping's mirror-pair contacts (positions m, covariances m^2).
+        ridge : Contacts, optional
+            The mirror-pair contacts of the ping's echoes hidden by a CW's ridge notch: for the clutter map only
+            (:meth:`_not_clutter`).
 
         Returns
         -------
         numpy.ndarray
             (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts) & self._not_images(t_s, contacts)
+        keep = (self._gates(t_s, contacts) & self._not_clutter(t_s, contacts, ridge)
+                & self._not_images(t_s, contacts))
         self._cw_pd(contacts)
         if hasattr(self.tracker.measurements, "at_scan"):
             g, lam = self.geometry, None
