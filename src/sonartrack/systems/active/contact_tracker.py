@@ -190,7 +190,7 @@ class ContactTracker:
 
                 self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
         self.clutter_map, self.hold = clutter_map, None
-        self.ridge_window, self.ridge_clutter = ridge_window, 0
+        self.ridge_window, self.ridge_counts = ridge_window, [0, 0]  # (still ridge contacts, images) so far
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
@@ -273,9 +273,11 @@ class ContactTracker:
             from sonartrack.detection.clutter_map import echo_images
 
             still = both.rows(np.nonzero(verdict[n:])[0] + n)
-            clutter = clutter | echo_images(contacts.xy, contacts.range_rate_mps, g.tx_at(t_s), g.rx_at(t_s),
-                                            still.xy, still.range_rate_mps, *self.ridge_window)
-        self.ridge_clutter = int(verdict[n:].sum())
+            image = echo_images(contacts.xy, contacts.range_rate_mps, g.tx_at(t_s), g.rx_at(t_s), still.xy,
+                                still.range_rate_mps, *self.ridge_window)
+            self.ridge_counts[0] += len(still)
+            self.ridge_counts[1] += int((image & ~clutter).sum())
+            clutter = clutter | image
         self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
