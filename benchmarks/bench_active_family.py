@@ -310,6 +310,29 @@ def _time_lobes() -> None:
     lobes.cell_images = cells.cell_images = timed
 
 
+RIDGE_CPU = {"s": 0.0, "calls": 0, "echoes": 0}
+
+
+def _time_ridge() -> None:
+    """Count the CPU seconds spent finding the echoes under the CW ridge notch and forming their contacts
+    (systems/active/run.py ``_Chain._ridge_contacts``: the clutter map's extra input)."""
+    import sonartrack.systems.active.run as run_mod
+
+    inner = getattr(run_mod._Chain, "_ridge_contacts", None)
+    if inner is None:  # (a chain without it)
+        return
+
+    def timed(self, *a, **k):
+        t0 = time.process_time()
+        out = inner(self, *a, **k)
+        RIDGE_CPU["s"] += time.process_time() - t0
+        RIDGE_CPU["calls"] += 1
+        RIDGE_CPU["echoes"] += 0 if out is None else len(out) // 2
+        return out
+
+    run_mod._Chain._ridge_contacts = timed
+
+
 def main() -> None:
     from sonartrack.studies.active_chain import Config
 
@@ -340,6 +363,7 @@ def main() -> None:
     if args.still_moving_p is not None:
         _patch_still_hold(args.still_moving_p)
     _time_lobes()
+    _time_ridge()
     if args.skirt_to_confirmed is not None:
         _patch_skirt_to_confirmed(args.skirt_to_confirmed)
     if args.mftd_cell_lobes:
@@ -373,11 +397,18 @@ def main() -> None:
             print(f"  track {r['track']:4d} pings {r['pings']:>7s} ({r['n']:3d}) {r['where']:7s} {r['share']:.0%} "
                   f"speed {r['speed_mps']:5.2f} m/s delay {r['delay_s']:5.1f} s cone {r['cone_deg']:5.1f}{extra} "
                   f"-> {verdict(r)}")
+        from sonartrack.systems.active.targets import mirror_targets
+
+        n_rows = len(mirror_targets(result.tracks, result.geometry))
         print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
-              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
+              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses); {n_rows} listed rows "
+              "(systems/active/targets.py mirror_targets: all false here)")
     print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
     if LOBE_CPU["calls"]:
         print(f"lobe test: {LOBE_CPU['s']:.2f} s CPU in {LOBE_CPU['calls']} calls (runs not cached only)")
+    if RIDGE_CPU["calls"]:
+        print(f"ridge echoes: {RIDGE_CPU['s']:.2f} s CPU in {RIDGE_CPU['calls']} pings, {RIDGE_CPU['echoes']} echoes "
+              "(runs not cached only)")
 
 
 if __name__ == "__main__":

@@ -82,6 +82,9 @@ by default: a target on or near the ridge (crossing, zero world Doppler) is notc
 track alive; measured on the default scene as CW (benchmarks/bench_active_rows.py, 1 h; rows, false, extra; held %
 approacher/crossing-a/crossing-b/maneuvering), off -> 3 dB: seed 1 7, 1, 2; 95/75/100/91 -> 8, 1, 3; 95/79/100/65;
 seed 2 5, 0, 1; 90/76/100/85 -> 7, 1, 2; 92/74/100/82. Sources of 15 dB (s >= 30) instead of 10 dB: trial 1 6 -> 4.
+What the chain does instead: the echoes under the notch (:func:`ridge_echoes`) feed the clutter map, not the tracker;
+where the map shows one still at one world place over pings, its skirt and images are withheld (detection/
+clutter_map.py module doc), and a target crossing the ridge, not still in the world, keeps its skirt.
 """
 
 from __future__ import annotations
