@@ -53,7 +53,7 @@ def track(c: dict, with_ridge: bool):
     """bench_active_rows.py ``track`` on the stored contacts, the ridge echoes given to each step or not; returns
     (tracks, end reasons, contacts withheld by the ridge echoes)."""
     import bench_active_rows as rows
-    from sonartrack.systems.active.contact_tracker import ContactTracker
+    from sonartrack.systems.active.contact_tracker import ContactTracker, ridge_map_of
     from sonartrack.systems.active.cw_tracking import cw_ridge_window
 
     real, count = ContactTracker.step, {}
@@ -61,6 +61,8 @@ def track(c: dict, with_ridge: bool):
 
     def step(self, t_s, contacts, ridge=None):
         self.ridge_window = window
+        if with_ridge and getattr(self, "ridge_map", None) is None:
+            self.ridge_map = ridge_map_of(c["settings"])
         ridge = c["ridge"].get(round(float(t_s), 3)) if with_ridge else None
         keep = real(self, t_s, contacts, ridge)
         count["n"] = list(self.ridge_counts)
@@ -92,8 +94,8 @@ def main() -> None:
                 rows.report(c, res, reasons, 1000.0, f"{kind.upper()} seed {seed} ridge echoes "
                             f"{'on' if flag else 'off'}")
                 if flag:
-                    print(f"    ridge-echo contacts shown still (summed over pings) {n[0]}, contacts withheld as their "
-                          f"images (not already clutter) {n[1]}")
+                    print(f"    ridge-echo contacts shown still (summed over pings) {n[0]}, contacts the ridge map "
+                          f"marked (in a known point's gate or an echo's window) {n[1]}")
 
 
 if __name__ == "__main__":

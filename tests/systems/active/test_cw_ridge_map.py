@@ -14,7 +14,7 @@ import pytest
 from sonartrack.detection.cells import PingCells
 from sonartrack.detection.clutter_map import echo_images
 from sonartrack.detection.cw_cells import ridge_echoes
-from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of
+from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of, ridge_map_of
 from sonartrack.systems.active.contacts import ActiveGeometry, Contacts
 from sonartrack.systems.active.settings import ActiveSettings
 
@@ -59,7 +59,7 @@ def run(scatterer, pings: int = 24, ridge: bool = True, seed: int = 0, first_ima
     g = geometry(pings)
     s = ActiveSettings()
     trk = ContactTracker(s.tracker_settings(), g, None, 0.18, clutter_map=clutter_map_of(s), scan_interval_s=PING_S,
-                         ridge_window=WINDOW)
+                         ridge_window=WINDOW, ridge_map=ridge_map_of(s))
     kept = []
     for k in range(pings):
         t = PING_S * k

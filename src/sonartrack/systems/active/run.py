@@ -45,6 +45,7 @@ from sonartrack.systems.active.contact_tracker import (  # noqa: F401 - re-expor
     clutter_map_of,
     endfire_alias_of,
     rate_sd_of,
+    ridge_map_of,
     track_detections,
 )
 from sonartrack.systems.active.contacts import (
@@ -276,7 +277,8 @@ class _Chain:
                                       rejoin_s=s.rejoin_s, claims=s.contact_claims,
                                       keep_apart=s.merge_keep_apart, reunite_scans=s.merge_reunite_scans,
                                       endfire_alias=endfire_alias_of(s, waveform),
-                                      ridge_window=cw_ridge_window(waveform, s.sound_speed_mps) if self.cw else None)
+                                      ridge_window=cw_ridge_window(waveform, s.sound_speed_mps) if self.cw else None,
+                                      ridge_map=ridge_map_of(s) if self.cw else None)
 
     def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
@@ -345,7 +347,7 @@ class _Chain:
         sees the point itself, not only its skirt); None without a map or without the power before the notch."""
         from sonartrack.detection.cw_cells import ridge_echoes
 
-        if self.tracker.clutter_map is None or self.tracker.ridge_window is None:
+        if self.tracker.ridge_map is None:
             return None
         det = ridge_echoes(cells, self.threshold)
         if det is None:
