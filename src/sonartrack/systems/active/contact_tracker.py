@@ -169,8 +169,7 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
-        self.endfire_alias = endfire_alias
-        self.claims = claims
+        self.endfire_alias, self.claims = endfire_alias, claims
         if claims is not None:
             from sonartrack.tracking.associators import ClaimedPDA
 
@@ -193,8 +192,7 @@ class ContactTracker:
 
                 self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
         self.clutter_map, self.hold = clutter_map, None
-        self.ridge_window, self.ridge_map = ridge_window, ridge_map
-        self.ridge_counts = [0, 0]  # (ridge contacts shown still, contacts withheld by the ridge map) so far
+        self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
@@ -283,7 +281,8 @@ class ContactTracker:
         echoes under the notch, detection/cw_cells.py ``ridge_echoes``) feeds the ridge map (its own clutter map, so
         that the sea's ridge peaks and the tracker's contacts do not make hits for each other); a contact is clutter
         when it lies in the gate of a point that map knows still, or within ``ridge_window`` of an echo it shows still
-        at this ping (clutter_map.py :func:`echo_images`: the echo's skirt past the notch and its sidelobe images)."""
+        at this ping (clutter_map.py :func:`echo_images`: the echo's skirt past the notch and its sidelobe images).
+        ``ridge_counts`` adds up the ridge contacts shown still and the contacts marked."""
         from sonartrack.detection.clutter_map import echo_images, mahalanobis2
 
         rm, g = self.ridge_map, self.geometry
