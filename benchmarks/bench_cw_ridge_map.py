@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import pickle
 import sys
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -90,7 +91,9 @@ def main() -> None:
             n_ridge = sum(len(v) for v in c["ridge"].values() if v is not None)
             print(f"{kind} seed {seed}: {n_ridge} ridge-echo contacts in {len(c['time_s'])} pings")
             for flag in (False, True):
+                t0 = time.process_time()
                 res, reasons, n = track(c, flag)
+                print(f"    tracker stage {time.process_time() - t0:.1f} s CPU")
                 rows.report(c, res, reasons, 1000.0, f"{kind.upper()} seed {seed} ridge echoes "
                             f"{'on' if flag else 'off'}")
                 if flag:

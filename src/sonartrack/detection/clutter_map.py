@@ -48,18 +48,22 @@ direction, on its own beam's reverberation ridge, which the CW front end notches
 contacts then hold only its delay-Doppler skirt past the notch and its sidelobe images in other beams, 0.4-2 km off
 it, at varying places, on a fraction of the pings, with the CW's wide errors: none of them recurs still, and study
 active-chain trial 15 (CW, 16 x 0.5 m, 2.4 kHz, K +5 dB) confirmed 9 false tracks in its reverberation-only hour, 8 of
-them in mirror pairs on two points of TS 25-30 dB. So the chain also feeds the map the echoes under the notch
-(cw_cells.py ``ridge_echoes``: the peaks of the statistic before the notch, at the single-ping threshold), which go
-to no track: a still point gives one at its own place on every ping it stands above the ridge, and the recurrence and
-stillness tests show it still as any other point. The notch itself is no stillness test: a target crossing the line of
-sight holds the sea's Doppler too (zero world range rate), and is told from a still point only by its world position,
-which does not recur still. The contacts within a CW's ambiguity of an echo the map shows still, c tau in bistatic
-range and a few Doppler cells in range rate (:func:`echo_images`), are its skirt or its images, and are withheld as
-the map's clutter is. Measured (benchmarks/bench_active_family.py, 1 h twins): trial 15 9 -> 0 false confirmed tracks
-(5 -> 0 rows), trial 1 6 -> 4; benchmarks/bench_cw_ridge_map.py (default scene as CW, the same contacts): rows and
-held % unchanged. The price: a contact within that window of a known still point's echo, wherever its cone, is
-withheld from unconfirmed tracks on that ping; and the map needs ~10 pings of the hidden echo (its fit's time base)
-before it withholds anything, so a track confirmed on the images before then keeps them.
+them in mirror pairs on two points of TS 25-30 dB. So the chain also finds the echoes under the notch (cw_cells.py
+``ridge_echoes``: the peaks of the statistic before the notch, at the single-ping threshold), which go to no track,
+and gives them to a second map of this class, the ridge map (systems/active/contact_tracker.py ``ridge_map_of``,
+4 hits of 8: the sea's own ridge peaks above the threshold, 10-20 a ping, recur by chance): a still point gives one
+at its own place on every ping it stands above the ridge, and the recurrence and stillness tests show it still as any
+other point. The notch itself is no stillness test: a target crossing the line of sight holds the sea's Doppler too
+(zero world range rate), and is told from a still point only by its world position, which does not recur still. A
+contact in the gate of a point the ridge map knows, or within a CW's ambiguity of an echo it shows still at the ping
+(c tau in bistatic range and 2.5 Doppler cells in range rate, :func:`echo_images`: its skirt or its images), is
+withheld as this map's clutter is. Measured (benchmarks/bench_active_family.py, 1 h reverberation-only twins): trial
+15 9 -> 0 false confirmed tracks (5 -> 0 rows); trial 1 (8 elements, 1 kHz) 6 -> 4 (a TS 30 dB point near endfire,
+cone 5-15 deg, whose hidden echoes, 300-540 m wide across the beam and on half the pings, the ridge map shows still
+only from ping 58); benchmarks/bench_cw_ridge_map.py (default scene as CW, seeds 1, 2, the same contacts): rows and
+held % of every target unchanged. The price: a contact within that window of a known still point's echo, wherever
+its cone, is withheld from unconfirmed tracks on that ping; and the ridge map needs ~10 pings of the hidden echo (its
+fit's time base) before it withholds anything, so a track confirmed on the images before then keeps them.
 
 Memory. The recurrence test looks back ``span`` pings, the stillness fit ``fit_span`` (longer: the velocity's error
 falls as T n^1.5), and a position once shown still is a known point for ``keep_pings`` pings after its last contact: a

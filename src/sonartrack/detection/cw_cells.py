@@ -82,8 +82,8 @@ by default: a target on or near the ridge (crossing, zero world Doppler) is notc
 track alive; measured on the default scene as CW (benchmarks/bench_active_rows.py, 1 h; rows, false, extra; held %
 approacher/crossing-a/crossing-b/maneuvering), off -> 3 dB: seed 1 7, 1, 2; 95/75/100/91 -> 8, 1, 3; 95/79/100/65;
 seed 2 5, 0, 1; 90/76/100/85 -> 7, 1, 2; 92/74/100/82. Sources of 15 dB (s >= 30) instead of 10 dB: trial 1 6 -> 4.
-What the chain does instead: the echoes under the notch (:func:`ridge_echoes`) feed the clutter map, not the tracker;
-where the map shows one still at one world place over pings, its skirt and images are withheld (detection/
+What the chain does instead: the echoes under the notch (:func:`ridge_echoes`) feed a clutter map of their own, not the
+tracker; where it shows one still at one world place over pings, its skirt and images are withheld (detection/
 clutter_map.py module doc), and a target crossing the ridge, not still in the world, keeps its skirt.
 """
 
@@ -535,7 +535,8 @@ def ridge_echoes(cells, threshold: float):
     two points of TS 25-30 dB; benchmarks/bench_active_family.py). These echoes are the point itself, at its own
     delay and cone, on every ping it is above the ridge's reverberation: the clutter map (detection/clutter_map.py)
     is fed them, not the tracker (a CW cannot tell a still point from a target holding the sea's Doppler on one
-    ping; the map's recurrence at one world place and its stillness fit over pings can).
+    ping; the map's recurrence at one world place and its stillness fit over pings can; systems/active/
+    contact_tracker.py ``ridge_map_of``).
 
     Parameters
     ----------

@@ -16,8 +16,8 @@ the number of pings beyond the per-ping tables and a small B-scan):
    mirrors under constant-velocity motion, once it has lived through a turn of the array; a track decided on
    its target's side has the mirror contact of each detection it gates dropped (:func:`resolve_mirrors`), a
    track decided a ghost has the contacts in its gate dropped, so it starves), and the clutter map
-   (detection/clutter_map.py: still world positions over pings; on a CW fed also the echoes the ridge notch hides,
-   detection/cw_cells.py ``ridge_echoes``, whose skirt and images it then withholds);
+   (detection/clutter_map.py: still world positions over pings; on a CW a second map of the echoes the ridge notch
+   hides, detection/cw_cells.py ``ridge_echoes``, whose still points' skirt and images are withheld too);
 5. tracking: P4's IMM-IPDA with one-point initiation and existence-based confirmation (tracking/), one scan
    per ping, and after each scan the duplicate tracks merged (tracking/duplicates.py: a track whose state passes
    the track-to-track test against a confirmed one is deleted, the older confirmed track kept): IPDA tracks share
