@@ -58,6 +58,23 @@ whose gate holds them, as the clutter map's): trial 1, 1 h: 6 -> 2 (the mirror p
 ping 76 is left); default scene as CW (rows, false, extra; held %): seed 1 7, 1, 2; 95/75/100/89 (main 7, 1, 2;
 95/75/100/91), seed 2 7, 1, 2; 90/82/100/84 (main 5, 0, 1; 90/76/100/85; the CW rows move by 1-2 with any change of
 the contacts, ACTHOLD's sweeps). 28 contacts flagged in seed 2's 120 pings.
+
+Measured (2026-12-07 session 12, h12-cwmap, main at e4c2ec6; 1 h twins, ~2.5-4 min a trial at load 8-11): the CW
+chain's ridge map (systems/active/contact_tracker.py ``ridge_map_of``, ``_ridge_clutter``): the echoes under each
+beam's ridge notch (detection/cw_cells.py ``ridge_echoes``) in a clutter map of their own, and the contacts in a
+known still point's gate or within c tau and 2.5 Doppler cells of its echo (clutter_map.py ``echo_images``) given only
+to confirmed tracks. False confirmed tracks (listed rows), main -> this: trial 15 (CW, K +5 dB, 16 x 0.5 m, 2.4 kHz,
+14 points) 9 (5) -> 0 (0); trial 1 (CW, Rayleigh +5 dB, 8 x 0.5 m, 1 kHz, 14 points) 6 (1) -> 4 (1): the pair 37/38
+on point 13 from ping 76 gone, left the pairs of pings 11-37 and 50-63 on the same TS 30 dB point at cone 5-15 deg,
+whose hidden echoes come on about half the pings, 100-1400 m off it with 300-540 m sds across the beam (the 8-element
+array's beams near endfire), so the ridge map shows it still only from ping 58; trial 8 (LFM): no change (the ridge
+map is a CW's). Cost: finding the hidden echoes 2.75 s CPU per hour on trial 15 (22 a ping, most of them the sea's
+ridge peaks), 1.1 s on trial 1; the ridge map's updates within the tracker stage's noise (benchmarks/
+bench_cw_ridge_map.py). On the default scene as CW (bench_cw_ridge_map.py, seeds 1 and 2, the same contacts with and
+without): rows, false rows and held % of every target unchanged (seed 1 6, 1, 1; 95/75/100/91; seed 2 4, 0, 0;
+90/76/100/85); 13 ridge contacts shown still on seed 2 (no clutter points there), 14 contacts marked, none of a
+target's confirmed track. A first version feeding the hidden echoes to the tracker's own map (3 hits) gave trial 15 0
+too, but seed 2 4 -> 5 rows (19 ridge contacts shown still, the sea's ridge peaks recurring by chance).
 """
 
 from __future__ import annotations

@@ -51,7 +51,7 @@ def image_of(g: ActiveGeometry, t: float, xy) -> tuple[np.ndarray, float]:
     return rx + r * np.array([np.cos(a), np.sin(a)]), still_rate(g, t, xy) + 0.4
 
 
-def run(scatterer, pings: int = 24, ridge: bool = True, seed: int = 0, first_image: int = 12):
+def run(scatterer, pings: int = 24, ridge: bool = True, seed: int = 0, first_image: int = 12, image=None):
     """The tracker's verdict on the image contact at each ping from ``first_image`` on (before it, the hidden echo
     alone: a track confirmed on the images before the map learns the point keeps them, as any confirmed track keeps
     the contacts in its gate), and the tracker's ridge counts."""
@@ -64,7 +64,7 @@ def run(scatterer, pings: int = 24, ridge: bool = True, seed: int = 0, first_ima
     for k in range(pings):
         t = PING_S * k
         xy = scatterer(t)
-        img, img_rate = image_of(g, t, xy)
+        img, img_rate = (image or image_of)(g, t, xy)
         hidden = rows(k, t, xy + rng.normal(0, 100.0, 2), still_rate(g, t, xy), 300.0)
         seen = rows(k, t, img, img_rate, 40.0).rows(slice(0, int(k >= first_image)))
         verdict = trk.step(t, seen, hidden if ridge else None)
@@ -77,6 +77,16 @@ def test_a_still_points_images_are_withheld_once_its_hidden_echo_is_shown_still(
     kept, (still, images) = run(lambda t: np.array([4000.0, 6000.0]))
     assert len(kept) == 12 and not kept.any(), kept
     assert still >= 12 and images == 12
+
+
+def test_a_contact_at_the_known_point_itself_is_withheld_whatever_its_range_rate():
+    # the point's own echo detected off the notch (the notch's edge), 3 m/s off its range rate: outside the echo's
+    # window, inside the known point's gate
+    def at_point(g, t, xy):
+        return np.asarray(xy, float) + np.array([60.0, -40.0]), still_rate(g, t, xy) + 3.0
+
+    kept, (still, marked) = run(lambda t: np.array([4000.0, 6000.0]), image=at_point)
+    assert len(kept) == 12 and not kept.any() and marked == 12
 
 
 def test_without_the_hidden_echoes_the_images_are_kept():

@@ -539,8 +539,8 @@ def endfire_alias_of(settings: ActiveSettings, waveform) -> EndfireAlias | None:
 
 
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
-#: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, ~8-10 a ping (default scene
-#: as CW; study trial 1), recur by chance
+#: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, 7-22 a ping (default scene as
+#: CW; study trials 1, 15), recur by chance (with 3: 19 shown still on the default scene's seed 2, with 4: 13)
 RIDGE_MAP_HITS = 4
 
 
