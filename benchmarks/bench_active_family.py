@@ -67,8 +67,12 @@ to confirmed tracks. False confirmed tracks (listed rows), main -> this: trial 1
 14 points) 9 (5) -> 0 (0); trial 1 (CW, Rayleigh +5 dB, 8 x 0.5 m, 1 kHz, 14 points) 6 (1) -> 4 (1): the pair 37/38
 on point 13 from ping 76 gone, left the pairs of pings 11-37 and 50-63 on the same TS 30 dB point at cone 5-15 deg,
 whose hidden echoes come on about half the pings, 100-1400 m off it with 300-540 m sds across the beam (the 8-element
-array's beams near endfire), so the ridge map shows it still only from ping 58; trial 8 (LFM): no change (the ridge
-map is a CW's). Cost: finding the hidden echoes 2.75 s CPU per hour on trial 15 (22 a ping, most of them the sea's
+array's beams near endfire), so the ridge map shows it still only from ping 58; trial 11 (CW, spiky K +10 dB, 32 x
+0.25 m, 2.4 kHz, 6 points) 4 (2) -> 4 (2): two pairs at 0.2-0.3 m/s on points 3 (TS 27 dB) and 4 (22 dB), each
+confirmed on two skirt contacts 700-800 m off the point (r_B +1100-1400 m) and then coasting; point 3's hidden echo
+comes on 15 of the first 40 pings, so the ridge map shows it still only from ping 44, and at ping 45 (the second
+skirt contact) no hidden echo was found; trial 8 (LFM, K +10 dB, 14 points) 0 -> 0 (the ridge map is a CW's).
+Cost: finding the hidden echoes 2.75 s CPU per hour on trial 15 (22 a ping, most of them the sea's
 ridge peaks), 1.1 s on trial 1; the ridge map's updates within the tracker stage's noise (benchmarks/
 bench_cw_ridge_map.py). On the default scene as CW (bench_cw_ridge_map.py, seeds 1 and 2, the same contacts with and
 without): rows, false rows and held % of every target unchanged (seed 1 6, 1, 1; 95/75/100/91; seed 2 4, 0, 0;
