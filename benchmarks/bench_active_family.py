@@ -76,8 +76,9 @@ Cost: finding the hidden echoes 2.75 s CPU per hour on trial 15 (22 a ping, most
 ridge peaks), 1.1 s on trial 1; the ridge map's updates within the tracker stage's noise (benchmarks/
 bench_cw_ridge_map.py). On the default scene as CW (bench_cw_ridge_map.py, seeds 1 and 2, the same contacts with and
 without): rows, false rows and held % of every target unchanged (seed 1 6, 1, 1; 95/75/100/91; seed 2 4, 0, 0;
-90/76/100/85); 13 ridge contacts shown still on seed 2 (no clutter points there), 14 contacts marked, none of a
-target's confirmed track. A first version feeding the hidden echoes to the tracker's own map (3 hits) gave trial 15 0
+90/76/100/85); 13 ridge contacts shown still on seed 2 (no clutter points there), 14 contacts marked: the same
+confirmed tracks (two ids shifted); bench_cw_held.py's scene b (32 x 0.3 m, 2.4 kHz) seed 1: identical, 0 shown
+still. A first version feeding the hidden echoes to the tracker's own map (3 hits) gave trial 15 0
 too, but seed 2 4 -> 5 rows (19 ridge contacts shown still, the sea's ridge peaks recurring by chance).
 """
 
