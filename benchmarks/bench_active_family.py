@@ -79,7 +79,12 @@ without): rows, false rows and held % of every target unchanged (seed 1 6, 1, 1;
 90/76/100/85); 13 ridge contacts shown still on seed 2 (no clutter points there), 14 contacts marked: the same
 confirmed tracks (two ids shifted); bench_cw_held.py's scene b (32 x 0.3 m, 2.4 kHz) seed 1: identical, 0 shown
 still. A first version feeding the hidden echoes to the tracker's own map (3 hits) gave trial 15 0
-too, but seed 2 4 -> 5 rows (19 ridge contacts shown still, the sea's ridge peaks recurring by chance).
+too, but seed 2 4 -> 5 rows (19 ridge contacts shown still, the sea's ridge peaks recurring by chance). Tried and
+left off: the window also about every known ridge point's echo (its place, a still point's range rate there) on pings
+where its hidden peak was not found: trial 11 4 -> 4 (the pairs confirm before the point is known), default scene
+seed 2 4 -> 5 rows (81 contacts marked instead of 14). Left: a track confirmed on two skirt contacts 30 s apart
+before the ridge map knows the point, which then coasts confirmed for 10-20 pings on nothing (trials 1, 11; FAM3's
+note): the map cannot act before it has ~10 pings of the point, so this is the confirmation's to fix.
 """
 
 from __future__ import annotations
