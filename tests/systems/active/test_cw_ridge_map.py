@@ -1,5 +1,5 @@
 """The CW clutter map fed the echoes the ridge notch hides (detection/cw_cells.py ``ridge_echoes``,
-detection/clutter_map.py ``echo_images``, systems/active/contact_tracker.py ``ContactTracker(ridge_window=...)``):
+detection/clutter_map.py ``echo_images``, systems/active/contact_tracker.py ``ridge_map_of`` and ``_ridge_clutter``):
 a world-still point hidden under the notch is learned from those echoes, and its skirt and sidelobe images elsewhere
 are withheld from unconfirmed tracks; a target crossing the ridge (zero world range rate too, but moving) is not.
 
