@@ -58,6 +58,33 @@ whose gate holds them, as the clutter map's): trial 1, 1 h: 6 -> 2 (the mirror p
 ping 76 is left); default scene as CW (rows, false, extra; held %): seed 1 7, 1, 2; 95/75/100/89 (main 7, 1, 2;
 95/75/100/91), seed 2 7, 1, 2; 90/82/100/84 (main 5, 0, 1; 90/76/100/85; the CW rows move by 1-2 with any change of
 the contacts, ACTHOLD's sweeps). 28 contacts flagged in seed 2's 120 pings.
+
+Measured (2026-12-07 session 12, h12-cwmap, main at e4c2ec6; 1 h twins, ~2.5-4 min a trial at load 8-11): the CW
+chain's ridge map (systems/active/contact_tracker.py ``ridge_map_of``, ``_ridge_clutter``): the echoes under each
+beam's ridge notch (detection/cw_cells.py ``ridge_echoes``) in a clutter map of their own, and the contacts in a
+known still point's gate or within c tau and 2.5 Doppler cells of its echo (clutter_map.py ``echo_images``) given only
+to confirmed tracks. False confirmed tracks (listed rows), main -> this: trial 15 (CW, K +5 dB, 16 x 0.5 m, 2.4 kHz,
+14 points) 9 (5) -> 0 (0); trial 1 (CW, Rayleigh +5 dB, 8 x 0.5 m, 1 kHz, 14 points) 6 (1) -> 4 (1): the pair 37/38
+on point 13 from ping 76 gone, left the pairs of pings 11-37 and 50-63 on the same TS 30 dB point at cone 5-15 deg,
+whose hidden echoes come on about half the pings, 100-1400 m off it with 300-540 m sds across the beam (the 8-element
+array's beams near endfire), so the ridge map shows it still only from ping 58; trial 11 (CW, spiky K +10 dB, 32 x
+0.25 m, 2.4 kHz, 6 points) 4 (2) -> 4 (2): two pairs at 0.2-0.3 m/s on points 3 (TS 27 dB) and 4 (22 dB), each
+confirmed on two skirt contacts 700-800 m off the point (r_B +1100-1400 m) and then coasting; point 3's hidden echo
+comes on 15 of the first 40 pings, so the ridge map shows it still only from ping 44, and at ping 45 (the second
+skirt contact) no hidden echo was found; trial 8 (LFM, K +10 dB, 14 points) 0 -> 0 (the ridge map is a CW's).
+Cost: finding the hidden echoes 2.75 s CPU per hour on trial 15 (22 a ping, most of them the sea's
+ridge peaks), 1.1 s on trial 1; the ridge map's updates within the tracker stage's noise (benchmarks/
+bench_cw_ridge_map.py). On the default scene as CW (bench_cw_ridge_map.py, seeds 1 and 2, the same contacts with and
+without): rows, false rows and held % of every target unchanged (seed 1 6, 1, 1; 95/75/100/91; seed 2 4, 0, 0;
+90/76/100/85); 13 ridge contacts shown still on seed 2 (no clutter points there), 14 contacts marked: the same
+confirmed tracks (two ids shifted); bench_cw_held.py's scene b (32 x 0.3 m, 2.4 kHz) seed 1: identical, 0 shown
+still. A first version feeding the hidden echoes to the tracker's own map (3 hits) gave trial 15 0
+too, but seed 2 4 -> 5 rows (19 ridge contacts shown still, the sea's ridge peaks recurring by chance). Tried and
+left off: the window also about every known ridge point's echo (its place, a still point's range rate there) on pings
+where its hidden peak was not found: trial 11 4 -> 4 (the pairs confirm before the point is known), default scene
+seed 2 4 -> 5 rows (81 contacts marked instead of 14). Left: a track confirmed on two skirt contacts 30 s apart
+before the ridge map knows the point, which then coasts confirmed for 10-20 pings on nothing (trials 1, 11; FAM3's
+note): the map cannot act before it has ~10 pings of the point, so this is the confirmation's to fix.
 """
 
 from __future__ import annotations
@@ -310,6 +337,29 @@ def _time_lobes() -> None:
     lobes.cell_images = cells.cell_images = timed
 
 
+RIDGE_CPU = {"s": 0.0, "calls": 0, "echoes": 0}
+
+
+def _time_ridge() -> None:
+    """Count the CPU seconds spent finding the echoes under the CW ridge notch and forming their contacts
+    (systems/active/run.py ``_Chain._ridge_contacts``: the clutter map's extra input)."""
+    import sonartrack.systems.active.run as run_mod
+
+    inner = getattr(run_mod._Chain, "_ridge_contacts", None)
+    if inner is None:  # (a chain without it)
+        return
+
+    def timed(self, *a, **k):
+        t0 = time.process_time()
+        out = inner(self, *a, **k)
+        RIDGE_CPU["s"] += time.process_time() - t0
+        RIDGE_CPU["calls"] += 1
+        RIDGE_CPU["echoes"] += 0 if out is None else len(out) // 2
+        return out
+
+    run_mod._Chain._ridge_contacts = timed
+
+
 def main() -> None:
     from sonartrack.studies.active_chain import Config
 
@@ -340,6 +390,7 @@ def main() -> None:
     if args.still_moving_p is not None:
         _patch_still_hold(args.still_moving_p)
     _time_lobes()
+    _time_ridge()
     if args.skirt_to_confirmed is not None:
         _patch_skirt_to_confirmed(args.skirt_to_confirmed)
     if args.mftd_cell_lobes:
@@ -373,11 +424,18 @@ def main() -> None:
             print(f"  track {r['track']:4d} pings {r['pings']:>7s} ({r['n']:3d}) {r['where']:7s} {r['share']:.0%} "
                   f"speed {r['speed_mps']:5.2f} m/s delay {r['delay_s']:5.1f} s cone {r['cone_deg']:5.1f}{extra} "
                   f"-> {verdict(r)}")
+        from sonartrack.systems.active.targets import mirror_targets
+
+        n_rows = len(mirror_targets(result.tracks, result.geometry))
         print("  by place: " + ", ".join(f"{k} {v}" for k, v in sorted(by.items())) +
-              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses)")
+              f"; {mirror_pairs(result)} of them in mirror pairs (one echo, two hypotheses); {n_rows} listed rows "
+              "(systems/active/targets.py mirror_targets: all false here)")
     print(f"all: {total_false} false confirmed tracks in {total_h:.2f} h = {total_false / max(total_h, 1e-9):.1f}/h")
     if LOBE_CPU["calls"]:
         print(f"lobe test: {LOBE_CPU['s']:.2f} s CPU in {LOBE_CPU['calls']} calls (runs not cached only)")
+    if RIDGE_CPU["calls"]:
+        print(f"ridge echoes: {RIDGE_CPU['s']:.2f} s CPU in {RIDGE_CPU['calls']} pings, {RIDGE_CPU['echoes']} echoes "
+              "(runs not cached only)")
 
 
 if __name__ == "__main__":

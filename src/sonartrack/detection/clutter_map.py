@@ -43,6 +43,28 @@ known to a few hundred metres across the beam, and the stillness test does not p
 withholds them, and the mirror twins of the clutter contacts, as it withholds the point. The price: a target's echo
 within ``image_range_m`` in r_B of a stronger recurring echo is withheld at that ping from the tracks not confirmed.
 
+A CW still point is hidden from the map by the front end itself: it echoes at the stationary sea's Doppler in its own
+direction, on its own beam's reverberation ridge, which the CW front end notches (detection/cw_cells.py). The chain's
+contacts then hold only its delay-Doppler skirt past the notch and its sidelobe images in other beams, 0.4-2 km off
+it, at varying places, on a fraction of the pings, with the CW's wide errors: none of them recurs still, and study
+active-chain trial 15 (CW, 16 x 0.5 m, 2.4 kHz, K +5 dB) confirmed 9 false tracks in its reverberation-only hour, 8 of
+them in mirror pairs on two points of TS 25-30 dB. So the chain also finds the echoes under the notch (cw_cells.py
+``ridge_echoes``: the peaks of the statistic before the notch, at the single-ping threshold), which go to no track,
+and gives them to a second map of this class, the ridge map (systems/active/contact_tracker.py ``ridge_map_of``,
+4 hits of 8: the sea's own ridge peaks above the threshold, 10-20 a ping, recur by chance): a still point gives one
+at its own place on every ping it stands above the ridge, and the recurrence and stillness tests show it still as any
+other point. The notch itself is no stillness test: a target crossing the line of sight holds the sea's Doppler too
+(zero world range rate), and is told from a still point only by its world position, which does not recur still. A
+contact in the gate of a point the ridge map knows, or within a CW's ambiguity of an echo it shows still at the ping
+(c tau in bistatic range and 2.5 Doppler cells in range rate, :func:`echo_images`: its skirt or its images), is
+withheld as this map's clutter is. Measured (benchmarks/bench_active_family.py, 1 h reverberation-only twins): trial
+15 9 -> 0 false confirmed tracks (5 -> 0 rows); trial 1 (8 elements, 1 kHz) 6 -> 4 (a TS 30 dB point near endfire,
+cone 5-15 deg, whose hidden echoes, 300-540 m wide across the beam and on half the pings, the ridge map shows still
+only from ping 58); benchmarks/bench_cw_ridge_map.py (default scene as CW, seeds 1, 2, the same contacts): rows and
+held % of every target unchanged. The price: a contact within that window of a known still point's echo, wherever
+its cone, is withheld from unconfirmed tracks on that ping; and the ridge map needs ~10 pings of the hidden echo (its
+fit's time base) before it withholds anything, so a track confirmed on the images before then keeps them.
+
 Memory. The recurrence test looks back ``span`` pings, the stillness fit ``fit_span`` (longer: the velocity's error
 falls as T n^1.5), and a position once shown still is a known point for ``keep_pings`` pings after its last contact: a
 contact in a known point's gate is clutter without a new fit, so a point whose contacts grow wide across the beam as
@@ -300,3 +322,43 @@ def in_gate(xy_a: np.ndarray, R_a: np.ndarray, xy_b: np.ndarray, R_b: np.ndarray
         (a, b) bool.
     """
     return mahalanobis2(xy_a, R_a, xy_b, R_b) <= gamma
+
+
+def echo_images(xy: np.ndarray, range_rate_mps: np.ndarray, tx_xy, rx_xy, echo_xy: np.ndarray,
+                echo_rate_mps: np.ndarray, range_m: float, rate_mps: float) -> np.ndarray:
+    """The contacts of one ping within ``range_m`` in bistatic range r_B = |z - Tx| + |z - Rx| AND ``rate_mps`` in
+    bistatic range rate of an echo (a CW still point's, found under the ridge notch: detection/cw_cells.py
+    ``ridge_echoes``): that echo's delay-Doppler skirt past the notch (a CW's ambiguity reaches one pulse length tau
+    off in delay, its Doppler main lobe widening to 2 / tau half a pulse off: Levanon & Mozeson, Radar Signals,
+    2004, ch. 2) and its sidelobe images in other beams (its own delay and Doppler), wherever in cone they fall.
+
+    Parameters
+    ----------
+    xy : ndarray (m, 2)
+        The ping's contact positions (m).
+    range_rate_mps : ndarray (m,)
+        Their measured bistatic range rates (m/s; NaN: none measured, never an image).
+    tx_xy, rx_xy : array (2,)
+        Source and receiver at the ping (m).
+    echo_xy : ndarray (k, 2)
+        The echoes' positions (m; either mirror: r_B is the same).
+    echo_rate_mps : ndarray (k,)
+        Their measured range rates (m/s).
+    range_m, rate_mps : float
+        Half-widths of the r_B (m) and range-rate (m/s) windows.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool.
+    """
+    xy, e = np.asarray(xy, float).reshape(-1, 2), np.asarray(echo_xy, float).reshape(-1, 2)
+    if not len(xy) or not len(e):
+        return np.zeros(len(xy), bool)
+    tx, rx = np.asarray(tx_xy, float), np.asarray(rx_xy, float)
+    r_b = np.linalg.norm(xy - tx, axis=1) + np.linalg.norm(xy - rx, axis=1)
+    r_e = np.linalg.norm(e - tx, axis=1) + np.linalg.norm(e - rx, axis=1)
+    with np.errstate(invalid="ignore"):
+        near = (np.abs(r_b[:, None] - r_e[None, :]) <= range_m) & (
+            np.abs(np.asarray(range_rate_mps, float)[:, None] - np.asarray(echo_rate_mps, float)[None, :]) <= rate_mps)
+    return near.any(axis=1)

@@ -82,6 +82,9 @@ by default: a target on or near the ridge (crossing, zero world Doppler) is notc
 track alive; measured on the default scene as CW (benchmarks/bench_active_rows.py, 1 h; rows, false, extra; held %
 approacher/crossing-a/crossing-b/maneuvering), off -> 3 dB: seed 1 7, 1, 2; 95/75/100/91 -> 8, 1, 3; 95/79/100/65;
 seed 2 5, 0, 1; 90/76/100/85 -> 7, 1, 2; 92/74/100/82. Sources of 15 dB (s >= 30) instead of 10 dB: trial 1 6 -> 4.
+What the chain does instead: the echoes under the notch (:func:`ridge_echoes`) feed a clutter map of their own, not the
+tracker; where it shows one still at one world place over pings, its skirt and images are withheld (detection/
+clutter_map.py module doc), and a target crossing the ridge, not still in the world, keeps its skirt.
 """
 
 from __future__ import annotations
@@ -97,7 +100,7 @@ from sonartrack.detection.cw_law import CwEstimate, equal_tail_map, os_cdf, os_d
 
 __all__ = ["CwEstimate", "CwNormaliserSettings", "cw_noise_estimate", "cw_ping_cells", "cw_statistic", "cw_threshold",
            "doppler_stride", "equal_tail_map", "first_searched_delay_s", "notch_skirts", "one_sided_os", "os_cdf",
-           "os_draws", "skirt_gain"]
+           "os_draws", "ridge_echoes", "skirt_gain"]
 
 
 class CwNormaliserSettings(Settings):
@@ -518,3 +521,44 @@ def notch_skirts(power: np.ndarray, stat: np.ndarray, notch: np.ndarray, delay_s
         out[b] = (power[b] <= explained * scale) & (explained > 0) & ~notch[b][None, :]
     return out
 
+
+
+def ridge_echoes(cells, threshold: float):
+    """The echoes the ridge notch hides: local maxima of the statistic BEFORE the notch, s' = P / mu (``cells.power``
+    over ``cells.level``), at or above ``threshold``, whose cell lies in its beam's notched Doppler cells (those set
+    to s = 0 at every delay).
+
+    Why. A still clutter point echoes at the stationary sea's Doppler in its own direction, on its own beam's ridge,
+    which the front end notches (module doc): the chain's detections never hold the point itself, only its skirt
+    past the notch and its sidelobe images in other beams, 400-2000 m off it and at varying places, which no clutter
+    map shows still (study active-chain trial 15, CW 16 x 0.5 m, 2.4 kHz: 8 of 9 false confirmed tracks an hour on
+    two points of TS 25-30 dB; benchmarks/bench_active_family.py). These echoes are the point itself, at its own
+    delay and cone, on every ping it is above the ridge's reverberation: the clutter map (detection/clutter_map.py)
+    is fed them, not the tracker (a CW cannot tell a still point from a target holding the sea's Doppler on one
+    ping; the map's recurrence at one world place and its stillness fit over pings can; systems/active/
+    contact_tracker.py ``ridge_map_of``).
+
+    Parameters
+    ----------
+    cells : PingCells
+        A CW ping's cells from :func:`cw_ping_cells` with ``power`` and ``level`` kept (``lobe_margin_db`` set).
+    threshold : float
+        Threshold on s' (the single-ping detector's).
+
+    Returns
+    -------
+    Detections or None
+        The hidden echoes (``statistic`` s'); None when the cells keep no power before the notch.
+    """
+    from dataclasses import replace
+
+    from sonartrack.detection.cells import detect_ping
+
+    if cells.power is None or cells.level is None:
+        return None
+    notch = (np.asarray(cells.statistic) <= 0.0).all(axis=1)  # (B, J): the notched Doppler cells of each beam
+    level = np.asarray(cells.level, np.float32)
+    before = np.divide(np.asarray(cells.power, np.float32), level, out=np.zeros_like(level), where=level > 0)
+    det = detect_ping(replace(cells, statistic=before, lobes=None, power=None), threshold)
+    keep = notch[det.beam, det.doppler_cell]
+    return type(det)(**{f: np.asarray(getattr(det, f))[keep] for f in type(det).__slots__})

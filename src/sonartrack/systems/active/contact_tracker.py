@@ -146,6 +146,13 @@ class ContactTracker:
         contact before it is merged after all (tracking/duplicates.py ``reunite_scans``; 0: never).
     endfire_alias : EndfireAlias or None
         The line array's grating-lobe alias of a held echo withheld (:meth:`_not_images`); None: not.
+    ridge_window : tuple of float or None
+        (bistatic range m, range rate m/s): a contact within both of a ridge echo the ridge map shows still is
+        that echo's skirt or sidelobe image (clutter_map.py :func:`echo_images`; systems/active/cw_tracking.py
+        ``cw_ridge_window``); None: only the contacts in the gate of the ridge map's known points.
+    ridge_map : ClutterMap or None
+        The clutter map of the echoes under a CW's ridge notch (:meth:`_ridge_clutter`, :func:`ridge_map_of`);
+        None: the ridge echoes given to :meth:`step` are ignored.
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -153,7 +160,7 @@ class ContactTracker:
                  max_range_rate_mps: float | None = None, turns=None, clutter_area_m2: float | None = None,
                  clutter_map=None, scan_interval_s: float | None = None, rejoin_s: float | None = None,
                  claims: str | None = None, keep_apart: bool = False, endfire_alias: EndfireAlias | None = None,
-                 reunite_scans: int = 0):
+                 reunite_scans: int = 0, ridge_window: tuple[float, float] | None = None, ridge_map=None):
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
@@ -162,8 +169,7 @@ class ContactTracker:
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
         self.clutter_area, self._counts = clutter_area_m2, [0, 0]  # (contacts, scans) so far
-        self.endfire_alias = endfire_alias
-        self.claims = claims
+        self.endfire_alias, self.claims = endfire_alias, claims
         if claims is not None:
             from sonartrack.tracking.associators import ClaimedPDA
 
@@ -186,6 +192,7 @@ class ContactTracker:
 
                 self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
         self.clutter_map, self.hold = clutter_map, None
+        self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
@@ -243,11 +250,11 @@ class ContactTracker:
                 keep &= ~(gate[d < 0].any(axis=0) & ~gate[d > 0].any(axis=0))
         return keep
 
-    def _not_clutter(self, t_s: float, contacts: Contacts) -> np.ndarray:
+    def _not_clutter(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
         ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
         clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
-        withheld)."""
+        withheld); and on a CW the contacts :meth:`_ridge_clutter` finds from the echoes under the ridge notch."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
@@ -260,12 +267,36 @@ class ContactTracker:
             g = self.geometry
             clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
                 contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+        if ridge is not None and self.ridge_map is not None:
+            clutter = clutter | self._ridge_clutter(float(t_s), contacts, ridge)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
             keep &= ~clutter | held
         return keep
+
+    def _ridge_clutter(self, t_s: float, contacts: Contacts, ridge: Contacts) -> np.ndarray:
+        """(m,) bool: the contacts a still point hidden under a CW's ridge notch explains. ``ridge`` (the ping's
+        echoes under the notch, detection/cw_cells.py ``ridge_echoes``) feeds the ridge map (its own clutter map, so
+        that the sea's ridge peaks and the tracker's contacts do not make hits for each other); a contact is clutter
+        when it lies in the gate of a point that map knows still, or within ``ridge_window`` of an echo it shows still
+        at this ping (clutter_map.py :func:`echo_images`: the echo's skirt past the notch and its sidelobe images).
+        ``ridge_counts`` adds up the ridge contacts shown still and the contacts marked."""
+        from sonartrack.detection.clutter_map import echo_images, mahalanobis2
+
+        rm, g = self.ridge_map, self.geometry
+        still = rm.update(ridge.xy, ridge.R, t_s)
+        out = np.zeros(len(contacts), bool)
+        kxy, kR, _ = rm.known
+        if len(kxy) and len(contacts):
+            out |= (mahalanobis2(contacts.xy, contacts.R, kxy, kR) <= rm.gamma).any(axis=1)
+        if still.any() and self.ridge_window is not None:
+            out |= echo_images(contacts.xy, contacts.range_rate_mps, g.tx_at(t_s), g.rx_at(t_s), ridge.xy[still],
+                               ridge.range_rate_mps[still], *self.ridge_window)
+        self.ridge_counts[0] += int(still.sum())
+        self.ridge_counts[1] += int(out.sum())
+        return out
 
     def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact in no confirmed
@@ -310,7 +341,7 @@ class ContactTracker:
 
         self.tracker.measurements = replace(m, pd=float(pd))
 
-    def step(self, t_s: float, contacts: Contacts) -> np.ndarray:
+    def step(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """One ping's scan; returns the contacts' verdict (True: given to the tracker; False: refused by the
         range-rate gate or the mirror of a resolved side).
 
@@ -320,13 +351,17 @@ class ContactTracker:
             The scan time (s), the ping's transmit time.
         contacts : Contacts
             The ping's mirror-pair contacts (positions m, covariances m^2).
+        ridge : Contacts, optional
+            The mirror-pair contacts of the ping's echoes hidden by a CW's ridge notch: for the ridge map only
+            (:meth:`_ridge_clutter`), never the tracker.
 
         Returns
         -------
         numpy.ndarray
             (m,) bool verdict per contact (False also: a clutter-map contact outside every confirmed track's gate).
         """
-        keep = self._gates(t_s, contacts) & self._not_clutter(t_s, contacts) & self._not_images(t_s, contacts)
+        keep = (self._gates(t_s, contacts) & self._not_clutter(t_s, contacts, ridge)
+                & self._not_images(t_s, contacts))
         self._cw_pd(contacts)
         if hasattr(self.tracker.measurements, "at_scan"):
             g, lam = self.geometry, None
@@ -501,6 +536,25 @@ def endfire_alias_of(settings: ActiveSettings, waveform) -> EndfireAlias | None:
     band = waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else 1.0 / waveform.duration_s
     window = max(c / (band * np.sqrt(12.0)), settings.clutter_map_image_m or 0.0)
     return EndfireAlias.of(c / waveform.carrier_hz, float(settings.spacing_m), int(settings.elements), window)
+
+
+#: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
+#: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, 7-22 a ping (default scene as
+#: CW; study trials 1, 15), recur by chance (with 3: 19 shown still on the default scene's seed 2, with 4: 13)
+RIDGE_MAP_HITS = 4
+
+
+def ridge_map_of(settings: ActiveSettings):
+    """The clutter map of a CW's echoes under the ridge notch (:meth:`ContactTracker._ridge_clutter`): as
+    :func:`clutter_map_of`'s, at least :data:`RIDGE_MAP_HITS` hits, no lobe-image window; None without a map."""
+    cm = clutter_map_of(settings)
+    if cm is None:
+        return None
+    from sonartrack.detection.clutter_map import ClutterMap
+
+    return ClutterMap(cm.span, min(max(cm.min_hits, RIDGE_MAP_HITS), cm.span),
+                      still_probability=settings.clutter_map_still_probability, slow_mps=cm.slow_mps,
+                      image_range_m=None)
 
 
 def clutter_map_of(settings: ActiveSettings):

@@ -276,3 +276,32 @@ def cw_echo_window(settings: ActiveSettings, waveform) -> tuple[int, float, int]
 def detection_rows(det, keep):
     """The rows ``keep`` (bool mask or indices) of a detections record."""
     return type(det)(**{f: np.asarray(getattr(det, f))[keep] for f in det.__dataclass_fields__})
+
+
+#: Doppler resolution cells (c / (f_c tau) m/s each) of the range-rate window about a still point's hidden echo in
+#: which its skirt and sidelobe images fall (measured, study active-chain trial 15, 2.4 kHz, tau 1 s: the contacts
+#: near a TS 30 dB point 0-1.24 m/s = 0-2 cells off its range rate; trial 1, 1 kHz: 1.5-2.4 m/s = 1-1.6 cells)
+RIDGE_IMAGE_CELLS = 2.5
+
+
+def cw_ridge_window(waveform, sound_speed_mps: float) -> tuple[float, float] | None:
+    """(bistatic range m, range rate m/s) about a still point's echo hidden by the ridge notch within which a contact
+    is its skirt or a sidelobe image (detection/clutter_map.py ``echo_images``): one pulse length in travel time,
+    c tau (the CW ambiguity's delay extent), and :data:`RIDGE_IMAGE_CELLS` Doppler resolution cells; None for an LFM.
+
+    Parameters
+    ----------
+    waveform : Waveform or WaveformSettings
+        The pulse (kind, duration_s, carrier_hz).
+    sound_speed_mps : float
+        Sound speed c (m/s).
+
+    Returns
+    -------
+    tuple of float or None
+        (r_B half-width m, range-rate half-width m/s).
+    """
+    if waveform.kind != "cw":
+        return None
+    c, tau = float(sound_speed_mps), float(waveform.duration_s)
+    return c * tau, RIDGE_IMAGE_CELLS * c / (float(waveform.carrier_hz) * tau)

@@ -15,7 +15,9 @@ the number of pings beyond the per-ping tables and a small B-scan):
    decided sides (sides.py: each confirmed track's side by the likelihood ratio of its contacts and their
    mirrors under constant-velocity motion, once it has lived through a turn of the array; a track decided on
    its target's side has the mirror contact of each detection it gates dropped (:func:`resolve_mirrors`), a
-   track decided a ghost has the contacts in its gate dropped, so it starves);
+   track decided a ghost has the contacts in its gate dropped, so it starves), and the clutter map
+   (detection/clutter_map.py: still world positions over pings; on a CW a second map of the echoes the ridge notch
+   hides, detection/cw_cells.py ``ridge_echoes``, whose still points' skirt and images are withheld too);
 5. tracking: P4's IMM-IPDA with one-point initiation and existence-based confirmation (tracking/), one scan
    per ping, and after each scan the duplicate tracks merged (tracking/duplicates.py: a track whose state passes
    the track-to-track test against a confirmed one is deleted, the older confirmed track kept): IPDA tracks share
@@ -43,6 +45,7 @@ from sonartrack.systems.active.contact_tracker import (  # noqa: F401 - re-expor
     clutter_map_of,
     endfire_alias_of,
     rate_sd_of,
+    ridge_map_of,
     track_detections,
 )
 from sonartrack.systems.active.contacts import (
@@ -58,6 +61,7 @@ from sonartrack.systems.active.cw_tracking import (
     cw_merge_echoes,
     cw_peaked,
     cw_rate_sd_mps,
+    cw_ridge_window,
     cw_unpeaked_errors,
     detection_rows,
 )
@@ -272,7 +276,9 @@ class _Chain:
                                       clutter_map=clutter_map_of(s), scan_interval_s=self.scan_interval,
                                       rejoin_s=s.rejoin_s, claims=s.contact_claims,
                                       keep_apart=s.merge_keep_apart, reunite_scans=s.merge_reunite_scans,
-                                      endfire_alias=endfire_alias_of(s, waveform))
+                                      endfire_alias=endfire_alias_of(s, waveform),
+                                      ridge_window=cw_ridge_window(waveform, s.sound_speed_mps) if self.cw else None,
+                                      ridge_map=ridge_map_of(s) if self.cw else None)
 
     def _front_end(self, w, fs: float, number: int, time_s: float, samples: np.ndarray) -> PingCells:
         """The ping's cells: detection/cells.py's for an LFM (samples before the direct blast's end gated, its
@@ -327,12 +333,27 @@ class _Chain:
         c = replace(c, detection=c.detection + self.n_detections)  # rows of the whole record's detections
         self.n_detections += len(det)
         self.contacts.append(c)
-        self.gate.append(tm.run("tracking", self.tracker.step, time_s, c))
+        ridge = tm.run("contacts", self._ridge_contacts, cells, number, time_s) if self.cw else None
+        self.gate.append(tm.run("tracking", self.tracker.step, time_s, c, ridge))
         self.times.append(float(time_s))
         self.ping_detections.append(len(det))
         if self.history_s is not None:
             self._forget(float(time_s) - self.history_s)
         return cells
+
+    def _ridge_contacts(self, cells: PingCells, number: int, time_s: float) -> Contacts | None:
+        """The contacts of a CW ping's echoes hidden by the ridge notch (detection/cw_cells.py ``ridge_echoes``, at
+        the single-ping threshold), for the clutter map alone (a still point sits on its own beam's ridge: the map
+        sees the point itself, not only its skirt); None without a map or without the power before the notch."""
+        from sonartrack.detection.cw_cells import ridge_echoes
+
+        if self.tracker.ridge_map is None:
+            return None
+        det = ridge_echoes(cells, self.threshold)
+        if det is None:
+            return None
+        s = self.settings
+        return form_contacts(det, [time_s], self.geometry, s.sound_speed_mps, s.contacts, self.beam_step, [number])
 
     def _cw_tracked(self, mftd: Detections, single: Detections, cells: PingCells):
         """A CW ping's tracked detections (cw_tracking.py): each MFTD detection measured by the ping's own echo peak
