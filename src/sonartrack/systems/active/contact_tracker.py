@@ -164,7 +164,6 @@ class ContactTracker:
         from sonartrack.association.gating import gate_threshold
         from sonartrack.tracking.configurations import position_tracker
         from sonartrack.tracking.duplicates import DuplicateMerger
-        from sonartrack.tracking.measurements import RangeRatePositionMeasurements
 
         self.settings, self.geometry, self.gate_sigma, self.rate_sd = settings, geometry, gate_sigma, rate_sd_mps
         self.side_turn = None if side_turn_deg is None else float(np.deg2rad(side_turn_deg))
@@ -177,20 +176,9 @@ class ContactTracker:
                                                            f"{claims!r}")
         self.tracker = position_tracker(settings, turns=turns, associator=None if claims is None else ClaimedPDA(
             linear_multitarget=claims == "lm"))
-        if max_range_rate_mps is not None:
-            m = self.tracker.measurements
-            self.tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability,
-                                                                      m.clutter_density_per_m2, rate_sd_mps,
-                                                                      float(max_range_rate_mps))
+        _measurement_part(self.tracker, settings, rate_sd_mps, max_range_rate_mps)
         if settings.false_tracks_per_h is not None and scan_interval_s is not None:  # at the stated rate
-            from sonartrack.tracking.deleters import RateConfirmation  # (tracking/existence.py; one ping: no rate)
-
-            self.tracker.deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s,
-                                                    settings.initial_existence, settings.terminate_threshold)
-            if settings.confirm_min_hits > 1:
-                from sonartrack.tracking.deleters import MinHits
-
-                self.tracker.deleter = MinHits(self.tracker.deleter, settings.confirm_min_hits)
+            self.tracker.deleter = _rate_confirmation(settings, scan_interval_s)
         self.clutter_map, self.hold = clutter_map, None
         self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
@@ -382,7 +370,8 @@ class ContactTracker:
                                                    np.ones(len(T), bool))
         if self.merger is not None:  # the scan's contacts, for a told-apart pair's reunion (duplicates.py)
             self.merger.contacts[:] = [contacts.xy[keep], contacts.R[keep]]
-        snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep])
+        amplitude = contacts.statistic[keep] if "amplitude" in self.tracker.measurements.scan_needs else None
+        snap = self.tracker.step(t_s, contacts.xy[keep], contacts.R[keep], amplitude)
         self._last_t = float(t_s)
         c = snap.confirmed
         self.sides.update(float(t_s), float(self.geometry.heading_at(t_s)), contacts, snap.track_id[c], snap.x[c],
@@ -457,6 +446,32 @@ class ContactTracker:
         for rows in self._rows.values():
             del rows[:max(int(n), 0)]
 
+
+
+def _measurement_part(tracker, settings: PositionTrackerSettings, rate_sd_mps: float,
+                      max_range_rate_mps: float | None) -> None:
+    """The tracker's measurement part: range rate measured (CW) where a largest range rate is given, each contact's
+    detection statistic weighed (tracking/amplitude_parts.py) where ``amplitude_aided`` says so."""
+    if max_range_rate_mps is not None:
+        from sonartrack.tracking.measurements import RangeRatePositionMeasurements
+
+        m = tracker.measurements
+        tracker.measurements = RangeRatePositionMeasurements(m.pd, m.gate_probability, m.clutter_density_per_m2,
+                                                             rate_sd_mps, float(max_range_rate_mps))
+    if settings.amplitude_aided:
+        from sonartrack.tracking.amplitude_parts import with_amplitude
+
+        with_amplitude(tracker, settings)
+
+
+def _rate_confirmation(settings: PositionTrackerSettings, scan_interval_s: float):
+    """Confirmation at the stated false-track rate (tracking/existence.py; one ping: no rate), after
+    ``confirm_min_hits`` hits where more than one is asked."""
+    from sonartrack.tracking.deleters import MinHits, RateConfirmation
+
+    deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s, settings.initial_existence,
+                               settings.terminate_threshold)
+    return MinHits(deleter, settings.confirm_min_hits) if settings.confirm_min_hits > 1 else deleter
 
 def rate_sd_of(cells_range_rate_mps) -> float:
     """Standard deviation of a measured range rate: one Doppler cell / sqrt(12) (uniform within the cell); 1 m/s

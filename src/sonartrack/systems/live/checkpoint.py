@@ -77,7 +77,9 @@ def read_checkpoint(cls, path):
 
 #: the active chain's checkpoint format and version (systems/live/active.py)
 ACTIVE_CHECKPOINT_FORMAT = "sonartrack-live-active"
-ACTIVE_CHECKPOINT_VERSION = 5  # 5: the merger reunites told-apart pairs; 4: endfire alias test; 3: contact claims
+#: 6: the CW ridge map and the amplitude parts; 5: the merger reunites told-apart pairs; 4: endfire alias test;
+#: 3: contact claims
+ACTIVE_CHECKPOINT_VERSION = 6
 #: LiveActive's attributes a checkpoint keeps as they are (the chain: its tracker, MFTD stack, clutter map, sides,
 #: B-scan rows and the per-ping rows of its history)
 _ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets", "newest")
