@@ -16,14 +16,15 @@ compared (detection/normalise.py):
 For each delay band it prints the share of cells whose mapped statistic reaches the exponential-noise threshold for
 Pfa 1e-2, 1e-3, 1e-4 (as a ratio to the stated Pfa, with its count), and the single-ping detections a ping at the
 chain's Pfa 1e-5 and 1e-6 (``mftd_strong_pfa``). A map that holds its rate gives ratios near 1 in every band (the
-binomial interval is printed for the 1e-4 column). ``--mftd`` also runs the chain's MFTD (pfa 1e-9) on the mapped
-cells and counts its detections per band.
+binomial interval is printed for the 1e-4 column).
 
 Usage: ``python benchmarks/bench_near_pfa.py --trials 14 2 --pings 20``.
 
-``--chain ARGS...`` instead runs benchmarks/bench_active_family.py with ARGS (its false confirmed tracks of the 1 h
-twins) with the front end's heavy-tail map replaced by :class:`DelayShapes` (one per run of pings): the wiring
-proposed for detection/cells.py ``ping_front_end`` and systems/active/run.py, measured without editing them.
+``--chain family ARGS...`` instead runs benchmarks/bench_active_family.py with ARGS (its false confirmed tracks of the
+1 h twins), ``--chain rows ARGS...`` benchmarks/bench_active_rows.py (rows and held % of the default scene; give it a
+fresh ``--cache`` so that the chain runs), with the front end's heavy-tail map replaced by :class:`DelayShapes` (one
+per run of pings): the wiring proposed for detection/cells.py ``ping_front_end`` and systems/active/run.py,
+measured without editing them.
 """
 
 from __future__ import annotations
@@ -177,13 +178,16 @@ def patch_front_end() -> None:
 def main() -> None:
     import sys
 
-    if "--chain" in sys.argv:
-        sys.path.insert(0, str(Path(__file__).parent))
-        import bench_active_family
+    if "--chain" in sys.argv:  # --chain family|rows ARGS: that benchmark with the proposed wiring
+        import importlib
 
+        sys.path.insert(0, str(Path(__file__).parent))
+        at = sys.argv.index("--chain")
+        name = {"family": "bench_active_family", "rows": "bench_active_rows"}[sys.argv[at + 1]]
+        bench = importlib.import_module(name)
         patch_front_end()
-        sys.argv = [sys.argv[0]] + sys.argv[sys.argv.index("--chain") + 1:]
-        bench_active_family.main()
+        sys.argv = [sys.argv[0]] + sys.argv[at + 2:]
+        bench.main()
         return
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--trials", type=int, nargs="+", default=[14])
