@@ -78,3 +78,31 @@ def test_pooled_shapes_keep_the_rate_in_every_delay_band():
             assert 0.8 * lo <= count <= 1.25 * hi, (region.mean(), beams, count, lo, hi)  # + the fit's own scatter
     near_spiky = per_ping[:, :6, 0][..., delay < 4.3]
     assert np.mean(near_spiky >= alpha) > 3 * pfa  # one shape per ping: the spiky near cells over-alarm
+
+
+def _with_target(rng, n_pings: int, delay: np.ndarray, level: float) -> np.ndarray:
+    """OS-CFAR statistic (P, 12, 1, D) of K clutter (nu 4) with an echo ``level`` times the clutter's mean in beams
+    4-6 and delay cells 2000-2007 of every ping (a slow target that stays in one tile; an LFM echo's footprint)."""
+    out = []
+    for _ in range(n_pings):
+        y = rng.gamma(4.0, 0.25, (12, delay.size)) * rng.exponential(1.0, (12, delay.size))
+        y[4:7, 2000:2008] += level * rng.exponential(1.0, (3, 8))  # Swerling 1 across its cells
+        out.append(cfar_normalise(y.astype(np.float32), CfarSettings())[:, None, :])
+    return np.stack(out)
+
+
+def test_a_target_that_stays_in_its_tile_is_not_fitted_as_clutter():
+    rng = np.random.default_rng(77)
+    delay = np.linspace(2.0, 20.0, 6000)
+    s = _with_target(rng, 16, delay, 1000.0)  # 30 dB
+    fitted = {}
+    for name, censor in (("censored", 1e-6), ("not censored", 1e-300)):
+        shapes = DelayShapes(N, K, DelayShapeSettings(tile_cells=1000, pings=16).model_copy(
+            update={"censor_pfa": censor}))
+        for x in s:
+            out, nu = shapes.push(x, delay)
+        fitted[name] = (float(nu[5, 0, 2001]), float(nu[5, 0, 5000]))  # the target's tile, a tile far from it
+    # censored, the target's tile is fitted as the clutter elsewhere (nu 4 both, within the fits' scatter)
+    assert fitted["censored"][0] == pytest.approx(fitted["censored"][1], rel=0.35)
+    # not censored, its own cells make its tile look spikier: the map would lower the target with it
+    assert fitted["not censored"][0] < 0.8 * fitted["censored"][0]  # measured 0.70 x
