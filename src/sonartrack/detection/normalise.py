@@ -4,6 +4,11 @@ The detector's design SNR and its log-likelihood weights assume noise-only cells
 mean 2 (eq. 8), whose median is 2 ln 2. A receiver's gain is arbitrary, so by default the frames are
 scaled so that their median is 2 ln 2: the median is robust to a target occupying a few cells, and
 after it the design SNR means what it says whatever the gain.
+
+Heavy-tailed reverberation is put on the same scale by its law: the OS-CFAR statistic of K clutter is mapped onto
+its law in exponential noise (:func:`k_to_exponential`) through a K shape fitted to its tail, per ping and beam group
+(:func:`k_shape_from_exceedance`), or per delay band and beam group on counts pooled over pings
+(:class:`DelayShapes`: the near, reverberation-limited delays are spikier than the far ones).
 """
 
 from __future__ import annotations
