@@ -304,9 +304,10 @@ class DelayShapes:
     through a K shape per Doppler cell and tile (a delay band x a group of adjacent beams, :func:`delay_tiles`), fitted
     to the share of the tile's cells above the level ``alpha_0`` in the pings BEFORE it, up to ``pings`` of them,
     together (:func:`k_shape_from_share` on pooled counts). The level is the deepest of :data:`SHAPE_LEVELS` the pooled
-    cells measure (at least 100 of them expected above it in exponential noise); a tile with too few pooled cells
-    takes its band's fit over all beams, and where that is short too (the first ping) this ping's own fit by beam
-    group (:func:`k_map_by_delay` without bands): the first ~10 pings are the warm-up. After the map the ping's counts
+    cells measure (at least 100 of them expected above it in exponential noise; in the warm-up 30 at the first
+    level, :data:`WARM_UP_EXCEEDANCES`); a tile with too few pooled cells takes its band's fit over all beams, and
+    where that is short too (the first ping) this ping's own fit by beam group (:func:`k_map_by_delay` without
+    bands): the first ~3 pings are the warm-up. After the map the ping's counts
     join the pool, censored: the footprint of an echo the map leaves above the threshold of ``censor_pfa`` is left
     out (a target that stays in a 1000-cell tile for 20 pings puts ~10 cells a ping above the level of 1e-2, as many
     as the clutter does; uncensored, the default LFM scene seed 1 lost crossing-a on 10 pings, held 73 -> 63 %).
@@ -411,9 +412,9 @@ class DelayShapes:
         they measure none."""
         size = counts[0]
         usable = [m for m, p in enumerate(SHAPE_LEVELS) if size * p >= 100]
-        if not usable:
+        if not usable and size * SHAPE_LEVELS[0] < WARM_UP_EXCEEDANCES:
             return float("nan")
-        m = usable[-1]
+        m = usable[-1] if usable else 0
         return k_shape_from_share(counts[m + 1] / size, SHAPE_LEVELS[m], self.n, self.k)
 
 
@@ -424,6 +425,12 @@ def quantised_shape(nu: float) -> float:
         return float(nu)
     return float(np.exp(np.round(20.0 * np.log(nu)) / 20.0))
 
+
+#: a tile's own fit at the first level from this many expected exceedances on (its share then within ~+-35 % at
+#: 95 %): in the warm-up a rough fit of its own beats its band's over all beams, which mixes narrow spiky beams with
+#: wide ones (study active-chain trial 14, 1 h twin: a false mirror pair confirmed at 2.5 s delay on pings 11-19 with
+#: the band's fit until 100)
+WARM_UP_EXCEEDANCES = 30
 
 #: the levels (Pfa in exponential noise) at which :class:`DelayShapes` may fit: the deepest its pooled cells measure
 SHAPE_LEVELS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
