@@ -35,8 +35,9 @@ heavier than K: the volume scatterers (0.5 per km^2 at 10 km, shape 0.2) are ~1e
 the K of the seabed (Abraham & Lyons' mixture), which no K shape fitted at 1e-2 .. 1e-3 extrapolates to 1e-5.
 
 Measured with ``--chain`` (same day, 1 h reverberation-only twins, false confirmed tracks, main at e4c2ec6 -> the
-wiring; 2-10 min each at load ~11): trial 14 4 (two mirror pairs at 2.1-2.7 s, "early") -> 0; trial 2 2 -> 0; trial 10
-3 -> 0; trial 18 (Rayleigh) 4 -> 4, the same two pairs (a TS 24 dB clutter point and one at 9.6 s, cone 44 deg).
+wiring; 2-10 min each at load ~11; "before" rerun here for trials 14 and 18, for 2 and 10 the study's
+trials.parquet): trial 14 4 (two mirror pairs at 2.1-2.7 s, "early") -> 0; trial 2 2 -> 0; trial 10 3 -> 0; trial 18
+(Rayleigh) 4 -> 4, the same two pairs (a TS 24 dB clutter point and one at 9.6 s, cone 44 deg).
 ``--chain rows --kinds lfm`` (the default scene run uncached; rows, false rows; held % approacher / crossing-a /
 crossing-b / maneuvering): seed 1 4, 0; 74/73/85/99 -> 4, 0; 75/63/88/99 (crossing-a's first segment, pings 45-55 at
 10-11 s delay and cone 41 deg, not confirmed: its contacts at pings 46 and 49 are gone), seed 2 4, 0; 78/82/89/98 ->
