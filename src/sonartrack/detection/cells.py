@@ -50,6 +50,7 @@ from sonartrack.core.rows import Rows
 from sonartrack.core.settings import Settings, setting
 from sonartrack.detection.cfar import CfarSettings, cfar_threshold, noise_estimate
 from sonartrack.detection.lobes import LobeBand, cell_images
+from sonartrack.detection.normalise import DelayShapes, DelayShapeSettings
 
 
 class FrontEndSettings(Settings):
@@ -78,6 +79,13 @@ class FrontEndSettings(Settings):
                                      "(detection/normalise.py): thresholds set for exponential noise then keep their "
                                      "false-alarm rate in spiky reverberation (OS CFAR only)", unit="")
     cfar: CfarSettings = setting(default_factory=CfarSettings, doc="the CFAR normaliser along range")
+    heavy_tail_by_delay: bool = setting(
+        True, "in a run of pings (the chain), heavy_tail's K shape is fitted per tile (a delay band x adjacent beams) "
+              "on its exceedance counts pooled over pings (detection/normalise.py DelayShapes): the near, "
+              "reverberation-limited delays are spikier than the far, noise-limited ones; the first ~3 pings, and a "
+              "ping on its own, are fitted by beam group over all delays (heavy_tail_cells)", unit="")
+    heavy_tail_tiles: DelayShapeSettings = setting(default_factory=DelayShapeSettings,
+                                                   doc="the tiles and pings of heavy_tail_by_delay")
     heavy_tail_cells: int | None = setting(
         20000, "heavy_tail's K shape is fitted per group of adjacent beams holding at least this many cells (a narrow "
                "beam's reverberation is spikier than a wide one's: cells.py heavy_tail_statistic); not set: one fit "
@@ -229,7 +237,7 @@ def cfar_stride(waveform: Waveform, fs_hz: float, delay_s: np.ndarray) -> int:
 
 def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array: LineArray,
                    settings: FrontEndSettings, *, time_s: float = 0.0, ping: int = 0,
-                   direct_arrival_s: float | None = None) -> PingCells:
+                   direct_arrival_s: float | None = None, shapes: DelayShapes | None = None) -> PingCells:
     """One ping's normalised cells (module doc).
 
     Parameters
@@ -252,6 +260,9 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     direct_arrival_s : float, optional
         Arrival of the direct blast at the array (s after transmit, |Tx - Rx| / c from the navigation): the samples
         before its end plus ``blast_guard_s`` are zeroed and no delay before it is searched (:func:`blast_gate_s`).
+    shapes : DelayShapes, optional
+        The run's K shapes by delay band and beam group (``heavy_tail_by_delay``): this ping's counts join them and
+        its statistic is mapped by them; None: by this ping's own fit by beam group (:func:`heavy_tail_statistic`).
 
     Returns
     -------
@@ -271,7 +282,13 @@ def ping_front_end(samples: np.ndarray, fs_hz: float, waveform: Waveform, array:
     mu = noise_estimate(y, settings.cfar, cfar_stride(waveform, fs_hz, delay))
     stat = np.zeros((power.shape[0], int(keep.sum()), power.shape[2]), np.float32)
     level = np.zeros_like(stat)
-    s_live, _ = heavy_tail_statistic(np.divide(y, mu, out=np.zeros_like(y), where=mu > 0), settings)
+    s_live = np.divide(y, mu, out=np.zeros_like(y), where=mu > 0)
+    if shapes is None or not settings.heavy_tail or settings.cfar.method != "os":
+        s_live, _ = heavy_tail_statistic(s_live, settings)
+    else:  # on the whole delay axis (the gated cells 0): the tiles stay put when the blast's gate moves
+        whole = np.zeros(y.shape[:2] + (int(keep.sum()),), np.float32)
+        whole[..., live] = s_live
+        s_live = shapes.push(whole, delay[keep], settings.heavy_tail_cells)[0][..., live]
     stat[:, live] = np.moveaxis(s_live, -1, 1)
     level[:, live] = np.moveaxis(np.divide(y, s_live, out=mu.copy(), where=s_live > 0), -1, 1)  # s level = power
     rate = (doppler_to_range_rate(doppler, waveform.carrier_hz, settings.sound_speed_mps)

@@ -38,6 +38,7 @@ import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.detection.cells import Detections, PingCells
+from sonartrack.detection.normalise import DelayShapes
 from sonartrack.systems.active.checks import check_memory, check_spacing
 from sonartrack.systems.active.contact_tracker import (  # noqa: F401 - re-exported: the chain's tracker stage
     ActiveTracks,
@@ -220,6 +221,9 @@ class _Chain:
         self.geometry, self.cw, self.period, self.scan_interval = geometry, bool(cw), period_s, scan_interval_s
         self.array = LineArray(int(s.elements), float(s.spacing_m))
         self.front_end = s.front_end_settings()
+        fe = self.front_end
+        self.shapes = (DelayShapes(fe.cfar.n_reference, fe.cfar.rank, fe.heavy_tail_tiles)
+                       if fe.heavy_tail and fe.heavy_tail_by_delay and fe.cfar.method == "os" else None)
         self.threshold = cw_threshold(s.pfa, s.cw) if self.cw else detection_threshold(self.front_end)
         strong = s.mftd_strong_pfa
         self.strong = None if strong is None else (cw_threshold(strong, s.cw) if self.cw else detection_threshold(
@@ -291,7 +295,7 @@ class _Chain:
         if w.kind != "cw":
             direct_s = float(np.hypot(*(g.tx_at(time_s) - g.rx_at(time_s)))) / self.settings.sound_speed_mps
             return ping_front_end(samples, fs, w, self.array, self.front_end, time_s=time_s, ping=number,
-                                  direct_arrival_s=direct_s)
+                                  direct_arrival_s=direct_s, shapes=self.shapes)
         motion = (float(g.heading_at(time_s)), g.velocity(time_s, "tx"), g.velocity(time_s, "rx"))
         return cw_ping_cells(samples, fs, w, self.array, self.front_end, self.settings.cw, time_s=time_s, ping=number,
                              motion=motion)
