@@ -71,7 +71,7 @@ class FrontEndSettings(Settings):
     blast_guard_s: float | None = setting(
         0.2, "the samples before the end of the direct blast plus this guard are zeroed before the beams, and no delay "
              "before it is searched or used as a CFAR reference: the blast's arrival is the source-array distance / c "
-             "from the navigation, its end one pulse later (module doc; not set: only blank_s)", unit="s", ge=0, le=10)
+             "from the navigation, its end one pulse later (module doc; 'off': only blank_s)", unit="s", ge=0, le=10)
     pfa: float = setting(1e-5, "false-alarm probability per cell of the single-ping threshold", unit="1",
                          gt=0, lt=1)
     heavy_tail: bool = setting(True, "each ping's OS-normalised statistic is mapped onto its law in exponential noise "
@@ -88,13 +88,13 @@ class FrontEndSettings(Settings):
                                                    doc="the tiles and pings of heavy_tail_by_delay")
     heavy_tail_cells: int | None = setting(
         20000, "heavy_tail's K shape is fitted per group of adjacent beams holding at least this many cells (a narrow "
-               "beam's reverberation is spikier than a wide one's: cells.py heavy_tail_statistic); not set: one fit "
+               "beam's reverberation is spikier than a wide one's: cells.py heavy_tail_statistic); 'off': one fit "
                "over all beams", unit="1", ge=10000)
     lobe_margin_db: float | None = setting(
         3.0, "drop a single-ping detection that is a sidelobe or grating-lobe image of a stronger echo of the same "
               "ping (detection/lobes.py cell_images: a beam outside its main lobe holds, at its travel time and "
               "Doppler, a stronger echo whose power times the array's beam pattern there, plus this margin, explains "
-              "its own); None: every detection kept. Measured (study active-chain trial 1, CW 8 x 0.5 m at 1 kHz, "
+              "its own); 'off': every detection kept. Measured (study active-chain trial 1, CW 8 x 0.5 m at 1 kHz, "
               "14 clutter points, 1 h reverberation-only, benchmarks/bench_active_family.py): false confirmed tracks "
               "37 -> 6 at 3 dB (at a point's range elsewhere in cone 21 -> 0); the price: a second echo within "
               "the pattern's sidelobe level + margin of a stronger one at the same travel time is lost",

@@ -116,7 +116,7 @@ class CwNormaliserSettings(Settings):
                                   "references start one pulse length from the cell, where the echo's triangle ends; "
                                   "module doc)", unit="1", ge=0, le=16)
     delay_reference: int | None = setting(4, "reference cells each side along delay, in pulse lengths (short: the "
-                                             "reverberation falls with delay); not set: the Doppler estimate alone",
+                                             "reverberation falls with delay); 'off': the Doppler estimate alone",
                                           unit="1", ge=1, le=64)
     os_rank: float = setting(0.75, "order statistic of both estimates: rank k as a fraction of N", unit="1", gt=0,
                              le=1)
@@ -124,7 +124,7 @@ class CwNormaliserSettings(Settings):
                                                 "directions where its pattern is above this", unit="dB", le=0)
     ridge_margin_cells: float | None = setting(
         1.0, "cells within this many Doppler resolution cells (c / (f_c tau) m/s each) of a beam's reverberation ridge "
-             "are not searched (not set: no notch)", unit="1", ge=0, le=20)
+             "are not searched ('off': no notch)", unit="1", ge=0, le=20)
 
     skirt_margin_db: float | None = setting(
         None, "a cell off the notch is the delay-Doppler skirt of a notched echo (its own beam; the echo's statistic "

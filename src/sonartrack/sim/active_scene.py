@@ -87,7 +87,7 @@ class ActiveOwnshipSettings(OwnshipSettings):
     turn_deg: float = setting(-60.0, "course change (negative: to port); 0 for none; it makes the left/right side "
                                      "of the line array observable", unit="deg", ge=-180, le=180)
     turn_rate_deg_s: float = setting(0.08, "rate of turn (P4's 0.08 deg/s)", unit="deg/s", gt=0, le=10)
-    turn_start_s: float | None = setting(1500.0, "time the turn starts (P4: 1500 s; not set: centred on the "
+    turn_start_s: float | None = setting(1500.0, "time the turn starts (P4: 1500 s; 'off': centred on the "
                                                  "middle of the scene)", unit="s", ge=0, le=MAX_DURATION_S)
 
 

@@ -56,7 +56,7 @@ class ContactSettings(Settings):
               "constant error, the beams widen towards its axis), held at its value this many degrees from endfire; "
               "measured on the default scene (seed 9101, single-ping detections near the targets, sd of cone - true "
               "cone, the cone then taken from s): 0.7-0.9 deg at 60-120 deg, 1.3 at 40-60, 1.8 at 140-160, 3.2 at "
-              "160-180, against 0.87 / sin = 0.87-1.0, 1.1-1.35, 1.7-2.5, 5.0 (not set: the same error at every "
+              "160-180, against 0.87 / sin = 0.87-1.0, 1.1-1.35, 1.7-2.5, 5.0 ('off': the same error at every "
               "cone angle, P4's model)",
         unit="deg", gt=0, le=90)
     sigma_heading_deg: float = setting(0.0, "error of the array heading from the navigation (P4: known)", unit="deg",

@@ -90,7 +90,7 @@ class ActiveSettings(Settings):
                                               "its range-rate span when the pulse measures no Doppler", unit="m/s",
                                         gt=0, le=200)
     mftd_pfa: float | None = setting(
-        1e-9, "false detections per cell and ping of the MFTD (not set: pfa). Its false detections come in streaks "
+        1e-9, "false detections per cell and ping of the MFTD ('off': pfa). Its false detections come in streaks "
               "(a strong reverberation echo lifts the K windows that hold it, each ending near it), which a tracker "
               "confirms more readily than single-ping false alarms: equal false-track rates need a lower rate here "
               "(the default scene: 3 false tracks an hour at 1e-9 against single-ping's 27 at 1e-5, the targets "
@@ -101,18 +101,18 @@ class ActiveSettings(Settings):
               "MFTD's (not within a beam and 3 delay cells of one): a target entering the window is then detected on "
               "its first ping, not when the MFTD's K-ping stack has filled with it (a 15 dB target: its 3rd ping). "
               "With it, the MFTD's SNR gain over single-ping detection at the same stated false-track rate is 1.6 dB "
-              "[0.6, 2.3] against 1.2 [0.1, 2.1] without (benchmarks/bench_mftd_gain.py). Not set: the MFTD's "
+              "[0.6, 2.3] against 1.2 [0.1, 2.1] without (benchmarks/bench_mftd_gain.py). 'off': the MFTD's "
               "detections alone", unit="1", gt=0, lt=0.1)
     detector: Literal["mftd", "single"] = setting(
         "mftd", "detections the tracker gets: mftd = paper P1 across pings, single = one ping's threshold", unit="")
     range_rate_gate_sigma: float | None = setting(
         3.0, "a contact in a confirmed track's position gate whose range rate is further than this many standard "
-             "deviations from the track's predicted bistatic range rate is kept from the tracker (not set: no gate)",
+             "deviations from the track's predicted bistatic range rate is kept from the tracker ('off': no gate)",
         unit="1", gt=0)
     side_turn_deg: float | None = setting(
         20.0, "a confirmed track that has lived through this much change of the array heading has its side resolved: "
               "the mirror contact of each detection in its gate is then dropped, so no ghost track restarts on the "
-              "other side after the turn (not set: both mirror contacts always go to the tracker)", unit="deg", gt=0,
+              "other side after the turn ('off': both mirror contacts always go to the tracker)", unit="deg", gt=0,
         le=180)
     target_turn_rates_deg_s: list[Annotated[float, Field(gt=0, le=30)]] = setting(
         default_factory=lambda: [0.5, 1.0], unit="deg/s",
@@ -128,12 +128,12 @@ class ActiveSettings(Settings):
               "is deleted after each scan (the older confirmed one is kept). IPDA tracks share the contacts in their "
               "gates, so a track started on a stray contact beside a target coalesces with the target's track: "
               "without it the default scene (seed 9101, not a study seed) holds 3-4 confirmed tracks on each strong "
-              "target at once (not set: no merging)", unit="1", gt=0, lt=1)
+              "target at once ('off': no merging)", unit="1", gt=0, lt=1)
     rejoin_s: float | None = setting(
         600.0, "a track confirmed within this time of the loss of a confirmed track (its existence fell), whose state "
                "passes the track-to-track test (merge_probability) against that track's prediction, is listed as the "
                "same target's next segment (one row, systems/active/targets.py), as is a confirmed track merged into "
-               "another as its duplicate (not set: no re-joining)", unit="s", gt=0)
+               "another as its duplicate ('off': no re-joining)", unit="s", gt=0)
     cw_peak_contacts: bool = setting(
         False, "CW pings: each MFTD detection measured by its ping's own echo peak where there is one, the others "
                "given the errors of a cell anywhere in the echo's response (travel time 2 tau / sqrt(12), cone the "
@@ -146,7 +146,7 @@ class ActiveSettings(Settings):
               "is given a contact only as far as no track ranked above it claims it, so a young track beside a "
               "confirmed one gains no existence on that one's echoes; 'all': every track claims from those ranked "
               "below it (confirmed first, then by existence), 'confirmed': the confirmed from the tentative only, "
-              "'lm': LMIPDA's symmetric odds form (not set: each track on its own, IPDA). Measured "
+              "'lm': LMIPDA's symmetric odds form ('off': each track on its own, IPDA). Measured "
               "(benchmarks/bench_active_rows.py, default scene, cached contacts): confirmed tracks LFM 8/8 -> 8/6, "
               "CW 29/26 -> 21/21; LFM seed 2's row joining crossing-b and maneuvering gone; 'confirmed' and 'lm' "
               "left more CW rows (8-13 for 4 targets)",
@@ -182,7 +182,7 @@ class ActiveSettings(Settings):
            "points and their mirrors from 48 to 14, and with the points' mirror twins and lobe images withheld too "
            "(clutter_map.py same_range: weaker contacts at a recurring echo's bistatic range) and StillHold kept "
            "until a track moves, all false confirmed tracks there from 36 to 2; the study's quick scene (5 kn "
-           "targets, 10 s pings) is held as without it (not set: no map)",
+           "targets, 10 s pings) is held as without it ('off': no map)",
         unit="1", ge=1, le=100)
     clutter_map_hits: int = setting(3, "pings of the clutter map's memory that must hold a contact in the gate of a "
                                        "new one for it to be clutter (3: learned before IPDA confirms a track on a "
@@ -191,7 +191,7 @@ class ActiveSettings(Settings):
     clutter_map_still_probability: float | None = setting(
         0.9, "the clutter map's stillness test (detection/clutter_map.py): a recurring contact is clutter only when "
              "the confidence ellipse, at this probability, of the velocity fitted through its recurrences lies "
-             "within clutter_map_slow_mps, so a moving target's contacts are spared (not set: recurrence alone)",
+             "within clutter_map_slow_mps, so a moving target's contacts are spared ('off': recurrence alone)",
         unit="1", gt=0, lt=1)
     clutter_map_slow_mps: float = setting(
         1.0, "speed below which the clutter map may take a recurring contact for a still point (a target slower "
@@ -199,7 +199,7 @@ class ActiveSettings(Settings):
     clutter_map_image_m: float | None = setting(
         15.0, "bistatic-range window of the clutter map's lobe images (detection/clutter_map.py same_range): a contact "
               "of the same ping weaker than a recurring one and within this of its bistatic range is withheld from "
-              "unconfirmed tracks (a beam at one endfire hears the other's clutter; about 2 LFM delay cells; not set: "
+              "unconfirmed tracks (a beam at one endfire hears the other's clutter; about 2 LFM delay cells; 'off': "
               "off)", unit="m", gt=0)
     bscan_bins: int = setting(400, "travel-time bins of the stored B-scan per ping (max over the cells of a bin and "
                                    "the Doppler cells)", unit="1", ge=10, le=100_000)
