@@ -46,6 +46,17 @@ hypotheses are searched alike and the chi-squares capped because a gate run back
 wide: the nearest contact in it is often stray, chosen for lying near that hypothesis's line; a search of the
 track's side alone, uncapped, gave a ghost a made-up past that fitted its line and a ratio in the tens of
 thousands (a ghost of the approacher on a 24-element array, seed 7, called its target's side at ln LR +38807).
+A target's track is often lost and a new one confirmed later (re-joined to it), or two tracks hold it and one is
+deleted as the other's duplicate (tracking/duplicates.py): the chain lists them as one target (``ActiveTracks.joins``,
+targets.py), and the evidence goes with the join (:meth:`SideTracker.carry`): the earlier segment's contacts, at the
+pings the later track holds none, become a piece of its evidence. Each hypothesis's log-likelihood is then the larger,
+less Schwarz's penalty (k / 2) ln n (Schwarz, "Estimating the dimension of a model", Ann. Statist. 6, 1978; k = 4
+parameters per CV motion, n = 2 per contact), of one CV motion through every piece and one per piece (a maneuver
+while no track held the target); a piece over which the array turned less than ``min_turn`` fits both hypotheses
+alike. So two segments before and after the turn decide once joined, up to the evidence ~(k / 2) ln n that a
+maneuver in the gap could also explain, and a segment that decided keeps deciding after a maneuver. Before, a
+track re-joined after the turn began undecided (ln LR 0): at full size (study active-chain, e4c2ec6) all 9 targets
+judged wrong ended on such a track (benchmarks/bench_active_sides.py).
 The side is decided when |ln LR| >= ``min_log_lr`` (ln 100 by default, the passive chain's 100:1) once the
 track has lived through ``min_turn_rad`` of change of the array's heading: ln LR > 0 says the track is on
 its target's side; < 0 that the track is the mirror of a target on the other side (a ghost).
@@ -80,7 +91,7 @@ class SideDecisions:
     array (port | starboard) the target is judged on (the track's side at its last update, the other one for a
     ghost, "" when undecided); ``log_lr`` ln LR at the track's last contact; ``resolved_s`` the ping time (s)
     from which |ln LR| stayed above the threshold with the final sign (NaN: never); ``contacts`` the number of
-    contacts in the fit; ``twin`` the confirmed track on this one's mirror (the track that took the other contact
+    contacts in the fit (with those carried from joined segments); ``twin`` the confirmed track on this one's mirror (the track that took the other contact
     of the same detections on at least ``MIN_TWIN_PINGS`` pings, the most such pings), -1 when none."""
 
     track_id: np.ndarray
@@ -101,23 +112,50 @@ class SideDecisions:
 
 
 class _CvFit:
-    """One contact sequence and its CV fit with each contact's chi-square capped at ``cap`` (module doc)."""
+    """One contact sequence and its CV fit with each contact's chi-square capped at ``cap`` (module doc); each
+    contact's ping time ``at`` (s) and the array's heading ``h`` (rad) then are kept beside, for carrying it over a
+    join (:meth:`SideTracker.carry`)."""
 
-    __slots__ = ("cap", "t", "z", "W", "logdet", "live")
+    __slots__ = ("cap", "t", "z", "W", "logdet", "live", "at", "h")
 
     def __init__(self, cap: float = np.inf):
         self.cap, self.t, self.z, self.W, self.logdet, self.live = float(cap), [], [], [], 0.0, []
+        self.at, self.h = [], []
 
     @property
     def n(self) -> int:
         return len(self.t)
 
-    def add(self, dt_s: float, z, R, live: bool = True) -> None:
+    def add(self, dt_s: float, z, R, live: bool = True, t_s: float = np.nan, heading_rad: float = np.nan) -> None:
         self.t.append(float(dt_s))
         self.z.append(np.asarray(z, float))
         self.W.append(np.linalg.inv(R))
         self.logdet += float(np.log(np.linalg.det(2.0 * np.pi * R)))
         self.live.append(bool(live))
+        self.at.append(float(t_s))
+        self.h.append(float(heading_rad))
+
+    def subset(self, keep) -> _CvFit:
+        """The fit of the contacts ``keep`` (indices) alone."""
+        out = _CvFit(self.cap)
+        for k in keep:
+            out.add(self.t[k], self.z[k], np.linalg.inv(self.W[k]), self.live[k], self.at[k], self.h[k])
+        return out
+
+    @staticmethod
+    def joined(fits) -> _CvFit:
+        """One fit of the contacts of ``fits`` (their times from their ping times ``at``)."""
+        out = _CvFit(fits[0].cap)
+        t0 = min(min(f.at) for f in fits)
+        for f in fits:
+            for k in range(f.n):
+                out.add(f.at[k] - t0, f.z[k], np.linalg.inv(f.W[k]), f.live[k], f.at[k], f.h[k])
+        return out
+
+    def turn_rad(self) -> float:
+        """The change of the array's heading over the contacts (rad; 0 when any heading is unknown)."""
+        h = np.array(self.h, float)
+        return float(h.max() - h.min()) if len(h) and np.isfinite(h).all() else 0.0
 
     def log_likelihood(self) -> float:
         """ln L = -(sum_k min(r_k, cap) + sum ln det(2 pi R_k)) / 2 at the CV motion that minimises it (r_k the
@@ -234,6 +272,8 @@ class SideTracker:
         self._last_side: dict[int, int] = {}
         self._shared: dict[tuple[int, int], int] = {}  # (track, track) -> pings they took one detection's mirrors
         self._twins: dict[int, int] = {}
+        self._pieces: dict[int, list[tuple[_CvFit, _CvFit]]] = {}  # track -> the joined segments' contacts
+        self._now = np.nan  # the last ping's time (s)
 
     def update(self, t_s: float, heading_rad: float, contacts, track_ids, x, P, sides_of) -> None:
         """Add this ping's contacts of the confirmed tracks.
@@ -251,6 +291,7 @@ class SideTracker:
         sides_of : callable
             ``sides_of(t_s, xy (n, 2)) -> (n,)`` +1 starboard / -1 port of the array.
         """
+        self._now = float(t_s)
         if len(track_ids):
             self._update(t_s, heading_rad, contacts, track_ids, x, P, sides_of(t_s, np.asarray(x)[:, :2]))
         if self._lookback:
@@ -288,8 +329,8 @@ class SideTracker:
                 taken.add(int(cp.detection[row]))
                 own, mirror = (row, mate) if h == 0 else (mate, row)
                 self._h0[tid] = hp
-                seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], live=False)
-                seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], live=False)
+                seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], False, tp, hp)
+                seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], False, tp, hp)
 
     def _nearest(self, contacts, xh, Ph) -> int | None:
         """The contact of the smallest chi-square distance to a state (x_h, P_h + R), inside the gate (None:
@@ -316,11 +357,10 @@ class SideTracker:
             self._count_twins(took.setdefault(int(contacts.detection[own]), []), tid, int(contacts.side[own]))
             t0 = self._t0.setdefault(tid, t_s)
             sums = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
-            sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own])
-            sums[1].add(t_s - t0, contacts.xy[mirror], contacts.R[mirror])
-            if sums[0].n >= MIN_CONTACTS:  # before the turn the two fits are equal: ln LR = 0 uncomputed
-                lr = sums[0].log_likelihood() - sums[1].log_likelihood() if self._turned[tid] else 0.0
-                self._history.setdefault(tid, []).append((t_s, lr))
+            sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own], True, t_s, heading_rad)
+            sums[1].add(t_s - t0, contacts.xy[mirror], contacts.R[mirror], True, t_s, heading_rad)
+            if sums[0].n >= MIN_CONTACTS or tid in self._pieces:
+                self._history.setdefault(tid, []).append((t_s, self._log_lr(tid)))
         self._twins = self.twins()
 
     def _count_twins(self, took: list[tuple[int, int]], tid: int, side: int) -> None:
@@ -359,6 +399,50 @@ class SideTracker:
         t = self._history.get(twin) if twin is not None else None
         return 0 if t and t[-1][1] >= self.min_log_lr else 1
 
+    def carry(self, into: int, source: int) -> None:
+        """The track ``source`` is an earlier segment of ``into``'s target on the same side (joined after its loss,
+        or deleted as ``into``'s duplicate: ActiveTracks.joins): its contacts, at the pings ``into`` holds none,
+        become a piece of ``into``'s evidence, with its own CV motion (module doc), and ``into``'s ln LR is from now
+        its own plus its pieces'. ``source``'s own pieces come with it (a chain of joins)."""
+        into, source = int(into), int(source)
+        if into == source or source not in self._sums:
+            return
+        own = self._sums.get(into)
+        taken = set(own[0].at) if own is not None else set()
+        for p in self._pieces.get(into, ()):
+            taken.update(p[0].at)
+        pieces = self._pieces.setdefault(into, [])
+        for a, b in [self._sums[source], *self._pieces.get(source, ())]:
+            keep = [k for k, t in enumerate(a.at) if t not in taken]
+            if keep:
+                pieces.append((a.subset(keep), b.subset(keep)))
+                taken.update(a.at[k] for k in keep)
+        self._h0.setdefault(into, self._h0[source])
+        self._sums.setdefault(into, (_CvFit(self.cap), _CvFit(self.cap)))
+        if np.isfinite(self._now):
+            self._history.setdefault(into, []).append((self._now, self._log_lr(into)))
+
+    def _log_lr(self, tid: int) -> float:
+        """ln LR of the track ``tid`` now: of its own contacts (0 before ``MIN_CONTACTS`` or the turn); with joined
+        segments' pieces (:meth:`carry`), each hypothesis's log-likelihood is the larger of two models', each less
+        Schwarz's (1978) penalty (k / 2) ln n (k = 4 parameters per CV motion, n = 2 per contact): one CV motion
+        through every piece, or one per piece (a maneuver in a gap); a piece (or the whole) over which the array
+        turned less than ``min_turn`` fits both hypotheses alike (the larger of its two log-likelihoods for both)."""
+        own = self._sums[tid]
+        if tid not in self._pieces:
+            ok = own[0].n >= MIN_CONTACTS and self._turned.get(tid, False)
+            return own[0].log_likelihood() - own[1].log_likelihood() if ok else 0.0
+        fits = [f for f in (own, *self._pieces[tid]) if f[0].n]
+        whole = tuple(_CvFit.joined([f[h] for f in fits]) for h in (0, 1))
+        if whole[0].turn_rad() < self.min_turn:
+            return 0.0
+        ln_n = np.log(2.0 * whole[0].n)
+        per = [(f[0].log_likelihood(), f[1].log_likelihood()) for f in fits]
+        per = [(max(p),) * 2 if f[0].turn_rad() < self.min_turn else p for f, p in zip(fits, per, strict=True)]
+        best = [max(whole[h].log_likelihood() - 2.0 * ln_n, sum(p[h] for p in per) - 2.0 * len(fits) * ln_n)
+                for h in (0, 1)]
+        return best[0] - best[1]
+
     def twins(self) -> dict[int, int]:
         """Mirror twins: track -> the confirmed track that took the other contact of the same detection on the most
         pings (at least ``MIN_TWIN_PINGS``), each track in one pair at most (pairs taken by decreasing count).
@@ -387,6 +471,8 @@ class SideTracker:
         self._twins = self.twins()
         if tid in self._sums:
             self._sums[tid] = self._sums[tid][::-1]
+        if tid in self._pieces:
+            self._pieces[tid] = [p[::-1] for p in self._pieces[tid]]
         self._history[tid] = [(t, -lr) for t, lr in self._history.get(tid, [])]
         if tid in self._last_side:
             self._last_side[tid] = -self._last_side[tid]
@@ -426,7 +512,8 @@ class SideTracker:
             s = self._last_side[tid] * d
             side.append("" if d == 0 else ("starboard" if s > 0 else "port"))
             lr.append(float(h[-1, 1]) if len(h) else 0.0)
-            n.append(self._sums[tid][0].n if tid in self._sums else 0)
+            n.append((self._sums[tid][0].n if tid in self._sums else 0) + sum(p[0].n for p in
+                                                                              self._pieces.get(tid, ())))
             ok = d * h[:, 1] >= self.min_log_lr if d else np.zeros(len(h), bool)
             bad = np.nonzero(~ok)[0]
             start = bad[-1] + 1 if len(bad) else 0
@@ -468,12 +555,24 @@ class GhostDeleter:
         """The inner deleter's per-track counters (``inner.new_track_attrs(k)``)."""
         return self.inner.new_track_attrs(k)
 
+    def _merged(self) -> dict:
+        """The duplicate merger's record (tracking/duplicates.py ``DuplicateMerger.merged``: deleted confirmed track
+        -> the track kept) found down the ``inner`` chain; an empty dict when there is no merger."""
+        d = self.inner
+        while d is not None and not isinstance(getattr(d, "merged", None), dict):
+            d = getattr(d, "inner", None)
+        return d.merged if d is not None else {}
+
     def manage(self, T, hit):
         """The inner deleter's confirmation and deletion, then the rejected tracks deleted or reflected (TrackArrays
         in and out)."""
         from dataclasses import replace
 
+        merged = self._merged()
+        before = dict(merged)
         T = self.inner.manage(T, hit)
+        for gone in merged.keys() - before.keys():  # a duplicate deleted: its side evidence goes to the kept track
+            self.sides.carry(merged[gone], gone)
         if not len(T):
             return T
         live = set(T.track_id.tolist())
