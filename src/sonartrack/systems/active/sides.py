@@ -387,9 +387,13 @@ class SideTracker:
     def decision(self, track_id: int) -> int:
         """+1 the track ``track_id`` is on its target's side, -1 a ghost, 0 undecided so far: the sign of the
         track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also for a track with no
-        history); 0 too when the track and its mirror twin are BOTH decided on their side: one target cannot be on
-        both, and deciding both made GhostDeleter delete both (benchmarks/bench_active_turns.py, CW seed 2: 6 of 9
-        turn scenes lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair)."""
+        history). When the track and its mirror twin are BOTH decided on their side (one target cannot be on both:
+        deciding both made GhostDeleter delete both, benchmarks/bench_active_turns.py, CW seed 2: 6 of 9 turn scenes
+        lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair), the pair's two views are
+        averaged, (ln LR_track - ln LR_twin) / 2 (each one's ratio is the other's with the sign turned when their
+        evidence agrees): the track is decided when that reaches ``min_log_lr``, the twin then its rejected mirror,
+        else neither (9.9 and 12.1: neither; a track re-joined onto a false track's evidence, bench_active_sides.py
+        trial 15, 31.2 against its twin's 280.6: the twin)."""
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0
@@ -397,7 +401,7 @@ class SideTracker:
             return -1
         twin = self._twins.get(int(track_id))
         t = self._history.get(twin) if twin is not None else None
-        return 0 if t and t[-1][1] >= self.min_log_lr else 1
+        return 0 if t and t[-1][1] >= self.min_log_lr and h[-1][1] - t[-1][1] < 2.0 * self.min_log_lr else 1
 
     def carry(self, into: int, source: int) -> None:
         """The track ``source`` is an earlier segment of ``into``'s target on the same side (joined after its loss,
