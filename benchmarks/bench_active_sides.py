@@ -10,9 +10,12 @@ holding track, its segments (``ActiveTracks.joins``) and twin with their decisio
 reason:
 
 * ``right`` the study judges it right;
-* ``no turn`` the target's own detections (the chain's tracked detections within the study's hit window of its
-  echo) span less than the chain's ``side_turn_deg`` of the array's heading: no evidence can exist, undecided is
-  the honest answer;
+* ``no turn`` the target was detectable (the study's ``detectable_grid``: expected echo-to-background >= 15 dB, in
+  the window) on no two pings between which the array's heading changed by the chain's ``side_turn_deg``, and nothing
+  was decided about it: the
+  geometry offered no evidence the study calls visible, undecided is the honest answer (the hits printed beside,
+  any tracked detection within the study's hit window of the echo, span the whole turn on almost every target:
+  clutter falls in that window too, so they do not tell);
 * ``late`` the holding track was confirmed after the turn and its retrodiction (sides.py) did not reach back over
   ``side_turn_deg`` of heading change (while the target's detections did);
 * ``segments`` an earlier segment joined to the holding track (merge or re-join) had lived through the turn;
@@ -138,7 +141,7 @@ def _segments(joins, tid: int) -> list[int]:
 def describe(config, c: dict, tracks, trk) -> list[dict]:
     """One row per judged target (module doc)."""
     from sonartrack.metrics.track_quality import associate_tracks
-    from sonartrack.studies.active_chain import _mirror, _truth_arrays, echo_hits, score_tracks
+    from sonartrack.studies.active_chain import _mirror, _truth_arrays, detectable_grid, echo_hits, score_tracks
     from sonartrack.studies.active_chain_family import target_names
 
     r, truth = c["result"], c["truth"]
@@ -149,6 +152,7 @@ def describe(config, c: dict, tracks, trk) -> list[dict]:
     assoc = associate_tracks(t_truth, ids, xy, tr.time_s, tr.track_id, tr.x[:, :2], config.match_m,
                              confirmed=tr.confirmed)
     hits = echo_hits(config, r.detections, truth)
+    det = detectable_grid(config, truth) > 0.5
     ping_t = np.asarray(r.ping_time_s, float)
     min_turn = float(config.chain.side_turn_deg)
     last = tr.time_s == assoc.time_s[-1]
@@ -158,6 +162,7 @@ def describe(config, c: dict, tracks, trk) -> list[dict]:
         if not np.isfinite(sc["side_ok"][i]):
             continue
         span = _heading_span_deg(g, ping_t[hits[i]])
+        det_span = _heading_span_deg(g, ping_t[det[i]])
         hold = int(assoc.track_of[-1, i])
         at = np.isclose(t_truth, assoc.time_s[-1]) & (ids == assoc.truth_ids[i])
         rows = last & tr.confirmed & ~np.isin(tr.track_id, assoc.track_of[-1])
@@ -178,7 +183,11 @@ def describe(config, c: dict, tracks, trk) -> list[dict]:
         gh = [(gid, d.decision[d.of(gid)] if d.of(gid) is not None else "-") for gid in ghosts]
         out.append({"target": name, "ok": sc["side_ok"][i], "lr": sc["side_log_lr"][i], "hold": hold,
                     "span_deg": span, "hits": int(hits[i].sum()), "segments": info, "ghosts": gh,
-                    "reason": _reason(sc["side_ok"][i], hold, info, gh, span, min_turn)})
+                    "det_span_deg": det_span, "detectable": int(det[i].sum()),
+                    "decided": (decided := any(s["decision"] != "undecided" for s in info if s["track"] == hold) or
+                                any(x[1] != "undecided" for x in gh)),
+                    "reason": _reason(sc["side_ok"][i], hold, info, gh, det_span if not decided else 360.0,
+                                      min_turn)})
     return out
 
 
@@ -227,7 +236,9 @@ def main() -> None:
         for row in describe(config, c, tracks, trk):
             tally[row["reason"]] = tally.get(row["reason"], 0) + 1
             print(f"  {row['target']:12s} ok {row['ok']:.0f} lnLR {row['lr']:8.1f} hold {row['hold']:4d} "
-                  f"hits {row['hits']:3d} over {row['span_deg']:5.1f} deg -> {row['reason']}")
+                  f"hits {row['hits']:3d} over {row['span_deg']:5.1f} deg, detectable {row['detectable']:3d} over "
+                  f"{row['det_span_deg']:5.1f} deg, {'decided' if row['decided'] else 'undecided'} "
+                  f"-> {row['reason']}")
             if args.quiet:
                 continue
             for s in row["segments"]:

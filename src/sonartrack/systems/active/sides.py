@@ -55,8 +55,8 @@ parameters per CV motion, n = 2 per contact), of one CV motion through every pie
 while no track held the target); a piece over which the array turned less than ``min_turn`` fits both hypotheses
 alike. So two segments before and after the turn decide once joined, up to the evidence ~(k / 2) ln n that a
 maneuver in the gap could also explain, and a segment that decided keeps deciding after a maneuver. Before, a
-track re-joined after the turn began undecided (ln LR 0): at full size (study active-chain, e4c2ec6) all 9 targets
-judged wrong ended on such a track (benchmarks/bench_active_sides.py).
+track re-joined after the turn began undecided (ln LR 0): at full size (study active-chain, e4c2ec6) 3 of the 9
+targets judged wrong ended so (benchmarks/bench_active_sides.py).
 The side is decided when |ln LR| >= ``min_log_lr`` (ln 100 by default, the passive chain's 100:1) once the
 track has lived through ``min_turn_rad`` of change of the array's heading: ln LR > 0 says the track is on
 its target's side; < 0 that the track is the mirror of a target on the other side (a ghost).
@@ -91,8 +91,9 @@ class SideDecisions:
     array (port | starboard) the target is judged on (the track's side at its last update, the other one for a
     ghost, "" when undecided); ``log_lr`` ln LR at the track's last contact; ``resolved_s`` the ping time (s)
     from which |ln LR| stayed above the threshold with the final sign (NaN: never); ``contacts`` the number of
-    contacts in the fit (with those carried from joined segments); ``twin`` the confirmed track on this one's mirror (the track that took the other contact
-    of the same detections on at least ``MIN_TWIN_PINGS`` pings, the most such pings), -1 when none."""
+    contacts in the fit (with those carried from joined segments); ``twin`` the confirmed track on this one's
+    mirror (the track that took the other contact of the same detections on at least ``MIN_TWIN_PINGS`` pings, the
+    most such pings), -1 when none."""
 
     track_id: np.ndarray
     decision: np.ndarray
