@@ -23,6 +23,20 @@ reason:
 * ``ghost`` a confirmed track on the target's mirror not decided a ghost;
 * ``other`` none of these.
 
+Measured (2026-12-07, seed 2017, the 14 trials with judged targets: 0 1 2 4 5 7 8 9 10 11 14 15 18 19, the chain's
+runs 37-148 s CPU each at load 8-12, re-trackings 0.2-3 s): main at e4c2ec6 24 of 33 right, exactly the study's
+(trials.parquet), every wrong one at ln LR 0: evidence lost at a join 3 (trial 1 approacher: four re-joined segments
+with ln LR 2.6, 4.4, 0, 0; trial 7 maneuvering: segment 30 at +43.4 merged into 53, which began at 0; trial 15
+approacher: 51 at +273 re-joined by 132), tracking late 4 (the target held only after the turn, its track's
+retrodiction finds no turn: trial 8 approacher and crossing-b, 15 maneuvering, 18 approacher), no detectable echo
+across the turn 2 (trial 9 crossing-a, 19 maneuvering; also trials 1 and 7's above). With sides.py carrying the
+merges' evidence (this branch): 24 of 33 (trial 7's holding track now decided +43.4, but an undecided track on its
+mirror, the twin of an unmerged duplicate of it, keeps it wrong); with the re-joins' too (``--rejoin-carry``, the
+change proposed to contact_tracker.py): 26 of 33 (trials 1 and 15's approachers right; 15's through the pair rule
+of :meth:`SideTracker.decision`: its twin was re-joined onto a false track at +31.2 against its +280.6); no right
+target turned wrong. Not judging an undecided target detectable on no two pings >= side_turn_deg of heading apart
+(the proposed study rule): main 24 of 29, with both carries 26 of 31.
+
 Usage: ``python benchmarks/bench_active_sides.py --trials 1 7 8``. CPU: ~1-3 min per trial's first run (the
 pickle), ~5-20 s per re-tracking.
 """
