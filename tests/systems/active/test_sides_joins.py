@@ -135,6 +135,7 @@ def test_a_merged_duplicate_s_evidence_goes_to_the_kept_track():
         _ping(st, k, h[k], (3, 4), rng)
     d = st.result()
     assert d.decision[d.of(3)] == "track" and d.decision[d.of(4)] == "mirror"
+    assert d.contacts[d.of(3)] == 41 - 4  # pings 0-17 (carried) and 22-40 (its own)
 
 
 def test_flip_swaps_the_carried_evidence():
@@ -151,3 +152,25 @@ def test_flip_swaps_the_carried_evidence():
     # the history and the recomputed ratio (own contacts and the carried piece both swapped) change sign
     assert st.result().log_lr[st.result().of(3)] == -before and abs(before) >= MIN_LOG_LR
     assert abs(st._log_lr(3) + before) < 1e-6 * abs(before)
+
+
+def test_a_carry_before_the_kept_track_s_first_update_keeps_its_retrodiction():
+    # a duplicate merged into a track confirmed at this very scan (GhostDeleter runs before SideTracker.update): the
+    # kept track is still new to the side tracker, so its retrodiction runs (lookback > 0) and the carry neither
+    # breaks it nor counts a ping twice
+    h = _headings()
+    rng = np.random.default_rng(1)
+    st = SideTracker(min_turn_rad=np.deg2rad(20.0), lookback=40)
+    for k in range(18):
+        _ping(st, k, h[k], (1, 2), rng)
+    st.carry(3, 1)
+    st.carry(4, 2)
+    assert 3 not in st._sums  # the carry leaves the track new: its first update retrodicts
+    _ping(st, 18, h[18], (3, 4), rng)
+    retro = st._sums[3][0].live.count(False)
+    assert retro >= 10  # the target's contacts of pings 0-17 found again backwards
+    for k in range(19, 41):
+        _ping(st, k, h[k], (3, 4), rng)
+    d = st.result()
+    assert d.decision[d.of(3)] == "track" and d.decision[d.of(4)] == "mirror"
+    assert d.contacts[d.of(3)] == 41  # each ping's contact once: the retrodicted pings are not counted twice

@@ -422,10 +422,20 @@ class SideTracker:
             if keep:
                 pieces.append((a.subset(keep), b.subset(keep)))
                 taken.update(a.at[k] for k in keep)
-        self._h0.setdefault(into, self._h0[source])
-        self._sums.setdefault(into, (_CvFit(self.cap), _CvFit(self.cap)))
         if np.isfinite(self._now):
             self._history.setdefault(into, []).append((self._now, self._log_lr(into)))
+
+    def _fits(self, tid: int) -> list[tuple[_CvFit, _CvFit]]:
+        """The track's own contact sequences and its pieces', each ping once (a piece's contacts at the pings its
+        own hold, e.g. found again by its retrodiction after a carry at its first confirmed scan, left out)."""
+        own = self._sums.get(tid)
+        out = [own] if own is not None and own[0].n else []
+        taken = set(own[0].at) if own is not None else set()
+        for a, b in self._pieces.get(tid, ()):
+            keep = [k for k, t in enumerate(a.at) if t not in taken]
+            if keep:
+                out.append((a, b) if len(keep) == a.n else (a.subset(keep), b.subset(keep)))
+        return out
 
     def _log_lr(self, tid: int) -> float:
         """ln LR of the track ``tid`` now: of its own contacts (0 before ``MIN_CONTACTS`` or the turn); with joined
@@ -433,11 +443,13 @@ class SideTracker:
         Schwarz's (1978) penalty (k / 2) ln n (k = 4 parameters per CV motion, n = 2 per contact): one CV motion
         through every piece, or one per piece (a maneuver in a gap); a piece (or the whole) over which the array
         turned less than ``min_turn`` fits both hypotheses alike (the larger of its two log-likelihoods for both)."""
-        own = self._sums[tid]
         if tid not in self._pieces:
+            own = self._sums[tid]
             ok = own[0].n >= MIN_CONTACTS and self._turned.get(tid, False)
             return own[0].log_likelihood() - own[1].log_likelihood() if ok else 0.0
-        fits = [f for f in (own, *self._pieces[tid]) if f[0].n]
+        fits = self._fits(tid)
+        if not fits:
+            return 0.0
         whole = tuple(_CvFit.joined([f[h] for f in fits]) for h in (0, 1))
         if whole[0].turn_rad() < self.min_turn:
             return 0.0
@@ -517,8 +529,7 @@ class SideTracker:
             s = self._last_side[tid] * d
             side.append("" if d == 0 else ("starboard" if s > 0 else "port"))
             lr.append(float(h[-1, 1]) if len(h) else 0.0)
-            n.append((self._sums[tid][0].n if tid in self._sums else 0) + sum(p[0].n for p in
-                                                                              self._pieces.get(tid, ())))
+            n.append(sum(f[0].n for f in self._fits(tid)))
             ok = d * h[:, 1] >= self.min_log_lr if d else np.zeros(len(h), bool)
             bad = np.nonzero(~ok)[0]
             start = bad[-1] + 1 if len(bad) else 0
