@@ -138,3 +138,9 @@ def test_twins_both_decided_on_their_side_are_neither_decided_nor_rejected():
     # below the threshold the twin does not contradict
     st._history[2] = [(0.0, thr - 0.5)]
     assert st.decision(1) == 1 and st.rejected(2)
+    # both on their side, but the pair's mean view (ln LR_1 - ln LR_2) / 2 reaches the threshold: 1 decided
+    st._history[2] = [(0.0, thr + 0.5)]
+    st._history[1] = [(0.0, 3.0 * thr + 1.0)]
+    assert st.decision(1) == 1 and st.decision(2) == 0 and st.rejected(2) and not st.rejected(1)
+    st._history[1] = [(0.0, 3.0 * thr + 0.4)]
+    assert st.decision(1) == 0 and not st.rejected(2)

@@ -46,6 +46,17 @@ hypotheses are searched alike and the chi-squares capped because a gate run back
 wide: the nearest contact in it is often stray, chosen for lying near that hypothesis's line; a search of the
 track's side alone, uncapped, gave a ghost a made-up past that fitted its line and a ratio in the tens of
 thousands (a ghost of the approacher on a 24-element array, seed 7, called its target's side at ln LR +38807).
+A target's track is often lost and a new one confirmed later (re-joined to it), or two tracks hold it and one is
+deleted as the other's duplicate (tracking/duplicates.py): the chain lists them as one target (``ActiveTracks.joins``,
+targets.py), and the evidence goes with the join (:meth:`SideTracker.carry`): the earlier segment's contacts, at the
+pings the later track holds none, become a piece of its evidence. Each hypothesis's log-likelihood is then the larger,
+less Schwarz's penalty (k / 2) ln n (Schwarz, "Estimating the dimension of a model", Ann. Statist. 6, 1978; k = 4
+parameters per CV motion, n = 2 per contact), of one CV motion through every piece and one per piece (a maneuver
+while no track held the target); a piece over which the array turned less than ``min_turn`` fits both hypotheses
+alike. So two segments before and after the turn decide once joined, up to the evidence ~(k / 2) ln n that a
+maneuver in the gap could also explain, and a segment that decided keeps deciding after a maneuver. Before, a
+track re-joined after the turn began undecided (ln LR 0): at full size (study active-chain, e4c2ec6) 3 of the 9
+targets judged wrong ended so (benchmarks/bench_active_sides.py).
 The side is decided when |ln LR| >= ``min_log_lr`` (ln 100 by default, the passive chain's 100:1) once the
 track has lived through ``min_turn_rad`` of change of the array's heading: ln LR > 0 says the track is on
 its target's side; < 0 that the track is the mirror of a target on the other side (a ghost).
@@ -57,6 +68,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sonartrack.systems.active.side_fit import CvFit as _CvFit  # noqa: N814 - its name here
+
 #: the side is decided at a likelihood ratio of 100:1 (the passive chain's threshold, tma/sides.py)
 MIN_LOG_LR = float(np.log(100.0))
 #: fewest contacts of a track before its ratio is computed (the CV fit has 4 parameters; 2 per contact)
@@ -65,8 +78,6 @@ MIN_CONTACTS = 3
 MAX_MISSES = 3
 #: a contact's chi-square in the CV fit is capped at its chi-square(2) quantile of 1 - this (27.6): a stray one
 STRAY_PROBABILITY = 1e-6
-#: refits of the capped CV fit beyond two per contact (it stops when the kept set repeats)
-MAX_REFITS = 10
 #: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings (the
 #: pair with the most such pings wins): 1, not 2, so that a pair confirmed together is one target from its first
 #: ping (the default scene as CW, seed 1: a pair confirmed on the last ping was listed as two rows)
@@ -80,8 +91,9 @@ class SideDecisions:
     array (port | starboard) the target is judged on (the track's side at its last update, the other one for a
     ghost, "" when undecided); ``log_lr`` ln LR at the track's last contact; ``resolved_s`` the ping time (s)
     from which |ln LR| stayed above the threshold with the final sign (NaN: never); ``contacts`` the number of
-    contacts in the fit; ``twin`` the confirmed track on this one's mirror (the track that took the other contact
-    of the same detections on at least ``MIN_TWIN_PINGS`` pings, the most such pings), -1 when none."""
+    contacts in the fit (with those carried from joined segments); ``twin`` the confirmed track on this one's
+    mirror (the track that took the other contact of the same detections on at least ``MIN_TWIN_PINGS`` pings, the
+    most such pings), -1 when none."""
 
     track_id: np.ndarray
     decision: np.ndarray
@@ -98,66 +110,6 @@ class SideDecisions:
         """The first row of the track ``track_id`` (None: not a confirmed track)."""
         hit = np.nonzero(self.track_id == track_id)[0]
         return int(hit[0]) if len(hit) else None
-
-
-class _CvFit:
-    """One contact sequence and its CV fit with each contact's chi-square capped at ``cap`` (module doc)."""
-
-    __slots__ = ("cap", "t", "z", "W", "logdet", "live")
-
-    def __init__(self, cap: float = np.inf):
-        self.cap, self.t, self.z, self.W, self.logdet, self.live = float(cap), [], [], [], 0.0, []
-
-    @property
-    def n(self) -> int:
-        return len(self.t)
-
-    def add(self, dt_s: float, z, R, live: bool = True) -> None:
-        self.t.append(float(dt_s))
-        self.z.append(np.asarray(z, float))
-        self.W.append(np.linalg.inv(R))
-        self.logdet += float(np.log(np.linalg.det(2.0 * np.pi * R)))
-        self.live.append(bool(live))
-
-    def log_likelihood(self) -> float:
-        """ln L = -(sum_k min(r_k, cap) + sum ln det(2 pi R_k)) / 2 at the CV motion that minimises it (r_k the
-        contact's chi-square against it), searched from two starts, the track's own (live) contacts and all of
-        them, keeping the smaller sum (:func:`_capped_chi2`)."""
-        t, z, W = np.array(self.t), np.array(self.z), np.array(self.W)
-        A = np.zeros((len(t), 2, 4))
-        A[:, [0, 1], [0, 1]] = 1.0
-        A[:, [0, 1], [2, 3]] = t[:, None]
-        AtW = np.swapaxes(A, 1, 2) @ W
-        info, b = AtW @ A, np.einsum("kij,kj->ki", AtW, z)
-        starts = [np.ones(len(t), bool)] + ([np.array(self.live)] if 2 <= sum(self.live) < len(t) else [])
-        chi2 = min(_capped_chi2(t, z, W, info, b, keep, self.cap) for keep in starts)
-        return -0.5 * (chi2 + self.logdet)
-
-
-def _capped_chi2(t, z, W, info, b, keep, cap: float) -> float:
-    """sum_k min(r_k, cap) at a local minimum over the CV motion, from the fit of the contacts ``keep``: the kept
-    contact of the largest r_k >= cap is left out and the rest refitted, one at a time; then every contact under
-    the cap is taken back, until the kept set repeats (t (n,) s, z (n, 2), W = R^-1, info = A^T W A and
-    b = A^T W z per contact, A = [I, t I])."""
-    keep = np.array(keep, bool)
-    info_sum, b_sum = info[keep].sum(0), b[keep].sum(0)
-    for _ in range(2 * len(z) + MAX_REFITS):
-        try:  # two contacts at different times make info_sum regular
-            p = np.linalg.solve(info_sum, b_sum)
-        except np.linalg.LinAlgError:
-            p = np.linalg.lstsq(info_sum, b_sum, rcond=None)[0]
-        nu = z - p[:2] - t[:, None] * p[2:]
-        r = np.einsum("ki,kij,kj->k", nu, W, nu)
-        worst = int(np.argmax(np.where(keep, r, -np.inf)))
-        if r[worst] >= cap and keep.sum() > 2:
-            keep[worst] = False
-            info_sum, b_sum = info_sum - info[worst], b_sum - b[worst]
-        elif np.array_equal(r < cap, keep) or (r < cap).sum() < 2:
-            break
-        else:
-            keep = r < cap
-            info_sum, b_sum = info[keep].sum(0), b[keep].sum(0)
-    return float(np.minimum(r, cap).sum())
 
 
 def _mate(contacts, row: int) -> int | None:
@@ -234,6 +186,8 @@ class SideTracker:
         self._last_side: dict[int, int] = {}
         self._shared: dict[tuple[int, int], int] = {}  # (track, track) -> pings they took one detection's mirrors
         self._twins: dict[int, int] = {}
+        self._pieces: dict[int, list[tuple[_CvFit, _CvFit]]] = {}  # track -> the joined segments' contacts
+        self._now = np.nan  # the last ping's time (s)
 
     def update(self, t_s: float, heading_rad: float, contacts, track_ids, x, P, sides_of) -> None:
         """Add this ping's contacts of the confirmed tracks.
@@ -251,6 +205,7 @@ class SideTracker:
         sides_of : callable
             ``sides_of(t_s, xy (n, 2)) -> (n,)`` +1 starboard / -1 port of the array.
         """
+        self._now = float(t_s)
         if len(track_ids):
             self._update(t_s, heading_rad, contacts, track_ids, x, P, sides_of(t_s, np.asarray(x)[:, :2]))
         if self._lookback:
@@ -288,8 +243,8 @@ class SideTracker:
                 taken.add(int(cp.detection[row]))
                 own, mirror = (row, mate) if h == 0 else (mate, row)
                 self._h0[tid] = hp
-                seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], live=False)
-                seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], live=False)
+                seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], False, tp, hp)
+                seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], False, tp, hp)
 
     def _nearest(self, contacts, xh, Ph) -> int | None:
         """The contact of the smallest chi-square distance to a state (x_h, P_h + R), inside the gate (None:
@@ -316,11 +271,10 @@ class SideTracker:
             self._count_twins(took.setdefault(int(contacts.detection[own]), []), tid, int(contacts.side[own]))
             t0 = self._t0.setdefault(tid, t_s)
             sums = self._sums.setdefault(tid, (_CvFit(self.cap), _CvFit(self.cap)))
-            sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own])
-            sums[1].add(t_s - t0, contacts.xy[mirror], contacts.R[mirror])
-            if sums[0].n >= MIN_CONTACTS:  # before the turn the two fits are equal: ln LR = 0 uncomputed
-                lr = sums[0].log_likelihood() - sums[1].log_likelihood() if self._turned[tid] else 0.0
-                self._history.setdefault(tid, []).append((t_s, lr))
+            sums[0].add(t_s - t0, contacts.xy[own], contacts.R[own], True, t_s, heading_rad)
+            sums[1].add(t_s - t0, contacts.xy[mirror], contacts.R[mirror], True, t_s, heading_rad)
+            if sums[0].n >= MIN_CONTACTS or tid in self._pieces:
+                self._history.setdefault(tid, []).append((t_s, self._log_lr(tid)))
         self._twins = self.twins()
 
     def _count_twins(self, took: list[tuple[int, int]], tid: int, side: int) -> None:
@@ -347,9 +301,13 @@ class SideTracker:
     def decision(self, track_id: int) -> int:
         """+1 the track ``track_id`` is on its target's side, -1 a ghost, 0 undecided so far: the sign of the
         track's latest ln LR when its magnitude is at least ``min_log_lr``, else 0 (also for a track with no
-        history); 0 too when the track and its mirror twin are BOTH decided on their side: one target cannot be on
-        both, and deciding both made GhostDeleter delete both (benchmarks/bench_active_turns.py, CW seed 2: 6 of 9
-        turn scenes lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair)."""
+        history). When the track and its mirror twin are BOTH decided on their side (one target cannot be on both:
+        deciding both made GhostDeleter delete both, benchmarks/bench_active_turns.py, CW seed 2: 6 of 9 turn scenes
+        lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair), the pair's two views are
+        averaged, (ln LR_track - ln LR_twin) / 2 (each one's ratio is the other's with the sign turned when their
+        evidence agrees): the track is decided when that reaches ``min_log_lr``, the twin then its rejected mirror,
+        else neither (9.9 and 12.1: neither; a track re-joined onto a false track's evidence, bench_active_sides.py
+        trial 15, 31.2 against its twin's 280.6: the twin)."""
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0
@@ -357,7 +315,63 @@ class SideTracker:
             return -1
         twin = self._twins.get(int(track_id))
         t = self._history.get(twin) if twin is not None else None
-        return 0 if t and t[-1][1] >= self.min_log_lr else 1
+        return 0 if t and t[-1][1] >= self.min_log_lr and h[-1][1] - t[-1][1] < 2.0 * self.min_log_lr else 1
+
+    def carry(self, into: int, source: int) -> None:
+        """The track ``source`` is an earlier segment of ``into``'s target on the same side (joined after its loss,
+        or deleted as ``into``'s duplicate: ActiveTracks.joins): its contacts, at the pings ``into`` holds none,
+        become a piece of ``into``'s evidence, with its own CV motion (module doc), and ``into``'s ln LR is from now
+        its own plus its pieces'. ``source``'s own pieces come with it (a chain of joins)."""
+        into, source = int(into), int(source)
+        if into == source or source not in self._sums:
+            return
+        own = self._sums.get(into)
+        taken = set(own[0].at) if own is not None else set()
+        for p in self._pieces.get(into, ()):
+            taken.update(p[0].at)
+        pieces = self._pieces.setdefault(into, [])
+        for a, b in [self._sums[source], *self._pieces.get(source, ())]:
+            keep = [k for k, t in enumerate(a.at) if t not in taken]
+            if keep:
+                pieces.append((a.subset(keep), b.subset(keep)))
+                taken.update(a.at[k] for k in keep)
+        if np.isfinite(self._now):
+            self._history.setdefault(into, []).append((self._now, self._log_lr(into)))
+
+    def _fits(self, tid: int) -> list[tuple[_CvFit, _CvFit]]:
+        """The track's own contact sequences and its pieces', each ping once (a piece's contacts at the pings its
+        own hold, e.g. found again by its retrodiction after a carry at its first confirmed scan, left out)."""
+        own = self._sums.get(tid)
+        out = [own] if own is not None and own[0].n else []
+        taken = set(own[0].at) if own is not None else set()
+        for a, b in self._pieces.get(tid, ()):
+            keep = [k for k, t in enumerate(a.at) if t not in taken]
+            if keep:
+                out.append((a, b) if len(keep) == a.n else (a.subset(keep), b.subset(keep)))
+        return out
+
+    def _log_lr(self, tid: int) -> float:
+        """ln LR of the track ``tid`` now: of its own contacts (0 before ``MIN_CONTACTS`` or the turn); with joined
+        segments' pieces (:meth:`carry`), each hypothesis's log-likelihood is the larger of two models', each less
+        Schwarz's (1978) penalty (k / 2) ln n (k = 4 parameters per CV motion, n = 2 per contact): one CV motion
+        through every piece, or one per piece (a maneuver in a gap); a piece (or the whole) over which the array
+        turned less than ``min_turn`` fits both hypotheses alike (the larger of its two log-likelihoods for both)."""
+        if tid not in self._pieces:
+            own = self._sums[tid]
+            ok = own[0].n >= MIN_CONTACTS and self._turned.get(tid, False)
+            return own[0].log_likelihood() - own[1].log_likelihood() if ok else 0.0
+        fits = self._fits(tid)
+        if not fits:
+            return 0.0
+        whole = tuple(_CvFit.joined([f[h] for f in fits]) for h in (0, 1))
+        if whole[0].turn_rad() < self.min_turn:
+            return 0.0
+        ln_n = np.log(2.0 * whole[0].n)
+        per = [(f[0].log_likelihood(), f[1].log_likelihood()) for f in fits]
+        per = [(max(p),) * 2 if f[0].turn_rad() < self.min_turn else p for f, p in zip(fits, per, strict=True)]
+        best = [max(whole[h].log_likelihood() - 2.0 * ln_n, sum(p[h] for p in per) - 2.0 * len(fits) * ln_n)
+                for h in (0, 1)]
+        return best[0] - best[1]
 
     def twins(self) -> dict[int, int]:
         """Mirror twins: track -> the confirmed track that took the other contact of the same detection on the most
@@ -387,6 +401,8 @@ class SideTracker:
         self._twins = self.twins()
         if tid in self._sums:
             self._sums[tid] = self._sums[tid][::-1]
+        if tid in self._pieces:
+            self._pieces[tid] = [p[::-1] for p in self._pieces[tid]]
         self._history[tid] = [(t, -lr) for t, lr in self._history.get(tid, [])]
         if tid in self._last_side:
             self._last_side[tid] = -self._last_side[tid]
@@ -426,7 +442,7 @@ class SideTracker:
             s = self._last_side[tid] * d
             side.append("" if d == 0 else ("starboard" if s > 0 else "port"))
             lr.append(float(h[-1, 1]) if len(h) else 0.0)
-            n.append(self._sums[tid][0].n if tid in self._sums else 0)
+            n.append(sum(f[0].n for f in self._fits(tid)))
             ok = d * h[:, 1] >= self.min_log_lr if d else np.zeros(len(h), bool)
             bad = np.nonzero(~ok)[0]
             start = bad[-1] + 1 if len(bad) else 0
@@ -468,12 +484,24 @@ class GhostDeleter:
         """The inner deleter's per-track counters (``inner.new_track_attrs(k)``)."""
         return self.inner.new_track_attrs(k)
 
+    def _merged(self) -> dict:
+        """The duplicate merger's record (tracking/duplicates.py ``DuplicateMerger.merged``: deleted confirmed track
+        -> the track kept) found down the ``inner`` chain; an empty dict when there is no merger."""
+        d = self.inner
+        while d is not None and not isinstance(getattr(d, "merged", None), dict):
+            d = getattr(d, "inner", None)
+        return d.merged if d is not None else {}
+
     def manage(self, T, hit):
         """The inner deleter's confirmation and deletion, then the rejected tracks deleted or reflected (TrackArrays
         in and out)."""
         from dataclasses import replace
 
+        merged = self._merged()
+        before = dict(merged)
         T = self.inner.manage(T, hit)
+        for gone in merged.keys() - before.keys():  # a duplicate deleted: its side evidence goes to the kept track
+            self.sides.carry(merged[gone], gone)
         if not len(T):
             return T
         live = set(T.track_id.tolist())
