@@ -408,6 +408,7 @@ class ContactTracker:
                     best, d2_best = old, d2
             if best is not None:
                 self.joins[tid] = best
+                self.sides.carry(tid, best)  # the lost segment's side evidence goes on with this one (sides.py)
                 del self._lost[best]
         self._confirmed = now
 
