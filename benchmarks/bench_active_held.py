@@ -1,0 +1,268 @@
+"""Where the active-chain study's detectable-but-not-held pings go: each one given ONE cause, per trial and overall.
+
+Runs the scene with targets of chosen trials of study ``active-chain`` at full size, drawn exactly as
+studies/active_chain.py ``run_trial`` draws it (``trial_rng(seed, i)``, two seeds, studies/active_chain_family.py
+``draw_scene``, the first seed), through the study's own ``run_scene`` (the chain of ``sonartrack active``), with the
+tracker's deleters instrumented (which part removed which track at which ping: existence (RateConfirmation, the
+IPDA's termination threshold), duplicate merge (tracking/duplicates.py), ghost (systems/active/sides.py), still
+hold). The chain's tracks are scored by the study's own ``score_tracks`` (its ``held_pings`` is checked against the
+study's stored trials when ``--trials-parquet`` is given: the run must be the study's, ping for ping).
+
+Every COUNTED ping (detectable: ebr_db >= 15 dB, in the window, clear of the blast; after the target's first 5
+detectable pings, studies/active_chain_claims.py ``_held_detectable``) that no confirmed track holds is given the
+first cause that applies, in this order:
+
+* ``a-miss``: no tracked detection (MFTD + strong single-ping, what the contacts are formed from) on the target's echo
+  (within the study's hit_delay_s / hit_cone_deg of its delay and cone, studies/active_chain.py ``echo_hits``): a
+  detector miss the track must coast through (sub-split printed: the state of the target's track then);
+* ``b-acq``: before the target's first ping held by a confirmed track (acquisition latency);
+* ``c-<deleter>``: the confirmed track that last held the target was deleted (by existence / merge / ghost / still)
+  and no other confirmed track holds it; ``c-off``: that track is alive but farther than ``match_m``;
+* ``d-other``: a confirmed track within ``match_m`` is assigned by the study's assignment to another target;
+  ``d-mirror``: no confirmed track near the target, but an undecided confirmed track within ``match_m`` of its mirror
+  (its row lists the target's true position as the other hypothesis, systems/active/targets.py);
+* ``e-tent``: a tentative track within ``match_m`` (existence below the confirmation threshold);
+* ``f-other``.
+
+Also printed per trial: counted pings that are out of the chain's tracked window by the contacts (``no contact
+anywhere near``), and how many of ``a-miss`` had a detection whose contacts the chain's gates withheld.
+
+Usage: ``python benchmarks/bench_active_held.py --trials 18 2 8 --cache /tmp/bench_active_held``; each trial's
+chain result is pickled under ``--cache`` (the same trial, seed and code are not re-run: delete it after a change).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+CAUSES = ("a-miss", "b-acq", "c-existence", "c-merge", "c-ghost", "c-still", "c-other", "c-off", "d-other",
+          "d-mirror", "e-tent", "f-other")
+DELETERS = {"RateConfirmation": "existence", "ExistenceDeleter": "existence", "DuplicateMerger": "merge",
+            "GhostDeleter": "ghost", "StillHold": "still", "MinHits": "minhits"}
+LOG: dict = {"t": None, "removed": {}, "last": {}}  # the instrumented deleters' record (track id -> (t, part))
+
+
+def _instrument() -> None:
+    """Wrap every deleter part's ``manage``: the tracks a part itself removes (its inner part's output less its own)
+    are recorded with the scan time (ContactTracker.step wrapped for it)."""
+    import sonartrack.systems.active.contact_tracker as ct
+    import sonartrack.systems.active.sides as sd
+    import sonartrack.tracking.deleters as dl
+    import sonartrack.tracking.duplicates as du
+
+    for cls in (dl.RateConfirmation, dl.ExistenceDeleter, dl.StillHold, dl.MinHits, du.DuplicateMerger,
+                sd.GhostDeleter):
+        if getattr(cls.manage, "_held_wrapped", False):
+            continue
+
+        def wrap(orig, name):
+            def manage(self, T, hit):
+                ids_in = set(np.asarray(T.track_id).tolist())
+                out = orig(self, T, hit)
+                inner = getattr(self, "inner", None)
+                base = LOG["last"].get(id(inner), ids_in) if inner is not None else ids_in
+                for tid in base - set(np.asarray(out.track_id).tolist()):
+                    LOG["removed"].setdefault(int(tid), (LOG["t"], DELETERS.get(name, name)))
+                LOG["last"][id(self)] = set(np.asarray(out.track_id).tolist())
+                return out
+            manage._held_wrapped = True
+            return manage
+
+        cls.manage = wrap(cls.manage, cls.__name__)
+    step = ct.ContactTracker.step
+    if not getattr(step, "_held_wrapped", False):
+        def stepped(self, t_s, contacts):
+            LOG["t"], LOG["last"] = float(t_s), {}
+            return step(self, t_s, contacts)
+        stepped._held_wrapped = True
+        ct.ContactTracker.step = stepped
+
+
+def trial_config(config, seed: int, index: int):
+    """The trial's config (its drawn scene and seed, as ``run_trial``) and its axes."""
+    from sonartrack.core.random import trial_rng
+    from sonartrack.studies.active_chain import MANEUVERING
+    from sonartrack.studies.active_chain_family import draw_scene
+
+    rng = trial_rng(seed, index)
+    seeds = rng.integers(0, 2**31 - 1, size=2)
+    drawn, axes = draw_scene(config.scene, config.family, rng, MANEUVERING)
+    return config.model_copy(update={"scene": drawn.model_copy(update={"seed": int(seeds[0])})}), axes
+
+
+def run_cached(config, cache: Path, index: int):
+    """(result, truth of the real targets, deletions {track id: (time s, deleter)}, CPU s) of the trial's scene."""
+    import hashlib
+
+    from sonartrack.studies.active_chain import _real_truth, run_scene
+
+    key = hashlib.sha1((config.scene.model_dump_json() + config.chain.model_dump_json()).encode()).hexdigest()[:12]
+    path = cache / f"trial{index}-{key}.pkl"
+    if path.exists():
+        with path.open("rb") as f:
+            return (*pickle.load(f), 0.0)
+    _instrument()
+    LOG["removed"], LOG["last"] = {}, {}
+    t0 = time.process_time()
+    result, _, truth = run_scene(config, config.scene)
+    out = (result, _real_truth(truth), dict(LOG["removed"]))
+    cache.mkdir(parents=True, exist_ok=True)
+    with path.open("wb") as f:
+        pickle.dump(out, f)
+    return (*out, time.process_time() - t0)
+
+
+def _rows_at(tr, t: float) -> np.ndarray:
+    return np.nonzero(np.isclose(tr.time_s, t))[0]
+
+
+def _state(ctx: dict, i: int, p: int) -> str:
+    """The cause of a not-held counted ping (module doc), the detector's part left aside (b to f)."""
+    held, track_of, tr, gate = ctx["held"], ctx["track_of"], ctx["tracks"], ctx["match_m"]
+    before = np.nonzero(held[i, :p])[0]
+    if not len(before):
+        return "b-acq"
+    t = ctx["t"][i, p]
+    rows = _rows_at(tr, t)
+    d = np.hypot(*(tr.x[rows, :2] - ctx["xy"][i, p]).T)
+    conf = tr.confirmed[rows]
+    last = int(track_of[i, before[-1]])
+    alive = rows[tr.track_id[rows] == last]
+    if not len(alive):
+        t_del, who = ctx["removed"].get(last, (None, "other"))
+        return f"c-{who}" if f"c-{who}" in CAUSES else "c-other"
+    if np.hypot(*(tr.x[alive[0], :2] - ctx["xy"][i, p])) >= gate:
+        return "c-off"
+    if (conf & (d < gate)).any():
+        return "d-other"
+    dm = np.hypot(*(tr.x[rows, :2] - ctx["xy_m"][i, p]).T)
+    undecided = np.array([ctx["decision"](int(k)) == "undecided" for k in tr.track_id[rows]], bool)
+    if (conf & (dm < gate) & undecided).any():
+        return "d-mirror"
+    if ((~conf) & (d < gate)).any():
+        return "e-tent"
+    return "f-other"
+
+
+def attribute(config, result, truth: dict, removed: dict) -> dict:
+    """Per target, the causes of its counted, not-held pings (module doc) and the counts beside them."""
+    from sonartrack.studies.active_chain import (
+        _mirror,
+        detectable_grid,
+        echo_hits,
+        score_tracks,
+        truth_grid,
+    )
+
+    score = score_tracks(config, result.tracks, result, truth)
+    held = score["held_pings"] > 0.5
+    det = detectable_grid(config, truth) > 0.5
+    counted = det & (np.cumsum(det, axis=1) > config.acquire_pings)
+    hits = echo_hits(config, result.detections, truth)
+    t = truth_grid(config, truth, "time_s")
+    xy = np.stack([truth_grid(config, truth, "x_m"), truth_grid(config, truth, "y_m")], -1)
+    ok = np.isfinite(t)
+    xy_m = np.full_like(xy, np.nan)
+    xy_m[ok] = _mirror(result.geometry, t[ok], xy[ok])
+    sides = result.tracks.sides
+
+    def decision(tid: int) -> str:
+        k = None if sides is None else sides.of(tid)
+        return "undecided" if k is None else str(sides.decision[k])
+
+    track_of = np.full(held.shape, -1, np.int64)  # the holding track per (target, ping) via the study's assignment
+    track_of[held] = _holders(config, result, truth)[held]
+    ctx = {"held": held, "track_of": track_of, "tracks": result.tracks.tracks, "match_m": config.match_m, "t": t,
+           "xy": xy, "xy_m": xy_m, "removed": removed, "decision": decision}
+    causes, sub = Counter(), Counter()
+    for i, p in zip(*np.nonzero(counted & ~held), strict=True):
+        s = _state(ctx, int(i), int(p))
+        if not hits[i, p]:
+            causes["a-miss"] += 1
+            sub[s] += 1
+        else:
+            causes[s] += 1
+    ebr = truth_grid(config, truth, "ebr_db")
+    tt = truth_grid(config, truth, "travel_time_s")
+    blank = config.chain_settings().front_end.blank_s
+    return {"counted": int(counted.sum()), "held": int((held & counted).sum()), "causes": causes, "miss_sub": sub,
+            "held_pings": held, "hit_rate": float(hits[counted].mean()) if counted.any() else np.nan,
+            "blanked": int((counted & (tt < blank)).sum()), "ebr_median": float(np.median(ebr[counted]))
+            if counted.any() else np.nan, "per_target": [(int(counted[i].sum()), int((held & counted)[i].sum()))
+                                                         for i in range(len(held))]}
+
+
+def _holders(config, result, truth) -> np.ndarray:
+    """(targets, pings) the confirmed track holding each target (-1: none) by the study's assignment."""
+    from sonartrack.metrics.track_quality import associate_tracks
+    from sonartrack.studies.active_chain import _by_ping, _truth_arrays
+    from sonartrack.studies.active_chain_family import target_names
+
+    t_truth, ids, xy = _truth_arrays(truth, target_names(config.scene))
+    tr = result.tracks.tracks
+    assoc = associate_tracks(t_truth, ids, xy, tr.time_s, tr.track_id, tr.x[:, :2], config.match_m,
+                             confirmed=tr.confirmed)
+    return _by_ping(config, truth, assoc.time_s, assoc.track_of, -1)
+
+
+def _stored_held(path: Path | None, index: int):
+    if path is None or not path.exists():
+        return None
+    import pandas as pd
+
+    df = pd.read_parquet(path)
+    row = df[df["trial"] == index]
+    return None if not len(row) else np.asarray(row.iloc[0]["held_pings"], float)
+
+
+def main() -> None:
+    from sonartrack.studies.active_chain import Config
+    from sonartrack.studies.active_chain_family import target_names
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trials", type=int, nargs="+", default=[18, 2, 8, 16])
+    ap.add_argument("--seed", type=int, default=2017, help="the study's master seed (sonartrack reproduce's default)")
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/bench_active_held"))
+    ap.add_argument("--trials-parquet", type=Path, default=None, help="the study's trials.parquet: its held_pings "
+                                                                      "checked against this run's")
+    args = ap.parse_args()
+    total = {"LFM": Counter(), "CW": Counter()}
+    sub_total = {"LFM": Counter(), "CW": Counter()}
+    sums = {"LFM": [0, 0], "CW": [0, 0]}
+    print("trial pulse counted held frac hit|counted blanked ebr_med  " + " ".join(CAUSES))
+    for i in args.trials:
+        config, axes = trial_config(Config(), args.seed, i)
+        result, truth, removed, cpu = run_cached(config, args.cache, i)
+        a = attribute(config, result, truth, removed)
+        pulse = config.scene.waveform.kind.upper()
+        stored = _stored_held(args.trials_parquet, i)
+        same = "" if stored is None else (" same as study" if np.array_equal(
+            stored.reshape(4, *a["held_pings"].shape)[0] > 0.5, a["held_pings"]) else " DIFFERS from study")
+        print(f"{i:5d} {pulse:5s} {a['counted']:7d} {a['held']:4d} {a['held'] / max(a['counted'], 1):.2f} "
+              f"{a['hit_rate']:.2f} {a['blanked']:3d} {a['ebr_median']:5.1f}  "
+              + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}")
+        print("      a-miss by track state: " + ", ".join(f"{k} {v}" for k, v in sorted(a["miss_sub"].items())))
+        print("      per target (counted/held): " + ", ".join(
+            f"{n} {c}/{h}" for n, (c, h) in zip(target_names(config.scene), a["per_target"], strict=True)))
+        total[pulse].update(a["causes"])
+        sub_total[pulse].update(a["miss_sub"])
+        sums[pulse][0] += a["counted"]
+        sums[pulse][1] += a["held"]
+    for pulse in total:
+        n, h = sums[pulse]
+        if not n:
+            continue
+        lost = n - h
+        print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}), not held {lost}: " + ", ".join(
+            f"{c} {total[pulse][c]} ({total[pulse][c] / max(lost, 1):.0%})" for c in CAUSES if total[pulse][c]))
+        print(f"{pulse}: a-miss by track state: " + ", ".join(f"{k} {v}" for k, v in sorted(sub_total[pulse].items())))
+
+
+if __name__ == "__main__":
+    main()
