@@ -10,22 +10,23 @@ study's stored trials when ``--trials-parquet`` is given: the run must be the st
 
 Every COUNTED ping (detectable: ebr_db >= 15 dB, in the window, clear of the blast; after the target's first 5
 detectable pings, studies/active_chain_claims.py ``_held_detectable``) that no confirmed track holds is given the
-first cause that applies, in this order:
+first cause that applies (studies/active_chain_scoring.py ``unheld_causes``), in this order:
 
-* ``a-miss``: no tracked detection (MFTD + strong single-ping, what the contacts are formed from) on the target's echo
+* ``miss``: no tracked detection (MFTD + strong single-ping, what the contacts are formed from) on the target's echo
   (within the study's hit_delay_s / hit_cone_deg of its delay and cone, studies/active_chain.py ``echo_hits``): a
-  detector miss the track must coast through (sub-split printed: the state of the target's track then);
-* ``b-acq``: before the target's first ping held by a confirmed track (acquisition latency);
-* ``c-<deleter>``: the confirmed track that last held the target was deleted (by existence / merge / ghost / still)
-  and no other confirmed track holds it; ``c-off``: that track is alive but farther than ``match_m``;
-* ``d-other``: a confirmed track within ``match_m`` is assigned by the study's assignment to another target;
-  ``d-mirror``: no confirmed track near the target, but an undecided confirmed track within ``match_m`` of its mirror
-  (its row lists the target's true position as the other hypothesis, systems/active/targets.py);
-* ``e-tent``: a tentative track within ``match_m`` (existence below the confirmation threshold);
-* ``f-other``.
+  detector miss the track must coast through (the track state behind each miss is printed beside);
+* ``acquiring``: before the target's first ping held by a confirmed track (acquisition latency);
+* ``deleted-<deleter>``: the confirmed track that last held the target was deleted (existence / merge / ghost /
+  still, from the instrumented deleters); ``off``: that track is alive but farther than ``match_m``;
+* ``assigned-other``: that track, within ``match_m``, is assigned by the study's assignment to another target.
 
-Also printed per trial: counted pings that are out of the chain's tracked window by the contacts (``no contact
-anywhere near``), and how many of ``a-miss`` had a detection whose contacts the chain's gates withheld.
+(A track keeps its confirmation for life, tracking/deleters.py, so "held by a tentative track" or "by its
+mirror" is not a state of its own: beside each cause is printed what is near the target then: ``mirror`` an
+undecided confirmed track within ``match_m`` of its mirror, whose row lists the target's true position as its other
+hypothesis, systems/active/targets.py; else ``tentative`` a tentative track within ``match_m``; else ``none``.)
+
+Also per trial: the tracked detections' hit rate on the counted pings, counted pings in the blanked delays (0 on
+every trial measured), and the counted pings' median ebr_db.
 
 Usage: ``python benchmarks/bench_active_held.py --trials 18 2 8 --cache /tmp/bench_active_held``; each trial's
 chain result is pickled under ``--cache`` (the same trial, seed and code are not re-run: delete it after a change).
@@ -41,8 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
-CAUSES = ("a-miss", "b-acq", "c-existence", "c-merge", "c-ghost", "c-still", "c-other", "c-off", "d-other",
-          "d-mirror", "e-tent", "f-other")
+CAUSES = ("miss", "acquiring", "deleted-existence", "deleted-merge", "deleted-ghost", "deleted-still",
+          "deleted-unlogged", "off", "assigned-other")
 DELETERS = {"RateConfirmation": "existence", "ExistenceDeleter": "existence", "DuplicateMerger": "merge",
             "GhostDeleter": "ghost", "StillHold": "still", "MinHits": "minhits"}
 LOG: dict = {"t": None, "removed": {}, "last": {}}  # the instrumented deleters' record (track id -> (t, part))
@@ -118,38 +119,6 @@ def run_cached(config, cache: Path, index: int):
     return (*out, time.process_time() - t0)
 
 
-def _rows_at(tr, t: float) -> np.ndarray:
-    return np.nonzero(np.isclose(tr.time_s, t))[0]
-
-
-def _state(ctx: dict, i: int, p: int) -> str:
-    """The cause of a not-held counted ping (module doc), the detector's part left aside (b to f)."""
-    held, track_of, tr, gate = ctx["held"], ctx["track_of"], ctx["tracks"], ctx["match_m"]
-    before = np.nonzero(held[i, :p])[0]
-    if not len(before):
-        return "b-acq"
-    t = ctx["t"][i, p]
-    rows = _rows_at(tr, t)
-    d = np.hypot(*(tr.x[rows, :2] - ctx["xy"][i, p]).T)
-    conf = tr.confirmed[rows]
-    last = int(track_of[i, before[-1]])
-    alive = rows[tr.track_id[rows] == last]
-    if not len(alive):
-        t_del, who = ctx["removed"].get(last, (None, "other"))
-        return f"c-{who}" if f"c-{who}" in CAUSES else "c-other"
-    if np.hypot(*(tr.x[alive[0], :2] - ctx["xy"][i, p])) >= gate:
-        return "c-off"
-    if (conf & (d < gate)).any():
-        return "d-other"
-    dm = np.hypot(*(tr.x[rows, :2] - ctx["xy_m"][i, p]).T)
-    undecided = np.array([ctx["decision"](int(k)) == "undecided" for k in tr.track_id[rows]], bool)
-    if (conf & (dm < gate) & undecided).any():
-        return "d-mirror"
-    if ((~conf) & (d < gate)).any():
-        return "e-tent"
-    return "f-other"
-
-
 def attribute(config, result, truth: dict, removed: dict) -> dict:
     """Per target, the causes of its counted, not-held pings (module doc) and the counts beside them."""
     from sonartrack.studies.active_chain import (
@@ -159,6 +128,7 @@ def attribute(config, result, truth: dict, removed: dict) -> dict:
         score_tracks,
         truth_grid,
     )
+    from sonartrack.studies.active_chain_scoring import unheld_causes
 
     score = score_tracks(config, result.tracks, result, truth)
     held = score["held_pings"] > 0.5
@@ -176,18 +146,14 @@ def attribute(config, result, truth: dict, removed: dict) -> dict:
         k = None if sides is None else sides.of(tid)
         return "undecided" if k is None else str(sides.decision[k])
 
-    track_of = np.full(held.shape, -1, np.int64)  # the holding track per (target, ping) via the study's assignment
-    track_of[held] = _holders(config, result, truth)[held]
-    ctx = {"held": held, "track_of": track_of, "tracks": result.tracks.tracks, "match_m": config.match_m, "t": t,
-           "xy": xy, "xy_m": xy_m, "removed": removed, "decision": decision}
-    causes, sub = Counter(), Counter()
-    for i, p in zip(*np.nonzero(counted & ~held), strict=True):
-        s = _state(ctx, int(i), int(p))
-        if not hits[i, p]:
-            causes["a-miss"] += 1
-            sub[s] += 1
-        else:
-            causes[s] += 1
+    held_by = np.where(held, _holders(config, result, truth), -1)
+    cause, state, near = unheld_causes(counted, held_by, hits, t, xy, xy_m, result.tracks.tracks, config.match_m,
+                                       lambda tid: decision(tid) == "undecided")
+    cause, state = (_deleter(c, held_by, removed) for c in (cause, state))
+    m = cause != ""
+    causes = Counter(cause[m].tolist())
+    sub = Counter(f"{'miss, ' if c == 'miss' else ''}{s}, near {n}" for c, s, n in zip(cause[m], state[m], near[m],
+                                                                                      strict=True))
     ebr = truth_grid(config, truth, "ebr_db")
     tt = truth_grid(config, truth, "travel_time_s")
     blank = config.chain_settings().front_end.blank_s
@@ -196,6 +162,15 @@ def attribute(config, result, truth: dict, removed: dict) -> dict:
             "blanked": int((counted & (tt < blank)).sum()), "ebr_median": float(np.median(ebr[counted]))
             if counted.any() else np.nan, "per_target": [(int(counted[i].sum()), int((held & counted)[i].sum()))
                                                          for i in range(len(held))]}
+
+
+def _deleter(cause: np.ndarray, held_by: np.ndarray, removed: dict) -> np.ndarray:
+    """"deleted" causes named by the deleter that removed the last holding track (the instrumented log)."""
+    out = cause.copy()
+    for i, p in zip(*np.nonzero(cause == "deleted"), strict=True):
+        before = np.nonzero(held_by[i, :p] >= 0)[0]
+        out[i, p] = "deleted-" + removed.get(int(held_by[i, before[-1]]), (None, "unlogged"))[1]
+    return out
 
 
 def _holders(config, result, truth) -> np.ndarray:
@@ -247,7 +222,7 @@ def main() -> None:
         print(f"{i:5d} {pulse:5s} {a['counted']:7d} {a['held']:4d} {a['held'] / max(a['counted'], 1):.2f} "
               f"{a['hit_rate']:.2f} {a['blanked']:3d} {a['ebr_median']:5.1f}  "
               + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}")
-        print("      a-miss by track state: " + ", ".join(f"{k} {v}" for k, v in sorted(a["miss_sub"].items())))
+        print("      by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(a["miss_sub"].items())))
         print("      per target (counted/held): " + ", ".join(
             f"{n} {c}/{h}" for n, (c, h) in zip(target_names(config.scene), a["per_target"], strict=True)))
         total[pulse].update(a["causes"])
@@ -261,7 +236,7 @@ def main() -> None:
         lost = n - h
         print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}), not held {lost}: " + ", ".join(
             f"{c} {total[pulse][c]} ({total[pulse][c] / max(lost, 1):.0%})" for c in CAUSES if total[pulse][c]))
-        print(f"{pulse}: a-miss by track state: " + ", ".join(f"{k} {v}" for k, v in sorted(sub_total[pulse].items())))
+        print(f"{pulse}: by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(sub_total[pulse].items())))
 
 
 if __name__ == "__main__":

@@ -223,3 +223,75 @@ def one_row_through(track_of, window, detectable, row_of: dict[int, int]) -> tup
         return float("nan"), frac
     rows = {row_of.get(int(t), ("track", int(t))) for t in tid[held]}
     return float(bool(held[0] and held[-1] and len(rows) == 1)), frac
+
+
+#: the causes of a counted ping not held (:func:`unheld_causes`), in the order they are tested
+UNHELD_CAUSES = ("miss", "acquiring", "deleted", "off", "assigned-other")
+#: what else is near the target on such a ping (:func:`unheld_causes`)
+UNHELD_NEAR = ("mirror", "tentative", "none")
+
+
+def _unheld_state(tracks, rows, last: int, xy, gate_m: float) -> str:
+    """The track state behind one not-held ping (:func:`unheld_causes`): ``rows`` the track table's rows at the ping,
+    ``last`` the confirmed track that last held the target (-1: none yet)."""
+    if last < 0:
+        return "acquiring"
+    own = rows[tracks.track_id[rows] == last]
+    if not len(own):
+        return "deleted"
+    # confirmation is kept for a track's life (tracking/deleters.py): the last holder within the gate is confirmed
+    return "off" if np.hypot(*(tracks.x[own[0], :2] - xy)) >= gate_m else "assigned-other"
+
+
+def _unheld_near(tracks, rows, xy, xy_mirror, gate_m: float, undecided) -> str:
+    """"mirror" an undecided confirmed track within the gate of the target's mirror, else "tentative" a tentative
+    track within the gate of the target, else "none"."""
+    conf = np.asarray(tracks.confirmed[rows], bool)
+    dm = np.hypot(*(tracks.x[rows, :2] - xy_mirror).T)
+    if (conf & (dm < gate_m) & np.array([bool(undecided(int(k))) for k in tracks.track_id[rows]], bool)).any():
+        return "mirror"
+    return "tentative" if (~conf & (np.hypot(*(tracks.x[rows, :2] - xy).T) < gate_m)).any() else "none"
+
+
+def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: float,
+                  undecided=lambda tid: True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each counted ping on which no confirmed track holds the target, given ONE cause, tested in this order:
+    ``miss`` no detection on the target's echo (the detector's miss: a track must coast); ``acquiring`` no confirmed
+    track has held the target yet; ``deleted`` the confirmed track that last held it is gone; ``off`` that track
+    lives but farther than the gate; ``assigned-other`` that track, within the gate, is assigned to another target.
+    Beside it, the track state (the cause but for the miss) and what is near: ``mirror`` an undecided confirmed
+    track within the gate of the target's mirror (its row lists the target's true position as its other hypothesis,
+    systems/active/targets.py), else ``tentative`` a tentative track within the gate of the target, else ``none``.
+
+    Parameters
+    ----------
+    counted, hit : bool arrays (targets, pings)
+        The pings the held fraction counts, and those with a detection on the echo.
+    held_by : int array (targets, pings)
+        The confirmed track holding each target (-1: none; the study's assignment).
+    time_s : array (targets, pings)
+        The pings' times (s), as the track table's.
+    xy, xy_mirror : arrays (targets, pings, 2)
+        The targets' positions and their mirrors about the array's axis (m).
+    tracks : PositionTracks
+        The per-ping track table (``time_s``, ``track_id``, ``confirmed``, ``x``).
+    gate_m : float
+        The study's ``match_m`` (m).
+    undecided : callable
+        Track id -> whether its side is undecided (default: all are).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (targets, pings) object arrays, "" where the ping is not counted or is held: the cause, the track state and
+        what is near.
+    """
+    counted, held_by, hit = np.asarray(counted, bool), np.asarray(held_by, np.int64), np.asarray(hit, bool)
+    out = tuple(np.full(counted.shape, "", object) for _ in range(3))
+    for i, p in zip(*np.nonzero(counted & (held_by < 0)), strict=True):
+        before = np.nonzero(held_by[i, :p] >= 0)[0]
+        rows = np.nonzero(np.isclose(tracks.time_s, time_s[i, p]))[0]
+        state = _unheld_state(tracks, rows, int(held_by[i, before[-1]]) if len(before) else -1, xy[i, p], gate_m)
+        out[0][i, p], out[1][i, p] = "miss" if not hit[i, p] else state, state
+        out[2][i, p] = _unheld_near(tracks, rows, xy[i, p], xy_mirror[i, p], gate_m, undecided)
+    return out
