@@ -46,7 +46,8 @@ CAUSES = ("miss", "acquiring", "deleted-existence", "deleted-merge", "deleted-gh
           "deleted-unlogged", "off", "assigned-other")
 DELETERS = {"RateConfirmation": "existence", "ExistenceDeleter": "existence", "DuplicateMerger": "merge",
             "GhostDeleter": "ghost", "StillHold": "still", "MinHits": "minhits"}
-LOG: dict = {"t": None, "removed": {}, "last": {}}  # the instrumented deleters' record (track id -> (t, part))
+LOG: dict = {"t": None, "removed": {}, "last": {}, "withheld": {}}  # the instrumented deleters' record (track id ->
+# (t, part)) and the contacts' gates: (scan time, detection row) -> the gates that withheld a contact of it
 
 
 def _instrument() -> None:
@@ -76,6 +77,21 @@ def _instrument() -> None:
             return manage
 
         cls.manage = wrap(cls.manage, cls.__name__)
+    for name in ("_gates", "_not_clutter", "_not_images"):
+        orig = getattr(ct.ContactTracker, name)
+        if getattr(orig, "_held_wrapped", False):
+            continue
+
+        def gate(orig, name):
+            def verdict(self, t_s, contacts):
+                keep = orig(self, t_s, contacts)
+                for d in np.asarray(contacts.detection)[~np.asarray(keep, bool)]:
+                    LOG["withheld"].setdefault((float(t_s), int(d)), set()).add(name.strip("_"))
+                return keep
+            verdict._held_wrapped = True
+            return verdict
+
+        setattr(ct.ContactTracker, name, gate(orig, name))
     step = ct.ContactTracker.step
     if not getattr(step, "_held_wrapped", False):
         def stepped(self, t_s, contacts):
@@ -98,7 +114,8 @@ def trial_config(config, seed: int, index: int):
 
 
 def run_cached(config, cache: Path, index: int):
-    """(result, truth of the real targets, deletions {track id: (time s, deleter)}, CPU s) of the trial's scene."""
+    """(result, truth of the real targets, deletions {track id: (time s, deleter)}, withheld contacts {(time s,
+    detection row): gates}, CPU s) of the trial's scene (a cache of an older version: no withheld record, {})."""
     import hashlib
 
     from sonartrack.studies.active_chain import _real_truth, run_scene
@@ -107,19 +124,45 @@ def run_cached(config, cache: Path, index: int):
     path = cache / f"trial{index}-{key}.pkl"
     if path.exists():
         with path.open("rb") as f:
-            return (*pickle.load(f), 0.0)
+            out = pickle.load(f)
+        return (*out, *([{}] if len(out) == 3 else []), 0.0)
     _instrument()
-    LOG["removed"], LOG["last"] = {}, {}
+    LOG["removed"], LOG["last"], LOG["withheld"] = {}, {}, {}
     t0 = time.process_time()
     result, _, truth = run_scene(config, config.scene)
-    out = (result, _real_truth(truth), dict(LOG["removed"]))
+    out = (result, _real_truth(truth), dict(LOG["removed"]), dict(LOG["withheld"]))
     cache.mkdir(parents=True, exist_ok=True)
     with path.open("wb") as f:
         pickle.dump(out, f)
     return (*out, time.process_time() - t0)
 
 
-def attribute(config, result, truth: dict, removed: dict) -> dict:
+def withheld_echoes(config, result, truth: dict, withheld: dict, pings) -> Counter:
+    """Of the (target, ping) pairs ``pings`` whose echo has a tracked detection: how many had every contact of those
+    detections withheld from the tracker, by the gates that withheld them (the instrumented ContactTracker)."""
+    from sonartrack.studies.active_chain import truth_grid
+
+    w, D, C = config.scene.waveform, result.detections, result.contacts
+    delay = truth_grid(config, truth, "lfm_delay_s" if w.kind == "lfm" else "travel_time_s")
+    tol = config.hit_delay_s if w.kind == "lfm" else max(config.hit_delay_s, 0.5 * w.duration_s)
+    cone = truth_grid(config, truth, "cone_deg")
+    out = Counter()
+    for i, p in zip(*np.nonzero(pings), strict=True):
+        m = np.nonzero(D.ping == p + 1)[0]
+        near = m[(np.abs(D.travel_time_s[m] - delay[i, p]) < tol) & (np.abs(D.cone_deg[m] - cone[i, p])
+                                                                      < config.hit_cone_deg)]
+        rows = np.nonzero(np.isin(C.detection, near))[0]
+        if not len(near) or not len(rows):
+            continue
+        if result.gated_out[rows].any():
+            out["given"] += 1
+            continue
+        gates = set().union(*(withheld.get((float(C.time_s[r]), int(C.detection[r])), {"?"}) for r in rows))
+        out["withheld by " + "+".join(sorted(gates))] += 1
+    return out
+
+
+def attribute(config, result, truth: dict, removed: dict, withheld: dict | None = None) -> dict:
     """Per target, the causes of its counted, not-held pings (module doc) and the counts beside them."""
     from sonartrack.studies.active_chain import (
         _mirror,
@@ -154,6 +197,9 @@ def attribute(config, result, truth: dict, removed: dict) -> dict:
     causes = Counter(cause[m].tolist())
     sub = Counter(f"{'miss, ' if c == 'miss' else ''}{s}, near {n}" for c, s, n in zip(cause[m], state[m], near[m],
                                                                                       strict=True))
+    if withheld:
+        sub.update({f"hit, {k}": v for k, v in withheld_echoes(config, result, truth, withheld,
+                                                              (cause != "") & hits).items()})
     ebr = truth_grid(config, truth, "ebr_db")
     tt = truth_grid(config, truth, "travel_time_s")
     blank = config.chain_settings().front_end.blank_s
@@ -213,8 +259,8 @@ def main() -> None:
     print("trial pulse counted held frac hit|counted blanked ebr_med  " + " ".join(CAUSES))
     for i in args.trials:
         config, axes = trial_config(Config(), args.seed, i)
-        result, truth, removed, cpu = run_cached(config, args.cache, i)
-        a = attribute(config, result, truth, removed)
+        result, truth, removed, withheld, cpu = run_cached(config, args.cache, i)
+        a = attribute(config, result, truth, removed, withheld)
         pulse = config.scene.waveform.kind.upper()
         stored = _stored_held(args.trials_parquet, i)
         same = "" if stored is None else (" same as study" if np.array_equal(
