@@ -5,8 +5,9 @@ studies/active_chain.py ``run_trial`` draws it (``trial_rng(seed, i)``, two seed
 ``draw_scene``, the first seed), through the study's own ``run_scene`` (the chain of ``sonartrack active``), with the
 tracker's deleters instrumented (which part removed which track at which ping: existence (RateConfirmation, the
 IPDA's termination threshold), duplicate merge (tracking/duplicates.py), ghost (systems/active/sides.py), still
-hold). The chain's tracks are scored by the study's own ``score_tracks`` (its ``held_pings`` is checked against the
-study's stored trials when ``--trials-parquet`` is given: the run must be the study's, ping for ping).
+hold). The chain's tracks are scored by the study's own ``score_tracks`` (its ``held_pings`` less the version-7
+credit ``held_mirror_pings`` is checked against the study's stored trials when ``--trials-parquet`` is given: the
+run must be the study's, ping for ping).
 
 Every COUNTED ping (detectable: ebr_db >= 15 dB, in the window, clear of the blast; after the target's first 5
 detectable pings, studies/active_chain_claims.py ``_held_detectable``) that no confirmed track holds is given the
@@ -174,7 +175,8 @@ def attribute(config, result, truth: dict, removed: dict, withheld: dict | None 
     from sonartrack.studies.active_chain_scoring import unheld_causes
 
     score = score_tracks(config, result.tracks, result, truth)
-    held = score["held_pings"] > 0.5
+    as_mirror = score["held_mirror_pings"] > 0.5  # held as an undecided track's other hypothesis (TRIAL_VERSION 7)
+    held = (score["held_pings"] > 0.5) & ~as_mirror  # held as the study scored it up to version 6
     det = detectable_grid(config, truth) > 0.5
     counted = det & (np.cumsum(det, axis=1) > config.acquire_pings)
     hits = echo_hits(config, result.detections, truth)
@@ -201,10 +203,16 @@ def attribute(config, result, truth: dict, removed: dict, withheld: dict | None 
         sub.update({f"hit, {k}": v for k, v in withheld_echoes(config, result, truth, withheld,
                                                               (cause != "") & hits).items()})
     ebr = truth_grid(config, truth, "ebr_db")
+    # Swerling 1 at the single-ping threshold on s = y / mu: Pd = exp(-T / (1 + EBR)), the expected EBR taken as known
+    pd_sw1 = np.exp(-result.thresholds["single"] / (1.0 + 10.0 ** (ebr / 10.0)))
+    single = echo_hits(config, result.single, truth)
     tt = truth_grid(config, truth, "travel_time_s")
     blank = config.chain_settings().front_end.blank_s
     return {"counted": int(counted.sum()), "held": int((held & counted).sum()), "causes": causes, "miss_sub": sub,
-            "held_pings": held, "hit_rate": float(hits[counted].mean()) if counted.any() else np.nan,
+            "held_pings": held, "as_mirror": int((as_mirror & counted).sum()),
+            "hit_rate": float(hits[counted].mean()) if counted.any() else np.nan,
+            "single_rate": float(single[counted].mean()) if counted.any() else np.nan,
+            "pd_sw1": float(pd_sw1[counted].mean()) if counted.any() else np.nan,
             "blanked": int((counted & (tt < blank)).sum()), "ebr_median": float(np.median(ebr[counted]))
             if counted.any() else np.nan, "per_target": [(int(counted[i].sum()), int((held & counted)[i].sum()))
                                                          for i in range(len(held))]}
@@ -255,7 +263,7 @@ def main() -> None:
     args = ap.parse_args()
     total = {"LFM": Counter(), "CW": Counter()}
     sub_total = {"LFM": Counter(), "CW": Counter()}
-    sums = {"LFM": [0, 0], "CW": [0, 0]}
+    sums, mirror = {"LFM": [0, 0], "CW": [0, 0]}, {"LFM": 0, "CW": 0}
     print("trial pulse counted held frac hit|counted blanked ebr_med  " + " ".join(CAUSES))
     for i in args.trials:
         config, axes = trial_config(Config(), args.seed, i)
@@ -267,20 +275,26 @@ def main() -> None:
             stored.reshape(4, *a["held_pings"].shape)[0] > 0.5, a["held_pings"]) else " DIFFERS from study")
         print(f"{i:5d} {pulse:5s} {a['counted']:7d} {a['held']:4d} {a['held'] / max(a['counted'], 1):.2f} "
               f"{a['hit_rate']:.2f} {a['blanked']:3d} {a['ebr_median']:5.1f}  "
-              + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}")
+              + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}; "
+              f"held as an undecided mirror (version 7) {a['as_mirror']}")
         print("      by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(a["miss_sub"].items())))
+        print(f"      single-ping detector on the counted pings: hit {a['single_rate']:.2f}, Swerling 1 at its "
+              f"threshold "
+              f"and the expected ebr {a['pd_sw1']:.2f}")
         print("      per target (counted/held): " + ", ".join(
             f"{n} {c}/{h}" for n, (c, h) in zip(target_names(config.scene), a["per_target"], strict=True)))
         total[pulse].update(a["causes"])
         sub_total[pulse].update(a["miss_sub"])
         sums[pulse][0] += a["counted"]
         sums[pulse][1] += a["held"]
+        mirror[pulse] += a["as_mirror"]
     for pulse in total:
         n, h = sums[pulse]
         if not n:
             continue
         lost = n - h
-        print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}), not held {lost}: " + ", ".join(
+        print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}; with the undecided mirror, version 7: "
+              f"{(h + mirror[pulse]) / n:.2f}), not held {lost}: " + ", ".join(
             f"{c} {total[pulse][c]} ({total[pulse][c] / max(lost, 1):.0%})" for c in CAUSES if total[pulse][c]))
         print(f"{pulse}: by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(sub_total[pulse].items())))
 

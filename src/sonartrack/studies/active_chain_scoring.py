@@ -295,3 +295,53 @@ def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: 
         out[0][i, p], out[1][i, p] = "miss" if not hit[i, p] else state, state
         out[2][i, p] = _unheld_near(tracks, rows, xy[i, p], xy_mirror[i, p], gate_m, undecided)
     return out
+
+
+def undecided_at(sides, track_id: int, t_s: float) -> bool:
+    """Whether a confirmed track's side was undecided at ``t_s``: no decision, or one reached only later
+    (``SideDecisions.resolved_s``, systems/active/sides.py); a track without a side row counts as undecided."""
+    k = None if sides is None else sides.of(int(track_id))
+    if k is None or str(sides.decision[k]) == "undecided":
+        return True
+    r = float(sides.resolved_s[k])
+    return not np.isfinite(r) or t_s < r
+
+
+def held_as_mirror(held_by, time_s, xy_mirror, tracks, sides, gate_m: float) -> np.ndarray:
+    """(targets, pings) bool: the target is not held by a confirmed track of its own but a confirmed track whose
+    side is undecided then lies within ``gate_m`` of its mirror and holds no other target at that ping. The chain
+    lists such a track as one row with both hypotheses, its reflection (the target's true position) among them
+    (systems/active/targets.py ``mirror_targets``; issue 34 item 4: an undecided mirror pair is one target), as it
+    does when the target's own twin is confirmed too, which the study already counts as held.
+
+    Parameters
+    ----------
+    held_by : int array (targets, pings)
+        The confirmed track holding each target by the study's assignment (-1: none).
+    time_s : array (targets, pings)
+        The pings' times (s), as the track table's.
+    xy_mirror : array (targets, pings, 2)
+        The targets' mirrors about the array's axis (m).
+    tracks : PositionTracks
+        The per-ping track table.
+    sides : SideDecisions or None
+        The chain's side decisions (None: every track undecided).
+    gate_m : float
+        The study's ``match_m`` (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        The pings held through the mirror hypothesis.
+    """
+    held_by = np.asarray(held_by, np.int64)
+    out = np.zeros(held_by.shape, bool)
+    for i, p in zip(*np.nonzero(held_by < 0), strict=True):
+        if not np.isfinite(time_s[i, p]):
+            continue
+        rows = np.nonzero(np.isclose(tracks.time_s, time_s[i, p]) & np.asarray(tracks.confirmed, bool))[0]
+        rows = rows[np.hypot(*(tracks.x[rows, :2] - xy_mirror[i, p]).T) < gate_m]
+        others = set(held_by[:, p].tolist())
+        out[i, p] = any(int(tracks.track_id[r]) not in others and undecided_at(sides, tracks.track_id[r],
+                                                                              time_s[i, p]) for r in rows)
+    return out
