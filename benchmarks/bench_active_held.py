@@ -5,9 +5,8 @@ studies/active_chain.py ``run_trial`` draws it (``trial_rng(seed, i)``, two seed
 ``draw_scene``, the first seed), through the study's own ``run_scene`` (the chain of ``sonartrack active``), with the
 tracker's deleters instrumented (which part removed which track at which ping: existence (RateConfirmation, the
 IPDA's termination threshold), duplicate merge (tracking/duplicates.py), ghost (systems/active/sides.py), still
-hold). The chain's tracks are scored by the study's own ``score_tracks`` (its ``held_pings`` less the version-7
-credit ``held_mirror_pings`` is checked against the study's stored trials when ``--trials-parquet`` is given: the
-run must be the study's, ping for ping).
+hold). The chain's tracks are scored by the study's own ``score_tracks`` (its ``held_pings`` is checked against the
+study's stored trials when ``--trials-parquet`` is given: the run must be the study's, ping for ping).
 
 Every COUNTED ping (detectable: ebr_db >= 15 dB, in the window, clear of the blast; after the target's first 5
 detectable pings, studies/active_chain_claims.py ``_held_detectable``) that no confirmed track holds is given the
@@ -172,11 +171,10 @@ def attribute(config, result, truth: dict, removed: dict, withheld: dict | None 
         score_tracks,
         truth_grid,
     )
-    from sonartrack.studies.active_chain_scoring import unheld_causes
+    from sonartrack.studies.active_chain_scoring import undecided_at, unheld_causes
 
     score = score_tracks(config, result.tracks, result, truth)
-    as_mirror = score["held_mirror_pings"] > 0.5  # held as an undecided track's other hypothesis (TRIAL_VERSION 7)
-    held = (score["held_pings"] > 0.5) & ~as_mirror  # held as the study scored it up to version 6
+    held = score["held_pings"] > 0.5
     det = detectable_grid(config, truth) > 0.5
     counted = det & (np.cumsum(det, axis=1) > config.acquire_pings)
     hits = echo_hits(config, result.detections, truth)
@@ -187,13 +185,9 @@ def attribute(config, result, truth: dict, removed: dict, withheld: dict | None 
     xy_m[ok] = _mirror(result.geometry, t[ok], xy[ok])
     sides = result.tracks.sides
 
-    def decision(tid: int) -> str:
-        k = None if sides is None else sides.of(tid)
-        return "undecided" if k is None else str(sides.decision[k])
-
     held_by = np.where(held, _holders(config, result, truth), -1)
     cause, state, near = unheld_causes(counted, held_by, hits, t, xy, xy_m, result.tracks.tracks, config.match_m,
-                                       lambda tid: decision(tid) == "undecided")
+                                       lambda tid, t_s: undecided_at(sides, tid, t_s))
     cause, state = (_deleter(c, held_by, removed) for c in (cause, state))
     m = cause != ""
     causes = Counter(cause[m].tolist())
@@ -209,7 +203,7 @@ def attribute(config, result, truth: dict, removed: dict, withheld: dict | None 
     tt = truth_grid(config, truth, "travel_time_s")
     blank = config.chain_settings().front_end.blank_s
     return {"counted": int(counted.sum()), "held": int((held & counted).sum()), "causes": causes, "miss_sub": sub,
-            "held_pings": held, "as_mirror": int((as_mirror & counted).sum()),
+            "held_pings": held,
             "hit_rate": float(hits[counted].mean()) if counted.any() else np.nan,
             "single_rate": float(single[counted].mean()) if counted.any() else np.nan,
             "pd_sw1": float(pd_sw1[counted].mean()) if counted.any() else np.nan,
@@ -263,7 +257,7 @@ def main() -> None:
     args = ap.parse_args()
     total = {"LFM": Counter(), "CW": Counter()}
     sub_total = {"LFM": Counter(), "CW": Counter()}
-    sums, mirror = {"LFM": [0, 0], "CW": [0, 0]}, {"LFM": 0, "CW": 0}
+    sums = {"LFM": [0, 0], "CW": [0, 0]}
     print("trial pulse counted held frac hit|counted blanked ebr_med  " + " ".join(CAUSES))
     for i in args.trials:
         config, axes = trial_config(Config(), args.seed, i)
@@ -275,8 +269,7 @@ def main() -> None:
             stored.reshape(4, *a["held_pings"].shape)[0] > 0.5, a["held_pings"]) else " DIFFERS from study")
         print(f"{i:5d} {pulse:5s} {a['counted']:7d} {a['held']:4d} {a['held'] / max(a['counted'], 1):.2f} "
               f"{a['hit_rate']:.2f} {a['blanked']:3d} {a['ebr_median']:5.1f}  "
-              + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}; "
-              f"held as an undecided mirror (version 7) {a['as_mirror']}")
+              + " ".join(f"{a['causes'].get(c, 0):3d}" for c in CAUSES) + f"  cpu {cpu:.0f} s{same}")
         print("      by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(a["miss_sub"].items())))
         print(f"      single-ping detector on the counted pings: hit {a['single_rate']:.2f}, Swerling 1 at its "
               f"threshold "
@@ -287,14 +280,12 @@ def main() -> None:
         sub_total[pulse].update(a["miss_sub"])
         sums[pulse][0] += a["counted"]
         sums[pulse][1] += a["held"]
-        mirror[pulse] += a["as_mirror"]
     for pulse in total:
         n, h = sums[pulse]
         if not n:
             continue
         lost = n - h
-        print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}; with the undecided mirror, version 7: "
-              f"{(h + mirror[pulse]) / n:.2f}), not held {lost}: " + ", ".join(
+        print(f"{pulse}: counted {n}, held {h} ({h / n:.2f}), not held {lost}: " + ", ".join(
             f"{c} {total[pulse][c]} ({total[pulse][c] / max(lost, 1):.0%})" for c in CAUSES if total[pulse][c]))
         print(f"{pulse}: by state, near: " + ", ".join(f"{k} {v}" for k, v in sorted(sub_total[pulse].items())))
 

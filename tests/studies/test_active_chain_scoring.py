@@ -14,7 +14,6 @@ from sonartrack.studies.active_chain_scoring import (
     acquisition_pings,
     entering_level_db,
     false_rows,
-    held_as_mirror,
     one_row_through,
     row_of_tracks,
     turn_window,
@@ -255,30 +254,13 @@ def test_unheld_pings_each_get_one_cause_in_the_stated_order():
     assert state[1].tolist() == ["", "", "", "off", "assigned-other", "", "deleted"] and near[1, 6] == "none"
     # a track decided on its side (not undecided) on A's mirror does not list A's position: nothing near
     near_decided = unheld_causes(counted, held_by, hit, np.tile(t, (2, 1)), xy, mirror, tracks, 1000.0,
-                                 undecided=lambda tid: tid != 4)[2]
+                                 undecided=lambda tid, t_s: tid != 4)[2]
     assert near_decided[0, 0] == "none"
 
 
-def test_a_target_is_held_as_the_other_hypothesis_of_an_undecided_track_on_its_mirror():
-    """Targets A (3000, 6000) and B (-3000, 6500), receiver at the origin, array axis north (mirror (-x, y)); 4 pings
-    30 s apart; gate 1000 m. Track 4 sits on A's mirror (-3000, 6000) at every ping, 500 m from B too:
-    ping 0: undecided, holds nothing -> A held through it; ping 1: it holds B (assignment) -> not A's;
-    ping 2: undecided -> A held; ping 3: it was decided (resolved at 80 s) -> not A's. Track 6 (tentative) on A's
-    mirror at ping 1 gives nothing; B is held by its own track at ping 1 only."""
-    t = np.arange(4) * 30.0
-    rows = [(t[k], 4, True, -3000.0, 6000.0) for k in range(4)] + [(t[1], 6, False, -3000.0, 6000.0)]
-    tracks = _table(rows)
-    held_by = np.full((2, 4), -1)
-    held_by[1, 1] = 4
-    xy = np.stack([np.tile([3000.0, 6000.0], (4, 1)), np.tile([-3000.0, 6500.0], (4, 1))])
-    mirror = xy * [-1.0, 1.0]
-    sides = SideDecisions(np.array([4]), np.array(["mirror"], object), np.array(["starboard"], object),
-                          np.array([-9.0]), np.array([80.0]), np.array([4]), np.array([-1]))
-    got = held_as_mirror(held_by, np.tile(t, (2, 1)), mirror, tracks, sides, 1000.0)
-    assert got[0].tolist() == [True, False, True, False]
-    # B's mirror (3000, 6500) is 500 m from nothing confirmed: never held that way (and held by 4 at ping 1 anyway)
-    assert not got[1].any()
-    # with no side rows every confirmed track counts as undecided: ping 3 too
-    assert held_as_mirror(held_by, np.tile(t, (2, 1)), mirror, tracks, None, 1000.0)[0].tolist() == [
-        True, False, True, True]
-    assert undecided_at(sides, 4, 79.0) and not undecided_at(sides, 4, 80.0) and undecided_at(sides, 7, 1e9)
+def test_a_side_is_undecided_until_its_decision_is_reached():
+    sides = SideDecisions(np.array([4, 5]), np.array(["mirror", "undecided"], object),
+                          np.array(["starboard", ""], object), np.array([-9.0, 0.1]), np.array([80.0, np.nan]),
+                          np.array([4, 4]), np.array([-1, -1]))
+    assert undecided_at(sides, 4, 79.0) and not undecided_at(sides, 4, 80.0)  # decided (a ghost) from 80 s
+    assert undecided_at(sides, 5, 1e9) and undecided_at(sides, 7, 0.0) and undecided_at(None, 4, 100.0)

@@ -81,10 +81,8 @@ PAPER = "sonartrack's own: papers P1 (MFTD across pings) and P4 (bistatic contac
 #: the detectable pings, CW range-rate sd in the re-trackings, hits of echoes out of the window or in the blast left
 #: out of the SNR50 fits; 5: false targets counted as the rows the user sees (an undecided mirror pair once, the
 #: tracks beside), each target's turn held on one row (issue 34 items 4-5); 6: "detectable" by the echo-to-background
-#: ratio (truth ebr_db: noise + mean reverberation in the echo's cell, sim/active_background.py), not echo-to-noise;
-#: 7: a target is also held when only an undecided confirmed track on its mirror is (the row the chain lists shows
-#: the target's position as its other hypothesis: studies/active_chain_scoring.py ``held_as_mirror``)
-TRIAL_VERSION = 7
+#: ratio (truth ebr_db: noise + mean reverberation in the echo's cell, sim/active_background.py), not echo-to-noise
+TRIAL_VERSION = 6
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it. 20: with 10 runs each clutter
 #: model had 2-4 h, where no count, not even 0, gives a Poisson upper bound <= 1 per hour (0 in 2 h: 1.50)
@@ -136,10 +134,7 @@ class Config(Settings):
       starting in the window and clear of the blast. Up to version 5 the echo-to-noise ``snr_db`` (no
       reverberation) was used: on the reverberation-limited scenes many such "detectable" echoes were masked; the
       held fraction of those pings is printed beside. A target's first 5 detectable pings are its acquisition
-      (item 5) and not counted. Held: a confirmed track within ``match_m`` of the target at that ping, or (from
-      version 7) an undecided confirmed track within ``match_m`` of its mirror holding no other target (the chain
-      lists it as one row whose other hypothesis is the target's position; studies/active_chain_scoring.py
-      ``held_as_mirror``), as when the target's own twin is confirmed beside it.
+      (item 5) and not counted. Held: a confirmed track within ``match_m`` of the target at that ping.
     * Intervals: held fraction and GOSPA, mean over runs with a 95 % normal interval; sides, acquisition and
       turns, Wilson 95 %; false rows, Poisson one-sided 95 % bounds per model; the MFTD gain, a bootstrap over runs
       (200 resamples). Each claim holds on its point estimate except the MFTD gain, whose interval must clear 0 dB,
@@ -395,19 +390,6 @@ def _turns(config: Config, result, truth: dict, track_of, tracks) -> dict[str, n
     return {"turn_one_row": out[0], "turn_held": out[1]}
 
 
-def _held_as_mirror(config: Config, truth: dict, result, tracks, track_of) -> np.ndarray:
-    """(targets, pings) the pings a target is held only as the other hypothesis of an undecided confirmed track on
-    its mirror (studies/active_chain_scoring.py ``held_as_mirror``: the row the chain lists shows its position)."""
-    from sonartrack.studies.active_chain_scoring import held_as_mirror
-
-    t = truth_grid(config, truth, "time_s")
-    xy = np.stack([truth_grid(config, truth, "x_m"), truth_grid(config, truth, "y_m")], -1)
-    ok = np.isfinite(t)
-    xy_m = np.full(xy.shape, np.nan)
-    xy_m[ok] = _mirror(result.geometry, t[ok], xy[ok])
-    return held_as_mirror(track_of, t, xy_m, tracks.tracks, tracks.sides, config.match_m)
-
-
 def score_tracks(config: Config, tracks, result, truth: dict) -> dict[str, np.ndarray]:
     """One tracking's measures per target (module doc): time to confirm (s), fraction of pings held, CTT rate after
     the turn, RMSE and RMS own sd after the turn (m), side decision; and its confirmed false tracks."""
@@ -427,10 +409,8 @@ def score_tracks(config: Config, tracks, result, truth: dict) -> dict[str, np.nd
     side_ok, side_lr, side_s = _side_ok(tracks, assoc, t_truth, ids, xy_m, config.match_m)
     false_rows, rows, false_tracks = count_false_rows(tracks, result.geometry, t_truth, xy, xy_m, config.match_m)
     track_of = _by_ping(config, truth, assoc.time_s, assoc.track_of, -1)
-    as_mirror = _held_as_mirror(config, truth, result, tracks, track_of)
     return {"ttc_s": time_to_confirm(assoc), "hold": held.mean(axis=0),
-            "held_pings": ((track_of >= 0) | as_mirror).astype(float), "held_mirror_pings": as_mirror.astype(float),
-            "ctt_after": ctt_after, "rmse_after_m": rmse,
+            "held_pings": (track_of >= 0).astype(float), "ctt_after": ctt_after, "rmse_after_m": rmse,
             "sd_after_m": bound, "side_ok": side_ok, "side_log_lr": side_lr, "side_resolved_s": side_s,
             **_metrics(config, tracks, t_truth, ids, xy, assoc), **_turns(config, result, truth, track_of, tracks),
             "false_tracks": np.array([false_tracks], float), "false_rows": np.array([false_rows], float),

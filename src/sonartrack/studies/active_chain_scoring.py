@@ -243,18 +243,18 @@ def _unheld_state(tracks, rows, last: int, xy, gate_m: float) -> str:
     return "off" if np.hypot(*(tracks.x[own[0], :2] - xy)) >= gate_m else "assigned-other"
 
 
-def _unheld_near(tracks, rows, xy, xy_mirror, gate_m: float, undecided) -> str:
+def _unheld_near(tracks, rows, xy, xy_mirror, gate_m: float, undecided, t_s: float) -> str:
     """"mirror" an undecided confirmed track within the gate of the target's mirror, else "tentative" a tentative
     track within the gate of the target, else "none"."""
     conf = np.asarray(tracks.confirmed[rows], bool)
     dm = np.hypot(*(tracks.x[rows, :2] - xy_mirror).T)
-    if (conf & (dm < gate_m) & np.array([bool(undecided(int(k))) for k in tracks.track_id[rows]], bool)).any():
+    if (conf & (dm < gate_m) & np.array([bool(undecided(int(k), t_s)) for k in tracks.track_id[rows]], bool)).any():
         return "mirror"
     return "tentative" if (~conf & (np.hypot(*(tracks.x[rows, :2] - xy).T) < gate_m)).any() else "none"
 
 
 def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: float,
-                  undecided=lambda tid: True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  undecided=lambda tid, t_s: True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each counted ping on which no confirmed track holds the target, given ONE cause, tested in this order:
     ``miss`` no detection on the target's echo (the detector's miss: a track must coast); ``acquiring`` no confirmed
     track has held the target yet; ``deleted`` the confirmed track that last held it is gone; ``off`` that track
@@ -278,7 +278,8 @@ def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: 
     gate_m : float
         The study's ``match_m`` (m).
     undecided : callable
-        Track id -> whether its side is undecided (default: all are).
+        (track id, time s) -> whether the track's side is undecided then (default: all are; the study's:
+        :func:`undecided_at` with its side decisions).
 
     Returns
     -------
@@ -293,7 +294,7 @@ def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: 
         rows = np.nonzero(np.isclose(tracks.time_s, time_s[i, p]))[0]
         state = _unheld_state(tracks, rows, int(held_by[i, before[-1]]) if len(before) else -1, xy[i, p], gate_m)
         out[0][i, p], out[1][i, p] = "miss" if not hit[i, p] else state, state
-        out[2][i, p] = _unheld_near(tracks, rows, xy[i, p], xy_mirror[i, p], gate_m, undecided)
+        out[2][i, p] = _unheld_near(tracks, rows, xy[i, p], xy_mirror[i, p], gate_m, undecided, float(time_s[i, p]))
     return out
 
 
@@ -305,43 +306,3 @@ def undecided_at(sides, track_id: int, t_s: float) -> bool:
         return True
     r = float(sides.resolved_s[k])
     return not np.isfinite(r) or t_s < r
-
-
-def held_as_mirror(held_by, time_s, xy_mirror, tracks, sides, gate_m: float) -> np.ndarray:
-    """(targets, pings) bool: the target is not held by a confirmed track of its own but a confirmed track whose
-    side is undecided then lies within ``gate_m`` of its mirror and holds no other target at that ping. The chain
-    lists such a track as one row with both hypotheses, its reflection (the target's true position) among them
-    (systems/active/targets.py ``mirror_targets``; issue 34 item 4: an undecided mirror pair is one target), as it
-    does when the target's own twin is confirmed too, which the study already counts as held.
-
-    Parameters
-    ----------
-    held_by : int array (targets, pings)
-        The confirmed track holding each target by the study's assignment (-1: none).
-    time_s : array (targets, pings)
-        The pings' times (s), as the track table's.
-    xy_mirror : array (targets, pings, 2)
-        The targets' mirrors about the array's axis (m).
-    tracks : PositionTracks
-        The per-ping track table.
-    sides : SideDecisions or None
-        The chain's side decisions (None: every track undecided).
-    gate_m : float
-        The study's ``match_m`` (m).
-
-    Returns
-    -------
-    numpy.ndarray
-        The pings held through the mirror hypothesis.
-    """
-    held_by = np.asarray(held_by, np.int64)
-    out = np.zeros(held_by.shape, bool)
-    for i, p in zip(*np.nonzero(held_by < 0), strict=True):
-        if not np.isfinite(time_s[i, p]):
-            continue
-        rows = np.nonzero(np.isclose(tracks.time_s, time_s[i, p]) & np.asarray(tracks.confirmed, bool))[0]
-        rows = rows[np.hypot(*(tracks.x[rows, :2] - xy_mirror[i, p]).T) < gate_m]
-        others = set(held_by[:, p].tolist())
-        out[i, p] = any(int(tracks.track_id[r]) not in others and undecided_at(sides, tracks.track_id[r],
-                                                                              time_s[i, p]) for r in rows)
-    return out
