@@ -244,6 +244,29 @@ def _stored_held(path: Path | None, index: int):
     return None if not len(row) else np.asarray(row.iloc[0]["held_pings"], float)
 
 
+def study_split(path: Path, acquire: int = 5) -> None:
+    """From the study's stored trials alone (no run): per pulse, the counted not-held pings before the target is
+    first held (acquisition) and after (drops and gaps)."""
+    import pandas as pd
+
+    df = pd.read_parquet(path)
+    tot = {}
+    for k in range(len(df)):
+        r = df.iloc[k]
+        n_t = len(r["ttc_s"]) // 4
+        det = np.asarray(r["detectable"]).reshape(n_t, -1) > 0.5
+        counted = det & (np.cumsum(det, axis=1) > acquire)
+        held = np.asarray(r["held_pings"]).reshape(4, n_t, -1)[0] > 0.5
+        lost = counted & ~held
+        ever = np.cumsum(held, axis=1) > 0
+        v = np.array([counted.sum(), (held & counted).sum(), (lost & ~ever).sum(), (lost & ever).sum()])
+        pulse = "LFM" if int(np.asarray(r["axes"])[0]) == 0 else "CW"
+        tot[pulse] = tot.get(pulse, 0) + v
+    for pulse, (n, h, before, after) in tot.items():
+        print(f"study {pulse}: counted {n}, held {h} ({h / max(n, 1):.2f}); not held {n - h}: before first held "
+              f"{before} ({before / max(n - h, 1):.0%}), after {after} ({after / max(n - h, 1):.0%})")
+
+
 def main() -> None:
     from sonartrack.studies.active_chain import Config
     from sonartrack.studies.active_chain_family import target_names
@@ -255,6 +278,8 @@ def main() -> None:
     ap.add_argument("--trials-parquet", type=Path, default=None, help="the study's trials.parquet: its held_pings "
                                                                       "checked against this run's")
     args = ap.parse_args()
+    if args.trials_parquet is not None and args.trials_parquet.exists():
+        study_split(args.trials_parquet)
     total = {"LFM": Counter(), "CW": Counter()}
     sub_total = {"LFM": Counter(), "CW": Counter()}
     sums = {"LFM": [0, 0], "CW": [0, 0]}
