@@ -15,7 +15,10 @@ one row (issue 34 item 4). The study counts what the user sees:
 * **a turn held on one row** (issue 34 item 5): the pings from the last at or before the turn's start to the first at
   or after its end; judged when the target is detectable at both of those end pings; held on one row when a confirmed
   track holds it at both ends and every track holding it in between belongs to the same row (a track of no row, a
-  fleeting fragment the chain does not list, is a row of its own).
+  fleeting fragment the chain does not list, is a row of its own);
+* **why a detectable ping is not held** (:func:`unheld_causes`, used by benchmarks/bench_active_held.py): the
+  detector's miss, acquisition, the holding track deleted, wandered off or given to another target by the
+  assignment, and what is near the target then (an undecided track on its mirror, a tentative track, nothing).
 """
 
 from __future__ import annotations
