@@ -34,16 +34,16 @@ change). ~2 min CPU per LFM trial, 1 min per CW (7-18 min wall at load 10-15 on 
 
 Measured (2026-12-07, main at e4c2ec6, seed 2017; every trial's held pings identical to the full study's stored
 ones, /tmp/lead11/full_fin20): the study's 20 trials alone: LFM 518 of 1687 counted pings not held, 372 (72 %) of
-them before the target was first held, 146 after; CW 118 of 752, 25 (21 %) before, 93 after. Trials 18, 2, 8 (LFM):
-365 not held of 692: miss 179 (49 %), acquiring 131 (36 %), deleted by existence 33 (9 %), ghost 3, off 18 (5 %),
-assigned to another target 1; by the track state alone (the miss set aside): acquiring 277 (76 %: a tentative track
-on the target 213, nothing 45, an undecided confirmed track on its mirror 19), deleted by existence 52 (14 %), off
-30 (8 %), ghost 5, assigned-other 1; no merge or still-hold deletion. Of the 116 not-held pings of trials 2 and 8
-whose echo was detected, the contacts went to the tracker on 105, the clutter map withheld them on 11 (trial 8's
-approacher near its closest approach, range rate ~0). The single-ping detector found 0.53-0.56 of the counted
-echoes where Swerling 1 at its threshold and the expected ebr gives 0.75-0.86. Trial 15 (CW): 45 not held of 152:
-miss 34, existence 4, off 4, assigned-other 3; by state: off 18, deleted by existence 14, assigned-other 13,
-acquiring 0. No counted ping of the 20 trials is in the blanked delays or past the window.
+them before the target was first held, 146 after; CW 118 of 752, 25 (21 %) before, 93 after. Trials 18, 2, 8, 16,
+14 (LFM): 436 not held of 999: miss 204 (47 %), acquiring 152 (35 %), deleted by existence 33 (8 %), ghost 3, off
+42 (10 %), assigned to another target 2; by the track state alone (the miss set aside): acquiring 308 (71 %: a
+tentative track on the target 239, nothing 47, an undecided confirmed track on its mirror 22), deleted by existence
+52 (12 %), off 68 (16 %), ghost 5, assigned-other 3; no merge or still-hold deletion. Of the 162 not-held pings of
+trials 2, 8, 16, 14 whose echo was detected, the contacts went to the tracker on 142, the clutter map withheld them
+on 20 (e.g. trial 8's approacher near its closest approach, range rate ~0). The single-ping detector found
+0.47-0.77 of the counted echoes where Swerling 1 at its threshold and the expected ebr gives 0.68-0.86. Trial 15
+(CW): 45 not held of 152: miss 34, existence 4, off 4, assigned-other 3; by state: off 18, deleted by existence 14,
+assigned-other 13, acquiring 0. No counted ping of the 20 trials is in the blanked delays or past the window.
 """
 
 from __future__ import annotations
