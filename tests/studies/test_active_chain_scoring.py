@@ -17,6 +17,8 @@ from sonartrack.studies.active_chain_scoring import (
     one_row_through,
     row_of_tracks,
     turn_window,
+    undecided_at,
+    unheld_causes,
 )
 from sonartrack.systems.active.contacts import ActiveGeometry
 from sonartrack.systems.active.run import ActiveTracks
@@ -210,3 +212,55 @@ def test_false_claim_needs_every_model_under_one_per_hour_at_the_upper_bound():
                "reverb_false_upper95": {"mftd_imm": 0.43, "single_imm": 0.43}}
     c = _false_claim(summary, config)
     assert not c.holds and "k-spiky: not run" in c.ours
+
+
+def _table(rows):
+    """PositionTracks from (time s, track id, confirmed, x, y) rows."""
+    n = len(rows)
+    x = np.array([[r[3], r[4], 0.0, 0.0] for r in rows], float).reshape(n, 4)
+    return PositionTracks(np.array([r[0] for r in rows], float), np.array([r[1] for r in rows], np.int64),
+                          np.array([r[2] for r in rows], bool), np.ones(n), x, np.full(n, 100.0), np.full(n, 100.0),
+                          np.full((n, 1), 1.0))
+
+
+def test_unheld_pings_each_get_one_cause_in_the_stated_order():
+    """Two still targets, A at (3000, 6000) (mirror (-3000, 6000)) and B at (-5000, 2000), 7 pings 30 s apart, all
+    counted; the causes worked out by hand from the table below (gate 1000 m)."""
+    t = np.arange(7) * 30.0
+    A, B = (3000.0, 6000.0), (-5000.0, 2000.0)
+    rows = [(t[0], 4, True, -2900.0, 6000.0),                     # ping 0: A's mirror held by an undecided track
+            (t[1], 9, False, 3200.0, 6000.0),                     # ping 1: a tentative track on A
+            (t[2], 3, True, 3100.0, 6000.0), (t[3], 3, True, 3100.0, 6000.0),  # pings 2, 3: track 3 holds A
+            (t[5], 9, False, 3000.0, 6100.0)]                     # ping 4: nothing; ping 5: 3 gone, a tentative
+    rows += [(t[k], 5, True, -5000.0, 2100.0) for k in range(3)]  # pings 0-2: track 5 holds B
+    rows += [(t[3], 5, True, -5000.0, 4500.0),                    # ping 3: 5 is 2.5 km off B
+             (t[4], 5, True, -4900.0, 2000.0), (t[5], 5, True, -4900.0, 2000.0)]  # 4, 5: near B, given to A
+    tracks = _table(rows)
+    held_by = np.full((2, 7), -1)
+    held_by[0, 2:4] = 3
+    held_by[0, 4:6] = 5  # the assignment gives track 5 to A at pings 4 and 5 (B's cause there: assigned-other)
+    held_by[1, :3] = 5
+    hit = np.ones((2, 7), bool)
+    hit[0, 6] = hit[1, 6] = False  # ping 6: both missed; no track rows at all
+    counted = np.ones((2, 7), bool)
+    counted[1, 5] = False  # not counted: no cause
+    xy = np.stack([np.tile(A, (7, 1)), np.tile(B, (7, 1))])
+    mirror = xy * [-1.0, 1.0]
+    cause, state, near = unheld_causes(counted, held_by, hit, np.tile(t, (2, 1)), xy, mirror, tracks, 1000.0)
+    assert cause[0].tolist() == ["acquiring", "acquiring", "", "", "", "", "miss"]
+    assert state[0].tolist() == ["acquiring", "acquiring", "", "", "", "", "deleted"]
+    assert near[0].tolist() == ["mirror", "tentative", "", "", "", "", "none"]
+    assert cause[1].tolist() == ["", "", "", "off", "assigned-other", "", "miss"]
+    assert state[1].tolist() == ["", "", "", "off", "assigned-other", "", "deleted"] and near[1, 6] == "none"
+    # a track decided on its side (not undecided) on A's mirror does not list A's position: nothing near
+    near_decided = unheld_causes(counted, held_by, hit, np.tile(t, (2, 1)), xy, mirror, tracks, 1000.0,
+                                 undecided=lambda tid, t_s: tid != 4)[2]
+    assert near_decided[0, 0] == "none"
+
+
+def test_a_side_is_undecided_until_its_decision_is_reached():
+    sides = SideDecisions(np.array([4, 5]), np.array(["mirror", "undecided"], object),
+                          np.array(["starboard", ""], object), np.array([-9.0, 0.1]), np.array([80.0, np.nan]),
+                          np.array([4, 4]), np.array([-1, -1]))
+    assert undecided_at(sides, 4, 79.0) and not undecided_at(sides, 4, 80.0)  # decided (a ghost) from 80 s
+    assert undecided_at(sides, 5, 1e9) and undecided_at(sides, 7, 0.0) and undecided_at(None, 4, 100.0)

@@ -15,7 +15,10 @@ one row (issue 34 item 4). The study counts what the user sees:
 * **a turn held on one row** (issue 34 item 5): the pings from the last at or before the turn's start to the first at
   or after its end; judged when the target is detectable at both of those end pings; held on one row when a confirmed
   track holds it at both ends and every track holding it in between belongs to the same row (a track of no row, a
-  fleeting fragment the chain does not list, is a row of its own).
+  fleeting fragment the chain does not list, is a row of its own);
+* **why a detectable ping is not held** (:func:`unheld_causes`, used by benchmarks/bench_active_held.py): the
+  detector's miss, acquisition, the holding track deleted, wandered off or given to another target by the
+  assignment, and what is near the target then (an undecided track on its mirror, a tentative track, nothing).
 """
 
 from __future__ import annotations
@@ -223,3 +226,86 @@ def one_row_through(track_of, window, detectable, row_of: dict[int, int]) -> tup
         return float("nan"), frac
     rows = {row_of.get(int(t), ("track", int(t))) for t in tid[held]}
     return float(bool(held[0] and held[-1] and len(rows) == 1)), frac
+
+
+#: the causes of a counted ping not held (:func:`unheld_causes`), in the order they are tested
+UNHELD_CAUSES = ("miss", "acquiring", "deleted", "off", "assigned-other")
+#: what else is near the target on such a ping (:func:`unheld_causes`)
+UNHELD_NEAR = ("mirror", "tentative", "none")
+
+
+def _unheld_state(tracks, rows, last: int, xy, gate_m: float) -> str:
+    """The track state behind one not-held ping (:func:`unheld_causes`): ``rows`` the track table's rows at the ping,
+    ``last`` the confirmed track that last held the target (-1: none yet)."""
+    if last < 0:
+        return "acquiring"
+    own = rows[tracks.track_id[rows] == last]
+    if not len(own):
+        return "deleted"
+    # confirmation is kept for a track's life (tracking/deleters.py): the last holder within the gate is confirmed
+    return "off" if np.hypot(*(tracks.x[own[0], :2] - xy)) >= gate_m else "assigned-other"
+
+
+def _unheld_near(tracks, rows, xy, xy_mirror, gate_m: float, undecided, t_s: float) -> str:
+    """"mirror" an undecided confirmed track within the gate of the target's mirror, else "tentative" a tentative
+    track within the gate of the target, else "none"."""
+    conf = np.asarray(tracks.confirmed[rows], bool)
+    dm = np.hypot(*(tracks.x[rows, :2] - xy_mirror).T)
+    if (conf & (dm < gate_m) & np.array([bool(undecided(int(k), t_s)) for k in tracks.track_id[rows]], bool)).any():
+        return "mirror"
+    return "tentative" if (~conf & (np.hypot(*(tracks.x[rows, :2] - xy).T) < gate_m)).any() else "none"
+
+
+def unheld_causes(counted, held_by, hit, time_s, xy, xy_mirror, tracks, gate_m: float,
+                  undecided=lambda tid, t_s: True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each counted ping on which no confirmed track holds the target, given ONE cause, tested in this order:
+    ``miss`` no detection on the target's echo (the detector's miss: a track must coast); ``acquiring`` no confirmed
+    track has held the target yet; ``deleted`` the confirmed track that last held it is gone; ``off`` that track
+    lives but farther than the gate; ``assigned-other`` that track, within the gate, is assigned to another target.
+    Beside it, the track state (the cause but for the miss) and what is near: ``mirror`` an undecided confirmed
+    track within the gate of the target's mirror (its row lists the target's true position as its other hypothesis,
+    systems/active/targets.py), else ``tentative`` a tentative track within the gate of the target, else ``none``.
+
+    Parameters
+    ----------
+    counted, hit : bool arrays (targets, pings)
+        The pings the held fraction counts, and those with a detection on the echo.
+    held_by : int array (targets, pings)
+        The confirmed track holding each target (-1: none; the study's assignment).
+    time_s : array (targets, pings)
+        The pings' times (s), as the track table's.
+    xy, xy_mirror : arrays (targets, pings, 2)
+        The targets' positions and their mirrors about the array's axis (m).
+    tracks : PositionTracks
+        The per-ping track table (``time_s``, ``track_id``, ``confirmed``, ``x``).
+    gate_m : float
+        The study's ``match_m`` (m).
+    undecided : callable
+        (track id, time s) -> whether the track's side is undecided then (default: all are; the study's:
+        :func:`undecided_at` with its side decisions).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (targets, pings) object arrays, "" where the ping is not counted or is held: the cause, the track state and
+        what is near.
+    """
+    counted, held_by, hit = np.asarray(counted, bool), np.asarray(held_by, np.int64), np.asarray(hit, bool)
+    out = tuple(np.full(counted.shape, "", object) for _ in range(3))
+    for i, p in zip(*np.nonzero(counted & (held_by < 0)), strict=True):
+        before = np.nonzero(held_by[i, :p] >= 0)[0]
+        rows = np.nonzero(np.isclose(tracks.time_s, time_s[i, p]))[0]
+        state = _unheld_state(tracks, rows, int(held_by[i, before[-1]]) if len(before) else -1, xy[i, p], gate_m)
+        out[0][i, p], out[1][i, p] = "miss" if not hit[i, p] else state, state
+        out[2][i, p] = _unheld_near(tracks, rows, xy[i, p], xy_mirror[i, p], gate_m, undecided, float(time_s[i, p]))
+    return out
+
+
+def undecided_at(sides, track_id: int, t_s: float) -> bool:
+    """Whether a confirmed track's side was undecided at ``t_s``: no decision, or one reached only later
+    (``SideDecisions.resolved_s``, systems/active/sides.py); a track without a side row counts as undecided."""
+    k = None if sides is None else sides.of(int(track_id))
+    if k is None or str(sides.decision[k]) == "undecided":
+        return True
+    r = float(sides.resolved_s[k])
+    return not np.isfinite(r) or t_s < r
