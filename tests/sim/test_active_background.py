@@ -94,3 +94,21 @@ def test_an_echo_past_the_window_has_no_ebr():
     truth = {"ping": np.array([1]), "travel_time_s": np.array([scene.ping_interval_s + 1.0]),
              "cone_deg": np.array([90.0]), "doppler_hz": np.array([0.0]), "snr_db": np.array([20.0])}
     assert np.isnan(echo_background_db(scene, SphericalNoAbsorption(), _still_monostatic(), truth)[0])
+
+
+def test_lfm_peak_loss_is_the_unshifted_replica_matched_to_a_doppler_shifted_echo():
+    """An LFM echo at Doppler f_d through the zero-Doppler replica: its peak power over a still echo's, by direct
+    correlation of the sampled pulses (acoustics/matched_filter.py), against 20 log10(1 - |f_d| / B); a CW: 0 dB."""
+    from sonartrack.acoustics.matched_filter import Waveform
+    from sonartrack.sim.active_background import lfm_peak_loss_db
+
+    w = Waveform(kind="lfm", carrier_hz=1500.0, bandwidth_hz=50.0, duration_s=1.0)
+    fs = 800.0
+    r0 = w.replica(fs, 0.0)
+    n = len(r0)
+    for fd in (5.0, -11.6, 20.0):
+        echo = np.concatenate([np.zeros(n), w.replica(fs, fd), np.zeros(n)])
+        peak = np.max(np.abs(np.correlate(echo, r0, "valid")) ** 2) / n**2
+        assert 10.0 * np.log10(peak) == pytest.approx(lfm_peak_loss_db(w, fd), abs=0.05)
+    cw = Waveform(kind="cw", carrier_hz=1500.0, bandwidth_hz=0.0, duration_s=1.0)
+    assert lfm_peak_loss_db(cw, np.array([3.0, -7.0])).tolist() == [0.0, 0.0]

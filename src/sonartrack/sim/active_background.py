@@ -29,7 +29,11 @@ integral of |chi|^2 is done first, J(df) = int |chi(u, df)|^2 du, because chi is
 (Levanon and Mozeson, Radar Signals, eqs. 3.10 and 4.9). For a CW echo off the reverberation ridge J(df) is
 small (the Doppler filter at the echo's Doppler does not pass the still scatterers); for an LFM J ~ 1/B at every
 Doppler of interest (the range-Doppler coupling moves a scatterer's peak, it keeps its energy). The LFM's
-range-Doppler shift moves the cell by f_d tau / B (< 0.1 s): the reverberation is taken at the travel time.
+range-Doppler shift moves the cell by f_d tau / B (up to 0.23 s in study active-chain's family: a 50 Hz band at
+1.5 kHz, 11.6 m/s of bistatic range rate): the reverberation is taken at the travel time. The echo's OWN peak does
+lose: the chain's LFM replica is unshifted, and on the ridge u = f_d tau / B the sinc is 1, so its peak power is
+(1 - |f_d| / B)^2 of a still echo's (Levanon and Mozeson eq. 4.9): -2.3 dB at f_d = 0.23 B. ``ebr_db`` carries
+that loss (a CW's replica bank is at the echo's Doppler: none).
 Expected values only (never the ping's realised echo), so "detectable" stays a property of the scene.
 """
 
@@ -177,8 +181,18 @@ def echo_background_db(scene: ActiveSceneSettings, tl: TransmissionLoss, plat: P
         / scene.sound_speed_mps * 1.5 + 1.0
     table = doppler_table(scene, float(np.max(np.abs(dop))) + scat_max)
     noise = 10.0 ** (scene.noise_level_db / 10.0) / (scene.waveform.duration_s * scene.sonar.elements)
+    peak_db = lfm_peak_loss_db(scene.waveform, dop)
     for i in np.nonzero(travel < scene.ping_interval_s)[0]:
         rev = reverberation_in_cell(scene, tl, plat, int(truth["ping"][i]) - 1, travel[i],
                                     np.deg2rad(float(truth["cone_deg"][i])), dop[i], table)
-        out[i] = snr[i] - 10.0 * np.log10(1.0 + rev / noise)
+        out[i] = snr[i] + peak_db[i] - 10.0 * np.log10(1.0 + rev / noise)
     return out
+
+
+def lfm_peak_loss_db(waveform, doppler_hz) -> np.ndarray:
+    """10 log10 of an echo's matched-filter peak power at Doppler ``doppler_hz`` over a still echo's (dB, <= 0): an
+    LFM's 20 log10(1 - |f_d| / B) (module doc; -300 dB past |f_d| >= B), 0 for a CW."""
+    fd = np.abs(np.asarray(doppler_hz, float))
+    if waveform.kind != "lfm":
+        return np.zeros(fd.shape)
+    return 20.0 * np.log10(np.clip(1.0 - fd / waveform.bandwidth_hz, 1e-15, 1.0))

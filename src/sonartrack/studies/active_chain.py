@@ -81,8 +81,11 @@ PAPER = "sonartrack's own: papers P1 (MFTD across pings) and P4 (bistatic contac
 #: the detectable pings, CW range-rate sd in the re-trackings, hits of echoes out of the window or in the blast left
 #: out of the SNR50 fits; 5: false targets counted as the rows the user sees (an undecided mirror pair once, the
 #: tracks beside), each target's turn held on one row (issue 34 items 4-5); 6: "detectable" by the echo-to-background
-#: ratio (truth ebr_db: noise + mean reverberation in the echo's cell, sim/active_background.py), not echo-to-noise
-TRIAL_VERSION = 6
+#: ratio (truth ebr_db: noise + mean reverberation in the echo's cell, sim/active_background.py), not echo-to-noise;
+#: 7: an LFM echo's Doppler loss through the unshifted replica in ebr_db, a target left undecided with no detectable
+#: echoes across side_turn_deg of heading change not judged for its side, and the chain's session-12 changes (K shape
+#: by delay, the CW ridge map, side evidence over joins)
+TRIAL_VERSION = 7
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it. 20: with 10 runs each clutter
 #: model had 2-4 h, where no count, not even 0, gives a Poisson upper bound <= 1 per hour (0 in 2 h: 1.50)
@@ -309,11 +312,14 @@ def _held_errors(tracks, assoc, t_truth, ids, xy_truth, after) -> tuple[np.ndarr
     return np.array([rms(e) for e in err]), np.array([rms(s) for s in sd])
 
 
-def _side_ok(tracks, assoc, t_truth, ids, xy_mirror, gate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _side_ok(tracks, assoc, t_truth, ids, xy_mirror, gate: float,
+             evident=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per target at the last ping, by the chain's side decisions (systems/active/sides.py): 1 when the track
     holding it is decided on its own side and every confirmed track on its mirror is decided a ghost, 0 when
-    either fails, NaN when neither side is held (not judged); with the holding track's ln LR and the time its
-    decision was reached (NaN: none)."""
+    either fails, NaN when neither side is held (not judged) or when nothing is decided and the geometry offered
+    no evidence (``evident`` (targets,) False: the target was not detectable on two pings the array's heading
+    changed between by the chain's side_turn_deg; a decided target is judged whatever); with the holding track's
+    ln LR and the time its decision was reached (NaN: none)."""
     tr, sides = tracks.tracks, tracks.sides
     t = assoc.time_s[-1]
     rows = (tr.time_s == t) & tr.confirmed & ~np.isin(tr.track_id, assoc.track_of[-1])
@@ -334,11 +340,22 @@ def _side_ok(tracks, assoc, t_truth, ids, xy_mirror, gate: float) -> tuple[np.nd
         if not (held or len(ghosts)):
             continue
         ok = all(decision(g)[0] == "mirror" for g in ghosts)
+        decided = any(decision(g)[0] != "undecided" for g in ghosts)
         if held:
             d, lr[i], when[i] = decision(assoc.track_of[-1, i])
-            ok = ok and d == "track"
-        out[i] = float(ok)
+            ok, decided = ok and d == "track", decided or d != "undecided"
+        if evident is None or evident[target] or decided:
+            out[i] = float(ok)
     return out, lr, when
+
+
+def _side_evident(config: Config, result, truth: dict) -> np.ndarray:
+    """Per target (``target_names`` order): detectable (:func:`detectable_grid`) on two pings between which the
+    array's heading changed by at least the chain's ``side_turn_deg`` (the evidence a side decision needs)."""
+    det = detectable_grid(config, truth) > 0.5
+    h = np.asarray(result.geometry.heading_at(config.scene.ping_times_s[:det.shape[1]]), float)
+    span = np.array([np.ptp(h[d]) if d.any() else 0.0 for d in det])
+    return np.rad2deg(span) >= float(config.chain.side_turn_deg or 0.0)
 
 
 def _metrics(config: Config, tracks, t_truth, ids, xy, assoc) -> dict[str, np.ndarray]:
@@ -406,7 +423,8 @@ def score_tracks(config: Config, tracks, result, truth: dict) -> dict[str, np.nd
     rmse, bound = _held_errors(tracks, assoc, t_truth, ids, xy, after)
     with np.errstate(invalid="ignore"):
         ctt_after = held[after].mean(axis=0) if after.any() else np.full(len(names), np.nan)
-    side_ok, side_lr, side_s = _side_ok(tracks, assoc, t_truth, ids, xy_m, config.match_m)
+    side_ok, side_lr, side_s = _side_ok(tracks, assoc, t_truth, ids, xy_m, config.match_m,
+                                        _side_evident(config, result, truth))
     false_rows, rows, false_tracks = count_false_rows(tracks, result.geometry, t_truth, xy, xy_m, config.match_m)
     track_of = _by_ping(config, truth, assoc.time_s, assoc.track_of, -1)
     return {"ttc_s": time_to_confirm(assoc), "hold": held.mean(axis=0),

@@ -349,7 +349,9 @@ def _side_claim(summary: dict) -> Claim:
                  text="fraction of (run, target) pairs, at the last ping, whose holding track is decided on its own "
                       "side by the likelihood ratio of its contacts against their mirrors under constant-velocity "
                       "motion (|ln LR| >= ln 100, systems/active/sides.py) and whose mirror holds no confirmed track "
-                      "not decided a ghost (pairs with neither side held are not judged)",
+                      "not decided a ghost (pairs with neither side held are not judged, nor a target left "
+                      "undecided that was detectable on no two pings between which the array's heading changed by "
+                      "the chain's side_turn_deg: no evidence to decide on; a decided target is judged whatever)",
                  ours=f"{v:.3f} [{_num(w[1]):.3f}, {_num(w[2]):.3f}] of {n} pairs; mean ln LR of the holding "
                       f"track: {lr}; decided from (mean): {when}",
                  holds=n > 0 and v >= SIDE_REQUIRED, tolerance="point estimate; Wilson 95 % interval shown")
