@@ -5,7 +5,7 @@ trackers)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -55,11 +55,24 @@ class EndfireAlias:
     and their bistatic ranges differ by at most ``range_m``.
 
     ``period_u`` lambda / d; ``lobe_u`` lambda / (N d); ``range_m`` the r_B window (m): the delay's resolution,
-    c / (B sqrt(12)) with B the pulse's band (1 / tau for a CW), and not below the clutter map's image window."""
+    c / (B sqrt(12)) with B the pulse's band (1 / tau for a CW), and not below the clutter map's image window.
+
+    ``clutter_range_m`` the r_B window (m) about a clutter-map anchor (a recurring contact: :meth:`ContactTracker.
+    _not_clutter`), None: ``range_m``. A true-time-delay beamformer (acoustics/active_beams.py, steered per
+    frequency bin) passes the grating image only where the alias lies in the beam's main lobe: the array phase
+    2 pi d f (u_s - u_b) / c is within 2 pi / N of a multiple of 2 pi over |f - f_k| <= c / (N d |u_s - u_b|) ~
+    f_0 / N (|u_s - u_b| ~ lambda / d; Van Trees 2002, eq. 2.96 read in frequency), so the image is an echo of
+    band B_i = min(B, f_0 / N) and its delay is known only to c / B_i, not to the pulse's c / B. Measured (study
+    active-chain trial 18, LFM 50 Hz at 1.5 kHz, 48 x 0.75 m, 1 h reverberation-only): a TS 30 dB point at cone
+    0-2 deg (its own contacts recurring, withheld) gave a grating image at cone 109 on nearly every ping, its r_B
+    1-32 m off the point's contact (median ~17 m: 2-3 delay cells), outside the 15 m window; the image moves in the
+    world with the array (4.2 m/s), so the map never shows it still, and a mirror pair was confirmed on it from
+    ping 98 to the end. c / B_i there is 48 m."""
 
     period_u: float
     lobe_u: float
     range_m: float
+    clutter_range_m: float | None = None
 
     @classmethod
     def of(cls, wavelength_m: float, spacing_m: float, elements: int, resolution_m: float) -> EndfireAlias:
@@ -68,8 +81,9 @@ class EndfireAlias:
                 "endfire alias: wavelength, spacing > 0, elements >= 2 and a window >= 0 are needed")
         return cls(wavelength_m / spacing_m, wavelength_m / (elements * spacing_m), float(resolution_m))
 
-    def of_contacts(self, xy, tx_xy, rx_xy, heading_rad, anchor) -> np.ndarray:
-        """(m,) bool: the contacts within the alias lobe and r_B window of an ``anchor`` contact (class doc)."""
+    def of_contacts(self, xy, tx_xy, rx_xy, heading_rad, anchor, range_m: float | None = None) -> np.ndarray:
+        """(m,) bool: the contacts within the alias lobe and r_B window (``range_m``, m; None: the class's) of an
+        ``anchor`` contact (class doc)."""
         xy, anchor = np.asarray(xy, float).reshape(-1, 2), np.asarray(anchor, bool)
         if not anchor.any():
             return np.zeros(len(xy), bool)
@@ -78,7 +92,7 @@ class EndfireAlias:
         u = (d[:, 0] * np.sin(h) + d[:, 1] * np.cos(h)) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
         r_b = np.linalg.norm(xy - np.asarray(tx_xy, float), axis=1) + np.hypot(d[:, 0], d[:, 1])
         du = np.abs(np.abs(u[:, None] - u[None, anchor]) - self.period_u)
-        near = np.abs(r_b[:, None] - r_b[None, anchor]) <= self.range_m
+        near = np.abs(r_b[:, None] - r_b[None, anchor]) <= (self.range_m if range_m is None else float(range_m))
         return ((du <= self.lobe_u) & near).any(axis=1)
 
 
@@ -240,21 +254,28 @@ class ContactTracker:
 
     def _not_clutter(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
-        ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
-        clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
-        withheld); and on a CW the contacts :meth:`_ridge_clutter` finds from the echoes under the ridge notch."""
+        ping, still, its mirror twin, the weaker contacts at a recurring contact's bistatic range (lobe images,
+        clutter_map.py :func:`same_range`) and the grating images of a still one (:class:`EndfireAlias`, its
+        ``clutter_range_m``; anchored on the still contacts, not the recurring ones: a slow target's echo and its
+        image both recur, and each would withhold the other) go only to the confirmed tracks whose gate holds them
+        (True: not withheld); and on a CW the contacts :meth:`_ridge_clutter` finds from the echoes under the ridge
+        notch."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
         cm = self.clutter_map
         clutter = cm.update(contacts.xy, contacts.R, float(t_s))
-        r = cm.recurring
+        r, still = cm.recurring, clutter.copy()
         if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
             from sonartrack.detection.clutter_map import same_range
 
             g = self.geometry
             clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
                 contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+        if self.endfire_alias is not None and still.any():  # a still echo's grating image, whatever its strength
+            g, al = self.geometry, self.endfire_alias
+            clutter = clutter | al.of_contacts(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), g.heading_at(t_s), still,
+                                               al.clutter_range_m)
         if ridge is not None and self.ridge_map is not None:
             clutter = clutter | self._ridge_clutter(float(t_s), contacts, ridge)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
@@ -545,13 +566,16 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
 def endfire_alias_of(settings: ActiveSettings, waveform) -> EndfireAlias | None:
     """The chain's :class:`EndfireAlias` for ``waveform`` (carrier, and band: an LFM's swept band, a CW's 1 / tau)
     on ``settings``'s array, or None when ``endfire_alias`` is off; its r_B window c / (B sqrt(12)), not below the
-    clutter map's ``clutter_map_image_m``."""
+    clutter map's ``clutter_map_image_m``; about the clutter map's anchors c / B_i, B_i = min(B, f_0 / N) the grating
+    image's band (:class:`EndfireAlias` ``clutter_range_m``)."""
     if not settings.endfire_alias:
         return None
     c = float(settings.sound_speed_mps)
     band = waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else 1.0 / waveform.duration_s
     window = max(c / (band * np.sqrt(12.0)), settings.clutter_map_image_m or 0.0)
-    return EndfireAlias.of(c / waveform.carrier_hz, float(settings.spacing_m), int(settings.elements), window)
+    alias = EndfireAlias.of(c / waveform.carrier_hz, float(settings.spacing_m), int(settings.elements), window)
+    image_band = min(band, waveform.carrier_hz / int(settings.elements))  # the grating image's own band (class doc)
+    return replace(alias, clutter_range_m=max(window, c / image_band))
 
 
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
