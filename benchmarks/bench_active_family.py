@@ -101,7 +101,10 @@ shows still (not only recurring: a moving target's echo and its image both recur
 B_i = min(B, f_0 / N) the image's own band (the grating image passes only where it lies in the beam's main lobe),
 is withheld as the map's clutter (48 m here). Replayed on the same contacts: 182 of 4316 contacts (4 %) newly
 withheld from unconfirmed tracks, on 57 of 120 pings. Default scene LFM seeds 1, 2 (bench_active_rows.py on the
-cached contacts of /tmp/lead11/rows11, i.e. e4c2ec6's front end; the change is the tracker's): identical output.
+cached contacts of /tmp/lead11/rows11, i.e. e4c2ec6's front end; the change is the tracker's): identical output, and
+CW seeds 1, 2 identical. With the targets (the trials' full scenes, 1 h): trial 18, the tracker replayed on the same
+contacts, 9 -> 7 confirmed tracks, every target's pings held unchanged (24/20/45/57/0 of 120); trial 15 (CW, 16 x 0.5
+m at 2.4 kHz, d = 0.8 lambda; the chain run twice) identical, 20 confirmed tracks, the same pings held.
 """
 
 from __future__ import annotations
