@@ -85,6 +85,26 @@ where its hidden peak was not found: trial 11 4 -> 4 (the pairs confirm before t
 seed 2 4 -> 5 rows (81 contacts marked instead of 14). Left: a track confirmed on two skirt contacts 30 s apart
 before the ridge map knows the point, which then coasts confirmed for 10-20 pings on nothing (trials 1, 11; FAM3's
 note): the map cannot act before it has ~10 pings of the point, so this is the confirmation's to fix.
+
+Measured (2026-12-08 session 12, h12-pt18 on h12-lead 25a932b; 1 h twins, ~2.5 min a trial, cache deleted between):
+trial 18 (LFM 50 Hz at 1.5 kHz, 48 x 0.75 m, Rayleigh, 14 points) 4 -> 0 false confirmed tracks (2 -> 0 rows), trial
+8 0 -> 0. Neither pair was what its label said. The pair "on" point 0 (TS 24 dB, labels clutter/mirror, 4.2 m/s) was
+the grating image of point 6 (TS 30 dB at cone 0-2 deg, its own contacts recurring and withheld on every ping): at
+d = 0.75 lambda the array factor repeats every 4/3 in u = cos(cone), so the point is also heard at cone 109; the image
+moves in the world with the array (so the map never shows it still) and passed point 0's place at ping 107; its r_B
+was 1-32 m (median ~17 m, 2-3 delay cells) off the point's contact, outside the 15 m image window (same_range, and
+EndfireAlias's, which held only confirmed tracks' echoes anyway). The travel times the label tests are the
+truth's, so the LFM's range-Doppler coupling (f_d T / B: ~145 m at 5 m/s) also hid the match with point 6 (``lobe``
+wants c / B = 30 m). The "none" pair at 9.6 s (cone 16-44 deg, 3.9 m/s) was the grating image of point 10 (TS 27 dB,
+cone 112-128 deg). Fix (systems/active/contact_tracker.py): a contact within the alias lobe of a contact the map
+shows still (not only recurring: a moving target's echo and its image both recur) and within c / B_i of its r_B,
+B_i = min(B, f_0 / N) the image's own band (the grating image passes only where it lies in the beam's main lobe),
+is withheld as the map's clutter (48 m here). Replayed on the same contacts: 182 of 4316 contacts (4 %) newly
+withheld from unconfirmed tracks, on 57 of 120 pings. Default scene LFM seeds 1, 2 (bench_active_rows.py on the
+cached contacts of /tmp/lead11/rows11, i.e. e4c2ec6's front end; the change is the tracker's): identical output, and
+CW seeds 1, 2 identical. With the targets (the trials' full scenes, 1 h): trial 18, the tracker replayed on the same
+contacts, 9 -> 7 confirmed tracks, every target's pings held unchanged (24/20/45/57/0 of 120); trial 15 (CW, 16 x 0.5
+m at 2.4 kHz, d = 0.8 lambda; the chain run twice) identical, 20 confirmed tracks, the same pings held.
 """
 
 from __future__ import annotations

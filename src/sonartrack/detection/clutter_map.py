@@ -42,6 +42,10 @@ cone 160-175 deg, 9 on a point's mirror. :func:`same_range` marks the contacts o
 known to a few hundred metres across the beam, and the stillness test does not pass in the map's 8 pings); the chain
 withholds them, and the mirror twins of the clutter contacts, as it withholds the point. The price: a target's echo
 within ``image_range_m`` in r_B of a stronger recurring echo is withheld at that ping from the tracks not confirmed.
+Where the elements are more than half a wavelength apart a grating image can lie anywhere in cone, and its delay is
+known only to the image's own band (the grating lobe passes a band ~ f_0 / N of the pulse): the chain withholds the
+grating images of the contacts this map shows still in a wider r_B window (systems/active/contact_tracker.py
+``EndfireAlias.clutter_range_m``; measured: study active-chain trial 18, 48 x 0.75 wavelength, 2 false pairs -> 0).
 
 A CW still point is hidden from the map by the front end itself: it echoes at the stationary sea's Doppler in its own
 direction, on its own beam's reverberation ridge, which the CW front end notches (detection/cw_cells.py). The chain's

@@ -5,12 +5,13 @@ trackers)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from sonartrack.core.errors import require
 from sonartrack.detection.cells import Detections
+from sonartrack.systems.active.aliases import EndfireAlias, endfire_alias_of  # noqa: F401 (the chain's names)
 from sonartrack.systems.active.contacts import (
     ActiveGeometry,
     Contacts,
@@ -44,42 +45,6 @@ class ActiveTracks:
         return len(self.tracks)
 
 
-@dataclass(frozen=True, slots=True)
-class EndfireAlias:
-    """A line array's grating-lobe alias of an echo: a plane wave at u = cos(cone) is also passed by the beams at
-    u +- lambda / d (the array factor sum_n exp(i 2 pi n d u / lambda) is periodic in u with period lambda / d, Van
-    Trees, Optimum Array Processing, 2002, sec. 2.4, eq. 2.98), and a beam steered to u_b hears u within its main
-    lobe |u - u_b| <= lambda / (N d) (the first null, eq. 2.96). At d = lambda / 2 the period is 2: an echo near
-    one endfire (u ~ -1) is heard at the other (u ~ +1) at the same travel time, as strong as in its own beam (both
-    endfire beams are the widest). A contact is an alias of an anchor when |u - u_a -+ lambda / d| <= lambda / (N d)
-    and their bistatic ranges differ by at most ``range_m``.
-
-    ``period_u`` lambda / d; ``lobe_u`` lambda / (N d); ``range_m`` the r_B window (m): the delay's resolution,
-    c / (B sqrt(12)) with B the pulse's band (1 / tau for a CW), and not below the clutter map's image window."""
-
-    period_u: float
-    lobe_u: float
-    range_m: float
-
-    @classmethod
-    def of(cls, wavelength_m: float, spacing_m: float, elements: int, resolution_m: float) -> EndfireAlias:
-        """From the carrier's wavelength (m), the element spacing (m), their number and the r_B window (m)."""
-        require(wavelength_m > 0 and spacing_m > 0 and elements >= 2 and resolution_m >= 0,
-                "endfire alias: wavelength, spacing > 0, elements >= 2 and a window >= 0 are needed")
-        return cls(wavelength_m / spacing_m, wavelength_m / (elements * spacing_m), float(resolution_m))
-
-    def of_contacts(self, xy, tx_xy, rx_xy, heading_rad, anchor) -> np.ndarray:
-        """(m,) bool: the contacts within the alias lobe and r_B window of an ``anchor`` contact (class doc)."""
-        xy, anchor = np.asarray(xy, float).reshape(-1, 2), np.asarray(anchor, bool)
-        if not anchor.any():
-            return np.zeros(len(xy), bool)
-        d = xy - np.asarray(rx_xy, float)
-        h = float(heading_rad)  # bearings clockwise from north: the array axis (sin h, cos h)
-        u = (d[:, 0] * np.sin(h) + d[:, 1] * np.cos(h)) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
-        r_b = np.linalg.norm(xy - np.asarray(tx_xy, float), axis=1) + np.hypot(d[:, 0], d[:, 1])
-        du = np.abs(np.abs(u[:, None] - u[None, anchor]) - self.period_u)
-        near = np.abs(r_b[:, None] - r_b[None, anchor]) <= self.range_m
-        return ((du <= self.lobe_u) & near).any(axis=1)
 
 
 class ContactTracker:
@@ -240,21 +205,27 @@ class ContactTracker:
 
     def _not_clutter(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
         """The clutter map's verdict (detection/clutter_map.py): a contact at a world position that recurs ping after
-        ping, still, its mirror twin, and the weaker contacts at a recurring contact's bistatic range (lobe images,
-        clutter_map.py :func:`same_range`) go only to the confirmed tracks whose gate holds them (True: not
-        withheld); and on a CW the contacts :meth:`_ridge_clutter` finds from the echoes under the ridge notch."""
+        ping, still, its mirror twin, the weaker contacts at a recurring contact's bistatic range (lobe images,
+        clutter_map.py :func:`same_range`) and the grating images of a still one (:class:`EndfireAlias`
+        ``clutter_range_m``; still, not recurring: a moving target's echo and its image both recur) go only to the
+        confirmed tracks whose gate holds them (True: not withheld); and on a CW the contacts :meth:`_ridge_clutter`
+        finds from the echoes under the ridge notch."""
         keep = np.ones(len(contacts), bool)
         if self.clutter_map is None:
             return keep
         cm = self.clutter_map
         clutter = cm.update(contacts.xy, contacts.R, float(t_s))
-        r = cm.recurring
+        r, still = cm.recurring, clutter.copy()
         if cm.image_range_m is not None:  # a still point's mirror twin, a recurring echo's lobe images (same_range)
             from sonartrack.detection.clutter_map import same_range
 
             g = self.geometry
             clutter = clutter | np.isin(contacts.detection, contacts.detection[clutter]) | same_range(
                 contacts.xy, g.tx_at(t_s), g.rx_at(t_s), r, contacts.statistic, cm.image_range_m)
+        if self.endfire_alias is not None and still.any():  # a still echo's grating image, whatever its strength
+            g, al = self.geometry, self.endfire_alias
+            clutter = clutter | al.of_contacts(contacts.xy, g.tx_at(t_s), g.rx_at(t_s), g.heading_at(t_s), still,
+                                               al.clutter_range_m)
         if ridge is not None and self.ridge_map is not None:
             clutter = clutter | self._ridge_clutter(float(t_s), contacts, ridge)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
@@ -325,8 +296,6 @@ class ContactTracker:
         m = self.tracker.measurements
         if pd is None or m.pd == pd or not np.isfinite(contacts.range_rate_mps).any():
             return
-        from dataclasses import replace
-
         self.tracker.measurements = replace(m, pd=float(pd))
 
     def step(self, t_s: float, contacts: Contacts, ridge: Contacts | None = None) -> np.ndarray:
@@ -448,7 +417,6 @@ class ContactTracker:
             del rows[:max(int(n), 0)]
 
 
-
 def _measurement_part(tracker, settings: PositionTrackerSettings, rate_sd_mps: float,
                       max_range_rate_mps: float | None) -> None:
     """The tracker's measurement part: range rate measured (CW) where a largest range rate is given, each contact's
@@ -540,18 +508,6 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     keep = np.concatenate([trk.step(float(t[k]), contacts.rows(slice(bounds[k], bounds[k + 1])))
                            for k in range(len(t))]) if len(t) else np.zeros(0, bool)
     return contacts, keep, trk.result()
-
-
-def endfire_alias_of(settings: ActiveSettings, waveform) -> EndfireAlias | None:
-    """The chain's :class:`EndfireAlias` for ``waveform`` (carrier, and band: an LFM's swept band, a CW's 1 / tau)
-    on ``settings``'s array, or None when ``endfire_alias`` is off; its r_B window c / (B sqrt(12)), not below the
-    clutter map's ``clutter_map_image_m``."""
-    if not settings.endfire_alias:
-        return None
-    c = float(settings.sound_speed_mps)
-    band = waveform.bandwidth_hz if waveform.kind == "lfm" and waveform.bandwidth_hz > 0 else 1.0 / waveform.duration_s
-    window = max(c / (band * np.sqrt(12.0)), settings.clutter_map_image_m or 0.0)
-    return EndfireAlias.of(c / waveform.carrier_hz, float(settings.spacing_m), int(settings.elements), window)
 
 
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
