@@ -9,12 +9,37 @@ confirmation threshold then, and how many pings it stayed listed with no contact
 (bench_active_family.py ``classify``, every one of them false on a reverberation-only twin).
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_cw_confirm.py --trials 11 1 [--cache /tmp/cw_confirm]
-[--set FIELD=VALUE ...]`` (``--set``: tracker settings, e.g. ``listed_existence=0.5``). Measures, asserts nothing.
+[--set FIELD=VALUE ...]`` (``--set``: tracker settings, e.g. ``confirm_min_hits=3``). Measures, asserts nothing. The
+replay gives the chain's own tracks bit for bit (checked: trials 11 and 1, every row's id, flag, existence and state).
+
+Measured (2026-12-08, h12-cwconf on h12-lead 25a932b; chain 103 s / 44 s a trial at load ~4, replay ~1 s):
+trial 11 (CW, spiky K): 4 false tracks, 2 rows; trial 1 (CW, Rayleigh): 4 tracks, 1 row. Why confirmed: the CW
+tracker's clutter density is its own contacts' mean over the listening disc, 8e-10 /m^2 (1.3 contacts a ping) on
+trial 11 and 2-5e-10 on trial 1, so one contact in a young track's gate has a position likelihood ratio
+N(z; z_pred, S) / lambda = e^6.5-e^8.6 (the range-rate term adds only e^-0.3..e^0.9: the new track's 5 m/s prior
+predicts any range rate near a still point's), Lambda = 0.6 + 0.4 x 0.99 x that ~ 300-2000, while the rate rule's
+threshold at 1 false track/h with 0.6-1.1 tracks started a scan is odds 3.8-7 (existence 0.78-0.88) against the start's
+0.053: one contact after the first confirms (51/52 and 27/28: existence 0.03 -> 0.94 and 0.05 -> 0.98 on their second
+contact, none after). Ville's bound holds only where the clutter is as dense as assumed; a still point's skirt recurs
+in one place (~1e-6 /m^2 there, ~1000 x lambda). Why listed on: with p11 0.98 the predicted odds are at most 49 and
+each missed scan multiplies them by 0.98 x (1 - 0.4 x 0.99) ~ 0.59, so from ~1 to the deletion level 0.01 takes
+14 scans (12-14 listed after their last contact). Settings (tracker), false rows (tracks) on 11 + 1:
+    as is                       2 + 1 (8)
+    confirm_min_hits 3          1 + 1 (4)   (the pairs confirmed on one contact after their first: gone)
+    confirm_min_hits 4          0 + 1 (1)
+    listed_existence 0.5 (rows) 2 + 1 (8), listed 12-14 -> 5 pings after the last contact (needs the
+                                contact_tracker.py diff of tracking/deleters.py listed_tracks; as the deleter's
+                                confirmation flag instead: 2 + 2, a re-confirmation made a row)
+Default scene (bench_active_rows.py on /tmp/lead11/rows11's contacts; rows, false, extra; held % mean): as is LFM 4,0,0
+83 / 4,0,0 87; CW 6,1,1 90 / 4,0,0 88. min hits 3: LFM same; CW 5,0,1 90 / 5,1,0 89. min hits 4: CW 5,0,1 88 /
+6,2,0 83. listed 0.5: rows same, held LFM 81 / 87, CW 85 / 82; 0.2: 82 / 87, 88 / 86; 0.1: 82 / 87, 89 / 87.
+min hits 3 + listed 0.5: LFM 4,0,0 81 / 4,0,0 87; CW 5,0,1 85 / 5,1,0 83.
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import dataclasses
 import pickle
 import sys
@@ -41,7 +66,8 @@ def record(config, scene, cache: Path) -> dict:
 
     class Recording(real):
         def __init__(self, *args, **kwargs):
-            rec["args"], rec["kwargs"] = args, kwargs
+            # copies: the clutter and ridge maps are stateful and would be pickled full at the run's end
+            rec["args"], rec["kwargs"] = copy.deepcopy(args), copy.deepcopy(kwargs)
             super().__init__(*args, **kwargs)
 
         def step(self, t_s, contacts, ridge=None):
@@ -79,9 +105,9 @@ def replay(rec: dict, changes: dict):
     ContactTracker and a per-scan log of (time, track ids, existence, hit, confirm threshold)."""
     from sonartrack.systems.active.contact_tracker import ContactTracker
 
-    args = list(rec["args"])
+    args, kwargs = copy.deepcopy(list(rec["args"])), copy.deepcopy(rec["kwargs"])
     args[0] = type(args[0]).model_validate({**args[0].model_dump(), **changes})
-    trk = ContactTracker(*args, **rec["kwargs"])
+    trk = ContactTracker(*args, **kwargs)
     log = []
     inner = trk.tracker.deleter
     while getattr(inner, "inner", None) is not None and not hasattr(inner, "confirm_threshold"):
@@ -130,12 +156,14 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=60.0)
     ap.add_argument("--cache", type=Path, default=Path("/tmp/cw_confirm"))
     ap.add_argument("--set", nargs="*", default=[], help="tracker settings FIELD=VALUE (JSON values)")
+    ap.add_argument("--wire-deleter", action="store_true", help="listed_existence in the deleter (wire_listed)")
     ap.add_argument("--stories", action="store_true", help="print each confirmed track's existence per ping")
     args = ap.parse_args()
     import json
 
     changes = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
-    wire_listed()
+    if args.wire_deleter:
+        wire_listed()
     args.gate, args.early, args.ridge = 1500.0, 3.0, 0.3
     config, total, total_rows = Config(), 0, 0
     for i in args.trials:

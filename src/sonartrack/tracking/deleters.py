@@ -1,8 +1,7 @@
 """Deleter parts: after each update, confirm the tracks that earned it and delete the ones that lost it.
 
 * :class:`ExistenceDeleter` (IPDA, paper P4): confirmed once the existence probability exceeds
-  ``confirm_threshold`` (and then until deleted, or, with ``listed_threshold``, until it falls below that level),
-  deleted when it falls below ``terminate_threshold``.
+  ``confirm_threshold`` (and then until deleted), deleted when it falls below ``terminate_threshold``.
 * :class:`MOfNDeleter` (bearing tracks, paper P0 on user data): confirmed after a validated peak in
   ``confirm_m`` of its first ``confirm_n`` scans (else dropped), and deleted after ``delete_after``
   consecutive scans with an empty gate. Keeps the counters ``hits``, ``age``, ``misses`` in the
@@ -30,34 +29,19 @@ from sonartrack.tracking.tracks import TrackArrays
 
 @dataclass(frozen=True)
 class ExistenceDeleter:
-    """Confirm above ``confirm_threshold``, delete below ``terminate_threshold`` (existence probability); with
-    ``listed_threshold``, a confirmed track whose existence falls below it is confirmed no more (tentative, kept)
-    until its existence exceeds ``confirm_threshold`` again.
-
-    Why the third level. IPDA's existence is the posterior probability that the track's target exists (Musicki,
-    Evans, Stankovic 1994, eq. 29); P4 keeps a track confirmed until it is deleted at ``terminate_threshold``, so a
-    confirmed track with no more contacts stays listed while its existence falls from ~1 to that level: with the
-    Markov chain's survival p11 its predicted odds are at most p11 / (1 - p11) (49 at 0.98), and each scan with no
-    contact multiplies them by about p11 (1 - P_D P_G) (eqs. 11, 29; 0.59 at a CW's P_D 0.4), so from the cap to
-    0.01 takes ln(49 / 0.0101) / ln(1 / 0.59) ~ 16 scans (measured on the study active-chain's CW twins, trials 11
-    and 1: 14 scans listed after the last contact, existence 0.47 ... 0.008 on the last 8 of them). Below 1/2 the
-    track is more likely no target than a target: the level is the listing's own decision, stated apart from the
-    deletion level (a low deletion level keeps a target's track through its missed scans).
-    """
+    """Confirm above ``confirm_threshold``, delete below ``terminate_threshold`` (existence probability)."""
 
     confirm_threshold: float
     terminate_threshold: float
-    listed_threshold: float | None = None
 
     def new_track_attrs(self, k: int) -> dict:
         """Per-track counters this deleter keeps: none (an empty dict; protocol in the module docstring)."""
         return {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """Confirm tracks whose existence exceeds ``confirm_threshold``, unconfirm those below ``listed_threshold``
-        (when set); drop those below ``terminate_threshold`` (``hit`` is unused; protocol in the module docstring)."""
-        kept = T.confirmed if self.listed_threshold is None else T.confirmed & (T.existence >= self.listed_threshold)
-        T = replace(T, confirmed=kept | (T.existence > self.confirm_threshold))
+        """Confirm tracks whose existence exceeds ``confirm_threshold``; drop those below ``terminate_threshold``
+        (``hit`` is unused; protocol in the module docstring)."""
+        T = replace(T, confirmed=T.confirmed | (T.existence > self.confirm_threshold))
         return T.select(T.existence >= self.terminate_threshold)
 
 
@@ -102,16 +86,12 @@ class RateConfirmation:
         A track whose existence falls below this is deleted.
     floor : float
         Lowest threshold whatever the count (0: the rule alone).
-    listed_threshold : float or None
-        A confirmed track whose existence falls below this is confirmed no more (:class:`ExistenceDeleter`); None:
-        confirmed until deleted.
     """
 
     def __init__(self, false_tracks_per_h: float, scan_interval_s: float, initial_existence: float,
-                 terminate_threshold: float, floor: float = 0.0, listed_threshold: float | None = None):
+                 terminate_threshold: float, floor: float = 0.0):
         self.false_per_scan = float(false_tracks_per_h) * float(scan_interval_s) / 3600.0
         self.initial_existence, self.terminate_threshold, self.floor = initial_existence, terminate_threshold, floor
-        self.listed_threshold = listed_threshold
         self.started, self.scans = 0, 0
 
     @property
@@ -130,9 +110,8 @@ class RateConfirmation:
         return {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """Confirm above the rate's threshold, unconfirm below ``listed_threshold``; drop below
-        ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
-        return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold, self.listed_threshold).manage(T, hit)
+        """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
+        return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold).manage(T, hit)
 
 
 class StillHold:
@@ -277,3 +256,38 @@ class MinHits:
         was = np.isin(out.track_id, keep_id[before])
         early = out.confirmed & ~was & (out.attrs["hits"] < self.min_hits)
         return replace(out, confirmed=out.confirmed & ~early) if early.any() else out
+
+
+def listed_tracks(confirmed, existence, listed_existence: float | None):
+    """The confirmed tracks a user is shown: those whose existence is at least ``listed_existence`` (None: every
+    confirmed track, P4). The tracker's own confirmation (what the deleter parts keep: claims, merges, side
+    decisions, the clutter map's contacts) is not changed; only the listing.
+
+    Why. IPDA's existence is the posterior probability that the track's target exists (Musicki, Evans, Stankovic
+    1994, eq. 29), and P4 keeps a track confirmed until it is deleted at the termination level. With no contact in
+    its gate the predicted odds are at most p11 / (1 - p11) (49 at p11 0.98; eq. 11) and each scan multiplies them by
+    about p11 (1 - P_D P_G) (0.59 at a CW's P_D 0.4), so from the cap to the termination level 0.01 a confirmed track
+    is listed ln(49 / 0.0101) / ln(1 / 0.59) ~ 16 scans on nothing (measured on the study active-chain's CW twins,
+    trials 11 and 1, benchmarks/bench_cw_confirm.py: false tracks listed 12-14 pings after their last contact).
+    Below 1/2 the track is more likely no target than a target. Measured as the confirmation flag itself (a track
+    below the level unconfirmed until it re-crossed the threshold) the chain's machinery that keys on it split and
+    joined the default CW scene's rows (bench_active_rows.py seed 2: 4 -> 7 rows), hence the listing alone.
+
+    Parameters
+    ----------
+    confirmed : ndarray of bool, shape (n,)
+        The tracker's confirmation flags.
+    existence : ndarray, shape (n,)
+        The tracks' existence probabilities.
+    listed_existence : float or None
+        The level (settings ``listed_existence``).
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        Listed tracks.
+    """
+    confirmed = np.asarray(confirmed, bool)
+    if listed_existence is None:
+        return confirmed
+    return confirmed & (np.asarray(existence, float) >= float(listed_existence))

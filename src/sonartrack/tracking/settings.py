@@ -63,10 +63,9 @@ class PositionTrackerSettings(Settings):
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
     listed_existence: float | None = setting(
-        None, "a confirmed track whose existence falls below this is confirmed (listed) no more, and kept as a "
-              "tentative track until its existence exceeds the confirmation threshold again (tracking/deleters.py "
-              "ExistenceDeleter listed_threshold; 0.5: listed while more likely a target than not); off: confirmed "
-              "until deleted (P4)", unit="1", gt=0, lt=1)
+        None, "a confirmed track whose existence falls below this is not listed (shown) while it stays below; the "
+              "tracker's confirmation is unchanged (tracking/deleters.py listed_tracks; 0.5: listed while more likely "
+              "a target than not); off: every confirmed track listed until deleted (P4)", unit="1", gt=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "
                                                 "per axis", unit="m/s", gt=0)
     max_tracks: int = setting(2000, "most live tracks; measurements beyond it start no track", unit="1", ge=1)
