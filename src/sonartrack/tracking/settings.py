@@ -62,6 +62,10 @@ class PositionTrackerSettings(Settings):
         unit="1", ge=0, le=100)
     terminate_threshold: float = setting(0.01, "a track is deleted when its existence falls below this", unit="1",
                                          ge=0, lt=1)
+    listed_existence: float | None = setting(
+        None, "a confirmed track whose existence falls below this is not listed (shown) while it stays below; the "
+              "tracker's confirmation is unchanged (tracking/deleters.py listed_tracks; 0.5: listed while more likely "
+              "a target than not); off: every confirmed track listed until deleted (P4)", unit="1", gt=0, lt=1)
     init_velocity_std_mps: float = setting(5.0, "standard deviation of the zero-mean velocity prior of a new track, "
                                                 "per axis", unit="m/s", gt=0)
     max_tracks: int = setting(2000, "most live tracks; measurements beyond it start no track", unit="1", ge=1)
@@ -101,6 +105,8 @@ class PositionTrackerSettings(Settings):
             raise ValueError("q must be non-negative (m^2/s^3)")
         if not self.terminate_threshold < self.initial_existence < self.confirm_threshold:
             raise ValueError("need terminate_threshold < initial_existence < confirm_threshold")
+        if self.listed_existence is not None and not self.terminate_threshold < self.listed_existence:
+            raise ValueError("need terminate_threshold < listed_existence (a track is unlisted before it is deleted)")
         if len(self.q) > 1 and self.transition_diagonal < 1.0 / len(self.q):
             raise ValueError("transition_diagonal must be in [1/modes, 1]")
         return self
