@@ -23,6 +23,7 @@ from sonartrack.systems.active.contacts import (
 from sonartrack.systems.active.cw_tracking import cw_clutter_area
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
+from sonartrack.tracking.deleters import listed_tracks
 from sonartrack.tracking.run import PositionTracks
 from sonartrack.tracking.settings import PositionTrackerSettings
 
@@ -348,7 +349,8 @@ class ContactTracker:
         if self.rejoin_s is not None:
             self._rejoin(float(t_s), snap)
         r = self._rows
-        for k, v in (("track_id", snap.track_id), ("confirmed", snap.confirmed), ("existence", snap.existence),
+        listed = listed_tracks(snap.confirmed, snap.existence, self.settings.listed_existence)  # the rows shown
+        for k, v in (("track_id", snap.track_id), ("confirmed", listed), ("existence", snap.existence),
                      ("x", snap.x), ("P", snap.P), ("mu", snap.mu)):
             r[k].append(v)
         r["time_s"].append(np.full(len(snap.track_id), float(t_s)))
