@@ -291,8 +291,9 @@ def to_commented_toml(settings: BaseModel) -> str:
 
 
 def _dump_with_off(settings: BaseModel) -> dict:
-    """``model_dump(mode="json")`` with a None written ``"off"`` where the field's default is not None (so the
-    TOML reads back to None, not to the default); a None whose default is None stays unset."""
+    """``model_dump(mode="json")`` with a None written ``"off"`` where the field may be None and its default is a
+    value (so the TOML reads back to None, not to the default); a None whose default is None, or in a required
+    field (a value still to be given), stays unset."""
     cls, out = type(settings), settings.model_dump(mode="json")
     for name, field in cls.model_fields.items():
         value = getattr(settings, name)
@@ -300,6 +301,7 @@ def _dump_with_off(settings: BaseModel) -> dict:
             out[name] = _dump_with_off(value)
         elif isinstance(value, list | tuple) and value and all(isinstance(v, BaseModel) for v in value):
             out[name] = [_dump_with_off(v) for v in value]
-        elif value is None and field.get_default(call_default_factory=True) is not None:
+        elif (value is None and may_be_off(field.annotation) and not field.is_required()
+              and field.get_default(call_default_factory=True) is not None):
             out[name] = OFF
     return out
