@@ -97,8 +97,8 @@ def _instrument() -> None:
             continue
 
         def gate(orig, name):
-            def verdict(self, t_s, contacts):
-                keep = orig(self, t_s, contacts)
+            def verdict(self, t_s, contacts, *rest):  # rest: the CW ridge echoes (contact_tracker.py)
+                keep = orig(self, t_s, contacts, *rest)
                 for d in np.asarray(contacts.detection)[~np.asarray(keep, bool)]:
                     LOG["withheld"].setdefault((float(t_s), int(d)), set()).add(name.strip("_"))
                 return keep
@@ -108,9 +108,9 @@ def _instrument() -> None:
         setattr(ct.ContactTracker, name, gate(orig, name))
     step = ct.ContactTracker.step
     if not getattr(step, "_held_wrapped", False):
-        def stepped(self, t_s, contacts):
+        def stepped(self, t_s, contacts, *rest):
             LOG["t"], LOG["last"] = float(t_s), {}
-            return step(self, t_s, contacts)
+            return step(self, t_s, contacts, *rest)
         stepped._held_wrapped = True
         ct.ContactTracker.step = stepped
 
