@@ -59,3 +59,30 @@ def test_shape_fitted_to_the_tail_and_the_mapped_statistic_keeps_the_rate(nu):
     assert np.mean(mapped >= os_threshold(pfa, N, K)) == pytest.approx(pfa, rel=0.4)
     order = np.argsort(s.ravel()[:5000])
     assert np.all(np.diff(mapped.ravel()[:5000][order]) >= 0)  # monotone: the cells keep their order
+
+
+def test_swerling_pd_in_k_clutter_has_the_pfa_and_the_exponential_limits():
+    from sonartrack.detection.cfar import k_os_pd
+
+    a = np.array([5.0, 15.0, 40.0])
+    assert k_os_pd(a, 0.0, 1.5, N, K) == pytest.approx(k_os_pfa(a, 1.5, N, K), rel=1e-3)  # no echo: the Pfa
+    # Rohling's Swerling-1 OS-CFAR: Pd(alpha) = Pfa(alpha / (1 + EBR)); K of shape 100 is within 2 % of it
+    assert k_os_pd(a, 56.0, 100.0, N, K) == pytest.approx(os_pfa(a / 57.0, N, K), rel=0.02)
+    assert k_os_pd(a, 56.0, np.inf, N, K) == pytest.approx(os_pfa(a / 57.0, N, K), rel=1e-12)
+
+
+@pytest.mark.parametrize("nu", [0.7, 2.0])
+def test_swerling_pd_in_k_clutter_matches_draws_and_needs_more_ebr(nu):
+    from sonartrack.detection.cfar import k_os_pd, os_mean_factor
+
+    rng = np.random.default_rng(34)
+    draws, ebr = 100_000, 10 ** 1.75  # 17.5 dB, the counted echoes' median on study active-chain trial 2
+    alpha = k_os_threshold(1e-5, nu, N, K)
+    refs = k_intensity(rng, nu, (draws, N))
+    mu = np.partition(refs, K - 1, axis=1)[:, K - 1] / os_mean_factor(N, K)
+    y = k_intensity(rng, nu, draws) + ebr * rng.exponential(1.0, draws)  # Swerling 1 on a K cell
+    pd = k_os_pd(alpha, ebr, nu, N, K)
+    sd = np.sqrt(pd * (1 - pd) / draws)
+    assert np.mean(y / mu >= alpha) == pytest.approx(pd, abs=4 * sd + 2e-3)
+    # at the same Pfa the K clutter's threshold costs Pd against exponential noise (Watts 1985)
+    assert pd < k_os_pd(os_threshold(1e-5, N, K), ebr, np.inf, N, K) - 0.1

@@ -312,14 +312,19 @@ def _k_law(nu: float) -> tuple[np.ndarray, np.ndarray]:
 
     by generalised Gauss-Laguerre quadrature (exact for the gamma weight u^(nu-1) e^(-u), u = nu g): stable for every
     nu, where the Bessel form overflows for large nu."""
-    from scipy.special import gammaln, roots_genlaguerre
-
-    u, wq = roots_genlaguerre(_TEXTURE_NODES, nu - 1.0)
-    wq = wq / np.exp(gammaln(nu))  # the gamma density's normalisation
-    g = u / nu
+    g, wq = _texture_nodes(nu)
     x = np.exp(_LOG_X)[:, None]
     e = np.exp(-x / g[None, :]) * wq[None, :]
     return (e / g[None, :]).sum(axis=1), np.clip(e.sum(axis=1), 0.0, 1.0)
+
+
+@cache
+def _texture_nodes(nu: float) -> tuple[np.ndarray, np.ndarray]:
+    """(g, weights): generalised Gauss-Laguerre nodes of E_g[h(g)], g ~ Gamma(nu, 1 / nu) (:func:`_k_law`)."""
+    from scipy.special import gammaln, roots_genlaguerre
+
+    u, wq = roots_genlaguerre(_TEXTURE_NODES, nu - 1.0)
+    return u / nu, wq / np.exp(gammaln(nu))  # the gamma density's normalisation
 
 
 def k_os_pfa(alpha, nu: float, n: int, k: int):
@@ -364,6 +369,53 @@ def k_os_pfa(alpha, nu: float, n: int, k: int):
     a = np.atleast_1d(np.asarray(alpha, float))
     log_t = np.log(np.maximum(a[:, None] * x[None, :] / os_mean_factor(n, k), 1e-300))
     s = np.exp(np.interp(log_t, _LOG_X, np.log(np.maximum(sf, 1e-300))))
+    out = np.trapezoid(s * w[None, :], _LOG_X, axis=1) / np.trapezoid(w, _LOG_X)
+    return out if np.ndim(alpha) else float(out[0])
+
+
+def k_os_pd(alpha, ebr: float, nu: float, n: int, k: int):
+    """Pd of OS-CFAR (s = y / (x_(k) / c_k) >= alpha) for a Swerling-1 echo of mean ``ebr`` times the clutter's mean
+    in K clutter of shape nu (references as :func:`k_os_pfa`): the test cell is the echo's exponential intensity added
+    to a K cell, given its texture g exponential of mean g + ebr, so its survival is E_g[exp(-x / (g + ebr))] and
+
+        Pd(alpha) = integral_0^inf E_g[exp(-alpha x / (c_k (g + ebr)))] f_(k)(x) dx
+
+    (the integral of :func:`k_os_pfa` with the target-plus-clutter law of the test cell: Ward, Tough & Watts, Sea
+    Clutter, sec. 10.3, a Swerling-1 target in K clutter; Gandhi & Kassam 1988 for the OS reference). ebr = 0 gives
+    :func:`k_os_pfa`; nu -> infinity Rohling's Swerling-1 closed form os_pfa(alpha / (1 + ebr)). The yardstick of a
+    detector in K clutter: at the same Pfa it needs more EBR than in exponential noise.
+
+    Parameters
+    ----------
+    alpha : float or array_like
+        Threshold(s) on s (the K clutter's own: :func:`k_os_log_pfa` inverted at the wanted Pfa).
+    ebr : float
+        Mean echo intensity over the clutter's mean (linear, >= 0).
+    nu : float
+        K shape (> 0; above the tabulation's 100, and inf, the exponential closed form).
+    n, k : int
+        Reference cells N and the OS rank k.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Pd per cell at each alpha.
+    """
+    from scipy.special import gammaln
+
+    a = np.atleast_1d(np.asarray(alpha, float))
+    if not float(nu) <= K_SHAPES[-1]:  # the texture integral's quadrature overflows: the exponential closed form
+        out = os_pfa(a / (1.0 + float(ebr)), n, k)
+        return out if np.ndim(alpha) else float(out[0])
+    pdf, sf = _k_law(float(nu))
+    x = np.exp(_LOG_X)
+    with np.errstate(divide="ignore"):
+        log_fk = (gammaln(n + 1) - gammaln(k) - gammaln(n - k + 1) + (k - 1) * np.log1p(-sf) + (n - k) * np.log(sf)
+                  + np.log(pdf))
+    w = np.exp(log_fk) * x  # density of x_(k) in ln x
+    g, wq = _texture_nodes(float(nu))
+    t = a[:, None] * x[None, :] / os_mean_factor(n, k)  # the test cell's threshold given x_(k), (A, X)
+    s = np.stack([np.exp(-tt[:, None] / (g[None, :] + float(ebr))) @ wq for tt in t])
     out = np.trapezoid(s * w[None, :], _LOG_X, axis=1) / np.trapezoid(w, _LOG_X)
     return out if np.ndim(alpha) else float(out[0])
 
