@@ -107,3 +107,34 @@ def test_a_target_that_stays_in_its_tile_is_not_fitted_as_clutter():
     assert fitted["censored"][0] == pytest.approx(fitted["censored"][1], rel=0.35)
     # not censored, its own cells make its tile look spikier: the map would lower the target with it
     assert fitted["not censored"][0] < 0.8 * fitted["censored"][0]  # measured 0.70 x
+
+
+def _moving_echo_fits(width: int, censor_pfa: float, n_pings: int = 24, nu: float = 1.8, ebr_db: float = 17.5):
+    """(fitted nu of the echo's tile with the echo, without it (the same clutter draws), share of pings on which
+    the echo's largest mapped cell stayed below the censoring level): K clutter (3 beams, 1-beam tiles of ~1270
+    cells as on study active-chain trial 2), a Swerling-1 echo of ``ebr_db`` on ``width`` delay cells of beam 1
+    moving 2 cells a ping (a compressed LFM echo of a closing target)."""
+    delay = np.linspace(2.0, 20.0, 6000)
+    fits, below = [], []
+    for with_echo in (True, False):
+        rng = np.random.default_rng(5)
+        shapes = DelayShapes(N, K, DelayShapeSettings(censor_pfa=censor_pfa))
+        for p in range(n_pings):
+            y = rng.gamma(nu, 1.0 / nu, (3, delay.size)) * rng.exponential(1.0, (3, delay.size))
+            echo, c0 = 10 ** (ebr_db / 10) * rng.exponential(1.0, width), 2150 + 2 * p
+            y[1, c0:c0 + width] += echo if with_echo else 0.0
+            out, nus = shapes.push(cfar_normalise(y.astype(np.float32), CfarSettings())[:, None, :], delay)
+            below.append(with_echo and out[1, 0, c0:c0 + width].max() < shapes.censor_alpha)
+        fits.append(float(nus[1, 0, 2150]))
+    return fits[0], fits[1], float(np.sum(below)) / n_pings
+
+
+def test_a_weak_moving_echo_does_not_make_its_tile_spikier():
+    # issue 34, KDIAG: the by-delay map lowered target echoes; self-masking (the echo's cells below the censoring
+    # level counted as the clutter's tail for the 20 pooled pings) would show here as a smaller nu with the echo
+    with_echo, clutter, below = _moving_echo_fits(3, 1e-6)
+    assert below >= 0.2  # the echo was under the censoring level on a fair share of pings (measured 0.375) ...
+    assert with_echo == pytest.approx(clutter, rel=0.03)  # ... and its tile's fit is the clutter's (measured equal)
+    # the check can see a bias: uncensored, a 6-cell echo makes the tile spikier (measured 1.57 against 1.82)
+    spiky, clean, _ = _moving_echo_fits(6, 1e-300)
+    assert spiky < 0.92 * clean
