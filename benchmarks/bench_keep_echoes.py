@@ -8,7 +8,7 @@ the true echo footprints: the clutter-only fit in the same tiles). Per counted p
 grid) of each target: the fitted nu of its tile under ``pooled`` and ``oracle``, whether the footprint's largest
 mapped cell reaches the single-ping threshold, and the K-ideal Pd: a Swerling-1 echo of the ping's expected EBR in
 K clutter of the oracle's shape, against OS-CFAR at the threshold of the chain's Pfa in that K
-(detection/cfar.py k_os_pfa; numpy draws, the K intensity a gamma-mixed exponential).
+(detection/cfar.py k_os_pd, checked against numpy draws in tests/detection/test_cfar_k.py).
 """
 
 from __future__ import annotations
@@ -99,23 +99,13 @@ def ping_map(s, fe):
     return out, nus
 
 
-def k_ideal_pd(ebr_db: float, nu: float, pfa: float, n: int, k: int, rng, draws: int = 20000) -> float:
-    """Pd of a Swerling-1 echo (mean ebr x the clutter mean) in unit-mean K clutter of shape nu, OS-CFAR (N, k) at the
-    threshold whose K Pfa is ``pfa``: numpy draws (texture gamma(nu)/nu, exponential speckle, references
-    independent)."""
-    from sonartrack.detection.cfar import k_os_log_pfa, os_mean_factor, os_threshold
+def k_ideal_pd(ebr_db: float, nu: float, pfa: float, n: int, k: int) -> float:
+    """Pd of a Swerling-1 echo of ``ebr_db`` in K clutter of shape nu, OS-CFAR (N, k) at the threshold whose K Pfa is
+    ``pfa`` (detection/cfar.py k_os_pd; nu inf: exponential noise, Rohling)."""
+    from sonartrack.detection.cfar import k_os_pd, k_os_threshold, os_threshold
 
-    if np.isfinite(nu):
-        grid = np.exp(np.linspace(np.log(0.5), np.log(1e5), 2000))
-        lp = k_os_log_pfa(grid, nu, n, k)
-        alpha = float(np.interp(-np.log(pfa), -lp, grid))
-        tex = rng.gamma(nu, 1.0 / nu, size=(draws, n + 1))
-    else:
-        alpha, tex = os_threshold(pfa, n, k), np.ones((draws, n + 1))
-    x = tex * rng.exponential(size=tex.shape)
-    y = tex[:, 0] * rng.exponential(size=draws) + 10 ** (ebr_db / 10) * rng.exponential(size=draws)
-    mu = np.partition(x[:, 1:], k - 1, axis=1)[:, k - 1] / os_mean_factor(n, k)
-    return float(np.mean(y / mu >= alpha))
+    alpha = k_os_threshold(pfa, nu, n, k) if np.isfinite(nu) and nu <= 100 else os_threshold(pfa, n, k)
+    return float(k_os_pd(alpha, 10 ** (ebr_db / 10), nu, n, k))
 
 
 def local_rates(x, mask, fp_list, delay, cone, th, pfa, skip, cone_box, delay_ratio):
@@ -151,7 +141,6 @@ def main() -> None:
     ap.add_argument("--cone-tol", type=float, default=4.0, help="footprint half-width in cone (deg)")
     ap.add_argument("--delay-tol", type=float, default=0.03, help="footprint half-width in delay (s)")
     args = ap.parse_args()
-    rng = np.random.default_rng(1)
     for trial in args.trials:
         t0 = time.process_time()
         s, delay, cone, fe, config, truth, every = trial_cells(trial, args.seed, args.cache)
@@ -179,9 +168,9 @@ def main() -> None:
             where.append((c[i, p], d[i, p]))
         r = np.array(rows)
         e, v_or = r[:, 0], r[:, 6]
-        pd_k = np.array([k_ideal_pd(a, nu, fe.pfa, fe.cfar.n_reference, fe.cfar.rank, rng) for a, nu in zip(e, v_or,
+        pd_k = np.array([k_ideal_pd(a, nu, fe.pfa, fe.cfar.n_reference, fe.cfar.rank) for a, nu in zip(e, v_or,
                                                                                                             strict=True)])
-        pd_r = np.array([k_ideal_pd(a, np.inf, fe.pfa, fe.cfar.n_reference, fe.cfar.rank, rng) for a in e])
+        pd_r = np.array([k_ideal_pd(a, np.inf, fe.pfa, fe.cfar.n_reference, fe.cfar.rank) for a in e])
         print(f"  counted pings {len(r)}, ebr median {np.median(e):.1f} dB")
         for j, name in ((1, "ping"), (3, "pooled"), (5, "oracle")):
             nu = r[:, j + 1]
@@ -190,7 +179,7 @@ def main() -> None:
                   f"{np.quantile(nu, .75):.2f}]")
         ratio = r[:, 4] / r[:, 6]
         print(f"  pooled nu / oracle nu at the echo: median {np.median(ratio):.2f}, q10 {np.quantile(ratio, .1):.2f}")
-        pd_p = np.array([k_ideal_pd(a, nu, fe.pfa, fe.cfar.n_reference, fe.cfar.rank, rng) for a, nu in zip(e, r[:, 2],
+        pd_p = np.array([k_ideal_pd(a, nu, fe.pfa, fe.cfar.n_reference, fe.cfar.rank) for a, nu in zip(e, r[:, 2],
                                                                                                             strict=True)])
         print(f"  ideal Pd at Pfa {fe.pfa:g}, Swerling 1 at the expected EBR: K of the oracle's nu {pd_k.mean():.2f}, "
               f"K of the per-ping map's nu {pd_p.mean():.2f}, Rayleigh {pd_r.mean():.2f}")
