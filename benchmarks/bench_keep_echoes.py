@@ -155,6 +155,24 @@ def local_rates(x, mask, fp_list, delay, cone, th, pfa, skip, cone_box, delay_ra
     return np.array(out)
 
 
+def echo_rows(maps: dict, counted, d, c, ebr, delay, cone, cone_tol: float, delay_tol: float):
+    """Per counted (target, ping): [ebr_db, then per map (ping, pooled, oracle) the footprint's largest mapped cell
+    and its nu] (rows, 7) and the echo's (cone, delay)."""
+    rows, where = [], []
+    for i, p in zip(*np.nonzero(counted), strict=True):
+        fp = (np.abs(cone - c[i, p]) < cone_tol)[:, None] & (np.abs(delay - d[i, p]) < delay_tol)
+        if not fp.any():
+            continue
+        row = [ebr[i, p]]
+        for name in ("ping", "pooled", "oracle"):
+            x, v = maps[name]
+            b, dd = np.unravel_index(np.argmax(np.where(fp, x[p], -1)), fp.shape)
+            row += [x[p][b, dd], v[p][b, dd]]
+        rows.append(row)
+        where.append((c[i, p], d[i, p]))
+    return np.array(rows), where
+
+
 def main() -> None:
     from sonartrack.detection.cells import detection_threshold
     from sonartrack.studies.active_chain import detectable_grid, truth_grid
@@ -179,19 +197,7 @@ def main() -> None:
         d, c, ebr = (truth_grid(config, truth, k) for k in ("lfm_delay_s", "cone_deg", "ebr_db"))
         print(f"trial {trial}: {P} pings, {s.shape[1]} beams x {s.shape[2]} delays, cells+maps "
               f"{time.process_time() - t0:.0f} s CPU; thresholds single {th_single:.1f}, strong {th:.1f}")
-        rows, where = [], []
-        for i, p in zip(*np.nonzero(counted[:, :P]), strict=True):
-            fp = (np.abs(cone - c[i, p]) < args.cone_tol)[:, None] & (np.abs(delay - d[i, p]) < args.delay_tol)
-            if not fp.any():
-                continue
-            row = [ebr[i, p]]
-            for name in ("ping", "pooled", "oracle"):
-                x, v = maps[name]
-                b, dd = np.unravel_index(np.argmax(np.where(fp, x[p], -1)), fp.shape)
-                row += [x[p][b, dd], v[p][b, dd]]
-            rows.append(row)
-            where.append((c[i, p], d[i, p]))
-        r = np.array(rows)
+        r, where = echo_rows(maps, counted[:, :P], d, c, ebr, delay, cone, args.cone_tol, args.delay_tol)
         e, v_or = r[:, 0], r[:, 6]
         pd_k = np.array([k_ideal_pd(a, nu, fe.pfa, fe.cfar.n_reference, fe.cfar.rank) for a, nu in zip(e, v_or,
                                                                                                             strict=True)])
