@@ -96,3 +96,19 @@ def test_statistic_named_wrong_is_refused():
 
     with pytest.raises(InputError, match="statistic"):
         RateConfirmation(1.0, T_S, P0, 0.01, statistic="odds")
+
+
+def test_velocity_prior_from_a_speed_bound_matches_the_uniform_disc():
+    # independent: the second moments of velocities drawn uniformly over the disc |v| <= 7.5 m/s
+    from sonartrack.tracking.initiators import velocity_std_from_speed_bound
+
+    rng = np.random.default_rng(0)
+    r, th = 7.5 * np.sqrt(rng.uniform(size=200_000)), rng.uniform(0, 2 * np.pi, 200_000)
+    v = np.stack([r * np.cos(th), r * np.sin(th)], -1)
+    cov = v.T @ v / len(v)
+    assert velocity_std_from_speed_bound(7.5) == pytest.approx(np.sqrt(cov[0, 0]), rel=0.01)
+    assert abs(cov[0, 1]) < 0.05
+    from sonartrack.core.errors import InputError
+
+    with pytest.raises(InputError):
+        velocity_std_from_speed_bound(0.0)
