@@ -21,14 +21,39 @@ Per target the hits' median ln Lambda, sqrt det S against sqrt det R (the predic
 ratio) and the existence prediction's total loss are summed. Variants (``--variants``): ``base`` (the settings),
 ``lr`` (tracker.confirm_statistic = likelihood_ratio: the rate rule held against O_0 prod Lambda, the quantity
 Ville's inequality bounds, rather than the existence, whose odds p11 caps at 49, below the rule's threshold),
-``pd05`` (the tracker's pd 0.5), combinations joined (``lrpd05``). ``lr`` needs the wiring diff of the h13-acq report
+``pd05`` (the tracker's pd 0.5), ``v375`` (a one-point track's velocity prior from the chain's speed bound,
+tracking/initiators.py ``velocity_std_from_speed_bound(max_range_rate_mps / 2)``: 3.75 m/s per axis against 5),
+combinations joined (``lrv375``). ``lr`` needs the wiring diff of the h13-acq report
 in systems/active/contact_tracker.py ``_rate_confirmation`` (``statistic=settings.confirm_statistic``); until then
 :func:`wire` applies it here.
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_acquisition.py --trials 2 14 18 [--ledger] [--variants base,lr]``.
 
-Measured (2026-12-08, h13-acq at main f7e0a61 + the lr statistic; caches of bench_active_held.py at f7e0a61's
-chain, trials 2, 14, 18, LFM; 11 targets): see the h13-acq report and the commit messages for the numbers.
+Measured (2026-12-08, h13-acq at main f7e0a61; bench_active_held.py's caches of trials 2, 14, 18 (LFM; 11 targets
+entering, 10 of them at 15 dB), ~2-4 min a variant and trial at load 6-7 on 2 cores; every base run reproduced the
+stored tracks):
+* ledger, 336 target pings from entry to first held: no contact on the target 164 (49 %: a tentative track alive
+  123, none 41), the target's contact taken by a tentative track still short of the threshold 116 (35 %), the
+  track lost and restarted 22 (7 %: the contact started a new track 14, a young track's gate missed it 8), a
+  confirmed track near but not the holder (its mirror twin, or off) 31 (9 %); held back above the threshold
+  (StillHold, MinHits: off on the LFM chain) 0 (StillHold took back 10 and 16 confirmations on trials 14 and 18,
+  all away from the targets). A hit on a tentative track: ln Lambda median 1.09 (quartiles 0.08, 1.61), a miss
+  -1.18 (pd 0.7), against 6.7-7.7 nats needed (threshold 0.976-0.994 from 6.5-18.3 tracks started a ping at 30 s,
+  1 false track/h, P_0 0.05); per hit, sqrt det S / sqrt det R median 9.9 (ln 2.29 nats: the one-point track's
+  velocity prior and the IMM's maneuver modes against contacts known to ~15 m in range), the tracker's 1e-6 /m^2
+  against the contacts' ~1e-8 ~4.5 nats; the existence prediction lost 8.5 nats in all, near p11's cap.
+* acquisition (pings from entry; trials 2 / 14 / 18) and held counted pings: base inf 30 30 / 33 1 7 9 / 38 61 43 46,
+  held 65/172, 251/282, 125/306; ``lr`` inf 30 29 / 33 1 6 8 / 36 60 43 46, held 67, 253, 128; ``v375`` 36 30 29 /
+  11 1 4 8 / 1 54 43 46, held 60, 268, 147 (441 -> 475 of 760); ``lrv375`` on 14 as ``v375``; ``pd05`` on 14:
+  inf 1 31 11, held 202 (worse: not pursued). False confirmed tracks on the study's scoring: 0 in every run.
+* 1 h reverberation-only twins (bench_active_family.py's scenes, trials 14 K, 18 Rayleigh, 10 spiky K; all LFM):
+  base 0/0/0, ``lr`` 0/0/0, ``v375`` 0/2/0 (twin 18: one mirror pair confirmed at 3480 s, 4 pings, at the bistatic
+  range of a 19 dB still point 90 deg away in cone: a lobe image).
+* bench_active_turns.py (18 LFM turn scenes, cached contacts): acquired 8 -> 12 (``lr``) -> 14 (``v375``) of 18,
+  seed 1 at 18 pings in 3 scenes -> 17 in 7 (``lr``) -> 17 in 9 (``v375``); none within 5; false tracks 0 in all;
+  turn pings lost 155 -> 131 -> 117 of 191. bench_active_rows.py (default scene LFM seeds 1, 2): false rows 0/0 in
+  all; ``lr`` seed 2's crossing-b confirmed at ping 9 not 12, the maneuvering target at 7 not 8 (one more ghost
+  twin confirmed for 7 pings); ``v375`` held % 83/87 -> 85/87.
 """
 
 from __future__ import annotations
@@ -140,6 +165,10 @@ def variant(settings, name: str):
         upd["confirm_statistic"] = "likelihood_ratio"
     if "pd05" in name:
         upd["pd"] = 0.5
+    if "v375" in name:  # the velocity prior from the chain's speed bound (tracking/initiators.py)
+        from sonartrack.tracking.initiators import velocity_std_from_speed_bound
+
+        upd["init_velocity_std_mps"] = velocity_std_from_speed_bound(0.5 * settings.max_range_rate_mps)
     return settings.model_copy(update={"tracker": settings.tracker.model_copy(update=upd)})
 
 
