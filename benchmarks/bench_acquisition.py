@@ -38,7 +38,7 @@ stored tracks):
   confirmed track near but not the holder (its mirror twin, or off) 31 (9 %); held back above the threshold
   (StillHold, MinHits: off on the LFM chain) 0 (StillHold took back 10 and 16 confirmations on trials 14 and 18,
   all away from the targets). A hit on a tentative track: ln Lambda median 1.09 (quartiles 0.08, 1.61), a miss
-  -1.18 (pd 0.7), against 6.7-7.7 nats needed (threshold 0.976-0.994 from 6.5-18.3 tracks started a ping at 30 s,
+  -1.18 (pd 0.7), against 6.7-7.7 nats needed (threshold 0.975-0.994 from 6.5-18.3 tracks started a ping at 30 s,
   1 false track/h, P_0 0.05); per hit, sqrt det S / sqrt det R median 9.9 (ln 2.29 nats: the one-point track's
   velocity prior and the IMM's maneuver modes against contacts known to ~15 m in range), the tracker's 1e-6 /m^2
   against the contacts' ~1e-8 ~4.5 nats; the existence prediction lost 8.5 nats in all, near p11's cap.
