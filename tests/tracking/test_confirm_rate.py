@@ -20,13 +20,14 @@ def test_threshold_by_hand():
     assert confirm_threshold_for_rate(0.01, 20.0, 0.05) > confirm_threshold_for_rate(0.01, 10.0, 0.05)
 
 
-def clutter_run(stated_per_h: float, scans: int = 240, seed: int = 7, target_from: int | None = None):
+def clutter_run(stated_per_h: float, scans: int = 240, seed: int = 7, target_from: int | None = None,
+                statistic: str = "existence"):
     """(false tracks confirmed, tracks started, threshold at the end, scan of the target's confirmation or None) on
     clutter scans 30 s apart; with ``target_from``, a 5 m/s target detected on every scan from that one."""
     s = PositionTrackerSettings(q=[1e-4], clutter_density_per_m2=2e-7, pd=0.7, confirm_threshold=0.9,
                                 initial_existence=0.05)
     trk = position_tracker(s)
-    rule = RateConfirmation(stated_per_h, 30.0, s.initial_existence, s.terminate_threshold)
+    rule = RateConfirmation(stated_per_h, 30.0, s.initial_existence, s.terminate_threshold, statistic=statistic)
     trk.deleter = rule
     rng = np.random.default_rng(seed)
     side = 6000.0
@@ -47,12 +48,14 @@ def clutter_run(stated_per_h: float, scans: int = 240, seed: int = 7, target_fro
     return len(confirmed), rule.started, rule.confirm_threshold, at
 
 
-def test_stated_rate_is_kept_on_the_clutter_model():
+@pytest.mark.parametrize("statistic", ["existence", "likelihood_ratio"])
+def test_stated_rate_is_kept_on_the_clutter_model(statistic):
+    # the likelihood-ratio odds O_0 prod Lambda are the martingale Ville's inequality bounds (p11 not in them)
     from scipy.stats import poisson
 
     hours = 240 * 30.0 / 3600.0
     for stated in (10.0, 2.0):
-        n_false, started, thr, _ = clutter_run(stated)
+        n_false, started, thr, _ = clutter_run(stated, statistic=statistic)
         assert started > 500 and 0.5 < thr < 1.0
         # the count must not exceed what the stated rate allows, beyond chance (Poisson 99.9 % point)
         assert n_false <= poisson.ppf(0.999, stated * hours), (stated, n_false, thr)

@@ -74,6 +74,21 @@ class RateConfirmation:
     :func:`~sonartrack.tracking.existence.confirm_threshold_for_rate`), never below ``floor``; deletion below
     ``terminate_threshold``. Counts the tracks the initiator starts and the scans (stateful, one per tracker).
 
+    ``statistic`` says what is held against the threshold. "existence": IPDA's existence probability (P4).
+    "likelihood_ratio": the quantity the rule bounds, the track's initial odds times the product of its scans'
+    Lambda (Ville's inequality is on O_0 prod_j Lambda_j, existence.py), kept in ``attrs["log_lr_odds"]`` (the
+    tracker adds each scan's ln Lambda: tracking/multi_target.py). Why: with p11 < 1 the existence's predicted odds
+    are capped at p11 / (1 - p11) (49 at p11 0.98; Musicki, Evans, Stankovic 1994, eq. 11), below the rule's odds
+    at 1 false track/h (threshold 0.987-0.997, odds 75-330, on study active-chain's LFM trials 2, 14, 18), so the
+    existence crosses it only on a scan whose own hit lifts the odds from that cap by the rest (0.9-1.8 nats), and
+    every scan near the cap loses 0.5-1.2 nats to the prediction (trial 14: a target whose contacts fed one track on
+    pings 3-9 lost 2.0 nats so, confirmed at ping 9 where the likelihood ratio crossed at ping 8). A track the
+    existence confirms is confirmed here too (both tests are kept; with p21 = 0 the existence's odds never exceed the
+    likelihood ratio's), and the rule's bound is the same (it was derived for this statistic); the existence still
+    deletes and is still reported. Measured (benchmarks/bench_acquisition.py, study trials 2, 14, 18, LFM): latency
+    one ping less on 5 of 10 targets, held counted pings 441 -> 448 of 760, no false confirmed track on the 1 h
+    reverberation-only twins of trials 14, 18, 10, nor on bench_active_rows.py's LFM seeds 1-2.
+
     Parameters
     ----------
     false_tracks_per_h : float
@@ -86,12 +101,19 @@ class RateConfirmation:
         A track whose existence falls below this is deleted.
     floor : float
         Lowest threshold whatever the count (0: the rule alone).
+    statistic : {"existence", "likelihood_ratio"}
+        What is held against the threshold (above).
     """
 
     def __init__(self, false_tracks_per_h: float, scan_interval_s: float, initial_existence: float,
-                 terminate_threshold: float, floor: float = 0.0):
+                 terminate_threshold: float, floor: float = 0.0, statistic: str = "existence"):
+        from sonartrack.core.errors import require
+
+        require(statistic in ("existence", "likelihood_ratio"),
+                f"statistic must be 'existence' or 'likelihood_ratio', not {statistic!r}")
         self.false_per_scan = float(false_tracks_per_h) * float(scan_interval_s) / 3600.0
         self.initial_existence, self.terminate_threshold, self.floor = initial_existence, terminate_threshold, floor
+        self.statistic = statistic
         self.started, self.scans = 0, 0
 
     @property
@@ -104,14 +126,21 @@ class RateConfirmation:
         return max(float(rule), self.floor)
 
     def new_track_attrs(self, k: int) -> dict:
-        """Count the ``k`` tracks started this scan (called once a scan); no per-track counters (an empty dict)."""
+        """Count the ``k`` tracks started this scan (called once a scan); per track, with the likelihood-ratio
+        statistic, ``log_lr_odds`` NaN (the tracker starts it at the track's log odds at its first update)."""
         self.started += int(k)
         self.scans += 1
-        return {}
+        return {"log_lr_odds": np.full(int(k), np.nan)} if self.statistic == "likelihood_ratio" else {}
 
     def manage(self, T: TrackArrays, hit) -> TrackArrays:
-        """Confirm above the rate's threshold; drop below ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
-        return ExistenceDeleter(self.confirm_threshold, self.terminate_threshold).manage(T, hit)
+        """Confirm above the rate's threshold (existence, or the likelihood-ratio odds: class doc); drop below
+        ``terminate_threshold`` (as :class:`ExistenceDeleter`)."""
+        threshold = self.confirm_threshold
+        if self.statistic == "likelihood_ratio" and "log_lr_odds" in T.attrs:
+            with np.errstate(invalid="ignore"):
+                earned = T.attrs["log_lr_odds"] > np.log(threshold / (1.0 - threshold))
+            T = replace(T, confirmed=T.confirmed | earned)
+        return ExistenceDeleter(threshold, self.terminate_threshold).manage(T, hit)
 
 
 class StillHold:

@@ -45,6 +45,34 @@ def bearing_covariance(sigma_p_deg) -> np.ndarray:
     return np.stack([np.stack([s2, s2], -1), np.stack([s2, 2 * s2], -1)], -2)
 
 
+def velocity_std_from_speed_bound(max_speed_mps: float) -> float:
+    """Per-axis standard deviation of a one-point track's zero-mean velocity prior from a bound on the target's speed:
+    the velocity uniform over the disc |v| <= v_max (every heading and every speed up to the bound as likely per unit
+    area) has covariance (v_max^2 / 4) I, so the Gaussian of the same two moments has s_v = v_max / 2 per axis.
+
+    Why: the prior sets a young track's predicted position spread (S = R + T^2 s_v^2 I at its first update after one
+    scan of T s), and every hit's likelihood ratio falls as 1 / sqrt(det S) (Musicki, Evans, Stankovic 1994, eq. 29):
+    on study active-chain's LFM trials (30 s pings, contacts known to ~15 m in range) a hit's S was 8-10 times R in
+    sqrt(det) (benchmarks/bench_acquisition.py --ledger), most of it the prior along the range axis. An active chain
+    that searches bistatic range rates up to r_max (MFTD, CW Doppler bank) states a target no faster than r_max / 2
+    (an approaching target's bistatic range rate is twice its speed), so v_max = r_max / 2.
+
+    Parameters
+    ----------
+    max_speed_mps : float
+        The bound v_max on the target's speed (m/s, > 0).
+
+    Returns
+    -------
+    float
+        s_v (m/s per axis).
+    """
+    from sonartrack.core.errors import require
+
+    require(max_speed_mps > 0, f"the speed bound must be positive (m/s), not {max_speed_mps}")
+    return 0.5 * float(max_speed_mps)
+
+
 @dataclass(frozen=True)
 class OnePointInitiator:
     """Position tracks from single measurements, with a zero-mean velocity prior."""

@@ -150,6 +150,10 @@ class MultiTargetTracker:
             if pairs is not None:
                 own[pairs.ravel()] = False  # a shared peak says nothing of either member's own side
             attrs = self.own_motion.update(attrs, x_still, P_still, T.attrs["sigma_p"], scan.z[:, 0], own, turn_deg)
+        if "log_lr_odds" in attrs:  # the likelihood-ratio odds of a rate confirmation (tracking/deleters.py)
+            start = np.log(T.existence / (1.0 - T.existence))  # a new track's (NaN) from its existence before this scan
+            attrs = {**attrs, "log_lr_odds": np.where(np.isnan(attrs["log_lr_odds"]), start, attrs["log_lr_odds"])
+                     + log_total}
         T = replace(T, x=x, P=P, mu=mu, existence=existence, attrs=attrs)
         n, m = lik.gated.shape  # the gated pairs say the same as lik.gated.any(axis=1) and .any(axis=0)
         # hits (a track's life) and used peaks (no new track) count the pairs of the measurement part's own window

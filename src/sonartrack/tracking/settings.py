@@ -8,6 +8,8 @@ those differ from the defaults here; ``sonartrack track --config`` reads the sam
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 from pydantic import model_validator
 
@@ -48,6 +50,11 @@ class PositionTrackerSettings(Settings):
               "started per scan so far by Ville's inequality on IPDA's existence odds (tracking/existence.py "
               "confirm_threshold_for_rate), in place of confirm_threshold (not set: confirm_threshold)",
         unit="1/h", gt=0)
+    confirm_statistic: Literal["existence", "likelihood_ratio"] = setting(
+        "existence", "what the stated false-track rate's threshold (false_tracks_per_h) is held against: the existence "
+                     "probability (P4), or the likelihood-ratio odds the rule bounds, the track's initial odds times "
+                     "its scans' Lambda, which p11 does not cap below the threshold (tracking/deleters.py "
+                     "RateConfirmation); the existence still deletes", unit="")
     confirm_min_hits: int = setting(
         1, "fewest scans with a measurement in its gate (its initiating one counted) before a track may be confirmed, "
            "whatever its existence (tracking/deleters.py MinHits; 1: the existence alone, P4)", unit="1", ge=1, le=20)
