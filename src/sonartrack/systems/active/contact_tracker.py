@@ -147,11 +147,17 @@ class ContactTracker:
             self.tracker.deleter = _rate_confirmation(settings, scan_interval_s)
         self.clutter_map, self.hold = clutter_map, None
         self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
+        self._ridge_recurring = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0)  # _ridge_places: xy, R, t
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
             self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
                                                          gate_threshold(settings.gate_probability, 2))
+        self.ridge_hold = None
+        if clutter_map is not None and ridge_map is not None and ridge_window is not None:  # _ridge_places
+            self.ridge_hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
+                                                               gate_threshold(settings.gate_probability, 2),
+                                                               gate_threshold(RIDGE_HOLD_PROBABILITY, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4),
                                                    settings.merge_confirmed_scans,
@@ -230,6 +236,8 @@ class ContactTracker:
         if ridge is not None and self.ridge_map is not None:
             clutter = clutter | self._ridge_clutter(float(t_s), contacts, ridge)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
+        if self.ridge_hold is not None:
+            self.ridge_hold.recurring(*self._ridge_places(float(t_s), ridge))
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
@@ -257,6 +265,35 @@ class ContactTracker:
         self.ridge_counts[0] += int(still.sum())
         self.ridge_counts[1] += int(out.sum())
         return out
+
+    def _ridge_places(self, t_s: float, ridge: Contacts | None) -> tuple[np.ndarray, np.ndarray]:
+        """The places where a CW's hidden ridge echoes recur (the ridge map's ``recurring``: RIDGE_MAP_HITS of its
+        pings, not yet shown still), kept ``span`` pings after the last, for tracking/deleters.py
+        :class:`StillHold`: a slow track newly confirmed in the gate of one, widened by the echo's skirt
+        (:func:`skirt_covariance`), waits until its own speed shows it moving or the map withholds its contacts.
+
+        Why. A still point's hidden echo is found on a third to a half of the pings (study active-chain trial 11, CW,
+        spiky K: a TS 27 dB point's within 300 m of it on 13 of the first 44), so the map's recurrence test is met
+        well before its stillness test (speed bound 2.2-4.5 m/s at 4 hits with 220 m sds; shown still at ping 102),
+        while its delay-Doppler skirt, 500-800 m down the line of sight, gives a pair of contacts 30-60 s apart that
+        confirms a track (CWCONF: the tracker's mean clutter density makes each contact worth odds 300-2000) and
+        coasts 10-20 pings. Recurrence alone marks a target crossing the ridge as well, so the place only holds back
+        a slow track's confirmation (StillHold: < ``slow_mps``), it withholds no contact. Returns (k, 2) positions
+        (m) and (k, 2, 2) covariances (m^2); empty without a ridge map or window."""
+        rm = self.ridge_map
+        if rm is None or self.ridge_window is None:
+            return np.zeros((0, 2)), np.zeros((0, 2, 2))
+        xy, R, seen = self._ridge_recurring
+        if ridge is not None and len(rm.recurring) == len(ridge) and rm.recurring.any():
+            r = rm.recurring
+            g = self.geometry
+            wide = skirt_covariance(ridge.xy[r], ridge.R[r], g.tx_at(t_s), g.rx_at(t_s), self.ridge_window[0])
+            xy, R, seen = (np.concatenate([xy, ridge.xy[r]]), np.concatenate([R, wide]),
+                           np.concatenate([seen, np.full(int(r.sum()), t_s)]))
+        step = rm._step_s or 0.0
+        alive = t_s - seen <= rm.span * step
+        self._ridge_recurring = xy[alive], R[alive], seen[alive]
+        return xy[alive], R[alive]
 
     def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact in no confirmed
@@ -512,10 +549,49 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     return contacts, keep, trk.result()
 
 
+#: the confidence of the velocity ellipse by which a slow track newly confirmed on a recurring hidden ridge echo's
+#: skirt (ContactTracker._ridge_places) must show it moving before its confirmation stands (tracking/deleters.py
+#: StillHold ``moving_gamma``): two skirt contacts 30-60 s apart leave a young track's speed at 1.3-1.4 m/s on
+#: study active-chain trial 11's still points (its speed confirmed 0.2-0.3 m/s), over the speed estimate alone
+RIDGE_HOLD_PROBABILITY = 0.9
+
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
 #: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, 7-22 a ping (default scene as
 #: CW; study trials 1, 15), recur by chance (with 3: 19 shown still on the default scene's seed 2, with 4: 13)
 RIDGE_MAP_HITS = 4
+
+
+def skirt_covariance(xy: np.ndarray, R: np.ndarray, tx_xy, rx_xy, range_m: float) -> np.ndarray:
+    """Covariances of hidden ridge echoes widened along their bistatic range by their delay-Doppler skirt: a CW
+    echo's ambiguity reaches ``range_m`` (c tau) in r_B past its peak (Levanon & Mozeson, Radar Signals, 2004, ch. 2),
+    so a skirt contact lies up to that far in r_B from the echo, i.e. up to range_m / |grad r_B| along grad r_B in the
+    world (grad r_B = u_T + u_R, |grad r_B| = 2 monostatic). Taken as uniform over +-that: variance (range_m /
+    |grad r_B|)^2 / 3 added along the unit vector of grad r_B.
+
+    Parameters
+    ----------
+    xy : ndarray (k, 2)
+        Echo positions (m).
+    R : ndarray (k, 2, 2)
+        Their covariances (m^2).
+    tx_xy, rx_xy : array (2,)
+        Source and receiver (m).
+    range_m : float
+        The skirt's half-width in r_B (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        (k, 2, 2) widened covariances (m^2).
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    grad = np.zeros_like(xy)
+    for p in (tx_xy, rx_xy):
+        d = xy - np.asarray(p, float)
+        grad += d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
+    norm = np.maximum(np.linalg.norm(grad, axis=1), 1e-9)
+    u = grad / norm[:, None]
+    return np.asarray(R, float) + ((range_m / norm) ** 2 / 3.0)[:, None, None] * np.einsum("ki,kj->kij", u, u)
 
 
 def ridge_map_of(settings: ActiveSettings):

@@ -1,0 +1,124 @@
+"""How soon the CW ridge map knows a still point, and what that does to the false rows: the tracker stage replayed on
+the chain's recorded contacts with the hidden ridge echoes kept down to a lower threshold.
+
+Runs the reverberation-only twin of chosen trials of study ``active-chain`` (benchmarks/bench_active_family.py
+``trial_scene``) once through the chain (the tracker stage's inputs recorded as benchmarks/bench_cw_confirm.py does,
+plus detection/cw_cells.py ``ridge_echoes`` at ``--floor`` times the chain's threshold, a pickle per trial under
+``--cache``), then replays the tracker stage (seconds) with the ridge echoes cut at ``--ridge-factor`` times the
+threshold (1: the chain's own inputs, bit for bit) and prints the false confirmed tracks and rows (every confirmed
+track is false on a reverberation-only twin), and per clutter point of the scene the first ping the ridge map knows it.
+
+Usage: ``PYTHONPATH=src python benchmarks/bench_cw_ridge_learn.py --trials 11 1 15 --ridge-factor 1 0.7``.
+Measures, asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import hashlib
+import pickle
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+
+def record(config, scene, cache: Path, floor: float) -> dict:
+    """The tracker stage's inputs, the ridge contacts down to ``floor`` x the threshold (cached by the scene)."""
+    import sonartrack.detection.cw_cells as cw_cells
+    import sonartrack.systems.active.run as run_mod
+    from sonartrack.studies.active_chain import run_scene
+
+    key = hashlib.sha1((scene.model_dump_json() + config.chain.model_dump_json() + f"{floor}").encode()).hexdigest()
+    path = cache / f"ridge-{key[:12]}.pkl"
+    if path.exists():
+        return pickle.loads(path.read_bytes())
+    real, real_echoes, rec = run_mod.ContactTracker, cw_cells.ridge_echoes, {"steps": [], "threshold": None}
+
+    def low_echoes(cells, threshold):
+        rec["threshold"] = float(threshold)
+        return real_echoes(cells, floor * threshold)
+
+    class Recording(real):
+        def __init__(self, *args, **kwargs):
+            rec["args"], rec["kwargs"] = copy.deepcopy(args), copy.deepcopy(kwargs)
+            super().__init__(*args, **kwargs)
+
+        def step(self, t_s, contacts, ridge=None):
+            rec["steps"].append((float(t_s), contacts, ridge))
+            if ridge is not None:
+                ridge = ridge.rows(np.asarray(ridge.statistic) >= rec["threshold"])
+            return super().step(t_s, contacts, ridge)
+
+    run_mod.ContactTracker, cw_cells.ridge_echoes = Recording, low_echoes
+    t0 = time.perf_counter()
+    try:
+        result = run_scene(config.model_copy(update={"scene": scene}), scene)[0]
+    finally:
+        run_mod.ContactTracker, cw_cells.ridge_echoes = real, real_echoes
+    rec["result"], rec["seconds"] = result, time.perf_counter() - t0
+    cache.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(pickle.dumps(rec))
+    return rec
+
+
+def replay(rec: dict, factor: float, kwargs_update: dict | None = None):
+    """The tracker stage on the recorded inputs, ridge echoes at ``factor`` x the threshold; returns the tracker and
+    the ping (1-based) at which each known ridge point was first known (list of (ping, xy))."""
+    from sonartrack.systems.active.contact_tracker import ContactTracker
+
+    kwargs = {**copy.deepcopy(rec["kwargs"]), **(kwargs_update or {})}
+    trk = ContactTracker(*copy.deepcopy(list(rec["args"])), **kwargs)
+    first = []
+    for k, (t, contacts, ridge) in enumerate(rec["steps"]):
+        if ridge is not None:
+            ridge = ridge.rows(np.asarray(ridge.statistic) >= factor * rec["threshold"])
+        trk.step(t, contacts, ridge)
+        rm = trk.ridge_map
+        if rm is not None and len(rm.known[0]):
+            for xy in rm.known[0]:
+                if not any(np.hypot(*(xy - p)) < 600.0 for _, p in first):
+                    first.append((k + 1, xy.copy()))
+    return trk, first
+
+
+def main() -> None:
+    from bench_active_family import classify, trial_scene
+    from sonartrack.studies.active_chain import Config, _rows_and_tracks
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trials", type=int, nargs="+", default=[11, 1, 15])
+    ap.add_argument("--seed", type=int, default=2017)
+    ap.add_argument("--minutes", type=float, default=60.0)
+    ap.add_argument("--floor", type=float, default=0.5, help="ridge echoes recorded down to this x the threshold")
+    ap.add_argument("--ridge-factor", type=float, nargs="+", default=[1.0])
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/cw_ridge_learn"))
+    args = ap.parse_args()
+    args.gate, args.early, args.ridge = 1500.0, 3.0, 0.3
+    config = Config()
+    for i in args.trials:
+        scene, values = trial_scene(config, args.seed, i, args.minutes)
+        rec = record(config, scene, args.cache, args.floor)
+        w = scene.waveform
+        args.range_tol = 0.5 * scene.sound_speed_mps * w.duration_s if w.kind != "lfm" else None
+        for f in args.ridge_factor:
+            t0 = time.perf_counter()
+            trk, first = replay(rec, f)
+            result = dataclasses.replace(rec["result"], tracks=trk.result())
+            rows = classify(result, scene, args)
+            listed, _ = _rows_and_tracks(result.tracks, result.geometry)
+            known = ", ".join(f"ping {p} ({xy[0]:.0f}, {xy[1]:.0f})" for p, xy in first[:6])
+            print(f"trial {i} ({values['pulse']}, {values['model']}) ridge x{f}: {len(rows)} false confirmed, "
+                  f"{listed} rows; ridge-map points first known: {known}; replay {time.perf_counter() - t0:.1f} s "
+                  f"(chain {rec['seconds']:.0f} s)")
+            for r in rows:
+                print("   ", {k: (round(v, 2) if isinstance(v, float) else v) for k, v in r.items()})
+
+
+if __name__ == "__main__":
+    main()
