@@ -290,7 +290,7 @@ class ContactTracker:
             wide = skirt_covariance(ridge.xy[r], ridge.R[r], g.tx_at(t_s), g.rx_at(t_s), self.ridge_window[0])
             xy, R, seen = (np.concatenate([xy, ridge.xy[r]]), np.concatenate([R, wide]),
                            np.concatenate([seen, np.full(int(r.sum()), t_s)]))
-        step = rm._step_s or 0.0
+        step = getattr(rm, "_step_s", None) or 0.0  # the ping interval (none before the map's second update)
         alive = t_s - seen <= rm.span * step
         self._ridge_recurring = xy[alive], R[alive], seen[alive]
         return xy[alive], R[alive]
