@@ -148,6 +148,7 @@ class ContactTracker:
         self.clutter_map, self.hold = clutter_map, None
         self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
         self._ridge_recurring = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0)  # _ridge_places: xy, R, t
+        self._scan_lam = float(settings.clutter_density_per_m2)  # the scan's mean density (_skirt_density)
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
@@ -295,6 +296,20 @@ class ContactTracker:
         self._ridge_recurring = xy[alive], R[alive], seen[alive]
         return xy[alive], R[alive]
 
+    def _skirt_density(self, m, contacts: Contacts):
+        """The measurement part ``m`` with each contact's own clutter density (Musicki & Evans, "Clutter map
+        information for data association and track initialization", IEEE Trans. AES 40(2), 2004: the ratio of a
+        contact is p_j / rho_j with rho_j the clutter measurement density where it lies, not the scan's mean): in the
+        skirt gate of a recurring hidden ridge echo (:meth:`_ridge_places`) at least one contact a ping over the
+        gate's area, rho = 1 / (pi gamma sqrt(det(R_j + R_place))) (:func:`skirt_density`), where the scan's mean
+        (``clutter_area_m2``) is ~1000 times less (CWCONF); ``m`` itself when no contact lies in one or when
+        :data:`RIDGE_SKIRT_DENSITY` is off."""
+        if not RIDGE_SKIRT_DENSITY or self.ridge_hold is None or not len(contacts):
+            return m
+        h = self.ridge_hold
+        rho = skirt_density(contacts.xy, contacts.R, h.xy, h.R, float(m.clutter_density_per_m2), h.gamma)
+        return m if rho is None else replace(m, clutter_density_per_m2=rho)
+
     def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact in no confirmed
         track's gate that starts and feeds no track when (a) it is weaker than a contact in a confirmed track's gate
@@ -363,9 +378,13 @@ class ContactTracker:
             if self.clutter_area is not None:
                 self._counts = [self._counts[0] + int(keep.sum()), self._counts[1] + 1]
                 lam = (self._counts[0] + 1) / ((self._counts[1] + 1) * self.clutter_area)
-            self.tracker.measurements = self.tracker.measurements.at_scan(
-                (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
-                contacts.range_rate_mps[keep], lam)
+            m = self.tracker.measurements
+            if np.ndim(m.clutter_density_per_m2):  # last scan's per-contact densities: back to the scan's own
+                m = replace(m, clutter_density_per_m2=self._scan_lam)
+            m = m.at_scan((g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
+                          contacts.range_rate_mps[keep], lam)
+            self._scan_lam = float(m.clutter_density_per_m2)
+            self.tracker.measurements = self._skirt_density(m, contacts.rows(keep))
         if self.ghosts is not None:  # the axis a ghost is reflected about at this scan (sides.py GhostDeleter)
             self.ghosts.axis = (np.asarray(self.geometry.rx_at(t_s), float), float(self.geometry.heading_at(t_s)))
         if self.claims is not None:  # the ranks and claimers before the scan (tracking/associators.py ClaimedPDA)
@@ -555,10 +574,47 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
 #: study active-chain trial 11's still points (its speed confirmed 0.2-0.3 m/s), over the speed estimate alone
 RIDGE_HOLD_PROBABILITY = 0.9
 
+#: contacts in a recurring hidden ridge echo's skirt gate are scored against the skirt's own clutter density
+#: (ContactTracker._skirt_density), not the scan's mean
+RIDGE_SKIRT_DENSITY = True
+
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
 #: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, 7-22 a ping (default scene as
 #: CW; study trials 1, 15), recur by chance (with 3: 19 shown still on the default scene's seed 2, with 4: 13)
 RIDGE_MAP_HITS = 4
+
+
+def skirt_density(xy: np.ndarray, R: np.ndarray, place_xy: np.ndarray, place_R: np.ndarray, lam: float,
+                  gamma: float) -> np.ndarray | None:
+    """Each contact's clutter density (1/m^2): ``lam`` (the scan's mean), or where the contact lies in the gate
+    d^2 <= gamma of a place (covariance R_j + R_place) one contact a ping over that gate's area, pi gamma
+    sqrt(det(R_j + R_place)), when larger (the densest such place); None when no contact's density is raised.
+
+    Parameters
+    ----------
+    xy, R : ndarray (m, 2), (m, 2, 2)
+        The contacts (m, m^2).
+    place_xy, place_R : ndarray (k, 2), (k, 2, 2)
+        The places whose skirt recurs (m, m^2; :func:`skirt_covariance`).
+    lam : float
+        The scan's clutter density (1/m^2).
+    gamma : float
+        The chi-square(2) gate.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (m,) densities (1/m^2).
+    """
+    from sonartrack.detection.clutter_map import mahalanobis2
+
+    if not len(place_xy) or not len(xy):
+        return None
+    S = np.asarray(R, float)[:, None] + np.asarray(place_R, float)[None]
+    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
+    dense = 1.0 / (np.pi * gamma * np.sqrt(np.maximum(det, 1e-12)))
+    rho = np.where(mahalanobis2(xy, R, place_xy, place_R) <= gamma, dense, 0.0).max(axis=1)
+    return np.maximum(rho, lam) if (rho > lam).any() else None
 
 
 def skirt_covariance(xy: np.ndarray, R: np.ndarray, tx_xy, rx_xy, range_m: float) -> np.ndarray:
