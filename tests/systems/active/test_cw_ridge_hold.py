@@ -9,8 +9,9 @@ yet shown still), and contacts on its delay-Doppler skirt 600 m further down the
 import numpy as np
 import pytest
 
-from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of, ridge_map_of, skirt_covariance
+from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of, ridge_map_of
 from sonartrack.systems.active.contacts import ActiveGeometry, Contacts
+from sonartrack.systems.active.ridge_skirt import skirt_covariance
 from sonartrack.systems.active.settings import ActiveSettings
 
 PING_S, SPEED = 30.0, 2.5

@@ -21,6 +21,12 @@ from sonartrack.systems.active.contacts import (
     resolve_mirrors,
 )
 from sonartrack.systems.active.cw_tracking import cw_clutter_area
+from sonartrack.systems.active.ridge_skirt import (
+    RIDGE_HOLD_PROBABILITY,
+    RIDGE_SKIRT_DENSITY,
+    RidgePlaces,
+    skirt_density,
+)
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.deleters import listed_tracks
@@ -147,15 +153,15 @@ class ContactTracker:
             self.tracker.deleter = _rate_confirmation(settings, scan_interval_s)
         self.clutter_map, self.hold = clutter_map, None
         self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
-        self._ridge_recurring = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0)  # _ridge_places: xy, R, t
         self._scan_lam = float(settings.clutter_density_per_m2)  # the scan's mean density (_skirt_density)
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
             self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
                                                          gate_threshold(settings.gate_probability, 2))
-        self.ridge_hold = None
-        if clutter_map is not None and ridge_map is not None and ridge_window is not None:  # _ridge_places
+        self.ridge_hold, self.ridge_places = None, None  # a slow track on a recurring hidden echo's skirt waits
+        if clutter_map is not None and ridge_map is not None and ridge_window is not None:  # (ridge_skirt.py)
+            self.ridge_places = RidgePlaces(ridge_window[0])
             self.ridge_hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
                                                                gate_threshold(settings.gate_probability, 2),
                                                                gate_threshold(RIDGE_HOLD_PROBABILITY, 2))
@@ -268,42 +274,16 @@ class ContactTracker:
         return out
 
     def _ridge_places(self, t_s: float, ridge: Contacts | None) -> tuple[np.ndarray, np.ndarray]:
-        """The places where a CW's hidden ridge echoes recur (the ridge map's ``recurring``: RIDGE_MAP_HITS of its
-        pings, not yet shown still), kept ``span`` pings after the last, for tracking/deleters.py
-        :class:`StillHold`: a slow track newly confirmed in the gate of one, widened by the echo's skirt
-        (:func:`skirt_covariance`), waits until its own speed shows it moving or the map withholds its contacts.
-
-        Why. A still point's hidden echo is found on a third to a half of the pings (study active-chain trial 11, CW,
-        spiky K: a TS 27 dB point's within 300 m of it on 13 of the first 44), so the map's recurrence test is met
-        well before its stillness test (speed bound 2.2-4.5 m/s at 4 hits with 220 m sds; shown still at ping 102),
-        while its delay-Doppler skirt, 500-800 m down the line of sight, gives a pair of contacts 30-60 s apart that
-        confirms a track (CWCONF: the tracker's mean clutter density makes each contact worth odds 300-2000) and
-        coasts 10-20 pings. Recurrence alone marks a target crossing the ridge as well, so the place only holds back
-        a slow track's confirmation (StillHold: < ``slow_mps``), it withholds no contact. Returns (k, 2) positions
-        (m) and (k, 2, 2) covariances (m^2); empty without a ridge map or window."""
-        rm = self.ridge_map
-        if rm is None or self.ridge_window is None:
-            return np.zeros((0, 2)), np.zeros((0, 2, 2))
-        xy, R, seen = self._ridge_recurring
-        if ridge is not None and len(rm.recurring) == len(ridge) and rm.recurring.any():
-            r = rm.recurring
-            g = self.geometry
-            wide = skirt_covariance(ridge.xy[r], ridge.R[r], g.tx_at(t_s), g.rx_at(t_s), self.ridge_window[0])
-            xy, R, seen = (np.concatenate([xy, ridge.xy[r]]), np.concatenate([R, wide]),
-                           np.concatenate([seen, np.full(int(r.sum()), t_s)]))
-        step = getattr(rm, "_step_s", None) or 0.0  # the ping interval (none before the map's second update)
-        alive = t_s - seen <= rm.span * step
-        self._ridge_recurring = xy[alive], R[alive], seen[alive]
-        return xy[alive], R[alive]
+        """The places where this CW's hidden ridge echoes recur, widened by their skirt (ridge_skirt.py
+        :class:`RidgePlaces`): positions (k, 2) m and covariances (k, 2, 2) m^2."""
+        rm, g = self.ridge_map, self.geometry
+        recurring = rm.recurring if ridge is not None and len(rm.recurring) == len(ridge) else None
+        return self.ridge_places.update(t_s, ridge, recurring, g.tx_at(t_s), g.rx_at(t_s), rm.span,
+                                        getattr(rm, "_step_s", None) or 0.0)
 
     def _skirt_density(self, m, contacts: Contacts):
-        """The measurement part ``m`` with each contact's own clutter density (Musicki & Evans, "Clutter map
-        information for data association and track initialization", IEEE Trans. AES 40(2), 2004: the ratio of a
-        contact is p_j / rho_j with rho_j the clutter measurement density where it lies, not the scan's mean): in the
-        skirt gate of a recurring hidden ridge echo (:meth:`_ridge_places`) at least one contact a ping over the
-        gate's area, rho = 1 / (pi gamma sqrt(det(R_j + R_place))) (:func:`skirt_density`), where the scan's mean
-        (``clutter_area_m2``) is ~1000 times less (CWCONF); ``m`` itself when no contact lies in one or when
-        :data:`RIDGE_SKIRT_DENSITY` is off."""
+        """The measurement part ``m`` with each contact's own clutter density where it lies in a recurring hidden
+        ridge echo's skirt (ridge_skirt.py :func:`skirt_density`); ``m`` itself where none does."""
         if not RIDGE_SKIRT_DENSITY or self.ridge_hold is None or not len(contacts):
             return m
         h = self.ridge_hold
@@ -568,86 +548,10 @@ def track_detections(detections: Detections, ping_time_s, geometry: ActiveGeomet
     return contacts, keep, trk.result()
 
 
-#: the confidence of the velocity ellipse by which a slow track newly confirmed on a recurring hidden ridge echo's
-#: skirt (ContactTracker._ridge_places) must show it moving before its confirmation stands (tracking/deleters.py
-#: StillHold ``moving_gamma``): two skirt contacts 30-60 s apart leave a young track's speed at 1.3-1.4 m/s on
-#: study active-chain trial 11's still points (its speed confirmed 0.2-0.3 m/s), over the speed estimate alone
-RIDGE_HOLD_PROBABILITY = 0.9
-
-#: contacts in a recurring hidden ridge echo's skirt gate are scored against the skirt's own clutter density
-#: (ContactTracker._skirt_density), not the scan's mean
-RIDGE_SKIRT_DENSITY = True
-
 #: a ridge echo is a still point's only when its place recurs on this many of the ridge map's remembered pings (the
 #: tracker's map: clutter_map_hits, 3): the sea's own ridge peaks above the threshold, 7-22 a ping (default scene as
 #: CW; study trials 1, 15), recur by chance (with 3: 19 shown still on the default scene's seed 2, with 4: 13)
 RIDGE_MAP_HITS = 4
-
-
-def skirt_density(xy: np.ndarray, R: np.ndarray, place_xy: np.ndarray, place_R: np.ndarray, lam: float,
-                  gamma: float) -> np.ndarray | None:
-    """Each contact's clutter density (1/m^2): ``lam`` (the scan's mean), or where the contact lies in the gate
-    d^2 <= gamma of a place (covariance R_j + R_place) one contact a ping over that gate's area, pi gamma
-    sqrt(det(R_j + R_place)), when larger (the densest such place); None when no contact's density is raised.
-
-    Parameters
-    ----------
-    xy, R : ndarray (m, 2), (m, 2, 2)
-        The contacts (m, m^2).
-    place_xy, place_R : ndarray (k, 2), (k, 2, 2)
-        The places whose skirt recurs (m, m^2; :func:`skirt_covariance`).
-    lam : float
-        The scan's clutter density (1/m^2).
-    gamma : float
-        The chi-square(2) gate.
-
-    Returns
-    -------
-    numpy.ndarray or None
-        (m,) densities (1/m^2).
-    """
-    from sonartrack.detection.clutter_map import mahalanobis2
-
-    if not len(place_xy) or not len(xy):
-        return None
-    S = np.asarray(R, float)[:, None] + np.asarray(place_R, float)[None]
-    det = S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] * S[..., 1, 0]
-    dense = 1.0 / (np.pi * gamma * np.sqrt(np.maximum(det, 1e-12)))
-    rho = np.where(mahalanobis2(xy, R, place_xy, place_R) <= gamma, dense, 0.0).max(axis=1)
-    return np.maximum(rho, lam) if (rho > lam).any() else None
-
-
-def skirt_covariance(xy: np.ndarray, R: np.ndarray, tx_xy, rx_xy, range_m: float) -> np.ndarray:
-    """Covariances of hidden ridge echoes widened along their bistatic range by their delay-Doppler skirt: a CW
-    echo's ambiguity reaches ``range_m`` (c tau) in r_B past its peak (Levanon & Mozeson, Radar Signals, 2004, ch. 2),
-    so a skirt contact lies up to that far in r_B from the echo, i.e. up to range_m / |grad r_B| along grad r_B in the
-    world (grad r_B = u_T + u_R, |grad r_B| = 2 monostatic). Taken as uniform over +-that: variance (range_m /
-    |grad r_B|)^2 / 3 added along the unit vector of grad r_B.
-
-    Parameters
-    ----------
-    xy : ndarray (k, 2)
-        Echo positions (m).
-    R : ndarray (k, 2, 2)
-        Their covariances (m^2).
-    tx_xy, rx_xy : array (2,)
-        Source and receiver (m).
-    range_m : float
-        The skirt's half-width in r_B (m).
-
-    Returns
-    -------
-    numpy.ndarray
-        (k, 2, 2) widened covariances (m^2).
-    """
-    xy = np.asarray(xy, float).reshape(-1, 2)
-    grad = np.zeros_like(xy)
-    for p in (tx_xy, rx_xy):
-        d = xy - np.asarray(p, float)
-        grad += d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
-    norm = np.maximum(np.linalg.norm(grad, axis=1), 1e-9)
-    u = grad / norm[:, None]
-    return np.asarray(R, float) + ((range_m / norm) ** 2 / 3.0)[:, None, None] * np.einsum("ki,kj->kij", u, u)
 
 
 def ridge_map_of(settings: ActiveSettings):
