@@ -9,7 +9,29 @@ threshold (1: the chain's own inputs, bit for bit) and prints the false confirme
 track is false on a reverberation-only twin), and per clutter point of the scene the first ping the ridge map knows it.
 
 Usage: ``PYTHONPATH=src python benchmarks/bench_cw_ridge_learn.py --trials 11 1 15 --ridge-factor 1 0.7``.
-Measures, asserts nothing.
+Measures, asserts nothing. The replay at factor 1 gives the chain's own tracks (checked on main: the same false
+tracks and rows as bench_active_family.py / bench_cw_confirm.py).
+
+Measured (2026-12-08 session 13, h13-spiky on main f7e0a61; chain 118 / 48 / 70 s for trials 11 / 1 / 15 at load ~3,
+replay 1-5 s; false confirmed tracks, listed rows):
+
+* Why trial 11 (CW 32 x 0.25 m at 2.4 kHz, spiky K, 6 points) kept 2 rows: the ridge map first knew point 3 (TS 27
+  dB, the pair of pings 45-57) at ping 102, not 44 (44 was another point), and point 4 (TS 22 dB, pings 89-110)
+  never in the hour. Point 3's hidden echo lay within 300 m of it at the threshold on 13 of the first 44 pings; the
+  map's recurrence (4 of 8) was met from ping 44, its stillness fit's speed bound was 2.2-4.5 m/s then (1 m/s
+  wanted; 150 x 220 m errors), 1.1-2.6 m/s over pings 61-100. The confirming skirt contacts (ping 45: 792 m off the
+  point, r_B +1426 m, no hidden echo of that ping near; ping 89: 532 m off, r_B +1035 m) each sat in the gate of a
+  place where the hidden echo had recurred (4 hits) but had not been shown still.
+* Lower thresholds for the hidden echoes (``--ridge-factor``; the map's stillness test as the only guard): trial 11
+  x0.8 4/2, x0.7 4/2, x0.6 2/1, x0.5 0/0; trial 1 4/1 -> 2/1, 6/1, 4/1, 4/1; trial 15 0/0 -> 1/1, 2/1, 2/1, 2/1
+  (the sea's ridge peaks recur by chance: 15 gains a false row at every factor tried), replay 2-40x slower. Rejected.
+* systems/active/ridge_skirt.py (the recurring places' skirt gate: a slow track newly confirmed in one held until
+  its speed shows it moving; contacts in one scored against the skirt's own clutter density), trials 11 / 1 / 15:
+  main 4/2, 4/1, 0/0; hold alone 2/1 (a new pair at 8.9 m/s, its young speed from scattered skirt contacts), 4/1,
+  0/0; density alone 0/0, 4/2, 0/0; both (the default) 0/0, 4/2, 0/0. Trial 1's 4 false tracks are the same pairs on
+  its TS 30 dB point near endfire (no recurring hidden echo at their confirmations); the first pair now coasts out
+  at ping 29 (was 37), 21 pings before the second pair's confirmation, beyond the 600 s re-join (contact_tracker.py
+  ``rejoin_s``) that had listed both pairs as one row: 1 row -> 2, the same 4 tracks.
 """
 
 from __future__ import annotations
