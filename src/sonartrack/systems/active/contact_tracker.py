@@ -124,7 +124,10 @@ class ContactTracker:
         ``cw_ridge_window``); None: only the contacts in the gate of the ridge map's known points.
     ridge_map : ClutterMap or None
         The clutter map of the echoes under a CW's ridge notch (:meth:`_ridge_clutter`, :func:`ridge_map_of`);
-        None: the ridge echoes given to :meth:`step` are ignored.
+        None: the ridge echoes given to :meth:`step` are ignored. With ``clutter_map`` and ``ridge_window`` also set,
+        the places where those echoes recur before the map shows them still (ridge_skirt.py) hold a slow track's
+        new confirmation in their skirt until its speed shows it moving (``ridge_hold``, a second StillHold) and
+        raise the clutter density its contacts there are scored against (:meth:`_skirt_density`).
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
