@@ -11,7 +11,7 @@ import pytest
 
 from sonartrack.systems.active.contact_tracker import ContactTracker, clutter_map_of, ridge_map_of
 from sonartrack.systems.active.contacts import ActiveGeometry, Contacts
-from sonartrack.systems.active.ridge_skirt import skirt_covariance
+from sonartrack.systems.active.ridge_skirt import skirt_covariance, skirt_density
 from sonartrack.systems.active.settings import ActiveSettings
 
 PING_S, SPEED = 30.0, 2.5
@@ -90,3 +90,15 @@ def test_skirt_covariance_widens_along_the_gradient_of_the_bistatic_range():
     # bistatic, echo on the perpendicular bisector of a 2 km baseline at 1 km: u_T + u_R = (0, 2 / sqrt(2))
     wide = skirt_covariance(np.array([[0.0, 1000.0]]), np.zeros((1, 2, 2)), [-1000.0, 0.0], [1000.0, 0.0], 1500.0)
     assert wide[0] == pytest.approx(np.array([[0.0, 0.0], [0.0, (1500.0 / np.sqrt(2.0)) ** 2 / 3.0]]), abs=1e-6)
+
+
+def test_skirt_density_is_one_contact_over_the_gate_area_inside_the_gate_only():
+    # R_j + R_place = diag(300^2, 400^2): the gate d^2 <= gamma is an ellipse of area pi gamma 300 x 400
+    gamma, lam = 9.21, 1e-9
+    place, Rp = np.array([[0.0, 0.0]]), np.array([np.diag([200.0**2, 300.0**2])])
+    xy = np.array([[100.0, -200.0], [0.0, 1500.0]])  # d^2 = 100^2/300^2 + 200^2/400^2 = 0.36; 1500^2/400^2 = 14
+    Rc = np.tile(np.diag([np.sqrt(300.0**2 - 200.0**2) ** 2, np.sqrt(400.0**2 - 300.0**2) ** 2]), (2, 1, 1))
+    rho = skirt_density(xy, Rc, place, Rp, lam, gamma)
+    assert rho == pytest.approx([1.0 / (np.pi * gamma * 300.0 * 400.0), lam])
+    assert skirt_density(xy[1:], Rc[1:], place, Rp, lam, gamma) is None  # none raised
+    assert skirt_density(xy, Rc, place[:0], Rp[:0], lam, gamma) is None  # no place
