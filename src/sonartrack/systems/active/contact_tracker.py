@@ -21,6 +21,12 @@ from sonartrack.systems.active.contacts import (
     resolve_mirrors,
 )
 from sonartrack.systems.active.cw_tracking import cw_clutter_area
+from sonartrack.systems.active.ridge_skirt import (
+    RIDGE_HOLD_PROBABILITY,
+    RIDGE_SKIRT_DENSITY,
+    RidgePlaces,
+    skirt_density,
+)
 from sonartrack.systems.active.settings import ActiveSettings
 from sonartrack.systems.active.sides import GhostDeleter, SideDecisions, SideTracker
 from sonartrack.tracking.deleters import listed_tracks
@@ -118,7 +124,10 @@ class ContactTracker:
         ``cw_ridge_window``); None: only the contacts in the gate of the ridge map's known points.
     ridge_map : ClutterMap or None
         The clutter map of the echoes under a CW's ridge notch (:meth:`_ridge_clutter`, :func:`ridge_map_of`);
-        None: the ridge echoes given to :meth:`step` are ignored.
+        None: the ridge echoes given to :meth:`step` are ignored. With ``clutter_map`` and ``ridge_window`` also set,
+        the places where those echoes recur before the map shows them still (ridge_skirt.py) hold a slow track's
+        new confirmation in their skirt until its speed shows it moving (``ridge_hold``, a second StillHold) and
+        raise the clutter density its contacts there are scored against (:meth:`_skirt_density`).
     """
 
     def __init__(self, settings: PositionTrackerSettings, geometry: ActiveGeometry, gate_sigma: float | None,
@@ -147,11 +156,18 @@ class ContactTracker:
             self.tracker.deleter = _rate_confirmation(settings, scan_interval_s)
         self.clutter_map, self.hold = clutter_map, None
         self.ridge_window, self.ridge_map, self.ridge_counts = ridge_window, ridge_map, [0, 0]  # counts: _ridge_clutter
+        self._scan_lam = float(settings.clutter_density_per_m2)  # the scan's mean density (_skirt_density)
         if clutter_map is not None:  # a slow track on a recurring position waits for the map or its own speed
             from sonartrack.tracking.deleters import StillHold
 
             self.hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
                                                          gate_threshold(settings.gate_probability, 2))
+        self.ridge_hold, self.ridge_places = None, None  # a slow track on a recurring hidden echo's skirt waits
+        if clutter_map is not None and ridge_map is not None and ridge_window is not None:  # (ridge_skirt.py)
+            self.ridge_places = RidgePlaces(ridge_window[0])
+            self.ridge_hold = self.tracker.deleter = StillHold(self.tracker.deleter, clutter_map.slow_mps,
+                                                               gate_threshold(settings.gate_probability, 2),
+                                                               gate_threshold(RIDGE_HOLD_PROBABILITY, 2))
         if merge_probability is not None:
             self.tracker.deleter = DuplicateMerger(self.tracker.deleter, gate_threshold(merge_probability, 4),
                                                    settings.merge_confirmed_scans,
@@ -230,6 +246,8 @@ class ContactTracker:
         if ridge is not None and self.ridge_map is not None:
             clutter = clutter | self._ridge_clutter(float(t_s), contacts, ridge)
         self.hold.recurring(contacts.xy[r], contacts.R[r])
+        if self.ridge_hold is not None:
+            self.ridge_hold.recurring(*self._ridge_places(float(t_s), ridge))
         if clutter.any():
             x, P, _ = self._predicted_confirmed(t_s)
             held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0) if len(x) else False
@@ -257,6 +275,32 @@ class ContactTracker:
         self.ridge_counts[0] += int(still.sum())
         self.ridge_counts[1] += int(out.sum())
         return out
+
+    def _ridge_places(self, t_s: float, ridge: Contacts | None) -> tuple[np.ndarray, np.ndarray]:
+        """The places where this CW's hidden ridge echoes recur, widened by their skirt (ridge_skirt.py
+        :class:`RidgePlaces`): positions (k, 2) m and covariances (k, 2, 2) m^2."""
+        rm, g = self.ridge_map, self.geometry
+        recurring = rm.recurring if ridge is not None and len(rm.recurring) == len(ridge) else None
+        return self.ridge_places.update(t_s, ridge, recurring, g.tx_at(t_s), g.rx_at(t_s), rm.span,
+                                        getattr(rm, "_step_s", None) or 0.0)
+
+    def _skirt_density(self, t_s: float, m, contacts: Contacts):
+        """The measurement part ``m`` with each contact's own clutter density where it lies in a recurring hidden
+        ridge echo's skirt (ridge_skirt.py :func:`skirt_density`) and in no confirmed track's gate (a confirmed
+        track keeps its contacts' odds, as it keeps the clutter map's contacts: a target whose own echo sits on the
+        ridge recurs there too; study active-chain trial 15 with its targets, the maneuvering target's held pings
+        69 -> 43 without this exception); ``m`` itself where none does."""
+        if not RIDGE_SKIRT_DENSITY or self.ridge_hold is None or not len(contacts):
+            return m
+        h = self.ridge_hold
+        rho = skirt_density(contacts.xy, contacts.R, h.xy, h.R, float(m.clutter_density_per_m2), h.gamma)
+        if rho is None:
+            return m
+        x, P, _ = self._predicted_confirmed(t_s)
+        if len(x):
+            held = in_position_gate(contacts, x, P, self.settings.gate_probability).any(axis=0)
+            rho = np.where(held, float(m.clutter_density_per_m2), rho)
+        return replace(m, clutter_density_per_m2=rho)
 
     def _not_images(self, t_s: float, contacts: Contacts) -> np.ndarray:
         """The lobe images of confirmed targets' echoes withheld (True: not withheld): a contact in no confirmed
@@ -326,9 +370,13 @@ class ContactTracker:
             if self.clutter_area is not None:
                 self._counts = [self._counts[0] + int(keep.sum()), self._counts[1] + 1]
                 lam = (self._counts[0] + 1) / ((self._counts[1] + 1) * self.clutter_area)
-            self.tracker.measurements = self.tracker.measurements.at_scan(
-                (g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
-                contacts.range_rate_mps[keep], lam)
+            m = self.tracker.measurements
+            if np.ndim(m.clutter_density_per_m2):  # last scan's per-contact densities: back to the scan's own
+                m = replace(m, clutter_density_per_m2=self._scan_lam)
+            m = m.at_scan((g.tx_at(t_s), g.velocity(t_s, "tx")), (g.rx_at(t_s), g.velocity(t_s, "rx")),
+                          contacts.range_rate_mps[keep], lam)
+            self._scan_lam = float(m.clutter_density_per_m2)
+            self.tracker.measurements = self._skirt_density(t_s, m, contacts.rows(keep))
         if self.ghosts is not None:  # the axis a ghost is reflected about at this scan (sides.py GhostDeleter)
             self.ghosts.axis = (np.asarray(self.geometry.rx_at(t_s), float), float(self.geometry.heading_at(t_s)))
         if self.claims is not None:  # the ranks and claimers before the scan (tracking/associators.py ClaimedPDA)
