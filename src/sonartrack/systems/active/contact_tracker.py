@@ -489,7 +489,7 @@ def _rate_confirmation(settings: PositionTrackerSettings, scan_interval_s: float
     from sonartrack.tracking.deleters import MinHits, RateConfirmation
 
     deleter = RateConfirmation(settings.false_tracks_per_h, scan_interval_s, settings.initial_existence,
-                               settings.terminate_threshold)
+                               settings.terminate_threshold, statistic=settings.confirm_statistic)
     return MinHits(deleter, settings.confirm_min_hits) if settings.confirm_min_hits > 1 else deleter
 
 def rate_sd_of(cells_range_rate_mps) -> float:

@@ -56,6 +56,10 @@ ACTIVE_TRACKER_DEFAULTS = {
                                 "pings against 8, 8, never at 0.99; the study's quick scene held as at 0.99; K 1 + "
                                 "blast + 6 still points: 2 in 2 h with the map's lobe images (36 before); 0.5/h "
                                 "confirmed as many false tracks there and one ping later)"),
+    "confirm_statistic": ("likelihood_ratio", "the stated rate's threshold held against the likelihood-ratio odds "
+                          "the rule bounds, not the existence whose p11 caps its odds below it (tracking/deleters.py "
+                          "RateConfirmation; benchmarks/bench_acquisition.py: study trials 2, 14, 18 one ping sooner "
+                          "on 5 of 10 targets, held 441 -> 448 of 760, 0 false on the twins of trials 14, 18, 10)"),
     "pd_cw": (0.4, "probability that a target gives a contact on a CW ping (contacts with a measured range rate): "
                    "measured 0.30-0.64 per detectable ping of the default scene's strong targets as CW (MFTD, seed 1), "
                    "as Swerling 1 at the single-ping threshold 16.3 gives, exp(-16.3 / (1 + EBR)) = 0.38 at the "

@@ -77,9 +77,10 @@ def read_checkpoint(cls, path):
 
 #: the active chain's checkpoint format and version (systems/live/active.py)
 ACTIVE_CHECKPOINT_FORMAT = "sonartrack-live-active"
-#: 6: the CW ridge map, K shapes by delay, side evidence over joins, the amplitude parts; 5: the merger reunites
+#: 7: the CW ridge map's recurring places (hold, skirt density), the likelihood-ratio confirmation's per-track
+#: odds; 6: the CW ridge map, K shapes by delay, side evidence over joins, the amplitude parts; 5: the merger reunites
 #: told-apart pairs; 4: endfire alias test; 3: contact claims
-ACTIVE_CHECKPOINT_VERSION = 6
+ACTIVE_CHECKPOINT_VERSION = 7
 #: LiveActive's attributes a checkpoint keeps as they are (the chain: its tracker, MFTD stack, clutter map, sides,
 #: B-scan rows and the per-ping rows of its history)
 _ACTIVE_STATE = ("chain", "pending", "pings", "last", "said", "shown", "targets", "newest")
