@@ -1,0 +1,232 @@
+"""Are the active chain's false contacts independent from ping to ping? Streak factors of reverberation-only contacts.
+
+Measurement only (issue 34 items 3, 5). On the reverberation-only twins of study ``active-chain`` trials (run and
+cached by benchmarks/bench_active_family.py ``trial_scene`` / ``run_quiet``, the same ``--cache``), for the contacts
+the tracker is given (``result.contacts`` where ``result.gated_out`` is True: despite its name, ContactTracker.step's
+verdict "given to the tracker"; both mirror hypotheses; the clutter map's withholding from tentative tracks is not
+in the result, hence the split by still points below):
+
+* lambda0 = contacts per ping / A, A = pi (c t_max / 2)^2 the area they can fall in (cw_tracking.py
+  ``cw_clutter_area``'s; t_max the longest travel time of the detections);
+* for each contact i of ping k, the number of contacts of ping k + L (L = 1, 2, 3) in a target-like gate of it,
+  d^2 = (x_j - x_i)^T S_i^-1 (x_j - x_i) < gamma (chi2_2 at the tracker's P_G 0.99, gamma 9.21), against the
+  Poisson expectation lambda0 pi gamma sqrt(det S_i): ``wide`` S_i = R_i + (v L T)^2 I, v = 5 m/s, T the ping
+  interval (a target of unknown velocity); ``tight`` S_i = (1 + 1/3 + (L + 1)^2 / 2) R_i (a 3-hit track's
+  prediction: a straight line fitted to 3 hits one interval apart, predicted L intervals on, plus the new contact's
+  R, process noise neglected). On a CW also |rr_j - rr_i| < 3 sqrt(2) sd_rr (sd_rr = the Doppler cell / sqrt(12)),
+  the Poisson expectation then times the share of all contacts whose rr lies in that window of rr_i;
+* the streak factor F_L = observed / Poisson, and the same at far lags L = 10..14 with the L = 1 gates (``far``:
+  pings that share no MFTD window; what is left there is the contacts' spatial clumping and the still points'
+  recurrence, not the detector's memory), so F_1 / F_far is the ping-to-ping memory alone; q_L the mean count in
+  the gate per ping-k contact (q_1 is the chance a false contact "continues", to set against a target's P_D);
+* split by the ping-k contact's source (``detection_kind``: "mftd", "strong" single-ping, "single") and by whether it
+  lies within ``--near`` m of a still clutter point of the scene or of its mirror about the array axis.
+
+Then the per-hit evidence of a target against each clutter density (IPDA, Musicki, Evans & Stankovic 1994 eq. 29
+with one contact in the gate: Lambda = 1 - P_D P_G + P_D N(nu; 0, S) / lambda, the expectation over nu ~ N(0, S)
+inside the gate, by quadrature over d^2 ~ chi2_2; S the tight gate's at L = 1 with each contact's own R, the median
+over contacts), the per-ping drift P_D E[ln Lambda_hit] + (1 - P_D) ln(1 - P_D P_G) + ln p11, and the pings to gain
+ln(n / f) (tracking/existence.py ``confirm_threshold_for_rate``: n = 7 tracks started a ping, f = 1 false track/h
+in pings) from the initial existence: for lambda = the LFM tracker's 1e-6 setting, lambda0, and lambda0 F_1 (tight)
+the streak-conditioned density a track following a streak actually meets.
+
+Usage: ``PYTHONPATH=src python benchmarks/bench_false_streaks.py --trials 14 2 10 18 1 --minutes 30 --cache DIR``
+(the chain runs once per trial and is cached; the measurement takes seconds).
+
+Measured: see the table at the end of this docstring (filled in from the run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+GAMMA = 9.21  # chi2_2 at P_G 0.99 (tracking/settings.py gate_probability)
+P_G, P_D, P11 = 0.99, 0.7, 0.98
+LAGS, FAR_LAGS = (1, 2, 3), tuple(range(10, 15))
+
+
+def _family():
+    """benchmarks/bench_active_family.py as a module (its trial scene and cached chain run)."""
+    path = Path(__file__).with_name("bench_active_family.py")
+    spec = importlib.util.spec_from_file_location("bench_active_family", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def contact_table(result, scene, near_m: float) -> dict:
+    """The tracker's contacts as arrays: ping index, xy, R, rr, source kind, near a still point (module doc)."""
+    from sonartrack.studies.active_chain_family import is_clutter
+
+    fam = _family()
+    c, keep = result.contacts, np.asarray(result.gated_out, bool)  # True: given to the tracker (ContactTracker.step)
+    ping_index = {float(t): k for k, t in enumerate(result.ping_time_s)}
+    k = np.array([ping_index.get(float(t), -1) for t in c.time_s])[keep]
+    xy, R, rr, t = c.xy[keep], c.R[keep], np.asarray(c.range_rate_mps, float)[keep], c.time_s[keep]
+    kinds = np.asarray(result.detection_kind, object)
+    kind = kinds[c.detection[keep]] if len(kinds) == len(result.detections) else np.full(len(k), "single", object)
+    pts = np.array([[p.x_m, p.y_m] for p in scene.targets if is_clutter(p.name)], float).reshape(-1, 2)
+    near = np.zeros(len(k), bool)
+    for p in pts:
+        pp = np.repeat(p[None], len(k), 0)
+        mir = fam._mirror(result.geometry, t, pp)
+        near |= (np.hypot(*(xy - p).T) < near_m) | (np.hypot(*(xy - mir).T) < near_m)
+    return {"k": k, "xy": xy, "R": R, "rr": rr, "kind": kind.astype(str), "near": near}
+
+
+def searched_area_m2(result, sound_speed_mps: float) -> float:
+    """pi (c t_max / 2)^2: the area the contacts can fall in (cw_tracking.py cw_clutter_area's)."""
+    return float(np.pi * (sound_speed_mps * np.max(result.detections.travel_time_s) / 2.0) ** 2)
+
+
+def gate_counts(tab: dict, lag: int, interval_s: float, tight: bool, rr_window: float | None, gate_lag: int):
+    """Per contact of ping k: (contacts of ping k + lag in its gate, gate area m^2, rr share) (module doc), the gate
+    that of ``gate_lag`` pings on. Contacts whose ping k + lag does not exist get NaN."""
+    k, xy, R, rr = tab["k"], tab["xy"], tab["R"], tab["rr"]
+    n = len(k)
+    obs, area, share = np.full(n, np.nan), np.full(n, np.nan), np.ones(n)
+    g = gate_lag
+    S = R * (1.0 + 1.0 / 3.0 + (g + 1) ** 2 / 2.0) if tight else R + (5.0 * g * interval_s) ** 2 * np.eye(2)
+    Si = np.linalg.inv(S)
+    area_all = np.pi * GAMMA * np.sqrt(np.linalg.det(S))
+    if rr_window is not None:
+        srt = np.sort(rr)
+        share = (np.searchsorted(srt, rr + rr_window) - np.searchsorted(srt, rr - rr_window)) / len(rr)
+    last = k.max()
+    for p in np.unique(k):
+        i, j = np.nonzero(k == p)[0], np.nonzero(k == p + lag)[0]
+        if p + lag > last:
+            continue
+        area[i] = area_all[i]
+        if not len(j):
+            obs[i] = 0.0
+            continue
+        d = xy[j][None] - xy[i][:, None]  # (ni, nj, 2)
+        d2 = np.einsum("abi,aij,abj->ab", d, Si[i], d)
+        ok = d2 < GAMMA
+        if rr_window is not None:
+            ok &= np.abs(rr[j][None] - rr[i][:, None]) < rr_window
+        obs[i] = ok.sum(1)
+    return obs, area, share
+
+
+def streak_rows(tab: dict, lam0: float, interval_s: float, rr_window: float | None) -> list[dict]:
+    """Streak factors per gate, lag and split (module doc)."""
+    splits = {"all": np.ones(len(tab["k"]), bool)}
+    for kd in np.unique(tab["kind"]):
+        splits[kd] = tab["kind"] == kd
+    splits["near pt"], splits["not near"] = tab["near"], ~tab["near"]
+    rows = []
+    for tight in (False, True):
+        per_lag = {}
+        for lag in LAGS + FAR_LAGS:
+            per_lag[lag] = gate_counts(tab, lag, interval_s, tight, rr_window, lag if lag in LAGS else 1)
+        for name, m in ((n, m) for n, m in splits.items() if m.any()):
+            row = {"gate": "tight" if tight else "wide", "split": name, "n": int(m.sum())}
+            for lag in LAGS + FAR_LAGS:
+                obs, area, share = per_lag[lag]
+                ok = m & np.isfinite(obs)
+                exp = lam0 * np.sum(area[ok] * share[ok])
+                row[lag] = float(np.sum(obs[ok]) / exp) if exp > 0 else float("nan")
+                row[f"exp{lag}"] = float(exp / max(ok.sum(), 1))
+                row[f"q{lag}"] = float(np.mean(obs[ok])) if ok.any() else float("nan")
+            far = [row[lag] for lag in FAR_LAGS if np.isfinite(row[lag])]
+            row["far"] = float(np.mean(far)) if far else float("nan")
+            row["memory"] = row[1] / row["far"] if row["far"] > 0 else float("inf")
+            rows.append(row)
+    return rows
+
+
+def hit_gain_nats(S_det_sqrt: np.ndarray, lam: float, rate_term: np.ndarray | float = 1.0) -> float:
+    """E[ln Lambda] of a hit: Lambda = 1 - P_D P_G + P_D N(nu; 0, S) rate_term / lambda, nu ~ N(0, S) within the
+    gate (d^2 ~ chi2_2 truncated at gamma: density exp(-d^2/2)/2 / P_G), averaged over the contacts' S."""
+    d2 = np.linspace(0.0, GAMMA, 401)
+    w = np.exp(-d2 / 2.0) / 2.0 / P_G
+    w /= np.trapezoid(w, d2)
+    dens = np.exp(-d2 / 2.0)[None] / (2.0 * np.pi * np.asarray(S_det_sqrt, float)[:, None])
+    lr = 1.0 - P_D * P_G + P_D * dens * np.asarray(rate_term, float).reshape(-1, 1) / lam
+    return float(np.mean(np.trapezoid(np.log(lr) * w[None], d2, axis=1)))
+
+
+def confirm_pings(gain_hit: float, interval_s: float, started_per_ping: float = 7.0) -> tuple[float, float]:
+    """(drift nats per ping, pings to gain ln(n / f)) for a target with P_D (module doc)."""
+    need = np.log(started_per_ping * 3600.0 / interval_s)
+    drift = P_D * gain_hit + (1.0 - P_D) * np.log(1.0 - P_D * P_G) + np.log(P11)
+    return float(drift), float(need / drift) if drift > 0 else float("inf")
+
+
+def evidence(tab: dict, lam0: float, interval_s: float, rows: list[dict], rr_window: float | None,
+             rr_sd: float | None) -> list[tuple]:
+    """The per-hit gain and pings to confirm against each clutter density (module doc)."""
+    S_det_sqrt = np.sqrt(np.linalg.det(tab["R"] * (1.0 + 1.0 / 3.0 + 2.0)))
+    rate_term = 1.0
+    if rr_window is not None:  # the contact's rr: target N(0, 2 sd^2) over the clutter's rr density at rr_i
+        srt = np.sort(tab["rr"])
+        f_rr = (np.searchsorted(srt, tab["rr"] + rr_window) - np.searchsorted(srt, tab["rr"] - rr_window)) / (
+            len(srt) * 2.0 * rr_window)
+        rate_term = np.exp(-0.5) / (np.sqrt(2.0 * np.pi * 2.0) * rr_sd) / np.maximum(f_rr, 1e-12)
+    F = {r["split"]: r for r in rows if r["gate"] == "tight"}
+    out = []
+    for label, lam in (("tracker 1e-6", 1e-6), ("lambda0", lam0), ("far (clumping)", lam0 * F["all"]["far"]),
+                       ("streak F1", lam0 * F["all"][1]), ("streak F1 mftd", lam0 * F.get("mftd", F["all"])[1]),
+                       ("F1 not near", lam0 * F["not near"][1]), ("F3 not near", lam0 * F["not near"][3])):
+        g = hit_gain_nats(S_det_sqrt, lam, rate_term)
+        drift, pings = confirm_pings(g, interval_s)
+        out.append((label, lam, g, drift, pings))
+    return out
+
+
+def report(i: int, result, scene, args) -> None:
+    """Print one trial's table."""
+    tab = contact_table(result, scene, args.near)
+    interval = float(np.median(np.diff(result.ping_time_s)))
+    area = searched_area_m2(result, scene.sound_speed_mps)
+    n_pings = len(result.ping_time_s)
+    lam0 = len(tab["k"]) / (n_pings * area)
+    cw = scene.waveform.kind == "cw"
+    rr_window = rr_sd = None
+    if cw:
+        cell = np.min(np.diff(np.unique(np.round(result.detections.range_rate_mps, 6))))
+        rr_sd = cell / np.sqrt(12.0)
+        rr_window = 3.0 * np.sqrt(2.0) * rr_sd
+    kinds = {str(kd): int(np.sum(tab["kind"] == kd)) for kd in np.unique(tab["kind"])}
+    print(f"trial {i} ({scene.waveform.kind}, {n_pings} pings of {interval:.0f} s): {len(tab['k']) / n_pings:.1f} "
+          f"contacts/ping {kinds}, near a point {tab['near'].mean():.0%}, A {area:.2e} m^2, lambda0 {lam0:.2e} /m^2"
+          + (f", rr window +-{rr_window:.2f} m/s" if cw else ""))
+    rows = streak_rows(tab, lam0, interval, rr_window)
+    print(f"  {'gate':5s} {'split':9s} {'n':>6s} " + " ".join(f"F{lag:<6d}" for lag in LAGS) +
+          " F_far   F1/Ffar  Poisson-in-gate(L=1)  q1    q2    q3    q_far")
+    for r in rows:
+        print(f"  {r['gate']:5s} {r['split']:9s} {r['n']:6d} " + " ".join(f"{r[lag]:7.1f}" for lag in LAGS) +
+              f" {r['far']:6.1f} {r['memory']:7.1f}  {r['exp1']:.2e}            " +
+              " ".join(f"{r[f'q{lag}']:5.2f}" for lag in LAGS) + f" {np.mean([r[f'q{lag}'] for lag in FAR_LAGS]):5.2f}")
+    print("  per-hit evidence of a target (pd 0.7, 3-hit prediction), pings to ln(7 x 3600/T) "
+          f"= {np.log(7 * 3600 / interval):.2f} nats:")
+    for label, lam, g, drift, pings in evidence(tab, lam0, interval, rows, rr_window, rr_sd):
+        print(f"    {label:15s} lambda {lam:.2e}: {g:5.2f} nats/hit, {drift:5.2f} nats/ping, {pings:5.1f} pings")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--trials", type=int, nargs="+", default=[14, 2, 10, 18, 1])
+    ap.add_argument("--seed", type=int, default=2017, help="the study's master seed")
+    ap.add_argument("--minutes", type=float, default=30.0, help="length of each twin (min)")
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/bench_active_family"))
+    ap.add_argument("--near", type=float, default=1500.0, help="near a still point or its mirror: within this (m; "
+                    "bench_active_family.py's --gate)")
+    args = ap.parse_args()
+    from sonartrack.studies.active_chain import Config
+
+    fam, config = _family(), Config()
+    for i in args.trials:
+        scene, _ = fam.trial_scene(config, args.seed, i, args.minutes)
+        result, sec = fam.run_quiet(config, scene, args.cache)
+        report(i, result, scene, args)
+
+
+if __name__ == "__main__":
+    main()
