@@ -13,7 +13,8 @@ in the result, hence the split by still points below):
   Poisson expectation lambda0 pi gamma sqrt(det S_i): ``wide`` S_i = R_i + (v L T)^2 I, v = 5 m/s, T the ping
   interval (a target of unknown velocity); ``tight`` S_i = (1 + 1/3 + (L + 1)^2 / 2) R_i (a 3-hit track's
   prediction: a straight line fitted to 3 hits one interval apart, predicted L intervals on, plus the new contact's
-  R, process noise neglected). On a CW also |rr_j - rr_i| < 3 sqrt(2) sd_rr (sd_rr = the Doppler cell / sqrt(12)),
+  R, process noise neglected). On a CW also |rr_j - rr_i| < 3 sqrt(2) sd_rr (sd_rr = c / (f_c tau) / sqrt(12), the
+  resolution cell's as cw_tracking.py ``cw_rate_sd_mps``),
   the Poisson expectation then times the share of all contacts whose rr lies in that window of rr_i;
 * the streak factor F_L = observed / Poisson, and the same at far lags L = 10..14 with the L = 1 gates (``far``:
   pings that share no MFTD window; what is left there is the contacts' spatial clumping and the still points'
@@ -46,7 +47,7 @@ import numpy as np
 
 GAMMA = 9.21  # chi2_2 at P_G 0.99 (tracking/settings.py gate_probability)
 P_G, P_D, P11 = 0.99, 0.7, 0.98
-LAGS, FAR_LAGS = (1, 2, 3), tuple(range(10, 15))
+LAGS, FAR_LAGS = (1, 2, 3, 4, 5, 6), tuple(range(10, 15))
 
 
 def _family():
@@ -88,7 +89,7 @@ def gate_counts(tab: dict, lag: int, interval_s: float, tight: bool, rr_window: 
     that of ``gate_lag`` pings on. Contacts whose ping k + lag does not exist get NaN."""
     k, xy, R, rr = tab["k"], tab["xy"], tab["R"], tab["rr"]
     n = len(k)
-    obs, area, share = np.full(n, np.nan), np.full(n, np.nan), np.ones(n)
+    obs, area, share, d2sum = np.full(n, np.nan), np.full(n, np.nan), np.ones(n), np.zeros(n)
     g = gate_lag
     S = R * (1.0 + 1.0 / 3.0 + (g + 1) ** 2 / 2.0) if tight else R + (5.0 * g * interval_s) ** 2 * np.eye(2)
     Si = np.linalg.inv(S)
@@ -110,8 +111,8 @@ def gate_counts(tab: dict, lag: int, interval_s: float, tight: bool, rr_window: 
         ok = d2 < GAMMA
         if rr_window is not None:
             ok &= np.abs(rr[j][None] - rr[i][:, None]) < rr_window
-        obs[i] = ok.sum(1)
-    return obs, area, share
+        obs[i], d2sum[i] = ok.sum(1), np.where(ok, d2, 0.0).sum(1)
+    return obs, area, share, d2sum
 
 
 def streak_rows(tab: dict, lam0: float, interval_s: float, rr_window: float | None) -> list[dict]:
@@ -128,12 +129,13 @@ def streak_rows(tab: dict, lam0: float, interval_s: float, rr_window: float | No
         for name, m in ((n, m) for n, m in splits.items() if m.any()):
             row = {"gate": "tight" if tight else "wide", "split": name, "n": int(m.sum())}
             for lag in LAGS + FAR_LAGS:
-                obs, area, share = per_lag[lag]
+                obs, area, share, d2sum = per_lag[lag]
                 ok = m & np.isfinite(obs)
                 exp = lam0 * np.sum(area[ok] * share[ok])
                 row[lag] = float(np.sum(obs[ok]) / exp) if exp > 0 else float("nan")
                 row[f"exp{lag}"] = float(exp / max(ok.sum(), 1))
                 row[f"q{lag}"] = float(np.mean(obs[ok])) if ok.any() else float("nan")
+                row[f"d2_{lag}"] = float(np.sum(d2sum[ok]) / max(np.sum(obs[ok]), 1.0))
             far = [row[lag] for lag in FAR_LAGS if np.isfinite(row[lag])]
             row["far"] = float(np.mean(far)) if far else float("nan")
             row["memory"] = row[1] / row["far"] if row["far"] > 0 else float("inf")
@@ -152,6 +154,35 @@ def hit_gain_nats(S_det_sqrt: np.ndarray, lam: float, rate_term: np.ndarray | fl
     return float(np.mean(np.trapezoid(np.log(lr) * w[None], d2, axis=1)))
 
 
+def truncated_scale(mean_d2: float) -> float:
+    """kappa such that d^2 = kappa X, X ~ chi2_2 truncated at gamma / kappa, has this mean: the spread of a streak's
+    continuation about the ping-k contact, as a multiple of the gate's S (large: uniform over the gate)."""
+    def mean(kappa):
+        t = GAMMA / kappa
+        return kappa * (2.0 - t * np.exp(-t / 2.0) / (1.0 - np.exp(-t / 2.0)))
+    lo, hi = 1e-3, 1e3
+    if mean_d2 >= mean(hi):
+        return hi
+    for _ in range(60):
+        mid = np.sqrt(lo * hi)
+        lo, hi = (mid, hi) if mean(mid) < mean_d2 else (lo, mid)
+    return float(np.sqrt(lo * hi))
+
+
+def mixture_gain_nats(S_det_sqrt: np.ndarray, lam_b: float, q: float, kappa: float) -> float:
+    """E[ln Lambda] of a hit against the streak-conditioned clutter density lambda(z | the track's last contact) =
+    lambda_b + q N(z; z_hat, kappa S) (a background plus the last contact's continuation, if it was clutter), nu ~
+    N(0, S) in the gate (as :func:`hit_gain_nats`)."""
+    d2 = np.linspace(0.0, GAMMA, 401)
+    w = np.exp(-d2 / 2.0)
+    w /= np.trapezoid(w, d2)
+    sq = np.asarray(S_det_sqrt, float)[:, None]
+    target = np.exp(-d2 / 2.0)[None] / (2.0 * np.pi * sq)
+    clutter = lam_b + q * np.exp(-d2 / (2.0 * kappa))[None] / (2.0 * np.pi * kappa * sq)
+    lr = 1.0 - P_D * P_G + P_D * target / clutter
+    return float(np.mean(np.trapezoid(np.log(lr) * w[None], d2, axis=1)))
+
+
 def confirm_pings(gain_hit: float, interval_s: float, started_per_ping: float = 7.0) -> tuple[float, float]:
     """(drift nats per ping, pings to gain ln(n / f)) for a target with P_D (module doc)."""
     need = np.log(started_per_ping * 3600.0 / interval_s)
@@ -161,6 +192,7 @@ def confirm_pings(gain_hit: float, interval_s: float, started_per_ping: float = 
 
 def evidence(tab: dict, lam0: float, interval_s: float, rows: list[dict], rr_window: float | None,
              rr_sd: float | None) -> list[tuple]:
+    cw = rr_window is not None
     """The per-hit gain and pings to confirm against each clutter density (module doc)."""
     S_det_sqrt = np.sqrt(np.linalg.det(tab["R"] * (1.0 + 1.0 / 3.0 + 2.0)))
     rate_term = 1.0
@@ -170,13 +202,26 @@ def evidence(tab: dict, lam0: float, interval_s: float, rows: list[dict], rr_win
             len(srt) * 2.0 * rr_window)
         rate_term = np.exp(-0.5) / (np.sqrt(2.0 * np.pi * 2.0) * rr_sd) / np.maximum(f_rr, 1e-12)
     F = {r["split"]: r for r in rows if r["gate"] == "tight"}
+    F.setdefault("not near", F["all"])
     out = []
     for label, lam in (("tracker 1e-6", 1e-6), ("lambda0", lam0), ("far (clumping)", lam0 * F["all"]["far"]),
                        ("streak F1", lam0 * F["all"][1]), ("streak F1 mftd", lam0 * F.get("mftd", F["all"])[1]),
+                       ("streak F1 strong", lam0 * F.get("strong", F["all"])[1]),
                        ("F1 not near", lam0 * F["not near"][1]), ("F3 not near", lam0 * F["not near"][3])):
         g = hit_gain_nats(S_det_sqrt, lam, rate_term)
         drift, pings = confirm_pings(g, interval_s)
         out.append((label, lam, g, drift, pings))
+    for split in ("all", "not near"):
+        a = F[split]
+        far_q = float(np.mean([a[f"q{lag}"] for lag in FAR_LAGS]))
+        far_d2 = float(np.mean([a[f"d2_{lag}"] for lag in FAR_LAGS]))
+        q = max(a["q1"] - far_q, 0.0)
+        mean_c = (a["q1"] * a["d2_1"] - far_q * far_d2) / q if q > 0 else GAMMA / 2.0
+        kappa = truncated_scale(mean_c)
+        lam_b = lam0 * max(a["far"], 1e-3)
+        g = mixture_gain_nats(S_det_sqrt, lam_b, q, kappa) + (np.log(np.mean(rate_term)) if cw else 0.0)
+        drift, pings = confirm_pings(g, interval_s)
+        out.append((f"mix {split[:4]} q{q:.2f} k{kappa:.1f}", lam_b, g, drift, pings))
     return out
 
 
@@ -190,24 +235,24 @@ def report(i: int, result, scene, args) -> None:
     cw = scene.waveform.kind == "cw"
     rr_window = rr_sd = None
     if cw:
-        cell = np.min(np.diff(np.unique(np.round(result.detections.range_rate_mps, 6))))
-        rr_sd = cell / np.sqrt(12.0)
+        w = scene.waveform  # the chain's sd: the resolution cell 1 / tau in range rate / sqrt(12) (cw_rate_sd_mps)
+        rr_sd = scene.sound_speed_mps / (w.carrier_hz * w.duration_s) / np.sqrt(12.0)
         rr_window = 3.0 * np.sqrt(2.0) * rr_sd
     kinds = {str(kd): int(np.sum(tab["kind"] == kd)) for kd in np.unique(tab["kind"])}
     print(f"trial {i} ({scene.waveform.kind}, {n_pings} pings of {interval:.0f} s): {len(tab['k']) / n_pings:.1f} "
           f"contacts/ping {kinds}, near a point {tab['near'].mean():.0%}, A {area:.2e} m^2, lambda0 {lam0:.2e} /m^2"
           + (f", rr window +-{rr_window:.2f} m/s" if cw else ""))
     rows = streak_rows(tab, lam0, interval, rr_window)
-    print(f"  {'gate':5s} {'split':9s} {'n':>6s} " + " ".join(f"F{lag:<6d}" for lag in LAGS) +
-          " F_far   F1/Ffar  Poisson-in-gate(L=1)  q1    q2    q3    q_far")
+    print(f"  {'gate':5s} {'split':9s} {'n':>5s} " + " ".join(f"{'F' + str(lag):>6s}" for lag in LAGS[:3]) +
+          "  F_far F1/Ffar Poisson(L=1) " + " ".join(f"{'q' + str(lag):>5s}" for lag in LAGS) + " q_far")
     for r in rows:
-        print(f"  {r['gate']:5s} {r['split']:9s} {r['n']:6d} " + " ".join(f"{r[lag]:7.1f}" for lag in LAGS) +
-              f" {r['far']:6.1f} {r['memory']:7.1f}  {r['exp1']:.2e}            " +
+        print(f"  {r['gate']:5s} {r['split']:9s} {r['n']:5d} " + " ".join(f"{r[lag]:6.1f}" for lag in LAGS[:3]) +
+              f" {r['far']:6.1f} {r['memory']:7.1f} {r['exp1']:12.3f} " +
               " ".join(f"{r[f'q{lag}']:5.2f}" for lag in LAGS) + f" {np.mean([r[f'q{lag}'] for lag in FAR_LAGS]):5.2f}")
     print("  per-hit evidence of a target (pd 0.7, 3-hit prediction), pings to ln(7 x 3600/T) "
           f"= {np.log(7 * 3600 / interval):.2f} nats:")
     for label, lam, g, drift, pings in evidence(tab, lam0, interval, rows, rr_window, rr_sd):
-        print(f"    {label:15s} lambda {lam:.2e}: {g:5.2f} nats/hit, {drift:5.2f} nats/ping, {pings:5.1f} pings")
+        print(f"    {label:22s} lambda {lam:.2e}: {g:5.2f} nats/hit, {drift:5.2f} nats/ping, {pings:5.1f} pings")
 
 
 def main() -> None:
