@@ -34,7 +34,65 @@ the streak-conditioned density a track following a streak actually meets.
 Usage: ``PYTHONPATH=src python benchmarks/bench_false_streaks.py --trials 14 2 10 18 1 --minutes 30 --cache DIR``
 (the chain runs once per trial and is cached; the measurement takes seconds).
 
-Measured: see the table at the end of this docstring (filled in from the run).
+Measured (2026-12-08, session 13, h13-streak on main c79db23; seed 2017; 1 h reverberation-only twins, 120 pings of
+30 s; the chain ~2 min CPU a trial (CW 1-1.7 min), this script 5 s for all; ``--trials 14 2 10 18 1 11 15 --minutes
+60``). tight gate (a 3-hit track's), F = observed / Poisson density in the gate, q = contacts in the gate per ping-k
+contact (Poisson expectation 0.015-0.027 on the LFMs), gain = a Swerling target's (P_D 0.7) expected nats per hit,
+pings = to the 6.73 nats of ln(7 x 3600 / 30) (1 false track/h, 7 tracks started a ping):
+
+  trial (pulse, sea, points)   contacts/ping  lambda0   F1 all/mftd/strong/not-near  F2   F3  F_far  q1 all/mftd  q_far
+  14 (LFM 200 Hz, K +5, 6)     20.1           1.35e-8   21.1 / 34.1 / 7.9 / 11.5    12.7  8.4  10.4   0.32 / 0.56  0.16
+  2  (LFM 200 Hz, K +10, 0)    23.1           1.58e-8    5.4 / 11.2 / 3.1 / 5.4      3.5  2.8   1.5   0.12 / 0.25  0.03
+  10 (LFM 200 Hz, spiky K, 6)  24.9           1.68e-8    8.3 / 16.0 / 2.1 / 5.2      5.7  3.7   3.0   0.22 / 0.43  0.08
+  18 (LFM 50 Hz, Rayleigh, 14) 13.6           9.3e-9    27.8 / 28.7 / 23.2 / 28.6   12.0  6.8   7.1   0.63 / 0.66  0.16
+  11 (CW, spiky K +10, 6)       1.3           1.1e-9    39 (151 contacts: ~4 pairs at L = 1, all MFTD, all near a point)
+  15 (CW, K +5, 14)             1.0           8.8e-10   0 at L = 1, 77 at L = 2 (116 contacts: ~6 MFTD pairs at L = 2,
+                                                        ~4 of them away from points)
+  1  (CW, Rayleigh +5, 14)      0.6           6.3e-10   97 (70 contacts: ~8 pairs at L = 1, all near a point)
+
+  gain nats/hit (pings):  tracker's 1e-6   lambda0      lambda0 F1    lambda0 F1 mftd  mixture not-near (q, kappa)
+  14                      0.81 (35)        4.82 (2.2)   1.88 (7.2)    1.45 (10.5)      2.01 (6.5)  (0.12, 2.8)
+  2                       0.67 (73)        4.49 (2.4)   2.84 (4.2)    2.15 (6.0)       2.11 (6.1)  (0.08, 1.8)
+  10                      0.63 (102)       4.37 (2.5)   2.32 (5.4)    1.72 (8.1)       2.23 (5.7)  (0.12, 3.6)
+  18                      0.22 (never)     4.41 (2.5)   1.26 (13.3)   1.23 (13.8)      0.45 (never) (0.57, 1.4)
+
+What it says. (1) The LFM false contacts are far from Poisson: a contact of ping k has 5-28 times the mean density
+of contacts in a 3-hit track's gate on ping k + 1 (MFTD contacts 11-34 times, strong single-ping ones 2-23 times);
+F decays with the lag (F3 ~ F1 / 3) but stays 1.5-10 times at lags 10-14 (F_far: still points, their images and
+the contacts' clumping near the array; the clutter map's job). The detector's own memory, F1 / F_far, is 2-4 on all
+contacts, 5-16 away from still points (within 1.5 km of a point or its mirror: 0-47 % of the contacts). (2) As a
+chance: a false MFTD contact has a successor in a 3-hit track's gate on the next ping 25-66 % of the time (Poisson:
+2 %), i.e. a streak looks like a target with P_D 0.25-0.66 for the few pings of the MFTD window; on trial 18 (50 Hz,
+Rayleigh) every kind of contact away from points continues 60 % of the time. (3) So the mean density lambda0
+~1e-8 overstates a target's evidence by ln F1 ~ 1.7-3.3 nats a hit (4.4-4.8 nats/hit, confirmation in 2.2-2.5 pings:
+the 19-23 false tracks a scene of the earlier sessions), and the tracker's 1e-6 understates it (0.2-0.8 nats/hit,
+35-100 pings at P_D 0.7) by ln(1e-6 / (lambda0 F1)) ~ 1.3-2.5 nats: 1e-6 is 4-12 times the density a track meets
+after a clutter hit. Against the streak-conditioned density a real target gains 1.3-2.8 nats a hit (MFTD-conditioned
+1.2-2.2), 0.5-1.6 nats a ping at P_D 0.7, confirmation in 4-14 pings (2-7 min); against the fitted mixture
+(below, away from still points) 2.0-2.2 nats a hit, 6-7 pings, but on trial 18 ~0.45 nats a hit: never (there a
+streak is as likely to continue as a target to be detected, so position alone cannot tell them apart within the
+window; only its end, F3 / F1 ~ 0.2, or amplitude, velocity or Doppler can). (4) The CW contacts (0.6-1.3 a ping)
+are too few to measure a streak factor (4-8 pairs an hour): at L = 1 all are near still points (the clutter and
+ridge maps' job); trial 15's ~4 MFTD pairs at L = 2 away from points are the only CW streak seen.
+
+The clutter model that would make the IPDA's likelihood ratio honest (Ville's bound in tracking/existence.py needs
+prod Lambda to be a martingale under "no target", i.e. the denominator must be the density of the track's next
+contact GIVEN its past contacts were clutter): a first-order (Markov) clutter density per track,
+lambda(z | the track's last contact z_prev, its source) = lambda_b(z) + q_s N(z; z_hat, kappa S), with lambda_b the
+local background (the contacts' own spatial density near the track over many pings, lambda0 F_far: a clutter map /
+spatial clutter density estimate in the sense of Musicki & Evans 2004, clutter map information for data association
+and track initialization, and the spatial clutter measurement density estimation the brief names as Song & Musicki
+2008 -- neither paper is in /work/shared/papers, not checked against them), and q_s the chance a source-s false
+contact continues (measured here: MFTD 0.25-0.66, strong single-ping 0.06-0.49, after a miss the lag-2/3 values),
+kappa ~ 1-4 (the continuation is spread like a track's prediction). A pooled density that ignores the condition
+cannot be right for both: too low (lambda0), false tracks confirm on streaks; too high (1e-6), targets do not.
+With the gate-averaged conditional density (lambda0 F_1) a real target would gain ~1.3-2.8 nats a hit; the
+mixture's q N term takes most of that back right at the prediction, where a target's hit lands (the mixture column).
+
+Caveats: the ``near`` split is geometric (1.5 km of a scene point or its mirror), not the clutter map's verdict
+(not in the result); the CW gain's range-rate factor uses the contacts' empirical rr density and
+exp(-1/2) / (sqrt(4 pi) sd) for the target's (an approximation of the expectation); the tight gate neglects process
+noise; the gains are expectations over a Gaussian innovation in the gate with one contact, not a tracker run.
 """
 
 from __future__ import annotations
@@ -48,6 +106,7 @@ import numpy as np
 GAMMA = 9.21  # chi2_2 at P_G 0.99 (tracking/settings.py gate_probability)
 P_G, P_D, P11 = 0.99, 0.7, 0.98
 LAGS, FAR_LAGS = (1, 2, 3, 4, 5, 6), tuple(range(10, 15))
+MIN_CONTACTS = 200  # fewer contacts in a split: no clutter model fitted to it
 
 
 def _family():
@@ -204,15 +263,20 @@ def evidence(tab: dict, lam0: float, interval_s: float, rows: list[dict], rr_win
     F = {r["split"]: r for r in rows if r["gate"] == "tight"}
     F.setdefault("not near", F["all"])
     out = []
-    for label, lam in (("tracker 1e-6", 1e-6), ("lambda0", lam0), ("far (clumping)", lam0 * F["all"]["far"]),
+    tracker = ("tracker's (lambda0)", lam0) if cw else ("tracker's 1e-6", 1e-6)  # CW: the contacts' own density
+    for label, lam in (tracker, ("lambda0", lam0), ("far (clumping)", lam0 * F["all"]["far"]),
                        ("streak F1", lam0 * F["all"][1]), ("streak F1 mftd", lam0 * F.get("mftd", F["all"])[1]),
                        ("streak F1 strong", lam0 * F.get("strong", F["all"])[1]),
                        ("F1 not near", lam0 * F["not near"][1]), ("F3 not near", lam0 * F["not near"][3])):
+        if not lam > 0:  # no contact in any gate: too few contacts to say
+            continue
         g = hit_gain_nats(S_det_sqrt, lam, rate_term)
         drift, pings = confirm_pings(g, interval_s)
         out.append((label, lam, g, drift, pings))
     for split in ("all", "not near"):
         a = F[split]
+        if a["n"] < MIN_CONTACTS or not a["far"] > 0:
+            continue
         far_q = float(np.mean([a[f"q{lag}"] for lag in FAR_LAGS]))
         far_d2 = float(np.mean([a[f"d2_{lag}"] for lag in FAR_LAGS]))
         q = max(a["q1"] - far_q, 0.0)
