@@ -57,23 +57,25 @@ pings = to the 6.73 nats of ln(7 x 3600 / 30) (1 false track/h, 7 tracks started
   18                      0.22 (never)     4.41 (2.5)   1.26 (13.3)   1.23 (13.8)      0.45 (never) (0.57, 1.4)
 
 What it says. (1) The LFM false contacts are far from Poisson: a contact of ping k has 5-28 times the mean density
-of contacts in a 3-hit track's gate on ping k + 1 (MFTD contacts 11-34 times, strong single-ping ones 2-23 times);
-F decays with the lag (F3 ~ F1 / 3) but stays 1.5-10 times at lags 10-14 (F_far: still points, their images and
-the contacts' clumping near the array; the clutter map's job). The detector's own memory, F1 / F_far, is 2-4 on all
-contacts, 5-16 away from still points (within 1.5 km of a point or its mirror: 0-47 % of the contacts). (2) As a
+of contacts in a 3-hit track's gate on ping k + 1 (MFTD contacts 11-34 times, strong single-ping ones 2-23 times); F
+decays with the lag (F3 ~ F1 / 4 to F1 / 2) but stays 1.5-10 times at lags 10-14 (F_far: still points, their images
+and the contacts' clumping near the array; the clutter map's job). The detector's own memory, F1 / F_far, is 2-4 on
+all contacts, 4-16 away from still points (within 1.5 km of a point or its mirror: 0-47 % of the contacts). (2) As a
 chance: a false MFTD contact has a successor in a 3-hit track's gate on the next ping 25-66 % of the time (Poisson:
-2 %), i.e. a streak looks like a target with P_D 0.25-0.66 for the few pings of the MFTD window; on trial 18 (50 Hz,
-Rayleigh) every kind of contact away from points continues 60 % of the time. (3) So the mean density lambda0
-~1e-8 overstates a target's evidence by ln F1 ~ 1.7-3.3 nats a hit (4.4-4.8 nats/hit, confirmation in 2.2-2.5 pings:
-the 19-23 false tracks a scene of the earlier sessions), and the tracker's 1e-6 understates it (0.2-0.8 nats/hit,
-35-100 pings at P_D 0.7) by ln(1e-6 / (lambda0 F1)) ~ 1.3-2.5 nats: 1e-6 is 4-12 times the density a track meets
-after a clutter hit. Against the streak-conditioned density a real target gains 1.3-2.8 nats a hit (MFTD-conditioned
-1.2-2.2), 0.5-1.6 nats a ping at P_D 0.7, confirmation in 4-14 pings (2-7 min); against the fitted mixture
-(below, away from still points) 2.0-2.2 nats a hit, 6-7 pings, but on trial 18 ~0.45 nats a hit: never (there a
-streak is as likely to continue as a target to be detected, so position alone cannot tell them apart within the
-window; only its end, F3 / F1 ~ 0.2, or amplitude, velocity or Doppler can). (4) The CW contacts (0.6-1.3 a ping)
-are too few to measure a streak factor (4-8 pairs an hour): at L = 1 all are near still points (the clutter and
-ridge maps' job); trial 15's ~4 MFTD pairs at L = 2 away from points are the only CW streak seen.
+2 %), i.e. a streak looks like a target with P_D 0.25-0.66, and in the 3-hit gate grown to lag L it still finds a
+successor nearly as often at L = 2-6 (q_L 0.4-1.2 q_1), falling to q_far (0.03-0.28 for MFTD, the same L = 1 gate)
+by lags 10-14; on trial 18 (50 Hz, Rayleigh) every kind of contact away from points continues 60 % of the time. (3)
+So the mean density lambda0 ~1e-8 overstates a target's evidence by ln F1 ~ 1.7-3.3 nats a hit (4.4-4.8 nats/hit,
+confirmation in 2.2-2.5 pings: as the 19-23 false tracks a scene of the earlier sessions showed), and the tracker's
+1e-6 understates it (0.2-0.8 nats/hit, 35-100 pings or never at P_D 0.7) by ln(1e-6 / (lambda0 F1)) ~ 1.3-2.5 nats:
+1e-6 is 3.5-12 times the density a track meets after a clutter hit. Against the streak-conditioned density a real
+target gains 1.3-2.8 nats a hit (MFTD-conditioned 1.2-2.2), 0.5-1.6 nats a ping at P_D 0.7, confirmation in 4-14
+pings (2-7 min); against the fitted mixture (below, away from still points) 2.0-2.2 nats a hit, 5.7-6.5 pings, but
+on trial 18 ~0.45 nats a hit: never (there a streak is as likely to continue as a target to be detected, so position
+alone cannot tell them apart within the window; only its end, F3 / F1 ~ 0.2, or amplitude, velocity or Doppler can).
+(4) The CW contacts (0.6-1.3 a ping) are too few to measure a streak factor (4-8 pairs an hour): at L = 1 all are
+near still points (the clutter and ridge maps' job); trial 15's ~4 MFTD pairs at L = 2 away from points are the only
+CW streak seen.
 
 The clutter model that would make the IPDA's likelihood ratio honest (Ville's bound in tracking/existence.py needs
 prod Lambda to be a martingale under "no target", i.e. the denominator must be the density of the track's next
@@ -87,7 +89,8 @@ contact continues (measured here: MFTD 0.25-0.66, strong single-ping 0.06-0.49, 
 kappa ~ 1-4 (the continuation is spread like a track's prediction). A pooled density that ignores the condition
 cannot be right for both: too low (lambda0), false tracks confirm on streaks; too high (1e-6), targets do not.
 With the gate-averaged conditional density (lambda0 F_1) a real target would gain ~1.3-2.8 nats a hit; the
-mixture's q N term takes most of that back right at the prediction, where a target's hit lands (the mixture column).
+mixture's q N term takes 0.4-0.8 nats of that back (the continuation is densest at the prediction, where a target's
+hit lands too; the mixture column against the F1 not-near one: 2.0 vs 2.4, 2.1 vs 2.8, 2.2 vs 2.8, 0.45 vs 1.2).
 
 Caveats: the ``near`` split is geometric (1.5 km of a scene point or its mirror), not the clutter map's verdict
 (not in the result); the CW gain's range-rate factor uses the contacts' empirical rr density and
