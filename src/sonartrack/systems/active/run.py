@@ -91,10 +91,11 @@ class ActiveResult:
     ``detections``: the tracked ones, whose rows ``contacts.detection`` counts (the single-ping detector's, or the
     MFTD's with the strong single-ping ones :func:`with_strong` adds, ``detection_kind`` saying which row is which:
     "single", "mftd" or "strong"); ``single`` and ``mftd``: each detector's (``mftd`` empty when the MFTD did not
-    run); ``contacts`` the mirror pairs of ``detections`` with the gate's
-    verdict (``gated_out``: refused by the range-rate gate); ``tracks``; ``bscan``; ``geometry`` the source and
-    receiver; ``ping_time_s``; ``stage_seconds`` wall time per stage (s); ``thresholds`` each detector's
-    threshold on its statistic ("single": on s; "mftd": on P1's S for K pings)."""
+    run); ``contacts`` the mirror pairs of ``detections`` with the gate's verdict (``gated_out``: True where the
+    contact passed the range-rate gate and went to the tracker, False where the gate kept it from the tracker: the
+    name is historical, files.py's ``gated`` column); ``tracks``; ``bscan``; ``geometry`` the source and receiver;
+    ``ping_time_s``; ``stage_seconds`` wall time per stage (s); ``thresholds`` each detector's threshold on its
+    statistic ("single": on s; "mftd": on P1's S for K pings)."""
 
     detections: Detections
     single: Detections
