@@ -74,14 +74,33 @@ from sonartrack.systems.active.side_fit import CvFit as _CvFit  # noqa: N814 - i
 MIN_LOG_LR = float(np.log(100.0))
 #: fewest contacts of a track before its ratio is computed (the CV fit has 4 parameters; 2 per contact)
 MIN_CONTACTS = 3
-#: the retrodiction stops at this many pings in a row with no contact in either hypothesis's gate
-MAX_MISSES = 3
+#: the retrodiction looks for a target detected on at least this share of pings (the study's hardest targets: trial 2,
+#: K clutter, 0.41 of its echoes detected on the pings counted, KDIAG)
+RETRO_DETECTION_PROBABILITY = 0.4
+#: ... and stops early on such a target with at most this probability
+RETRO_STOP_PROBABILITY = 0.02
+#: the retrodiction stops at this many pings in a row with no contact in either hypothesis's gate: the fewest n with
+#: (1 - Pd)^n <= RETRO_STOP_PROBABILITY (8; it was 3, at which a target detected on 0.4 of its pings is missed 3
+#: times in a row with probability 0.22, and the study's tracks confirmed after the turn stopped 2-7 contacts back,
+#: before the turn: bench_active_sides.py, trials 2, 4, 14, 18)
+MAX_MISSES = int(np.ceil(np.log(RETRO_STOP_PROBABILITY) / np.log(1.0 - RETRO_DETECTION_PROBABILITY)))
+#: a joined segment's contacts are carried only when they can be the same target's: a target moves at most this fast
+#: (m/s; 40 kn), and a piece whose contact nearest in time to the track's lies farther than MAX_SPEED_MPS |dt| plus
+#: CARRY_SIGMAS standard deviations from it is another object's (a false track merged into a ghost: trial 15)
+MAX_SPEED_MPS = 20.0
+#: standard deviations of the two contacts' position errors allowed beyond the reach at MAX_SPEED_MPS
+CARRY_SIGMAS = 4.0
 #: a contact's chi-square in the CV fit is capped at its chi-square(2) quantile of 1 - this (27.6): a stray one
 STRAY_PROBABILITY = 1e-6
 #: two confirmed tracks are mirror twins when they took the two contacts of one detection on this many pings (the
 #: pair with the most such pings wins): 1, not 2, so that a pair confirmed together is one target from its first
 #: ping (the default scene as CW, seed 1: a pair confirmed on the last ping was listed as two rows)
 MIN_TWIN_PINGS = 1
+#: a confirmed track that took the mirror contacts of a track decided on its target's side on this many pings is
+#: that target's ghost too, twin or not (study trial 7: a second ghost, twin of an undecided duplicate of the decided
+#: track, 6 such pings, stayed on the mirror to the end); two targets' tracks share a detection's two contacts only
+#: while one crosses the other's mirror, for a ping or two
+MIN_MIRROR_PINGS = 3
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,6 +167,22 @@ def _kalman_update(x, P, z, R):
     S = P[:2, :2] + R
     K = np.linalg.solve(S, P[:2, :]).T
     return x + K @ (z - x[:2]), P - K @ S @ K.T
+
+
+def _reachable(piece: _CvFit, ref: list[_CvFit]) -> bool:
+    """Whether ``piece``'s contacts can be the target of the contact sequences ``ref``: of the pairs (one of the piece,
+    one of ``ref``), the one nearest in time lies within MAX_SPEED_MPS |dt| + CARRY_SIGMAS sqrt(lambda_max(R_i + R_j))
+    (True when ``ref`` holds no contact)."""
+    t_ref = np.array([t for f in ref for t in f.at], float)
+    if not len(t_ref) or not piece.n:
+        return True
+    z_ref = np.array([z for f in ref for z in f.z], float)
+    W_ref = [w for f in ref for w in f.W]
+    gap = np.abs(np.array(piece.at, float)[:, None] - t_ref[None, :])
+    i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+    spread = np.linalg.inv(piece.W[i]) + np.linalg.inv(W_ref[j])
+    reach = MAX_SPEED_MPS * gap[i, j] + CARRY_SIGMAS * np.sqrt(np.linalg.eigvalsh(spread)[-1])
+    return bool(np.hypot(*(piece.z[i] - z_ref[j])) <= reach)
 
 
 class SideTracker:
@@ -305,23 +340,30 @@ class SideTracker:
         deciding both made GhostDeleter delete both, benchmarks/bench_active_turns.py, CW seed 2: 6 of 9 turn scenes
         lost their target's track at its side decision, ln LR 9.9 and 12.1 for the pair), the pair's two views are
         averaged, (ln LR_track - ln LR_twin) / 2 (each one's ratio is the other's with the sign turned when their
-        evidence agrees): the track is decided when that reaches ``min_log_lr``, the twin then its rejected mirror,
-        else neither (9.9 and 12.1: neither; a track re-joined onto a false track's evidence, bench_active_sides.py
-        trial 15, 31.2 against its twin's 280.6: the twin)."""
+        evidence agrees): the track is decided by that one's sign when it reaches ``min_log_lr``, else neither
+        (9.9 and 12.1: neither; a track re-joined onto a false track's evidence, bench_active_sides.py trial 15, 31.2
+        against its twin's 280.6: the twin on its side, the track its mirror). Twins BOTH decided ghosts contradict
+        alike (of a detection's two contacts one is the echo's) and are judged by the same average (study trial 7,
+        the maneuvering target's track -29.8 from 11 contacts and its twin -34.6 from 15: neither)."""
         h = self._history.get(int(track_id))
         if not h or abs(h[-1][1]) < self.min_log_lr:
             return 0
-        if h[-1][1] < 0:
-            return -1
+        lr = h[-1][1]
         twin = self._twins.get(int(track_id))
         t = self._history.get(twin) if twin is not None else None
-        return 0 if t and t[-1][1] >= self.min_log_lr and h[-1][1] - t[-1][1] < 2.0 * self.min_log_lr else 1
+        if t and abs(t[-1][1]) >= self.min_log_lr and np.sign(t[-1][1]) == np.sign(lr):  # the pair contradicts
+            pair = 0.5 * (lr - t[-1][1])
+            return int(np.sign(pair)) if abs(pair) >= self.min_log_lr else 0
+        return 1 if lr > 0 else -1
 
     def carry(self, into: int, source: int) -> None:
         """The track ``source`` is an earlier segment of ``into``'s target on the same side (joined after its loss,
         or deleted as ``into``'s duplicate: ActiveTracks.joins): its contacts, at the pings ``into`` holds none,
         become a piece of ``into``'s evidence, with its own CV motion (module doc), and ``into``'s ln LR is from now
-        its own plus its pieces'. ``source``'s own pieces come with it (a chain of joins)."""
+        its own plus its pieces'. ``source``'s own pieces come with it (a chain of joins). A piece that cannot be
+        ``into``'s object under either hypothesis (:func:`_reachable`: its contacts, or their mirrors, out of reach of
+        ``into``'s at ``MAX_SPEED_MPS``) is not carried: a false track merged into a ghost (study trial 15) gave the
+        ghost the false track's +77.7, and the target on the other side was judged wrong."""
         into, source = int(into), int(source)
         if into == source or source not in self._sums:
             return
@@ -330,10 +372,14 @@ class SideTracker:
         for p in self._pieces.get(into, ()):
             taken.update(p[0].at)
         pieces = self._pieces.setdefault(into, [])
+        refs = ([own] if own is not None else []) + list(pieces)
         for a, b in [self._sums[source], *self._pieces.get(source, ())]:
             keep = [k for k, t in enumerate(a.at) if t not in taken]
-            if keep:
-                pieces.append((a.subset(keep), b.subset(keep)))
+            piece = (a.subset(keep), b.subset(keep)) if keep else None
+            # one object under either hypothesis: a ghost's own contacts jump while the array turns, its mirrors not
+            if piece is not None and any(_reachable(piece[h], [r[h] for r in refs]) for h in (0, 1)):
+                pieces.append(piece)
+                refs.append(piece)
                 taken.update(a.at[k] for k in keep)
         if np.isfinite(self._now):
             self._history.setdefault(into, []).append((self._now, self._log_lr(into)))
@@ -408,8 +454,9 @@ class SideTracker:
             self._last_side[tid] = -self._last_side[tid]
 
     def rejected(self, track_id: int) -> bool:
-        """True when ``track_id`` is the rejected hypothesis of a decided target: decided a ghost itself, or the
-        mirror twin (:meth:`twins`) of a track decided on its target's side.
+        """True when ``track_id`` is the rejected hypothesis of a decided target: decided a ghost itself, the mirror
+        twin (:meth:`twins`) of a track decided on its target's side, or a track that took such a track's mirror
+        contacts on ``MIN_MIRROR_PINGS`` pings.
 
         Parameters
         ----------
@@ -421,8 +468,12 @@ class SideTracker:
         bool
             Whether the track is a decided target's mirror.
         """
-        twin = self._twins.get(int(track_id))
-        return self.decision(track_id) < 0 or (twin is not None and self.decision(twin) > 0)
+        tid = int(track_id)
+        twin = self._twins.get(tid)
+        if self.decision(tid) < 0 or (twin is not None and self.decision(twin) > 0):
+            return True
+        return any(n >= MIN_MIRROR_PINGS and tid in pair and self.decision(pair[pair[0] == tid]) > 0
+                   for pair, n in self._shared.items())
 
     def result(self) -> SideDecisions:
         """Every confirmed track's decision (:class:`SideDecisions`).
