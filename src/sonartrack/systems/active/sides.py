@@ -222,6 +222,7 @@ class SideTracker:
         self._shared: dict[tuple[int, int], int] = {}  # (track, track) -> pings they took one detection's mirrors
         self._twins: dict[int, int] = {}
         self._pieces: dict[int, list[tuple[_CvFit, _CvFit]]] = {}  # track -> the joined segments' contacts
+        self._search: dict[int, float] = {}  # track -> ln of the retrodiction's choices (:meth:`threshold`)
         self._now = np.nan  # the last ping's time (s)
 
     def update(self, t_s: float, heading_rad: float, contacts, track_ids, x, P, sides_of) -> None:
@@ -264,6 +265,8 @@ class SideTracker:
             hyps = [_predict(xh, Ph, tp - t_prev, self.q) for xh, Ph in hyps]
             t_prev = tp
             picks = [self._nearest(cp, *hyps[h]) for h in (0, 1)]
+            if any(k is not None for k in picks):
+                self._search[tid] = self._search.get(tid, 0.0) + np.log(self._choices(cp, hyps))
             misses = 0 if any(k is not None for k in picks) else misses + 1
             if misses >= MAX_MISSES:
                 break
@@ -280,6 +283,25 @@ class SideTracker:
                 self._h0[tid] = hp
                 seqs[0].add(tp - t_s, cp.xy[own], cp.R[own], False, tp, hp)
                 seqs[1].add(tp - t_s, cp.xy[mirror], cp.R[mirror], False, tp, hp)
+
+    def _choices(self, contacts, hyps) -> int:
+        """The number of detections with a contact inside either hypothesis's gate: the retrodiction chose its
+        pair among them (at least 1)."""
+        inside = np.zeros(len(contacts), bool)
+        for xh, Ph in hyps:
+            nu = contacts.xy - xh[:2]
+            inside |= np.einsum("mi,mi->m", nu, np.linalg.solve(Ph[:2, :2][None] + contacts.R, nu[..., None])[..., 0]) \
+                < self.gamma
+        return max(len(np.unique(np.asarray(contacts.detection)[inside])), 1)
+
+    def threshold(self, track_id: int) -> float:
+        """|ln LR| at which the track ``track_id`` is decided: ``min_log_lr`` plus ln M, M the number of contact
+        sequences its retrodiction (and its carried segments') chose among (the product over the pings looked back
+        of the detections inside either hypothesis's gate). The ratio of the chosen sequences is the largest of M
+        ratios; under the wrong hypothesis each is >= 100 M with probability <= 1 / (100 M) (E[LR] = 1, Markov;
+        Wald, Sequential Analysis, 1947, eq. 3:31), so by the union bound the largest with probability <= 1 / 100.
+        With no clutter in the gates (M = 1) it is ``min_log_lr``."""
+        return self.min_log_lr + self._search.get(int(track_id), 0.0)
 
     def _nearest(self, contacts, xh, Ph) -> int | None:
         """The contact of the smallest chi-square distance to a state (x_h, P_h + R), inside the gate (None:
@@ -346,14 +368,15 @@ class SideTracker:
         alike (of a detection's two contacts one is the echo's) and are judged by the same average (study trial 7,
         the maneuvering target's track -29.8 from 11 contacts and its twin -34.6 from 15: neither)."""
         h = self._history.get(int(track_id))
-        if not h or abs(h[-1][1]) < self.min_log_lr:
+        thr = self.threshold(track_id)
+        if not h or abs(h[-1][1]) < thr:
             return 0
         lr = h[-1][1]
         twin = self._twins.get(int(track_id))
         t = self._history.get(twin) if twin is not None else None
-        if t and abs(t[-1][1]) >= self.min_log_lr and np.sign(t[-1][1]) == np.sign(lr):  # the pair contradicts
+        if t and abs(t[-1][1]) >= self.threshold(twin) and np.sign(t[-1][1]) == np.sign(lr):  # they contradict
             pair = 0.5 * (lr - t[-1][1])
-            return int(np.sign(pair)) if abs(pair) >= self.min_log_lr else 0
+            return int(np.sign(pair)) if abs(pair) >= max(thr, self.threshold(twin)) else 0
         return 1 if lr > 0 else -1
 
     def carry(self, into: int, source: int) -> None:
@@ -372,6 +395,7 @@ class SideTracker:
         for p in self._pieces.get(into, ()):
             taken.update(p[0].at)
         pieces = self._pieces.setdefault(into, [])
+        n_before = len(pieces)
         refs = ([own] if own is not None else []) + list(pieces)
         for a, b in [self._sums[source], *self._pieces.get(source, ())]:
             keep = [k for k, t in enumerate(a.at) if t not in taken]
@@ -381,6 +405,8 @@ class SideTracker:
                 pieces.append(piece)
                 refs.append(piece)
                 taken.update(a.at[k] for k in keep)
+        if len(pieces) > n_before:  # the carried segments' retrodiction choices come with their contacts
+            self._search[into] = self._search.get(into, 0.0) + self._search.get(source, 0.0)
         if np.isfinite(self._now):
             self._history.setdefault(into, []).append((self._now, self._log_lr(into)))
 
@@ -494,7 +520,7 @@ class SideTracker:
             side.append("" if d == 0 else ("starboard" if s > 0 else "port"))
             lr.append(float(h[-1, 1]) if len(h) else 0.0)
             n.append(sum(f[0].n for f in self._fits(tid)))
-            ok = d * h[:, 1] >= self.min_log_lr if d else np.zeros(len(h), bool)
+            ok = d * h[:, 1] >= self.threshold(tid) if d else np.zeros(len(h), bool)
             bad = np.nonzero(~ok)[0]
             start = bad[-1] + 1 if len(bad) else 0
             when.append(float(h[start, 0]) if d and start < len(h) else float("nan"))
