@@ -69,6 +69,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonartrack.systems.active.side_fit import CvFit as _CvFit  # noqa: N814 - its name here
+from sonartrack.systems.active.side_fit import _kalman_update, _predict  # noqa: F401 - _predict: contact_tracker.py
+from sonartrack.systems.active.side_fit import reachable as _reachable
 
 #: the side is decided at a likelihood ratio of 100:1 (the passive chain's threshold, tma/sides.py)
 MIN_LOG_LR = float(np.log(100.0))
@@ -84,12 +86,6 @@ RETRO_STOP_PROBABILITY = 0.02
 #: times in a row with probability 0.22, and the study's tracks confirmed after the turn stopped 2-7 contacts back,
 #: before the turn: bench_active_sides.py, trials 2, 4, 14, 18)
 MAX_MISSES = int(np.ceil(np.log(RETRO_STOP_PROBABILITY) / np.log(1.0 - RETRO_DETECTION_PROBABILITY)))
-#: a joined segment's contacts are carried only when they can be the same target's: a target moves at most this fast
-#: (m/s; 40 kn), and a piece whose contact nearest in time to the track's lies farther than MAX_SPEED_MPS |dt| plus
-#: CARRY_SIGMAS standard deviations from it is another object's (a false track merged into a ghost: trial 15)
-MAX_SPEED_MPS = 20.0
-#: standard deviations of the two contacts' position errors allowed beyond the reach at MAX_SPEED_MPS
-CARRY_SIGMAS = 4.0
 #: a ratio under the threshold + the cap must stay decided with any one of the track's contacts left out
 #: (:meth:`SideTracker._rests_on_more_than_one`). bench_side_errors.py, 60 worlds a setting, Pd 0.4, confirmed after
 #: the turn, clutter 2 / 6 per ping: wrong 2.1 % / 5.5 % of decisions without it, 0 % / 2.8 % with it; the study's
@@ -158,38 +154,6 @@ def _reflection(heading_rad: float) -> np.ndarray:
     """2 x 2 reflection about an axis of heading ``heading_rad`` (clockwise from north, x east): 2 a a^T - I."""
     a = np.array([np.sin(heading_rad), np.cos(heading_rad)])
     return 2.0 * np.outer(a, a) - np.eye(2)
-
-
-def _predict(x, P, dt_s: float, q: float):
-    """CV prediction over ``dt_s`` (negative: backwards), white-noise acceleration q over |dt|."""
-    F = np.eye(4)
-    F[0, 2] = F[1, 3] = dt_s
-    a = abs(dt_s)
-    Q = q * np.kron(np.array([[a**3 / 3, a**2 / 2 * np.sign(dt_s)], [a**2 / 2 * np.sign(dt_s), a]]), np.eye(2))
-    return F @ x, F @ P @ F.T + Q
-
-
-def _kalman_update(x, P, z, R):
-    """Kalman update of a CV state with a position contact z (covariance R)."""
-    S = P[:2, :2] + R
-    K = np.linalg.solve(S, P[:2, :]).T
-    return x + K @ (z - x[:2]), P - K @ S @ K.T
-
-
-def _reachable(piece: _CvFit, ref: list[_CvFit]) -> bool:
-    """Whether ``piece``'s contacts can be the target of the contact sequences ``ref``: of the pairs (one of the piece,
-    one of ``ref``), the one nearest in time lies within MAX_SPEED_MPS |dt| + CARRY_SIGMAS sqrt(lambda_max(R_i + R_j))
-    (True when ``ref`` holds no contact)."""
-    t_ref = np.array([t for f in ref for t in f.at], float)
-    if not len(t_ref) or not piece.n:
-        return True
-    z_ref = np.array([z for f in ref for z in f.z], float)
-    W_ref = [w for f in ref for w in f.W]
-    gap = np.abs(np.array(piece.at, float)[:, None] - t_ref[None, :])
-    i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
-    spread = np.linalg.inv(piece.W[i]) + np.linalg.inv(W_ref[j])
-    reach = MAX_SPEED_MPS * gap[i, j] + CARRY_SIGMAS * np.sqrt(np.linalg.eigvalsh(spread)[-1])
-    return bool(np.hypot(*(piece.z[i] - z_ref[j])) <= reach)
 
 
 class SideTracker:
@@ -415,9 +379,9 @@ class SideTracker:
         or deleted as ``into``'s duplicate: ActiveTracks.joins): its contacts, at the pings ``into`` holds none,
         become a piece of ``into``'s evidence, with its own CV motion (module doc), and ``into``'s ln LR is from now
         its own plus its pieces'. ``source``'s own pieces come with it (a chain of joins). A piece that cannot be
-        ``into``'s object under either hypothesis (:func:`_reachable`: its contacts, or their mirrors, out of reach of
-        ``into``'s at ``MAX_SPEED_MPS``) is not carried: a false track merged into a ghost (study trial 15) gave the
-        ghost the false track's +77.7, and the target on the other side was judged wrong."""
+        ``into``'s object under either hypothesis (side_fit.py ``reachable``: its contacts, or their mirrors, out of
+        reach of ``into``'s at ``MAX_SPEED_MPS``) is not carried: a false track merged into a ghost (study trial 15)
+        gave the ghost the false track's +77.7, and the target on the other side was judged wrong."""
         into, source = int(into), int(source)
         if into == source or source not in self._sums:
             return
