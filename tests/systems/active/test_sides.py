@@ -141,6 +141,32 @@ def test_twins_both_decided_on_their_side_are_neither_decided_nor_rejected():
     # both on their side, but the pair's mean view (ln LR_1 - ln LR_2) / 2 reaches the threshold: 1 decided
     st._history[2] = [(0.0, thr + 0.5)]
     st._history[1] = [(0.0, 3.0 * thr + 1.0)]
-    assert st.decision(1) == 1 and st.decision(2) == 0 and st.rejected(2) and not st.rejected(1)
+    # (the twin is then decided by the same mean view: its mirror, -1; it was left undecided, but rejected)
+    assert st.decision(1) == 1 and st.decision(2) == -1 and st.rejected(2) and not st.rejected(1)
     st._history[1] = [(0.0, 3.0 * thr + 0.4)]
     assert st.decision(1) == 0 and not st.rejected(2)
+
+
+def test_twins_both_decided_ghosts_are_judged_by_their_mean_view():
+    # of a detection's two contacts one is the echo's: a track and its twin cannot both be ghosts either
+    st = SideTracker()
+    thr = st.min_log_lr
+    st._history = {1: [(0.0, -(thr + 1.0))], 2: [(0.0, -(thr + 3.0))]}
+    st._twins = {1: 2, 2: 1}
+    assert st.decision(1) == 0 and st.decision(2) == 0 and not st.rejected(1) and not st.rejected(2)
+    st._history[2] = [(0.0, -(3.0 * thr + 1.0))]  # mean view (ln LR_1 - ln LR_2) / 2 = thr + 0.5 / ... > thr
+    assert st.decision(1) == 1 and st.decision(2) == -1 and st.rejected(2)
+
+
+def test_a_track_on_a_decided_track_s_mirror_is_rejected_twin_or_not():
+    # track 3 took the mirror contacts of decided track 1 on 3 pings, but its twin is 4 (more shared pings)
+    st = SideTracker()
+    thr = st.min_log_lr
+    st._history = {1: [(0.0, thr + 1.0)]}
+    st._shared = {(1, 3): 3, (3, 4): 5, (1, 6): 4, (1, 5): 2, (5, 7): 9}
+    st._twins = st.twins()
+    assert st.twin_of(3) == 4 and st.twin_of(1) == 6 and st.twin_of(5) == 7
+    assert st.rejected(3) and st.rejected(6)
+    assert not st.rejected(5)  # 2 pings: a crossing of the mirror, not a ghost
+    st._history[1] = [(0.0, thr - 0.5)]
+    assert not st.rejected(3)  # undecided: nothing rejects it

@@ -174,3 +174,21 @@ def test_a_carry_before_the_kept_track_s_first_update_keeps_its_retrodiction():
     d = st.result()
     assert d.decision[d.of(3)] == "track" and d.decision[d.of(4)] == "mirror"
     assert d.contacts[d.of(3)] == 41  # each ping's contact once: the retrodicted pings are not counted twice
+
+
+def test_a_segment_of_another_object_is_not_carried():
+    # segments 1/2 held a still object 6 km from the target (a false track that later merged into the target's
+    # track): its contacts cannot be the target's (20 m/s over the gap does not reach), so 3 keeps its own evidence
+    rng = np.random.default_rng(4)
+    h = _headings()
+    st = SideTracker(min_turn_rad=np.deg2rad(20.0), lookback=0)
+    for k, hk in enumerate(h):
+        if k < 18:
+            _ping(st, k, hk, (1, 2), rng, lambda t: np.array([-2000.0, 8000.0]))
+        elif k >= 22:
+            _ping(st, k, hk, (3, 4), rng)
+            if k == 22:
+                st.carry(3, 1)
+                st.carry(4, 2)
+    d = st.result()
+    assert d.contacts[d.of(3)] == 41 - 22 and d.decision[d.of(3)] == "undecided"

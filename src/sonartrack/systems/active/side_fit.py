@@ -3,7 +3,8 @@
 z_k = p0 + (t_k - t_0) v with each contact's covariance R_k, by weighted least squares with each contact's
 chi-square capped at c (a stray contact costs c): ln L = -(min_p sum_k min(r_k, c) + sum ln det(2 pi R_k)) / 2
 (sides.py's module doc: the equations, the cap and why; Hampel et al., Robust Statistics, 1986, the truncated
-quadratic).
+quadratic). Beside it: whether a joined segment's contacts can be the same object's (``reachable``), and the CV
+prediction and Kalman update the retrodiction runs back with.
 """
 
 from __future__ import annotations
@@ -103,3 +104,42 @@ def capped_chi2(t, z, W, info, b, keep, cap: float) -> float:
             keep = r < cap
             info_sum, b_sum = info[keep].sum(0), b[keep].sum(0)
     return float(np.minimum(r, cap).sum())
+
+#: a joined segment's contacts are carried only when they can be the same target's: a target moves at most this fast
+#: (m/s; 40 kn), and a piece whose contact nearest in time to the track's lies farther than MAX_SPEED_MPS |dt| plus
+#: CARRY_SIGMAS standard deviations from it is another object's (a false track merged into a ghost: trial 15)
+MAX_SPEED_MPS = 20.0
+#: standard deviations of the two contacts' position errors allowed beyond the reach at MAX_SPEED_MPS
+CARRY_SIGMAS = 4.0
+
+
+def reachable(piece: CvFit, ref: list[CvFit]) -> bool:
+    """Whether ``piece``'s contacts can be the target of the contact sequences ``ref``: of the pairs (one of the piece,
+    one of ``ref``), the one nearest in time lies within MAX_SPEED_MPS |dt| + CARRY_SIGMAS sqrt(lambda_max(R_i + R_j))
+    (True when ``ref`` holds no contact)."""
+    t_ref = np.array([t for f in ref for t in f.at], float)
+    if not len(t_ref) or not piece.n:
+        return True
+    z_ref = np.array([z for f in ref for z in f.z], float)
+    W_ref = [w for f in ref for w in f.W]
+    gap = np.abs(np.array(piece.at, float)[:, None] - t_ref[None, :])
+    i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+    spread = np.linalg.inv(piece.W[i]) + np.linalg.inv(W_ref[j])
+    reach = MAX_SPEED_MPS * gap[i, j] + CARRY_SIGMAS * np.sqrt(np.linalg.eigvalsh(spread)[-1])
+    return bool(np.hypot(*(piece.z[i] - z_ref[j])) <= reach)
+
+
+def _predict(x, P, dt_s: float, q: float):
+    """CV prediction over ``dt_s`` (negative: backwards), white-noise acceleration q over |dt|."""
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt_s
+    a = abs(dt_s)
+    Q = q * np.kron(np.array([[a**3 / 3, a**2 / 2 * np.sign(dt_s)], [a**2 / 2 * np.sign(dt_s), a]]), np.eye(2))
+    return F @ x, F @ P @ F.T + Q
+
+
+def _kalman_update(x, P, z, R):
+    """Kalman update of a CV state with a position contact z (covariance R)."""
+    S = P[:2, :2] + R
+    K = np.linalg.solve(S, P[:2, :]).T
+    return x + K @ (z - x[:2]), P - K @ S @ K.T
