@@ -87,8 +87,9 @@ PAPER = "sonartrack's own: papers P1 (MFTD across pings) and P4 (bistatic contac
 #: by delay, the CW ridge map, side evidence over joins); 8: a still clutter point's grating-lobe image withheld as
 #: clutter (systems/active/aliases.py clutter_range_m); 9: confirmation on the likelihood-ratio odds
 #: (tracking/deleters.py RateConfirmation), CW skirt contacts of a recurring hidden ridge echo held and scored against
-#: the skirt's own density (systems/active/ridge_skirt.py)
-TRIAL_VERSION = 9
+#: the skirt's own density (systems/active/ridge_skirt.py); 10: side retrodiction through 5 misses, joined pieces
+#: carried only when reachable, ghost twins and mirror partners rejected (systems/active/sides.py)
+TRIAL_VERSION = 10
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it. 20: with 10 runs each clutter
 #: model had 2-4 h, where no count, not even 0, gives a Poisson upper bound <= 1 per hour (0 in 2 h: 1.50)
