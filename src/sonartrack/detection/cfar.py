@@ -327,6 +327,19 @@ def _texture_nodes(nu: float) -> tuple[np.ndarray, np.ndarray]:
     return u / nu, wq / np.exp(gammaln(nu))  # the gamma density's normalisation
 
 
+def _kth_reference_law(nu: float, n: int, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, w, sf): the grid exp(_LOG_X), the density of the k-th of N K references in ln x (order statistics:
+    N! / ((k-1)! (N-k)!) F^(k-1) (1-F)^(N-k) f, times x) and the K survival function on the grid."""
+    from scipy.special import gammaln
+
+    pdf, sf = _k_law(nu)
+    x = np.exp(_LOG_X)
+    with np.errstate(divide="ignore"):
+        log_fk = (gammaln(n + 1) - gammaln(k) - gammaln(n - k + 1) + (k - 1) * np.log1p(-sf) + (n - k) * np.log(sf)
+                  + np.log(pdf))
+    return x, np.exp(log_fk) * x, sf
+
+
 def k_os_pfa(alpha, nu: float, n: int, k: int):
     """Pfa of OS-CFAR (s = y / (x_(k) / c_k) >= alpha) when the cell y and its N references are independent
     K-distributed intensities of shape nu (a gamma(nu) texture times an exponential speckle, independent cell to cell).
@@ -358,14 +371,7 @@ def k_os_pfa(alpha, nu: float, n: int, k: int):
     float or numpy.ndarray
         Pfa per cell at each alpha.
     """
-    from scipy.special import gammaln
-
-    pdf, sf = _k_law(float(nu))
-    x = np.exp(_LOG_X)
-    with np.errstate(divide="ignore"):
-        log_fk = (gammaln(n + 1) - gammaln(k) - gammaln(n - k + 1) + (k - 1) * np.log1p(-sf) + (n - k) * np.log(sf)
-                  + np.log(pdf))
-    w = np.exp(log_fk) * x  # density of x_(k) in ln x
+    x, w, sf = _kth_reference_law(float(nu), n, k)
     a = np.atleast_1d(np.asarray(alpha, float))
     log_t = np.log(np.maximum(a[:, None] * x[None, :] / os_mean_factor(n, k), 1e-300))
     s = np.exp(np.interp(log_t, _LOG_X, np.log(np.maximum(sf, 1e-300))))
@@ -401,18 +407,11 @@ def k_os_pd(alpha, ebr: float, nu: float, n: int, k: int):
     float or numpy.ndarray
         Pd per cell at each alpha.
     """
-    from scipy.special import gammaln
-
     a = np.atleast_1d(np.asarray(alpha, float))
     if not float(nu) <= K_SHAPES[-1]:  # the texture integral's quadrature overflows: the exponential closed form
         out = os_pfa(a / (1.0 + float(ebr)), n, k)
         return out if np.ndim(alpha) else float(out[0])
-    pdf, sf = _k_law(float(nu))
-    x = np.exp(_LOG_X)
-    with np.errstate(divide="ignore"):
-        log_fk = (gammaln(n + 1) - gammaln(k) - gammaln(n - k + 1) + (k - 1) * np.log1p(-sf) + (n - k) * np.log(sf)
-                  + np.log(pdf))
-    w = np.exp(log_fk) * x  # density of x_(k) in ln x
+    x, w, _ = _kth_reference_law(float(nu), n, k)
     g, wq = _texture_nodes(float(nu))
     t = a[:, None] * x[None, :] / os_mean_factor(n, k)  # the test cell's threshold given x_(k), (A, X)
     s = np.stack([np.exp(-tt[:, None] / (g[None, :] + float(ebr))) @ wq for tt in t])
