@@ -88,8 +88,9 @@ PAPER = "sonartrack's own: papers P1 (MFTD across pings) and P4 (bistatic contac
 #: clutter (systems/active/aliases.py clutter_range_m); 9: confirmation on the likelihood-ratio odds
 #: (tracking/deleters.py RateConfirmation), CW skirt contacts of a recurring hidden ridge echo held and scored against
 #: the skirt's own density (systems/active/ridge_skirt.py); 10: side retrodiction through 5 misses, joined pieces
-#: carried only when reachable, ghost twins and mirror partners rejected (systems/active/sides.py)
-TRIAL_VERSION = 10
+#: carried only when reachable, ghost twins and mirror partners rejected (systems/active/sides.py); 11: the
+#: retrodiction back to 3 misses (sides.py RETRO_STOP_PROBABILITY: at 5 it lost real CW tracks)
+TRIAL_VERSION = 11
 #: Monte Carlo size of the full run (``Config.runs``) and of ``Config.quick()``: literals, so that
 #: ``sonartrack studies`` reads them from this file's source without importing it. 20: with 10 runs each clutter
 #: model had 2-4 h, where no count, not even 0, gives a Poisson upper bound <= 1 per hour (0 in 2 h: 1.50)
