@@ -16,7 +16,8 @@ import typer
 
 from sonartrack.core.settings import field_help, to_commented_toml
 
-PRINT_CONFIG_HELP = "Print the resolved settings (defaults, then --config, then options) as TOML and exit."
+PRINT_CONFIG_HELP = ("Print the resolved settings (defaults, then the settings file: --config, or --scene for "
+                     "simulate; then options) as TOML and exit.")
 
 
 def settings_help(default_model) -> Callable[..., str]:
