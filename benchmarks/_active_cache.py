@@ -94,3 +94,39 @@ def track_cached(c: dict, settings, detector: str = "mftd"):
                             c["beam_step_deg"], [int(numbers[k])])
         trk.step(float(t[k]), con)
     return trk.result()
+
+
+def run_recorded(config, scene, rec: dict | None = None, step_ridge=None) -> dict:
+    """The study's chain (studies/active_chain.py ``run_scene``) on ``scene`` with its ContactTracker recorded:
+    ``rec`` (a new dict by default) gets ``args``/``kwargs`` (deep copies at construction: the clutter and ridge maps
+    are stateful and would be pickled full at the run's end), ``steps`` [(t s, contacts, ridge echoes as they came)],
+    ``result`` and ``seconds``. ``step_ridge`` maps the ridge echoes a step passes on to the tracker (None: as they
+    came). Used by bench_cw_confirm.py and bench_cw_ridge_learn.py."""
+    import copy
+    import time
+
+    import sonartrack.systems.active.run as run_mod
+    from sonartrack.studies.active_chain import run_scene
+
+    rec = {} if rec is None else rec
+    rec["steps"], real = [], run_mod.ContactTracker
+
+    class Recording(real):
+        def __init__(self, *args, **kwargs):
+            rec["args"], rec["kwargs"] = copy.deepcopy(args), copy.deepcopy(kwargs)
+            super().__init__(*args, **kwargs)
+
+        def step(self, t_s, contacts, ridge=None):
+            rec["steps"].append((float(t_s), contacts, ridge))
+            if ridge is not None and step_ridge is not None:
+                ridge = step_ridge(ridge)
+            return super().step(t_s, contacts, ridge)
+
+    run_mod.ContactTracker = Recording
+    t0 = time.perf_counter()
+    try:
+        rec["result"] = run_scene(config.model_copy(update={"scene": scene}), scene)[0]
+    finally:
+        run_mod.ContactTracker = real
+    rec["seconds"] = time.perf_counter() - t0
+    return rec

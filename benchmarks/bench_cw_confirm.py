@@ -62,32 +62,13 @@ def record(config, scene, cache: Path) -> dict:
     """The tracker stage's inputs of the chain on ``scene`` (cached by the scene's JSON)."""
     import hashlib
 
-    import sonartrack.systems.active.run as run_mod
-    from sonartrack.studies.active_chain import run_scene
+    from _active_cache import run_recorded
 
     key = hashlib.sha1((scene.model_dump_json() + config.chain.model_dump_json()).encode()).hexdigest()[:12]
     path = cache / f"steps-{key}.pkl"
     if path.exists():
         return pickle.loads(path.read_bytes())
-    real, rec = run_mod.ContactTracker, {"steps": []}
-
-    class Recording(real):
-        def __init__(self, *args, **kwargs):
-            # copies: the clutter and ridge maps are stateful and would be pickled full at the run's end
-            rec["args"], rec["kwargs"] = copy.deepcopy(args), copy.deepcopy(kwargs)
-            super().__init__(*args, **kwargs)
-
-        def step(self, t_s, contacts, ridge=None):
-            rec["steps"].append((float(t_s), contacts, ridge))
-            return super().step(t_s, contacts, ridge)
-
-    run_mod.ContactTracker = Recording
-    t0 = time.perf_counter()
-    try:
-        result = run_scene(config.model_copy(update={"scene": scene}), scene)[0]
-    finally:
-        run_mod.ContactTracker = real
-    rec["result"], rec["seconds"] = result, time.perf_counter() - t0
+    rec = run_recorded(config, scene)
     cache.mkdir(parents=True, exist_ok=True)
     path.write_bytes(pickle.dumps(rec))
     return rec

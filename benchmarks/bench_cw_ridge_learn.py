@@ -60,37 +60,23 @@ sys.path.insert(0, str(Path(__file__).parent))
 def record(config, scene, cache: Path, floor: float) -> dict:
     """The tracker stage's inputs, the ridge contacts down to ``floor`` x the threshold (cached by the scene)."""
     import sonartrack.detection.cw_cells as cw_cells
-    import sonartrack.systems.active.run as run_mod
-    from sonartrack.studies.active_chain import run_scene
+    from _active_cache import run_recorded
 
     key = hashlib.sha1((scene.model_dump_json() + config.chain.model_dump_json() + f"{floor}").encode()).hexdigest()
     path = cache / f"ridge-{key[:12]}.pkl"
     if path.exists():
         return pickle.loads(path.read_bytes())
-    real, real_echoes, rec = run_mod.ContactTracker, cw_cells.ridge_echoes, {"steps": [], "threshold": None}
+    real_echoes, rec = cw_cells.ridge_echoes, {"threshold": None}
 
     def low_echoes(cells, threshold):
         rec["threshold"] = float(threshold)
         return real_echoes(cells, floor * threshold)
 
-    class Recording(real):
-        def __init__(self, *args, **kwargs):
-            rec["args"], rec["kwargs"] = copy.deepcopy(args), copy.deepcopy(kwargs)
-            super().__init__(*args, **kwargs)
-
-        def step(self, t_s, contacts, ridge=None):
-            rec["steps"].append((float(t_s), contacts, ridge))
-            if ridge is not None:
-                ridge = ridge.rows(np.asarray(ridge.statistic) >= rec["threshold"])
-            return super().step(t_s, contacts, ridge)
-
-    run_mod.ContactTracker, cw_cells.ridge_echoes = Recording, low_echoes
-    t0 = time.perf_counter()
-    try:
-        result = run_scene(config.model_copy(update={"scene": scene}), scene)[0]
+    cw_cells.ridge_echoes = low_echoes
+    try:  # the chain's tracker sees the echoes at its own threshold; the record keeps them down to the floor
+        run_recorded(config, scene, rec, lambda ridge: ridge.rows(np.asarray(ridge.statistic) >= rec["threshold"]))
     finally:
-        run_mod.ContactTracker, cw_cells.ridge_echoes = real, real_echoes
-    rec["result"], rec["seconds"] = result, time.perf_counter() - t0
+        cw_cells.ridge_echoes = real_echoes
     cache.mkdir(parents=True, exist_ok=True)
     path.write_bytes(pickle.dumps(rec))
     return rec
